@@ -1,0 +1,48 @@
+"""Exceptions raised by the boundary layer.
+
+Every bad-input error says *where*: the field name, and when the input came
+from a file, the file and line. The CLI prints ``str(exc)`` on one line and
+exits with status 2, without a traceback.
+"""
+
+from __future__ import annotations
+
+
+class InputError(ValueError):
+    """Bad user input: a config field, a data file line, a function argument.
+
+    Parameters
+    ----------
+    message : str
+        What is wrong, in plain words.
+    field : str, optional
+        Dotted name of the offending field or argument (``swarm.n_max``).
+    file : str, optional
+        File the value came from.
+    line : int, optional
+        1-based line in ``file``.
+    """
+
+    def __init__(self, message: str, *, field: str | None = None,
+                 file: str | None = None, line: int | None = None):
+        self.message = message
+        self.field = field
+        self.file = str(file) if file is not None else None
+        self.line = line
+        super().__init__(self._format())
+
+    def _format(self) -> str:
+        where = ""
+        if self.file is not None:
+            where = self.file + (f":{self.line}" if self.line is not None else "")
+        parts = []
+        if where:
+            parts.append(where)
+        if self.field:
+            parts.append(self.field)
+        prefix = ": ".join(parts)
+        return f"{prefix}: {self.message}" if prefix else self.message
+
+
+class DataNotFoundError(InputError, FileNotFoundError):
+    """A named data set (shape model, gravity field) was not found on the data path."""
