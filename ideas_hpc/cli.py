@@ -1,0 +1,96 @@
+"""``ideas-hpc`` command line: ``size``, ``run``, ``report``.
+
+Bad input (an :class:`~ideas_hpc.errors.InputError`) prints one line naming
+the problem and exits with status 2; no traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from . import __version__
+from .errors import InputError
+
+KM = 1e3
+DEG = 3.141592653589793 / 180.0
+
+
+def _add_size(sub) -> None:
+    p = sub.add_parser("size", help="print the instrument and flyby sizing (paper Tables 3-4)",
+                       description="Size the camera and the ring flyby for a body (SPEC section 2). "
+                                   "Lengths in km, angles in deg.")
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--body", default="eros",
+                   help="body name (eros, eros001708, ellipsoid, sphere...) or shape file path "
+                        "(default: eros)")
+    g.add_argument("--r-av", type=float, metavar="KM", help="given mean radius, km")
+    g.add_argument("--paper", action="store_true",
+                   help="use the paper's R_max/R_min (17.670/3.222 km) to reproduce its tables")
+    p.add_argument("--resolution", type=float, default=1.0, metavar="M",
+                   help="ground resolution X, m (default 1)")
+    p.add_argument("--aperture", type=float, default=8.0, metavar="CM",
+                   help="aperture diameter D, cm (default 8)")
+    p.add_argument("--wavelength", type=float, default=0.55, metavar="UM",
+                   help="imaging wavelength, um (default 0.55)")
+    p.add_argument("--elevation", type=float, default=5.0, metavar="DEG",
+                   help="minimum elevation angle, deg (default 5)")
+    p.add_argument("--data-path", default=None, help="folder with shape models "
+                   "(searched before $IDEAS_HPC_DATA)")
+
+
+def _cmd_size(args) -> int:
+    from .bodies import load_body
+    from .sizing import PAPER_R_MAX, PAPER_R_MIN, format_table, size_flyby
+
+    inst = dict(ground_resolution=args.resolution, aperture=args.aperture * 1e-2,
+                wavelength=args.wavelength * 1e-6, min_elevation=args.elevation * DEG)
+    paper = size_flyby(r_max=PAPER_R_MAX, r_min=PAPER_R_MIN, **inst)
+    if args.paper:
+        print(format_table(paper, "Sizing from the paper's R_max 17.670 km, R_min 3.222 km"))
+        return 0
+    if args.r_av is not None:
+        s = size_flyby(r_av=args.r_av * KM, **inst)
+        print(format_table(s, f"Sizing for a given mean radius R_av = {args.r_av:g} km", paper))
+        return 0
+    body = load_body(args.body, data_path=args.data_path)
+    print(f"body: {body.note}")
+    print(f"shape: {body.shape.summary()}")
+    s = size_flyby(r_max=body.shape.r_max, r_min=body.shape.r_min, **inst)
+    print(format_table(s, f"Sizing for {body.name}", paper))
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="ideas-hpc", description=__doc__.splitlines()[0])
+    parser.add_argument("--version", action="version", version=f"ideas_hpc {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    _add_size(sub)
+    try:
+        from .campaign.cli import add_commands  # run / report, when present
+    except ImportError:
+        add_commands = None
+    if add_commands is not None:
+        add_commands(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command is None:
+        parser.print_help()
+        return 2
+    handler = {"size": _cmd_size}.get(args.command) or getattr(args, "handler", None)
+    try:
+        return int(handler(args) or 0)
+    except InputError as exc:
+        print(f"ideas-hpc: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("ideas-hpc: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

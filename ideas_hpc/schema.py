@@ -1,0 +1,145 @@
+"""Declarative validation of campaign tables: types, ranges, units, unknown keys.
+
+A schema is a dict of :class:`Field` (or nested dicts for sub-tables). Values
+are checked once, converted to SI with ``Field.to_si``, and defaults filled
+in. Every error names the dotted field; :class:`~ideas_hpc.config.CampaignSource`
+adds the file and line.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from .errors import InputError
+
+REQUIRED = object()
+
+
+@dataclass(frozen=True)
+class Field:
+    """One config value.
+
+    Parameters
+    ----------
+    kind : {'float', 'int', 'bool', 'str', 'floats', 'any'}
+        ``floats`` is a list of numbers (``length`` fixes its size; a scalar
+        is broadcast when ``broadcast`` is set).
+    default : object
+        ``REQUIRED`` when the key must be given.
+    to_si : float
+        Multiplier from the file's unit to SI (e.g. 1e3 for km).
+    lo, hi : float, optional
+        Bounds in the file's unit; ``lo_open``/``hi_open`` make them strict.
+    choices : tuple, optional
+        Allowed values for ``str`` fields.
+    doc : str
+        One line for error messages and ``--help``.
+    """
+
+    kind: str
+    default: Any = REQUIRED
+    to_si: float = 1.0
+    lo: float | None = None
+    hi: float | None = None
+    lo_open: bool = False
+    hi_open: bool = False
+    choices: tuple | None = None
+    length: int | None = None
+    broadcast: bool = False
+    nullable: bool = False
+    doc: str = ""
+
+
+def _range_msg(f: Field) -> str:
+    lo = "" if f.lo is None else ("> " if f.lo_open else ">= ") + f"{f.lo:g}"
+    hi = "" if f.hi is None else ("< " if f.hi_open else "<= ") + f"{f.hi:g}"
+    return " and ".join(p for p in (lo, hi) if p)
+
+
+def _check_number(x: float, f: Field, name: str) -> None:
+    if not math.isfinite(x):
+        raise InputError(f"must be finite, got {x!r}", field=name)
+    bad = ((f.lo is not None and (x <= f.lo if f.lo_open else x < f.lo))
+           or (f.hi is not None and (x >= f.hi if f.hi_open else x > f.hi)))
+    if bad:
+        raise InputError(f"must be {_range_msg(f)}, got {x:g}", field=name)
+
+
+def _coerce(value: Any, f: Field, name: str) -> Any:
+    if value is None and f.nullable:
+        return None
+    k = f.kind
+    if k == "any":
+        return value
+    if k == "bool":
+        if not isinstance(value, bool):
+            raise InputError(f"must be true or false, got {value!r}", field=name)
+        return value
+    if k == "str":
+        if not isinstance(value, str):
+            raise InputError(f"must be a string, got {value!r}", field=name)
+        if f.choices is not None and value not in f.choices:
+            raise InputError(f"must be one of {', '.join(map(str, f.choices))}; got {value!r}",
+                             field=name)
+        return value
+    if k == "int":
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise InputError(f"must be a whole number, got {value!r}", field=name)
+        _check_number(float(value), f, name)
+        return int(value)
+    if k == "float":
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise InputError(f"must be a number, got {value!r}", field=name)
+        _check_number(float(value), f, name)
+        return float(value) * f.to_si
+    if k == "floats":
+        if isinstance(value, (int, float)) and not isinstance(value, bool) and f.broadcast:
+            value = [value] * (f.length or 1)
+        if not isinstance(value, list):
+            raise InputError(f"must be a list of numbers, got {value!r}", field=name)
+        if f.length is not None and len(value) != f.length:
+            raise InputError(f"must have {f.length} numbers, got {len(value)}", field=name)
+        out = []
+        for i, v in enumerate(value):
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                raise InputError(f"item {i} must be a number, got {v!r}", field=name)
+            _check_number(float(v), f, f"{name}[{i}]")
+            out.append(float(v) * f.to_si)
+        return out
+    raise AssertionError(f"unknown field kind {k!r}")  # schema bug, not user input
+
+
+def validate(data: Any, schema: dict, prefix: str = "") -> dict:
+    """Check ``data`` against ``schema`` and return SI values with defaults filled in.
+
+    Raises
+    ------
+    InputError
+        Naming the first offending dotted field: an unknown key (with the
+        allowed ones), a wrong type, a value out of range, a missing key.
+    """
+    if data is None:
+        data = {}
+    if not isinstance(data, dict):
+        raise InputError(f"must be a table, got {data!r}", field=prefix.rstrip(".") or "<root>")
+    unknown = [k for k in data if k not in schema]
+    if unknown:
+        raise InputError(f"unknown key {unknown[0]!r}; allowed here: {', '.join(sorted(schema))}",
+                         field=prefix + unknown[0])
+    out: dict = {}
+    for key, spec in schema.items():
+        name = prefix + key
+        if isinstance(spec, dict):
+            out[key] = validate(data.get(key), spec, name + ".")
+            continue
+        if key not in data:
+            if spec.default is REQUIRED:
+                raise InputError(f"is required ({spec.doc})" if spec.doc else "is required",
+                                 field=name)
+            default = spec.default
+            out[key] = (_coerce(default, spec, name) if default is not None else None)
+            continue
+        out[key] = _coerce(data[key], spec, name)
+    return out

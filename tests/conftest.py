@@ -1,0 +1,26 @@
+"""Shared fixtures. Tests find the Eros data through IDEAS_HPC_DATA (``.ci/run``
+sets it to ../shared/data); when it is unset and ../shared/data exists beside
+the checkout, that folder is used, so a plain ``pytest`` works in a checkout."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+_SHARED = ROOT.parent / "shared" / "data"
+if not os.environ.get("IDEAS_HPC_DATA") and _SHARED.is_dir():
+    os.environ["IDEAS_HPC_DATA"] = str(_SHARED)
+
+
+@pytest.fixture(scope="session")
+def eros1708():
+    """The real eros001708 body, or skip when the data path does not have it."""
+    from ideas_hpc.bodies import load_body
+    from ideas_hpc.datapath import have_data_file
+
+    if not have_data_file("eros001708.tab"):
+        pytest.skip("eros001708.tab not on IDEAS_HPC_DATA")
+    return load_body("eros001708")
