@@ -1,0 +1,357 @@
+"""Mapping boundary: validate inputs, pick the coverage kernel, package results (SPEC section 6).
+
+Physics lives in :mod:`ideas_hpc.core.coverage` (culling, clipping, strict
+options) and :mod:`ideas_hpc.core.bvh` (occlusion structure). This module
+checks the arguments (raising :class:`~ideas_hpc.errors.InputError` that names
+the argument), converts config units (deg, um, cm) to SI, builds the BVH when an
+option needs it, and chooses the kernel:
+
+* no strict option, full counts: :func:`~ideas_hpc.core.coverage.coverage_counts`
+  (tiled over vertices);
+* otherwise, or ``counts=False``: :func:`~ideas_hpc.core.coverage.coverage_vertices`
+  (``prange`` over vertices, early-out when counts are not wanted).
+
+Results map onto the store variables of SPEC section 9: ``observed``,
+``first_seen`` (s, NaN never), ``times_seen``, ``coverage`` and ``coverage_count``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .core import bvh as _bvh
+from .core import coverage as _cov
+from .errors import InputError
+
+_MODES = ("paper", "exact")
+#: Tolerance on ``C C^T = I`` for camera DCMs.
+DCM_ORTHO_TOL = 1e-6
+
+
+@dataclass(frozen=True)
+class CoverageOptions:
+    """How vertices are judged observed (SPEC section 6). All SI.
+
+    Attributes
+    ----------
+    mode : {'paper', 'exact'}
+        Culling test: paper ``r . n >= 0`` or exact ``(r - p) . n > 0``.
+    occlusion : bool
+        Self-occlusion: the segment vertex -> spacecraft crosses no face.
+    illumination : bool
+        Vertex lit by the Sun (``n . s > 0``) and not shadowed; needs ``sun_T``.
+    min_elevation : float or None
+        Minimum elevation of the spacecraft above the local horizontal, rad.
+    max_ground_resolution : float or None
+        Largest ground sample ``lambda * range / D`` accepted, m.
+    wavelength, aperture : float
+        lambda (m) and D (m) for the ground resolution.
+    """
+
+    mode: str = "paper"
+    occlusion: bool = False
+    illumination: bool = False
+    min_elevation: float | None = None
+    max_ground_resolution: float | None = None
+    wavelength: float = 0.55e-6
+    aperture: float = 0.08
+
+    def __post_init__(self):
+        if self.mode not in _MODES:
+            raise InputError(f"must be one of {_MODES}, got {self.mode!r}", field="mode")
+        for name in ("occlusion", "illumination"):
+            if not isinstance(getattr(self, name), (bool, np.bool_)):
+                raise InputError(f"must be true or false, got {getattr(self, name)!r}",
+                                 field=name)
+        if self.min_elevation is not None:
+            e = _finite(self.min_elevation, "min_elevation")
+            if not 0.0 <= e < math.pi / 2:
+                raise InputError(f"must be in [0, 90) deg, got {math.degrees(e):g} deg",
+                                 field="min_elevation")
+        if self.max_ground_resolution is not None:
+            if _finite(self.max_ground_resolution, "max_ground_resolution") <= 0.0:
+                raise InputError("must be > 0", field="max_ground_resolution")
+        for name in ("wavelength", "aperture"):
+            if _finite(getattr(self, name), name) <= 0.0:
+                raise InputError(f"must be > 0, got {getattr(self, name)!r}", field=name)
+
+    @property
+    def strict(self) -> bool:
+        """True when any option beyond the paper's culling + clipping is on."""
+        return (self.occlusion or self.illumination or self.min_elevation is not None
+                or self.max_ground_resolution is not None)
+
+    @property
+    def max_range(self) -> float:
+        """Largest range allowed by the ground resolution, ``X D / lambda`` (m)."""
+        if self.max_ground_resolution is None:
+            return math.inf
+        return self.max_ground_resolution * self.aperture / self.wavelength
+
+
+def _finite(value, field: str) -> float:
+    if isinstance(value, bool):
+        raise InputError(f"must be a number, got {value!r}", field=field)
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"must be a number, got {value!r}", field=field) from None
+    if not math.isfinite(x):
+        raise InputError(f"must be finite, got {value!r}", field=field)
+    return x
+
+
+# config key -> (option name, factor to SI); None factor means a non-numeric value
+_CONFIG_KEYS = {
+    "mode": ("mode", None),
+    "occlusion": ("occlusion", None),
+    "illumination": ("illumination", None),
+    "min_elevation_deg": ("min_elevation", math.pi / 180.0),
+    "max_ground_resolution_m": ("max_ground_resolution", 1.0),
+    "wavelength_um": ("wavelength", 1e-6),
+    "aperture_cm": ("aperture", 1e-2),
+}
+
+
+def coverage_options_from_config(table: dict, prefix: str = "coverage.") -> CoverageOptions:
+    """Build :class:`CoverageOptions` from a config table in user units.
+
+    Keys: ``mode`` ('paper' | 'exact'), ``occlusion``, ``illumination`` (bool),
+    ``min_elevation_deg``, ``max_ground_resolution_m``, ``wavelength_um``,
+    ``aperture_cm``. Unknown keys and bad values raise :class:`InputError`
+    naming ``prefix + key``.
+    """
+    if table is None:
+        table = {}
+    if not isinstance(table, dict):
+        raise InputError(f"must be a table, got {type(table).__name__}",
+                         field=prefix.rstrip(".") or "coverage")
+    kw = {}
+    for key, value in table.items():
+        if key not in _CONFIG_KEYS:
+            raise InputError(f"unknown key; known keys: {', '.join(sorted(_CONFIG_KEYS))}",
+                             field=prefix + key)
+        name, factor = _CONFIG_KEYS[key]
+        if factor is None:
+            if name in ("occlusion", "illumination") and not isinstance(value, bool):
+                raise InputError(f"must be true or false, got {value!r}", field=prefix + key)
+            if name == "mode" and value not in _MODES:
+                raise InputError(f"must be one of {_MODES}, got {value!r}", field=prefix + key)
+            kw[name] = value
+        elif value is None:
+            kw[name] = None
+        else:
+            kw[name] = _finite(value, prefix + key) * factor
+    try:
+        return CoverageOptions(**kw)
+    except InputError as exc:
+        inv = {v[0]: k for k, v in _CONFIG_KEYS.items()}
+        raise InputError(exc.message, field=prefix + inv.get(exc.field, exc.field)) from None
+
+
+@dataclass
+class CoverageResult:
+    """Per-vertex coverage of one flyby (store variables of SPEC section 9).
+
+    Attributes
+    ----------
+    observed : (V,) bool
+    first_seen : (V,) float64
+        s, NaN for vertices never seen.
+    times_seen : (V,) int32
+        (spacecraft, image) pairs that saw the vertex; with ``counts=False``
+        only 0/1.
+    coverage : float
+        Observed area / total area, 0..1.
+    coverage_count : float
+        Observed vertices / all vertices.
+    """
+
+    observed: np.ndarray
+    first_seen: np.ndarray
+    times_seen: np.ndarray
+    coverage: float
+    coverage_count: float
+
+
+def _check_geometry(shape, r_T, dcm_BT, eta, near, far, active=None):
+    """Validate and convert; return contiguous float64 arrays and scalars."""
+    eta = _finite(eta, "eta")
+    if not 0.0 < eta < math.pi / 2:
+        raise InputError(f"half angle must be in (0, 90) deg, got {math.degrees(eta):g} deg",
+                         field="eta")
+    near = _finite(near, "near")
+    far = _finite(far, "far")
+    if near <= 0.0:
+        raise InputError(f"must be > 0 m, got {near:g}", field="near")
+    if near >= far:
+        raise InputError(f"near ({near:g} m) must be smaller than far ({far:g} m)",
+                         field="near")
+    r = np.asarray(r_T, dtype=np.float64)
+    if r.ndim != 3 or r.shape[2] != 3 or r.shape[0] < 1 or r.shape[1] < 1:
+        raise InputError(f"must have shape (N, n_img, 3), got {r.shape}", field="r_T")
+    if not np.all(np.isfinite(r)):
+        raise InputError("has non-finite values", field="r_T")
+    c = np.asarray(dcm_BT, dtype=np.float64)
+    if c.shape != r.shape[:2] + (3, 3):
+        raise InputError(f"must have shape {r.shape[:2] + (3, 3)} to match r_T, got {c.shape}",
+                         field="dcm_BT")
+    if not np.all(np.isfinite(c)):
+        raise InputError("has non-finite values", field="dcm_BT")
+    err = np.abs(np.einsum("...ij,...kj->...ik", c, c) - np.eye(3)).max(axis=(-2, -1))
+    if np.any(err > DCM_ORTHO_TOL):
+        k, i = np.unravel_index(int(np.argmax(err)), err.shape)
+        raise InputError(f"not orthonormal at spacecraft {k}, image {i} "
+                         f"(|C C^T - I| = {err[k, i]:.2e})", field="dcm_BT")
+    det = np.linalg.det(c)
+    if np.any(det < 0.0):
+        k, i = np.unravel_index(int(np.argmin(det)), det.shape)
+        raise InputError(f"is a reflection (det < 0) at spacecraft {k}, image {i}",
+                         field="dcm_BT")
+    if active is None:
+        act = np.ones(r.shape[0], dtype=np.bool_)
+    else:
+        act = np.asarray(active)
+        if act.shape != (r.shape[0],):
+            raise InputError(f"must have shape ({r.shape[0]},) to match r_T, got {act.shape}",
+                             field="active")
+        if act.dtype != np.bool_:
+            raise InputError(f"must be a boolean mask, got dtype {act.dtype}", field="active")
+        act = np.ascontiguousarray(act)
+    return (np.ascontiguousarray(r), np.ascontiguousarray(c), math.tan(eta), near, far, act)
+
+
+def _mesh(shape):
+    return (np.ascontiguousarray(shape.vertices_T, dtype=np.float64),
+            np.ascontiguousarray(shape.vertex_normals_T, dtype=np.float64),
+            np.ascontiguousarray(shape.vertex_areas, dtype=np.float64))
+
+
+_BVH_CACHE: dict = {}
+
+
+def occlusion_structure(shape):
+    """The BVH of ``shape`` (built once per Shape object and cached)."""
+    key = id(shape)
+    hit = _BVH_CACHE.get(key)
+    if hit is not None and hit[0] is shape:
+        return hit[1]
+    tree = _bvh.build_bvh(np.ascontiguousarray(shape.vertices_T, dtype=np.float64),
+                          np.ascontiguousarray(shape.faces, dtype=np.int64))
+    if len(_BVH_CACHE) > 16:
+        _BVH_CACHE.clear()
+    _BVH_CACHE[key] = (shape, tree)
+    return tree
+
+
+_EMPTY_TREE = (np.zeros((1, 6)), np.full((1, 4), -1, dtype=np.int64),
+               np.zeros((1, 9)), np.zeros((1, 3), dtype=np.int64))
+
+
+def _strict_args(shape, options: CoverageOptions, sun_T, n_img):
+    if options.illumination:
+        if sun_T is None:
+            raise InputError("illumination needs the Sun direction per image", field="sun_T")
+        s = np.asarray(sun_T, dtype=np.float64)
+        if s.ndim == 1 and s.shape == (3,):
+            s = np.broadcast_to(s, (n_img, 3))
+        if s.shape != (n_img, 3):
+            raise InputError(f"must have shape ({n_img}, 3) (one per image), got {s.shape}",
+                             field="sun_T")
+        if not np.all(np.isfinite(s)):
+            raise InputError("has non-finite values", field="sun_T")
+        nrm = np.linalg.norm(s, axis=1)
+        if np.any(nrm == 0.0):
+            raise InputError("has a zero vector", field="sun_T")
+        s = np.ascontiguousarray(s / nrm[:, None])
+    else:
+        s = np.zeros((1, 3))
+    tree = occlusion_structure(shape) if (options.occlusion or options.illumination) \
+        else _EMPTY_TREE
+    sin_e = -2.0 if options.min_elevation is None else math.sin(options.min_elevation)
+    return sin_e, options.max_range, bool(options.occlusion), bool(options.illumination), s, tree
+
+
+def compute_coverage(shape, r_T, dcm_BT, image_times, eta, near, far, *,
+                     options: CoverageOptions = CoverageOptions(), sun_T=None,
+                     active=None, counts: bool = True) -> CoverageResult:
+    """Coverage of a flyby: per-vertex observed, first-seen time and counts.
+
+    Parameters
+    ----------
+    shape : ideas_hpc.shape.Shape
+    r_T : (N, n_img, 3) array
+        Spacecraft positions in T per image, m.
+    dcm_BT : (N, n_img, 3, 3) array
+        Camera DCM (B <- T) per image, camera along +z_B.
+    image_times : (n_img,) array
+        s, non-decreasing.
+    eta : float
+        Half angle of the square field of view, rad, in (0, pi/2).
+    near, far : float
+        Clipping distances, m, ``0 < near < far``.
+    options : CoverageOptions
+    sun_T : (n_img, 3) or (3,) array, optional
+        Direction body -> Sun in T (any length); needed for illumination.
+    active : (N,) bool, optional
+        False marks a failed spacecraft (its images are ignored).
+    counts : bool
+        True: full ``times_seen``. False: union and first-seen only, with
+        early-out (faster; ``times_seen`` is then 0/1).
+
+    Returns
+    -------
+    CoverageResult
+    """
+    r, c, tan_eta, near, far, act = _check_geometry(shape, r_T, dcm_BT, eta, near, far, active)
+    t = np.asarray(image_times, dtype=np.float64)
+    if t.shape != (r.shape[1],):
+        raise InputError(f"must have shape ({r.shape[1]},) to match r_T, got {t.shape}",
+                         field="image_times")
+    if not np.all(np.isfinite(t)):
+        raise InputError("has non-finite values", field="image_times")
+    if np.any(np.diff(t) < 0.0):
+        raise InputError("must be non-decreasing", field="image_times")
+    t = np.ascontiguousarray(t)
+    v, n, a = _mesh(shape)
+    exact = options.mode == "exact"
+    if not options.strict and counts:
+        out = _cov.coverage_counts(v, n, a, r, c, t, tan_eta, near, far, exact, act)
+    else:
+        sin_e, max_r, occ, ill, s, tree = _strict_args(shape, options, sun_T, r.shape[1])
+        out = _cov.coverage_vertices(v, n, a, r, c, t, tan_eta, near, far, exact, act,
+                                     bool(counts), sin_e, max_r, occ, ill, s, *tree)
+    obs, first, times, cov, cov_n = out
+    return CoverageResult(observed=obs, first_seen=first, times_seen=times,
+                          coverage=float(cov), coverage_count=float(cov_n))
+
+
+def observed_per_spacecraft(shape, r_T, dcm_BT, eta, near, far, *,
+                            options: CoverageOptions = CoverageOptions(),
+                            sun_T=None) -> np.ndarray:
+    """(N, V) bool: vertex j seen by spacecraft k at any image (for the GA's subset unions).
+
+    Arguments as in :func:`compute_coverage` (no times: each scan stops at its
+    first hit).
+    """
+    r, c, tan_eta, near, far, _ = _check_geometry(shape, r_T, dcm_BT, eta, near, far)
+    v, n, _ = _mesh(shape)
+    sin_e, max_r, occ, ill, s, tree = _strict_args(shape, options, sun_T, r.shape[1])
+    return _cov.observed_by_spacecraft(v, n, r, c, tan_eta, near, far,
+                                       options.mode == "exact", sin_e, max_r, occ, ill, s,
+                                       *tree)
+
+
+def coverage_from_mask(mask, vertex_areas) -> tuple[float, float]:
+    """(area coverage, count coverage) of the union of rows of a per-spacecraft mask."""
+    m = np.asarray(mask, dtype=np.bool_)
+    obs = m.any(axis=0) if m.ndim == 2 else m
+    a = np.asarray(vertex_areas, dtype=np.float64)
+    if obs.shape != a.shape:
+        raise InputError(f"mask has {obs.shape[0]} vertices but vertex_areas {a.shape[0]}",
+                         field="mask")
+    cov, cov_n = _cov.coverage_fractions(np.ascontiguousarray(obs), np.ascontiguousarray(a))
+    return float(cov), float(cov_n)
