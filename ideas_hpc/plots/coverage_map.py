@@ -1,0 +1,120 @@
+"""Coverage map of the target body: faces coloured by observed or first-seen time (paper Fig. 25).
+
+The body is drawn twice side by side (the given view and the opposite side,
+azimuth + 180 deg) with the Agg backend. A face takes the mean of its three
+vertex values: for ``kind='observed'`` the fraction of its vertices observed
+(blue = observed, grey = not), for ``kind='first_seen'`` the mean first-seen
+time in s (faces with a never-seen vertex are grey).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+
+_KINDS = ("observed", "first_seen")
+
+
+def render_coverage_map(shape, values, path, *, kind: str = "observed", title=None,
+                        view=(20.0, -60.0), dpi: int = 120) -> Path:
+    """Write a PNG of ``shape`` coloured by per-vertex ``values``.
+
+    Parameters
+    ----------
+    shape : ideas_hpc.shape.Shape
+    values : (V,) array
+        bool observed mask (``kind='observed'``) or first-seen times in s with
+        NaN for never seen (``kind='first_seen'``).
+    path : str or Path
+        Output PNG file (parent folders are created).
+    kind : {'observed', 'first_seen'}
+    title : str, optional
+    view : (elev, azim)
+        Viewing angles of the left panel, deg; the right panel shows the far side.
+    dpi : int
+
+    Returns
+    -------
+    Path
+        The written file.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+    from matplotlib import cm, colors
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    if kind not in _KINDS:
+        raise InputError(f"must be one of {_KINDS}, got {kind!r}", field="kind")
+    vals = np.asarray(values)
+    nv = shape.vertices_T.shape[0]
+    if vals.shape != (nv,):
+        raise InputError(f"must have shape ({nv},) (one per vertex), got {vals.shape}",
+                         field="values")
+    try:
+        elev, azim = (float(view[0]), float(view[1]))
+    except (TypeError, ValueError, IndexError):
+        raise InputError(f"must be (elev, azim) in deg, got {view!r}", field="view") from None
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+
+    v_km = shape.vertices_T / 1e3
+    tris = v_km[shape.faces]
+    grey = np.array([0.78, 0.78, 0.78, 1.0])
+    if kind == "observed":
+        frac = vals.astype(bool)[shape.faces].mean(axis=1)
+        cmap = colors.LinearSegmentedColormap.from_list("obs", [grey[:3], (0.12, 0.35, 0.85)])
+        norm = colors.Normalize(0.0, 1.0)
+        fc = cmap(norm(frac))
+        label = "observed fraction of face vertices"
+        n_obs = int(vals.astype(bool).sum())
+        stat = f"{n_obs}/{nv} vertices observed"
+    else:
+        t = vals.astype(np.float64)[shape.faces]
+        never = ~np.isfinite(t).all(axis=1)
+        tm = np.where(never, 0.0, np.where(np.isfinite(t), t, 0.0).mean(axis=1))
+        finite = vals[np.isfinite(vals)]
+        lo, hi = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
+        if hi <= lo:
+            hi = lo + 1.0
+        cmap = cm.viridis
+        norm = colors.Normalize(lo, hi)
+        fc = cmap(norm(tm))
+        fc[never] = grey
+        label = "first seen, s"
+        stat = f"{int(np.isfinite(vals).sum())}/{nv} vertices seen"
+    # Simple Lambert shading so the shape reads in 3-D.
+    light = np.array([0.4, -0.5, 0.77])
+    light /= np.linalg.norm(light)
+    shade = 0.55 + 0.45 * np.clip(shape.face_normals_T @ light, 0.0, 1.0)
+    fc = fc.copy()
+    fc[:, :3] *= shade[:, None]
+
+    fig = plt.figure(figsize=(12, 5.0))
+    lo3 = v_km.min(axis=0)
+    hi3 = v_km.max(axis=0)
+    for p, az in enumerate((azim, azim + 180.0)):
+        ax = fig.add_subplot(1, 2, p + 1, projection="3d")
+        coll = Poly3DCollection(tris, facecolors=fc, edgecolors=(0, 0, 0, 0.08),
+                                linewidths=0.2)
+        ax.add_collection3d(coll)
+        for k, setl in enumerate((ax.set_xlim, ax.set_ylim, ax.set_zlim)):
+            setl(lo3[k], hi3[k])
+        ax.set_box_aspect(tuple(hi3 - lo3), zoom=0.95)
+        ax.view_init(elev=elev, azim=az)
+        ax.set_xlabel("x, km")
+        ax.set_ylabel("y, km")
+        ax.set_zlabel("z, km")
+        ax.set_title(f"view azimuth {az % 360:.0f} deg", fontsize=9)
+    sm = cm.ScalarMappable(norm=norm, cmap=cmap)
+    fig.subplots_adjust(left=0.0, right=0.9, bottom=0.02, top=0.9, wspace=0.08)
+    cax = fig.add_axes((0.93, 0.2, 0.012, 0.6))
+    fig.colorbar(sm, cax=cax, label=label)
+    fig.suptitle((title + "  -  " if title else "") + stat)
+    fig.savefig(path, dpi=dpi)
+    plt.close(fig)
+    return path
