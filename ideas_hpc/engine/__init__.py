@@ -1,0 +1,33 @@
+"""Chunked, resumable campaign execution on dask into zarr (SPEC section 8).
+
+Campaign kinds plug in a template and a chunk function::
+
+    from ideas_hpc.engine import run_campaign
+    summary = run_campaign("mc.zarr", template, functools.partial(my_chunk, ...),
+                           config=resolved_config, campaign_seed=seed, chunk_size=8,
+                           resume=args.resume, workers=args.workers,
+                           scheduler=args.scheduler, cluster="local")
+
+* :mod:`~ideas_hpc.engine.store`: seeds, chunk plan, store creation, region writes.
+* :mod:`~ideas_hpc.engine.lock`: one writer per store.
+* :mod:`~ideas_hpc.engine.cluster`: LocalCluster, existing scheduler, SLURMCluster.
+* :mod:`~ideas_hpc.engine.runner`: one dask task per chunk, retries, progress.
+* :mod:`~ideas_hpc.engine.toy`: a physics-free workload for tests.
+"""
+
+from __future__ import annotations
+
+from .cluster import connect, load_slurm_config, local_cluster, slurm_cluster
+from .lock import StoreLock, StoreLockedError
+from .runner import CampaignError, RunSummary, run_campaign, run_chunks
+from .store import (CHUNK_DIM, DONE_VAR, SAMPLE_DIM, SEED_VAR, ChunkPlan, config_hash,
+                    create_store, done_mask, is_store, sample_rng, sample_seed_sequence,
+                    seeds_for, store_attrs, store_plan, write_chunk_region)
+
+__all__ = [
+    "CHUNK_DIM", "DONE_VAR", "SAMPLE_DIM", "SEED_VAR", "CampaignError", "ChunkPlan",
+    "RunSummary", "StoreLock", "StoreLockedError", "config_hash", "connect", "create_store",
+    "done_mask", "is_store", "load_slurm_config", "local_cluster", "run_campaign", "run_chunks",
+    "sample_rng", "sample_seed_sequence", "seeds_for", "slurm_cluster", "store_attrs",
+    "store_plan", "write_chunk_region",
+]

@@ -1,0 +1,167 @@
+"""Dask clusters for campaigns: local processes, an existing scheduler, or SLURM.
+
+* ``local`` (default): a :class:`distributed.LocalCluster` of ``workers``
+  processes with one thread each, and ``NUMBA_NUM_THREADS=1`` in every worker
+  so that N workers on N cores do not oversubscribe.
+* ``scheduler=ADDRESS``: connect to a running dask scheduler; the caller owns
+  its workers.
+* ``slurm``: :class:`dask_jobqueue.SLURMCluster` configured from the
+  ``jobqueue.slurm`` section of ``slurm/jobqueue.yaml`` (or any YAML/TOML file
+  in the dask config format), scaled to ``workers`` jobs.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+from pathlib import Path
+from typing import Any, Iterator
+
+from ..errors import InputError
+
+WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1",
+              "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+
+#: The repository's SLURM configuration (a checkout has ``slurm/`` beside the package).
+DEFAULT_SLURM_CONFIG = Path(__file__).resolve().parents[2] / "slurm" / "jobqueue.yaml"
+
+CLUSTER_KINDS = ("local", "slurm")
+
+
+def default_workers() -> int:
+    """Worker count when none is given: the CPUs this process may use."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def _check_workers(workers: int | None) -> int:
+    if workers is None:
+        return default_workers()
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise InputError(f"must be a positive integer, got {workers!r}", field="workers")
+    return workers
+
+
+def local_cluster(workers: int | None = None, **kwargs: Any):
+    """A process-based :class:`distributed.LocalCluster`, one thread per worker.
+
+    ``kwargs`` override the defaults (``dashboard_address=None``, quiet logs).
+    """
+    from distributed import LocalCluster
+
+    opts = dict(n_workers=_check_workers(workers), threads_per_worker=1, processes=True,
+                env=dict(WORKER_ENV), dashboard_address=None, silence_logs=logging.WARNING)
+    opts.update(kwargs)
+    return LocalCluster(**opts)
+
+
+def load_slurm_config(path: str | os.PathLike | None = None) -> dict:
+    """The ``jobqueue.slurm`` mapping of a YAML or TOML dask-config file.
+
+    Raises
+    ------
+    InputError
+        When the file is missing, unparsable or has no ``jobqueue.slurm`` table.
+    """
+    path = Path(path) if path is not None else DEFAULT_SLURM_CONFIG
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise InputError(f"cannot read SLURM config: {exc.strerror}", field="slurm_config",
+                         file=str(path)) from exc
+    try:
+        if path.suffix == ".toml":
+            import tomllib
+
+            data = tomllib.loads(text)
+        else:
+            import yaml
+
+            data = yaml.safe_load(text)
+    except Exception as exc:
+        raise InputError(f"cannot parse SLURM config: {exc}", field="slurm_config",
+                         file=str(path)) from exc
+    try:
+        section = data["jobqueue"]["slurm"]
+    except (KeyError, TypeError):
+        raise InputError("no 'jobqueue.slurm' section", field="slurm_config",
+                         file=str(path)) from None
+    if not isinstance(section, dict):
+        raise InputError("'jobqueue.slurm' must be a table", field="slurm_config", file=str(path))
+    return dict(section)
+
+
+def slurm_cluster(config_path: str | os.PathLike | None = None, **overrides: Any):
+    """A :class:`dask_jobqueue.SLURMCluster` from a jobqueue config file.
+
+    The file's ``jobqueue.slurm`` section is laid over dask's defaults for the
+    duration of the construction (so it behaves exactly like a dask config
+    file), and ``overrides`` are passed as keyword arguments. No job is
+    submitted until the cluster is scaled, so ``job_script()`` works without
+    a SLURM controller.
+    """
+    import dask
+    from dask_jobqueue import SLURMCluster
+
+    section = load_slurm_config(config_path)
+    merged = {**dask.config.get("jobqueue.slurm", default={}), **section}
+    with dask.config.set({"jobqueue.slurm": merged}):
+        return SLURMCluster(**overrides)
+
+
+@contextlib.contextmanager
+def connect(*, cluster: str = "local", workers: int | None = None, scheduler: str | None = None,
+            slurm_config: str | os.PathLike | None = None, worker_timeout: float = 300.0,
+            **cluster_kwargs: Any) -> Iterator:
+    """Yield a :class:`distributed.Client` on the requested cluster; close what it started.
+
+    Parameters
+    ----------
+    cluster : {'local', 'slurm'}
+        Kind of cluster to start when ``scheduler`` is None.
+    workers : int, optional
+        Local worker processes, or SLURM jobs. Default: the usable CPUs (local),
+        1 job (SLURM).
+    scheduler : str, optional
+        Address of an existing dask scheduler (``tcp://host:8786``); nothing is started.
+    slurm_config : path, optional
+        jobqueue config for ``cluster='slurm'`` (default ``slurm/jobqueue.yaml``).
+    worker_timeout : float
+        Seconds to wait for the first SLURM worker before giving up.
+    """
+    from distributed import Client
+
+    if cluster not in CLUSTER_KINDS:
+        raise InputError(f"must be one of {CLUSTER_KINDS}, got {cluster!r}", field="cluster")
+    if scheduler is not None:
+        if not isinstance(scheduler, str) or not scheduler:
+            raise InputError(f"must be a scheduler address, got {scheduler!r}", field="scheduler")
+        try:
+            client = Client(scheduler, timeout="30s")
+        except OSError as exc:
+            raise InputError(f"cannot connect to dask scheduler {scheduler}: {exc}",
+                             field="scheduler") from exc
+        try:
+            yield client
+        finally:
+            client.close()
+        return
+    if cluster == "local":
+        with local_cluster(workers, **cluster_kwargs) as lc, Client(lc) as client:
+            yield client
+        return
+    n_jobs = _check_workers(workers) if workers is not None else 1
+    with slurm_cluster(slurm_config, **cluster_kwargs) as sc:
+        sc.scale(jobs=n_jobs)
+        with Client(sc) as client:
+            try:
+                client.wait_for_workers(1, timeout=worker_timeout)
+            except TimeoutError as exc:
+                raise RuntimeError(
+                    f"no SLURM worker started within {worker_timeout:g} s; check `squeue` and "
+                    f"the job logs (log-directory in {slurm_config or DEFAULT_SLURM_CONFIG})"
+                ) from exc
+            yield client

@@ -1,0 +1,200 @@
+"""Run a campaign's chunks as dask tasks that write their own store regions.
+
+One task per chunk that is not yet done. The task computes the chunk
+(``chunk_fn(chunk_id, start, stop) -> {name: array}``), writes its region of
+the store and then its ``chunk_done`` flag, all on the worker: the client only
+submits, counts completions (tqdm progress bar) and holds the store's lock.
+dask retries a task that raises (``retries``) and reschedules tasks whose
+worker died. A chunk depends only on its sample indices and the campaign seed,
+so a retried, redone or resumed chunk writes identical values.
+
+``chunk_fn`` must be picklable: a module-level function, or
+:func:`functools.partial` of one with picklable arguments.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+import uuid
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Mapping
+
+import numpy as np
+
+from ..errors import InputError
+from .cluster import connect
+from .lock import StoreLock
+from .store import ChunkPlan, create_store, done_mask, store_plan, write_chunk_region
+
+ChunkFn = Callable[[int, int, int], Mapping[str, np.ndarray]]
+
+
+class CampaignError(RuntimeError):
+    """Some chunks failed after their retries; the store stays resumable."""
+
+
+@dataclass
+class RunSummary:
+    """What :func:`run_chunks` did."""
+
+    store: str
+    n_chunks: int
+    chunks_run: int
+    chunks_skipped: int
+    samples_run: int
+    wall_s: float
+    compute_s: float = 0.0   # summed over tasks: time inside chunk_fn
+    write_s: float = 0.0     # summed over tasks: region + flag writes
+    n_workers: int = 0
+    failed: list[int] = field(default_factory=list)
+    errors: list[str] = field(default_factory=list)
+
+    @property
+    def samples_per_s(self) -> float:
+        return self.samples_run / self.wall_s if self.wall_s > 0 else float("nan")
+
+    def __str__(self) -> str:
+        return (f"{self.store}: {self.chunks_run} chunks run, {self.chunks_skipped} skipped "
+                f"(of {self.n_chunks}), {self.samples_run} samples in {self.wall_s:.2f} s "
+                f"({self.samples_per_s:.1f} samples/s on {self.n_workers} workers)")
+
+
+def _run_chunk(store_path: str, chunk_fn: ChunkFn, chunk_id: int, start: int,
+               stop: int) -> tuple[int, int, float, float]:
+    """The task: compute one chunk, write its region, then its done flag."""
+    t0 = time.perf_counter()
+    arrays = chunk_fn(chunk_id, start, stop)
+    t1 = time.perf_counter()
+    write_chunk_region(store_path, chunk_id, start, stop, arrays)
+    return chunk_id, stop - start, t1 - t0, time.perf_counter() - t1
+
+
+def run_chunks(store_path: str | os.PathLike, chunk_fn: ChunkFn, plan: ChunkPlan | None = None,
+               *, resume: bool = False, workers: int | None = None, scheduler: str | None = None,
+               cluster: str = "local", slurm_config: str | os.PathLike | None = None,
+               progress: bool = True, retries: int = 2, client=None) -> RunSummary:
+    """Run every not-done chunk of a store, one dask task each.
+
+    Parameters
+    ----------
+    store_path : path
+        A store made by :func:`~ideas_hpc.engine.store.create_store`.
+    chunk_fn : callable
+        ``chunk_fn(chunk_id, start, stop) -> {variable: array}``, picklable,
+        deterministic in ``(chunk_id, start, stop)``.
+    plan : ChunkPlan, optional
+        Must equal the store's plan (checked); default: the store's.
+    resume : bool
+        Skip chunks marked done. Without it, a store with done chunks is refused.
+    workers, scheduler, cluster, slurm_config
+        See :func:`ideas_hpc.engine.cluster.connect`.
+    progress : bool
+        Show a tqdm bar over completed chunks (stderr).
+    retries : int
+        How many times dask re-runs a chunk task that raised.
+    client : distributed.Client, optional
+        Use this client instead of starting or connecting to a cluster.
+
+    Returns
+    -------
+    RunSummary
+
+    Raises
+    ------
+    CampaignError
+        When chunks still fail after their retries (the others are written;
+        rerun with ``resume=True``).
+    """
+    path = Path(store_path)
+    stored = store_plan(path)
+    if plan is not None and (plan.n_samples, plan.chunk_size) != (stored.n_samples,
+                                                                   stored.chunk_size):
+        raise InputError(f"plan {plan} does not match the store's {stored}", field="plan")
+    if not isinstance(retries, int) or retries < 0:
+        raise InputError(f"must be an integer >= 0, got {retries!r}", field="retries")
+    t0 = time.perf_counter()
+    with StoreLock(path):
+        done = done_mask(path)
+        if done.any() and not resume:
+            raise InputError(f"store {path} already has {int(done.sum())} finished chunks; "
+                             "pass --resume to continue it", field="resume")
+        todo = [c for c in stored.chunks() if not done[c[0]]]
+        summary = RunSummary(store=str(path), n_chunks=stored.n_chunks, chunks_run=0,
+                             chunks_skipped=stored.n_chunks - len(todo), samples_run=0, wall_s=0.0)
+        if todo:
+            if client is not None:
+                _submit_all(client, path, chunk_fn, todo, summary, progress, retries)
+            else:
+                with connect(cluster=cluster, workers=workers, scheduler=scheduler,
+                             slurm_config=slurm_config) as cl:
+                    _submit_all(cl, path, chunk_fn, todo, summary, progress, retries)
+    summary.wall_s = time.perf_counter() - t0
+    if summary.failed:
+        raise CampaignError(f"{len(summary.failed)} of {len(todo)} chunks failed after "
+                            f"{retries} retries (chunks {summary.failed[:10]}): "
+                            f"{summary.errors[0]}; the other chunks are written, rerun "
+                            "with --resume to redo the failed ones")
+    return summary
+
+
+def _submit_all(client, path: Path, chunk_fn: ChunkFn, todo, summary: RunSummary,
+                progress: bool, retries: int) -> None:
+    from distributed import as_completed
+    from tqdm.auto import tqdm
+
+    summary.n_workers = len(client.scheduler_info(n_workers=-1).get("workers", {})) \
+        if _accepts_n_workers(client) else len(client.scheduler_info().get("workers", {}))
+    tag = uuid.uuid4().hex[:8]
+    futures = [client.submit(_run_chunk, str(path), chunk_fn, cid, start, stop,
+                             key=f"chunk-{cid}-{tag}", pure=False, retries=retries)
+               for cid, start, stop in todo]
+    bar = tqdm(total=summary.n_chunks, initial=summary.chunks_skipped, unit="chunk",
+               desc=path.name, disable=not progress, dynamic_ncols=True)
+    try:
+        for fut in as_completed(futures):
+            if fut.status == "finished":
+                _cid, n, t_c, t_w = fut.result()
+                summary.chunks_run += 1
+                summary.samples_run += n
+                summary.compute_s += t_c
+                summary.write_s += t_w
+            else:
+                exc = fut.exception()
+                summary.failed.append(int(fut.key.split("-")[1]))
+                summary.errors.append(f"chunk {summary.failed[-1]}: {type(exc).__name__}: {exc}")
+            bar.update(1)
+    except BaseException:
+        client.cancel(futures)
+        raise
+    finally:
+        bar.close()
+    summary.failed.sort()
+
+
+def _accepts_n_workers(client) -> bool:
+    import inspect
+
+    try:
+        return "n_workers" in inspect.signature(client.scheduler_info).parameters
+    except (TypeError, ValueError):
+        return False
+
+
+def run_campaign(store_path: str | os.PathLike, template, chunk_fn: ChunkFn, *,
+                 config: Mapping, campaign_seed: int, chunk_size: int,
+                 attrs: Mapping | None = None, resume: bool = False, **run_kwargs: Any
+                 ) -> RunSummary:
+    """Create (or, with ``resume``, check) the store, then run its chunks.
+
+    ``template``, ``config``, ``campaign_seed``, ``chunk_size``, ``attrs`` go to
+    :func:`~ideas_hpc.engine.store.create_store`; ``run_kwargs`` (``workers``,
+    ``scheduler``, ``cluster``, ``slurm_config``, ``progress``, ``retries``,
+    ``client``) to :func:`run_chunks`.
+    """
+    Path(store_path).absolute().parent.mkdir(parents=True, exist_ok=True)
+    with StoreLock(store_path):  # creation and run are one critical section
+        create_store(store_path, template, config=config, campaign_seed=campaign_seed,
+                     chunk_size=chunk_size, attrs=attrs, resume=resume)
+        return run_chunks(store_path, chunk_fn, resume=resume, **run_kwargs)
