@@ -1,0 +1,579 @@
+"""Coverage kernels (SPEC section 6) against analytic sphere caps, a plain-Python
+brute force of the SPEC formulas, and trimesh ray casting on eros001708."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from ideas_hpc.analytic import ellipsoid_mesh, sphere_mesh
+from ideas_hpc.core import bvh as cbvh
+from ideas_hpc.core import coverage as ccov
+from ideas_hpc.errors import InputError
+from ideas_hpc.mapping import (CoverageOptions, compute_coverage,
+                               coverage_options_from_config, observed_per_spacecraft)
+
+R_SPHERE = 1000.0
+
+
+@pytest.fixture(scope="module")
+def sphere():
+    return sphere_mesh(R_SPHERE, 4)
+
+
+@pytest.fixture(scope="module")
+def small_body():
+    return ellipsoid_mesh(1200.0, 800.0, 600.0, 1)
+
+
+def look_at(r, target=(0.0, 0.0, 0.0), up=(0.0, 0.0, 1.0)):
+    """dcm_BT with +z_B from r toward target."""
+    z = np.asarray(target, float) - np.asarray(r, float)
+    z /= np.linalg.norm(z)
+    u = np.asarray(up, float)
+    if abs(z @ u) > 0.9:
+        u = np.array([1.0, 0.0, 0.0])
+    x = np.cross(u, z)
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    return np.array([x, y, z])
+
+
+def rot(axis, angle):
+    a = np.asarray(axis, float) / np.linalg.norm(axis)
+    k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+    return np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * k @ k
+
+
+# ---------------------------------------------------------------- brute force
+
+def brute_force(shape, r_T, dcm_BT, times, eta, near, far, exact, active=None,
+                min_elev=None, max_range=None):
+    """Plain-Python loops over the SPEC section 6 formulas as written (eq. 25-26)."""
+    V = shape.vertices_T.shape[0]
+    N, n_img = r_T.shape[:2]
+    t = math.tan(eta)
+    f, n = far, near
+    obs = np.zeros(V, bool)
+    first = np.full(V, np.nan)
+    count = np.zeros(V, np.int64)
+    per_sc = np.zeros((N, V), bool)
+    for k in range(N):
+        if active is not None and not active[k]:
+            continue
+        for i in range(n_img):
+            r = [float(x) for x in r_T[k, i]]
+            C = dcm_BT[k, i]
+            for j in range(V):
+                p = [float(x) for x in shape.vertices_T[j]]
+                nn = [float(x) for x in shape.vertex_normals_T[j]]
+                if exact:
+                    ok = (r[0] - p[0]) * nn[0] + (r[1] - p[1]) * nn[1] + (r[2] - p[2]) * nn[2] > 0
+                else:
+                    ok = r[0] * nn[0] + r[1] * nn[1] + r[2] * nn[2] >= 0
+                if not ok:
+                    continue
+                d = [p[0] - r[0], p[1] - r[1], p[2] - r[2]]
+                q = [C[m, 0] * d[0] + C[m, 1] * d[1] + C[m, 2] * d[2] for m in range(3)]
+                if not q[2] > 0:
+                    continue
+                a = q[0] / (q[2] * t)
+                b = q[1] / (q[2] * t)
+                c = ((f + n) * q[2] - 2 * f * n) / ((f - n) * q[2])
+                if not (abs(a) <= 1 and abs(b) <= 1 and abs(c) <= 1):
+                    continue
+                rng = math.sqrt(d[0] ** 2 + d[1] ** 2 + d[2] ** 2)
+                if max_range is not None and rng > max_range:
+                    continue
+                if min_elev is not None:
+                    los_n = -(d[0] * nn[0] + d[1] * nn[1] + d[2] * nn[2])
+                    if math.asin(max(-1.0, min(1.0, los_n / rng))) < min_elev:
+                        continue
+                obs[j] = True
+                per_sc[k, j] = True
+                count[j] += 1
+                if not first[j] <= times[i]:
+                    first[j] = times[i]
+    return obs, first, count, per_sc
+
+
+@st.composite
+def configurations(draw):
+    N = draw(st.integers(1, 3))
+    n_img = draw(st.integers(1, 5))
+    seed = draw(st.integers(0, 2**32 - 1))
+    rng = np.random.default_rng(seed)
+    r = np.empty((N, n_img, 3))
+    C = np.empty((N, n_img, 3, 3))
+    for k in range(N):
+        for i in range(n_img):
+            u = rng.normal(size=3)
+            u /= np.linalg.norm(u)
+            r[k, i] = u * rng.uniform(1500.0, 6000.0)
+            # aim near the body with a random tilt so that some vertices clip
+            C[k, i] = rot(rng.normal(size=3), rng.uniform(0.0, 0.4)) @ look_at(
+                r[k, i], target=rng.uniform(-500, 500, 3))
+    times = np.sort(rng.uniform(0.0, 100.0, n_img))
+    if n_img > 1 and draw(st.booleans()):
+        times[1] = times[0]  # duplicate times are allowed
+    eta = draw(st.floats(0.02, 1.4))
+    near = draw(st.floats(1.0, 3000.0))
+    far = near + draw(st.floats(10.0, 6000.0))
+    exact = draw(st.booleans())
+    active = rng.random(N) < 0.8
+    return r, C, times, eta, near, far, exact, active
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(cfg=configurations())
+def test_brute_force_agrees_exactly(small_body, cfg):
+    r, C, times, eta, near, far, exact, active = cfg
+    opts = CoverageOptions(mode="exact" if exact else "paper")
+    obs, first, count, per_sc = brute_force(small_body, r, C, times, eta, near, far, exact,
+                                            active)
+    full = compute_coverage(small_body, r, C, times, eta, near, far, options=opts,
+                            active=active)
+    np.testing.assert_array_equal(full.observed, obs)
+    np.testing.assert_array_equal(full.first_seen, first)
+    np.testing.assert_array_equal(full.times_seen, count)
+    area = small_body.vertex_areas
+    assert full.coverage == pytest.approx(area[obs].sum() / area.sum(), rel=1e-12)
+    assert full.coverage_count == pytest.approx(obs.mean(), rel=1e-12)
+    quick = compute_coverage(small_body, r, C, times, eta, near, far, options=opts,
+                             active=active, counts=False)
+    np.testing.assert_array_equal(quick.observed, obs)
+    np.testing.assert_array_equal(quick.first_seen, first)
+    np.testing.assert_array_equal(quick.times_seen, obs.astype(int))
+    mask = observed_per_spacecraft(small_body, r, C, eta, near, far, options=opts)
+    _, _, _, per_all = brute_force(small_body, r, C, times, eta, near, far, exact)
+    np.testing.assert_array_equal(mask, per_all)
+
+
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(cfg=configurations(), elev=st.floats(0.0, 1.2), rng_frac=st.floats(0.3, 1.2))
+def test_brute_force_strict_elevation_range(small_body, cfg, elev, rng_frac):
+    r, C, times, eta, near, far, exact, active = cfg
+    max_range = rng_frac * 5000.0
+    opts = CoverageOptions(mode="exact" if exact else "paper", min_elevation=elev,
+                           max_ground_resolution=max_range * 0.55e-6 / 0.08)
+    obs, first, count, _ = brute_force(small_body, r, C, times, eta, near, far, exact, active,
+                                       min_elev=elev, max_range=opts.max_range)
+    res = compute_coverage(small_body, r, C, times, eta, near, far, options=opts, active=active)
+    # asin(.) >= eps in the reference, a sine product in the kernel: equal away
+    # from a 1-ulp band that random draws do not hit
+    np.testing.assert_array_equal(res.observed, obs)
+    np.testing.assert_array_equal(res.first_seen, first)
+    np.testing.assert_array_equal(res.times_seen, count)
+
+
+# ---------------------------------------------------------------- sphere caps
+
+def _one_view(d, eta, far=1e7, n_img=1):
+    r = np.zeros((1, n_img, 3))
+    r[0, :, 0] = d
+    C = np.broadcast_to(look_at(r[0, 0]), (1, n_img, 3, 3)).copy()
+    return r, C, np.arange(n_img, dtype=float)
+
+
+@pytest.mark.parametrize("d_over_R", [1.5, 3.0, 10.0, 100.0])
+def test_sphere_exact_cap_fraction(sphere, d_over_R):
+    """Exact culling from distance d sees the cap cos(theta) > R/d, area fraction
+    (1 - R/d)/2 (spherical cap area 2 pi R^2 (1 - cos theta))."""
+    d = d_over_R * R_SPHERE
+    eta = math.asin(1 / d_over_R) + 0.05  # FoV wider than the sphere
+    r, C, t = _one_view(d, eta)
+    res = compute_coverage(sphere, r, C, t, eta, 1e-4, 1e7, options=CoverageOptions(mode="exact"))
+    expected = (1 - 1 / d_over_R) / 2
+    # mesh resolution: a band one edge (~0.03 R at resolution 4) wide around the rim
+    edge = 0.035
+    tol = 0.5 * math.sqrt(1 - (1 / d_over_R) ** 2) * edge
+    assert abs(res.coverage - expected) <= tol
+    assert abs(res.coverage_count - expected) <= tol
+    # per vertex: analytic condition p . x_hat > R^2 / d (away from the rim)
+    cosang = sphere.vertices_T[:, 0] / R_SPHERE
+    clear = np.abs(cosang - 1 / d_over_R) > 1e-6
+    # icosphere normals are area-weighted face normals, so vertices within
+    # ~half an edge of the rim may go either way
+    firm = np.abs(cosang - 1 / d_over_R) > edge
+    np.testing.assert_array_equal(res.observed[firm & clear], (cosang > 1 / d_over_R)[firm & clear])
+
+
+def test_sphere_paper_mode_hemisphere(sphere):
+    """Paper culling r . n >= 0 keeps the hemisphere facing the spacecraft."""
+    d = 20 * R_SPHERE
+    eta = math.atan(1 / 20) + 0.02
+    r, C, t = _one_view(d, eta)
+    res = compute_coverage(sphere, r, C, t, eta, 1e-4, 1e7)
+    assert abs(res.coverage - 0.5) <= 0.02
+    x = sphere.vertices_T[:, 0] / R_SPHERE
+    firm = np.abs(x) > 0.035
+    np.testing.assert_array_equal(res.observed[firm], (x > 0)[firm])
+
+
+def test_sphere_min_elevation_cap(sphere):
+    """Cap with elevation >= eps: Earth central angle lambda = acos(R cos eps / d) - eps
+    (Wertz & Larson, SMAD, sec. 5.2)."""
+    d, eps = 4 * R_SPHERE, math.radians(20)
+    eta = math.asin(0.25) + 0.05
+    r, C, t = _one_view(d, eta)
+    res = compute_coverage(sphere, r, C, t, eta, 1e-4, 1e7,
+                           options=CoverageOptions(mode="exact", min_elevation=eps))
+    lam = math.acos(R_SPHERE * math.cos(eps) / d) - eps
+    assert abs(res.coverage - (1 - math.cos(lam)) / 2) <= 0.01
+    x = sphere.vertices_T[:, 0] / R_SPHERE
+    firm = np.abs(np.arccos(np.clip(x, -1, 1)) - lam) > 0.05
+    np.testing.assert_array_equal(res.observed[firm], (np.arccos(np.clip(x, -1, 1)) < lam)[firm])
+
+
+def test_sphere_ground_resolution_cap(sphere):
+    """Range <= rho_max: law of cosines gives cos(theta) = (R^2 + d^2 - rho^2) / (2 R d)."""
+    d = 4 * R_SPHERE
+    rho = 3.5 * R_SPHERE
+    eta = math.asin(0.25) + 0.05
+    r, C, t = _one_view(d, eta)
+    X = 0.55e-6 * rho / 0.08
+    res = compute_coverage(sphere, r, C, t, eta, 1e-4, 1e7,
+                           options=CoverageOptions(mode="exact", max_ground_resolution=X))
+    c0 = (R_SPHERE**2 + d**2 - rho**2) / (2 * R_SPHERE * d)
+    assert abs(res.coverage - (1 - c0) / 2) <= 0.01
+
+
+def test_sphere_illumination(sphere):
+    """Convex body: lit = n . s > 0 (no cast shadows). Sun at +y, spacecraft at +x."""
+    d = 10 * R_SPHERE
+    eta = math.asin(0.1) + 0.05
+    r, C, t = _one_view(d, eta, n_img=3)
+    sun = np.tile([0.0, 3.0, 0.0], (3, 1))
+    opts = CoverageOptions(mode="exact", illumination=True)
+    res = compute_coverage(sphere, r, C, t, eta, 1e-4, 1e7, options=opts, sun_T=sun)
+    p = sphere.vertices_T / R_SPHERE
+    n = sphere.vertex_normals_T
+    truth = (p[:, 0] > 0.1) & (n[:, 1] > 0)
+    firm = (np.abs(p[:, 0] - 0.1) > 0.035)
+    np.testing.assert_array_equal(res.observed[firm], truth[firm])
+    np.testing.assert_array_equal(res.times_seen[res.observed], 3)
+    np.testing.assert_array_equal(res.first_seen[res.observed], 0.0)
+
+
+# ---------------------------------------------------------------- frustum planes
+
+def test_frustum_planes_inside_outside():
+    """Vertices a relative 1e-7 inside / outside each of the six planes of eq. 25."""
+    eta, near, far = math.radians(10.0), 50.0, 4000.0
+    tn = math.tan(eta)
+    C = rot([0.3, -1.0, 0.5], 0.7)  # rows: camera axes in T
+    r = np.array([100.0, -200.0, 300.0])
+    e = 1e-7
+    qs, want = [], []
+    zmid = 1000.0
+    for s_in, ok in ((1 - e, True), (1 + e, False)):
+        for sign in (1, -1):
+            qs.append([sign * tn * zmid * s_in, 0.0, zmid]); want.append(ok)   # |a| = 1
+            qs.append([0.0, sign * tn * zmid * s_in, zmid]); want.append(ok)   # |b| = 1
+    qs.append([0.0, 0.0, near * (1 + e)]); want.append(True)
+    qs.append([0.0, 0.0, near * (1 - e)]); want.append(False)
+    qs.append([0.0, 0.0, far * (1 - e)]); want.append(True)
+    qs.append([0.0, 0.0, far * (1 + e)]); want.append(False)
+    qs.append([0.0, 0.0, -zmid]); want.append(False)                         # behind
+    qs.append([tn * zmid * 0.5, -tn * zmid * 0.5, zmid]); want.append(True)  # corner region
+    q = np.array(qs)
+    verts = np.ascontiguousarray(r + q @ C)            # p = r + C^T q
+    normals = np.ascontiguousarray(np.tile(-C[2], (len(q), 1)))  # facing the camera
+    areas = np.ones(len(q))
+    rT = r.reshape(1, 1, 3).copy()
+    dcm = C.reshape(1, 1, 3, 3).copy()
+    act = np.ones(1, bool)
+    for exact in (False, True):
+        if not exact:
+            # paper culling uses r . n; make it pass for every vertex
+            normals_p = np.ascontiguousarray(np.tile(r / np.linalg.norm(r), (len(q), 1)))
+        else:
+            normals_p = normals
+        obs, first, cnt, cov, covn = ccov.coverage_counts(
+            verts, normals_p, areas, rT, dcm, np.zeros(1), tn, near, far, exact, act)
+        np.testing.assert_array_equal(obs, want)
+        obs2 = ccov.coverage_vertices(
+            verts, normals_p, areas, rT, dcm, np.zeros(1), tn, near, far, exact, act, True,
+            -2.0, np.inf, False, False, np.zeros((1, 3)), *_dummy_tree())[0]
+        np.testing.assert_array_equal(obs2, want)
+
+
+def _dummy_tree():
+    return (np.zeros((1, 6)), np.full((1, 4), -1, dtype=np.int64), np.zeros((1, 9)),
+            np.zeros((1, 3), dtype=np.int64))
+
+
+def test_culling_boundaries():
+    """Paper: r . n = 0 is kept (>=); exact: (r - p) . n = 0 is rejected (>)."""
+    r = np.array([0.0, 0.0, -1000.0])
+    C = np.eye(3)
+    verts = np.array([[0.0, 0.0, 100.0], [0.0, 0.0, 100.0]])
+    normals = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])   # r.n = 0 ; r.n > 0
+    args = (verts, normals, np.ones(2), r.reshape(1, 1, 3), C.reshape(1, 1, 3, 3),
+            np.zeros(1), 1.0, 1.0, 1e4)
+    obs = ccov.coverage_counts(*args, False, np.ones(1, bool))[0]
+    np.testing.assert_array_equal(obs, [True, True])
+    obs = ccov.coverage_counts(*args, True, np.ones(1, bool))[0]
+    np.testing.assert_array_equal(obs, [False, True])
+
+
+# ---------------------------------------------------------------- occlusion vs trimesh
+
+def _trimesh_blocked(mesh, shape, origins_idx, targets, adjacency):
+    """Segment p_j -> target blocked by a face not containing j (trimesh ray casting)."""
+    p = shape.vertices_T[origins_idx]
+    d = targets - p
+    L = np.linalg.norm(d, axis=1)
+    u = d / L[:, None]
+    tri, ray, loc = mesh.ray.intersects_id(p, u, multiple_hits=True, return_locations=True)
+    blocked = np.zeros(len(p), bool)
+    for f, k, x in zip(tri, ray, loc):
+        if f in adjacency[origins_idx[k]]:
+            continue
+        s = (x - p[k]) @ u[k]
+        if 1e-6 < s < L[k]:
+            blocked[k] = True
+    return blocked
+
+
+def test_occlusion_matches_trimesh_on_eros(eros1708):
+    import trimesh
+
+    shape = eros1708.shape
+    mesh = trimesh.Trimesh(shape.vertices_T, shape.faces, process=False)
+    adjacency = [set() for _ in range(shape.n_vertices)]
+    for f, tri in enumerate(shape.faces):
+        for v in tri:
+            adjacency[v].add(f)
+    rng = np.random.default_rng(20240605)
+    n_view = 24
+    r = np.empty((n_view, 1, 3))
+    C = np.empty((n_view, 1, 3, 3))
+    for k in range(n_view):
+        u = rng.normal(size=3)
+        u /= np.linalg.norm(u)
+        r[k, 0] = u * rng.uniform(25e3, 160e3)
+        C[k, 0] = look_at(r[k, 0])
+    eta = math.radians(60.0)
+    opts = CoverageOptions(mode="exact", occlusion=True)
+    mask = observed_per_spacecraft(shape, r, C, eta, 1e-4, 1e6, options=opts)
+    facing_mask = observed_per_spacecraft(shape, r, C, eta, 1e-4, 1e6,
+                                          options=CoverageOptions(mode="exact"))
+    p = shape.vertices_T
+    n = shape.vertex_normals_T
+    total = mismatches = n_blocked = 0
+    for k in range(n_view):
+        facing = ((r[k, 0] - p) * n).sum(axis=1) > 0
+        np.testing.assert_array_equal(facing_mask[k], facing)  # FoV holds the whole body
+        idx = np.flatnonzero(facing)
+        blocked = _trimesh_blocked(mesh, shape, idx, np.tile(r[k, 0], (len(idx), 1)), adjacency)
+        truth = np.zeros(shape.n_vertices, bool)
+        truth[idx[~blocked]] = True
+        mismatches += int((mask[k] != truth).sum())
+        total += len(idx)
+        n_blocked += int(blocked.sum())
+    assert n_blocked > 50  # the test really exercises occlusion
+    assert mismatches == 0, f"{mismatches} of {total} facing vertices disagree"
+
+
+def test_shadow_rays_match_trimesh_on_eros(eros1708):
+    import trimesh
+
+    shape = eros1708.shape
+    mesh = trimesh.Trimesh(shape.vertices_T, shape.faces, process=False)
+    adjacency = [set() for _ in range(shape.n_vertices)]
+    for f, tri in enumerate(shape.faces):
+        for v in tri:
+            adjacency[v].add(f)
+    tree = cbvh.build_bvh(shape.vertices_T, shape.faces)
+    rng = np.random.default_rng(7)
+    total_shadow = 0
+    for _ in range(20):
+        s = rng.normal(size=3)
+        s /= np.linalg.norm(s)
+        lit = shape.vertex_normals_T @ s > 0
+        idx = np.flatnonzero(lit)
+        far_pt = shape.vertices_T[idx] + 1e6 * s
+        truth = _trimesh_blocked(mesh, shape, idx, far_pt, adjacency)
+        ours = cbvh.segments_blocked(*tree, np.ascontiguousarray(shape.vertices_T[idx]),
+                                     np.ascontiguousarray(far_pt), idx.astype(np.int64))
+        np.testing.assert_array_equal(ours, truth)
+        total_shadow += int(truth.sum())
+    assert total_shadow > 20
+
+
+def test_bvh_convex_body_never_blocks(sphere):
+    """On a convex body no segment from a facing vertex toward the outside is blocked."""
+    tree = cbvh.build_bvh(sphere.vertices_T, sphere.faces)
+    p = sphere.vertices_T
+    tgt = np.ascontiguousarray(p + 5 * R_SPHERE * sphere.vertex_normals_T)
+    out = cbvh.segments_blocked(*tree, p, tgt, np.arange(len(p), dtype=np.int64))
+    assert not out.any()
+    # and a segment through the body is blocked
+    out = cbvh.segments_blocked(*tree, np.array([[-2e3, 0.0, 10.0]]), np.array([[2e3, 0.0, 10.0]]),
+                                np.array([-1], dtype=np.int64))
+    assert out.all()
+
+
+# ---------------------------------------------------------------- paper case
+
+def paper_case(n_img=6001):
+    th = np.array([0.2, 1.7, 2.4, 2.9, 3.3, 3.5, 5.6, 6.0])
+    t = np.linspace(0.0, 600.0, n_img)
+    z = -30e3 + 60e3 * t / 600.0
+    d = 155.901e3
+    r = np.empty((8, n_img, 3))
+    C = np.zeros((8, n_img, 3, 3))
+    for k, a in enumerate(th):
+        r[k, :, 0] = d * math.cos(a)
+        r[k, :, 1] = d * math.sin(a)
+        r[k, :, 2] = z
+        C[k, :, 0] = [0.0, 0.0, 1.0]
+        C[k, :, 1] = [-math.sin(a), math.cos(a), 0.0]
+        C[k, :, 2] = [-math.cos(a), -math.sin(a), 0.0]
+    return r, C, t
+
+
+def test_paper_case_full_coverage(eros1708):
+    """Paper Fig. 21/25: the 8-spacecraft NP swarm maps 100 % of Eros."""
+    r, C, t = paper_case(1201)
+    res = compute_coverage(eros1708.shape, r, C, t, math.radians(3.827), 1e-4, 166.347e3)
+    assert res.coverage == 1.0
+    assert np.all(np.isfinite(res.first_seen))
+    # failed spacecraft lower the coverage, and the union of the per-spacecraft
+    # masks reproduces the combined result
+    act = np.ones(8, bool)
+    act[2:] = False
+    part = compute_coverage(eros1708.shape, r, C, t, math.radians(3.827), 1e-4, 166.347e3,
+                            active=act)
+    mask = observed_per_spacecraft(eros1708.shape, r, C, math.radians(3.827), 1e-4, 166.347e3)
+    np.testing.assert_array_equal(mask[act].any(axis=0), part.observed)
+    assert part.coverage < 1.0
+
+
+# ---------------------------------------------------------------- bad input
+
+@pytest.fixture(scope="module")
+def good(small_body):
+    r = np.zeros((2, 3, 3))
+    r[..., 0] = 5000.0
+    C = np.broadcast_to(look_at(r[0, 0]), (2, 3, 3, 3)).copy()
+    return small_body, r, C, np.arange(3.0)
+
+
+@pytest.mark.parametrize("eta", [0.0, -0.1, math.pi / 2, 2.0, float("nan")])
+def test_bad_eta(good, eta):
+    shape, r, C, t = good
+    with pytest.raises(InputError) as ei:
+        compute_coverage(shape, r, C, t, eta, 1.0, 1e4)
+    assert ei.value.field == "eta"
+
+
+def test_bad_near_far(good):
+    shape, r, C, t = good
+    with pytest.raises(InputError) as ei:
+        compute_coverage(shape, r, C, t, 0.1, 1e4, 1e4)
+    assert ei.value.field == "near"
+    with pytest.raises(InputError) as ei:
+        compute_coverage(shape, r, C, t, 0.1, 2e4, 1e4)
+    assert "far" in str(ei.value)
+
+
+def test_bad_shapes(good):
+    shape, r, C, t = good
+    with pytest.raises(InputError) as ei:
+        compute_coverage(shape, r, C[:1], t, 0.1, 1.0, 1e4)
+    assert ei.value.field == "dcm_BT"
+    with pytest.raises(InputError) as ei:
+        compute_coverage(shape, r[..., :2], C, t, 0.1, 1.0, 1e4)
+    assert ei.value.field == "r_T"
+    with pytest.raises(InputError) as ei:
+        compute_coverage(shape, r, C, t[:2], 0.1, 1.0, 1e4)
+    assert ei.value.field == "image_times"
+    with pytest.raises(InputError) as ei:
+        compute_coverage(shape, r, C, t[::-1], 0.1, 1.0, 1e4)
+    assert ei.value.field == "image_times"
+    with pytest.raises(InputError) as ei:
+        compute_coverage(shape, r, C, t, 0.1, 1.0, 1e4, active=np.ones(3, bool))
+    assert ei.value.field == "active"
+
+
+def test_bad_dcm(good):
+    shape, r, C, t = good
+    bad = C.copy()
+    bad[1, 2, 0, 0] = np.nan
+    with pytest.raises(InputError) as ei:
+        compute_coverage(shape, r, bad, t, 0.1, 1.0, 1e4)
+    assert ei.value.field == "dcm_BT"
+    bad = C.copy()
+    bad[0, 1] *= 1.01
+    with pytest.raises(InputError) as ei:
+        compute_coverage(shape, r, bad, t, 0.1, 1.0, 1e4)
+    assert ei.value.field == "dcm_BT" and "orthonormal" in str(ei.value)
+    bad = C.copy()
+    bad[0, 0, 0] *= -1
+    with pytest.raises(InputError) as ei:
+        observed_per_spacecraft(shape, r, bad, 0.1, 1.0, 1e4)
+    assert ei.value.field == "dcm_BT"
+
+
+def test_bad_positions_and_sun(good):
+    shape, r, C, t = good
+    bad = r.copy()
+    bad[0, 0, 0] = np.inf
+    with pytest.raises(InputError) as ei:
+        compute_coverage(shape, bad, C, t, 0.1, 1.0, 1e4)
+    assert ei.value.field == "r_T"
+    with pytest.raises(InputError) as ei:
+        compute_coverage(shape, r, C, t, 0.1, 1.0, 1e4,
+                         options=CoverageOptions(illumination=True))
+    assert ei.value.field == "sun_T"
+    with pytest.raises(InputError) as ei:
+        compute_coverage(shape, r, C, t, 0.1, 1.0, 1e4,
+                         options=CoverageOptions(illumination=True), sun_T=np.ones((2, 3)))
+    assert ei.value.field == "sun_T"
+
+
+def test_options_from_config():
+    o = coverage_options_from_config({"mode": "exact", "occlusion": True,
+                                      "min_elevation_deg": 5.0, "max_ground_resolution_m": 1.0,
+                                      "wavelength_um": 0.55, "aperture_cm": 8.0})
+    assert o.mode == "exact" and o.occlusion and not o.illumination
+    assert o.min_elevation == pytest.approx(math.radians(5.0))
+    assert o.wavelength == pytest.approx(0.55e-6) and o.aperture == pytest.approx(0.08)
+    # paper sizing (SPEC section 2): X D / lambda = 145.454 km
+    assert o.max_range == pytest.approx(145.4545e3, rel=1e-5)
+    assert coverage_options_from_config({}) == CoverageOptions()
+    for table, field in (({"foo": 1}, "coverage.foo"),
+                         ({"mode": "fast"}, "coverage.mode"),
+                         ({"occlusion": "yes"}, "coverage.occlusion"),
+                         ({"min_elevation_deg": 95.0}, "coverage.min_elevation_deg"),
+                         ({"aperture_cm": -1.0}, "coverage.aperture_cm"),
+                         ({"wavelength_um": "x"}, "coverage.wavelength_um")):
+        with pytest.raises(InputError) as ei:
+            coverage_options_from_config(table)
+        assert ei.value.field == field
+    with pytest.raises(InputError) as ei:
+        coverage_options_from_config({"bogus": 1}, prefix="mapping.")
+    assert ei.value.field == "mapping.bogus"
+
+
+def test_render_coverage_map(tmp_path, small_body):
+    from ideas_hpc.plots.coverage_map import render_coverage_map
+
+    obs = small_body.vertices_T[:, 0] > 0
+    p = render_coverage_map(small_body, obs, tmp_path / "a" / "obs.png", title="test")
+    assert p.is_file() and p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    fs = np.where(obs, small_body.vertices_T[:, 1], np.nan)
+    p = render_coverage_map(small_body, fs, tmp_path / "fs.png", kind="first_seen")
+    assert p.stat().st_size > 10_000
+    with pytest.raises(InputError) as ei:
+        render_coverage_map(small_body, obs[:-1], tmp_path / "x.png")
+    assert ei.value.field == "values"
+    with pytest.raises(InputError) as ei:
+        render_coverage_map(small_body, obs, tmp_path / "x.png", kind="area")
+    assert ei.value.field == "kind"
