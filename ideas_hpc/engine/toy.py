@@ -166,6 +166,24 @@ def run_toy(out, *, n_samples: int = 64, chunk_size: int = 4, n_vertex: int = 64
                         resume=resume, **run_kwargs)
 
 
+def run_toy_serial(out, *, n_samples: int = 64, chunk_size: int = 4, n_vertex: int = 64,
+                   n_time: int = 16, work: int = 200, seed: int = 12345) -> None:
+    """The same toy campaign written chunk by chunk in this process, without dask.
+
+    The reference the distributed, killed-and-resumed runs must reproduce.
+    """
+    from .store import ChunkPlan, create_store, write_chunk_region
+
+    create_store(out, toy_template(n_samples, n_vertex, n_time),
+                 config=toy_config(n_samples, chunk_size, n_vertex, n_time, work, seed),
+                 campaign_seed=seed, chunk_size=chunk_size,
+                 attrs={"kind": "toy", "title": "engine test workload"})
+    for cid, start, stop in ChunkPlan(n_samples, chunk_size):
+        arrays = toy_chunk(cid, start, stop, campaign_seed=seed, n_vertex=n_vertex,
+                           n_time=n_time, work=work)
+        write_chunk_region(out, cid, start, stop, arrays)
+
+
 def main(argv: list[str] | None = None) -> int:
     from ..errors import InputError
 
