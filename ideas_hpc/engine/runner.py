@@ -58,7 +58,8 @@ class RunSummary:
     def __str__(self) -> str:
         return (f"{self.store}: {self.chunks_run} chunks run, {self.chunks_skipped} skipped "
                 f"(of {self.n_chunks}), {self.samples_run} samples in {self.wall_s:.2f} s "
-                f"({self.samples_per_s:.1f} samples/s on {self.n_workers} workers)")
+                f"({self.samples_per_s:.1f} samples/s on {self.n_workers} workers; tasks spent "
+                f"{self.compute_s:.2f} s computing, {self.write_s:.2f} s writing)")
 
 
 def _run_chunk(store_path: str, chunk_fn: ChunkFn, chunk_id: int, start: int,

@@ -1,0 +1,227 @@
+"""Engine on real dask clusters: worker counts, retries, killed campaigns, killed workers.
+
+Every distributed result is compared with the same toy campaign written
+serially in this process without dask (``run_toy_serial``): arrays must be
+bit-identical. One 2-worker LocalCluster is shared by the module (start-up
+costs seconds); the worker-kill test runs last because it restarts a worker.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from ideas_hpc.engine.lock import lock_path
+from ideas_hpc.engine.runner import CampaignError
+from ideas_hpc.engine.store import done_mask, store_attrs
+from ideas_hpc.engine.toy import run_toy, run_toy_serial, toy_chunk
+from ideas_hpc.errors import InputError
+
+# 24 chunks of ~0.1 s each: long enough to kill mid-run, short enough for CI.
+TOY = dict(n_samples=96, chunk_size=4, n_vertex=64, n_time=16, work=100_000, seed=7)
+N_CHUNKS = 24
+SAMPLE_VARS = ("coverage", "observed", "first_seen", "times_seen", "sigma_error", "sample_seed")
+
+
+def _warm():
+    from ideas_hpc.engine.toy import toy_chunk as f
+
+    f(0, 0, 1, campaign_seed=0, n_vertex=2, n_time=1, work=1)  # load the Numba cache once
+    return os.getpid()
+
+
+@pytest.fixture(scope="module")
+def cluster2():
+    from distributed import Client
+
+    from ideas_hpc.engine.cluster import local_cluster
+
+    with local_cluster(2) as lc, Client(lc) as client:
+        client.run(_warm)
+        yield lc, client
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    p = tmp_path_factory.mktemp("ref") / "serial.zarr"
+    run_toy_serial(p, **TOY)
+    return xr.load_dataset(p, engine="zarr")
+
+
+def assert_same_as(reference, path):
+    """Store at ``path`` is complete and bit-identical to the serial reference."""
+    assert done_mask(path).all(), f"not all chunks done: {done_mask(path)}"
+    ds = xr.load_dataset(path, engine="zarr")
+    for name in SAMPLE_VARS:
+        np.testing.assert_array_equal(ds[name].values, reference[name].values, err_msg=name)
+    assert np.isfinite(ds.coverage.values).all()  # no chunk left at its NaN fill
+    assert store_attrs(path)["config_hash"] == reference.attrs["config_hash"]
+
+
+def test_two_workers_match_serial(cluster2, reference, tmp_path):
+    _, client = cluster2
+    s = run_toy(tmp_path / "w2.zarr", client=client, progress=False, **TOY)
+    assert (s.chunks_run, s.chunks_skipped, s.samples_run) == (N_CHUNKS, 0, 96)
+    assert s.n_workers == 2
+    assert_same_as(reference, tmp_path / "w2.zarr")
+    assert not lock_path(tmp_path / "w2.zarr").exists()
+    # Finished store, no --resume: refused; with --resume: nothing to do.
+    with pytest.raises(InputError, match="already exists"):
+        run_toy(tmp_path / "w2.zarr", client=client, progress=False, **TOY)
+    s = run_toy(tmp_path / "w2.zarr", client=client, progress=False, resume=True, **TOY)
+    assert (s.chunks_run, s.chunks_skipped) == (0, N_CHUNKS)
+
+
+def test_one_worker_matches_two(reference, tmp_path, capsys):
+    # Its own LocalCluster with one worker process, started by the engine.
+    s = run_toy(tmp_path / "w1.zarr", workers=1, progress=True, **TOY)
+    assert s.n_workers == 1 and s.chunks_run == N_CHUNKS
+    assert_same_as(reference, tmp_path / "w1.zarr")
+    err = capsys.readouterr().err
+    assert f"{N_CHUNKS}/{N_CHUNKS}" in err  # the tqdm bar reached the end
+
+
+def test_failed_tasks_retried_then_resumed(cluster2, reference, tmp_path):
+    _, client = cluster2
+    flags = tmp_path / "flags"
+    flags.mkdir()
+    # Chunks 2 and 5 raise once; dask retries them.
+    s = run_toy(tmp_path / "retry.zarr", client=client, progress=False, retries=2,
+                fail_once_dir=str(flags), fail_chunks=(2, 5), **TOY)
+    assert s.chunks_run == N_CHUNKS and sorted(os.listdir(flags)) == ["failed-2", "failed-5"]
+    assert_same_as(reference, tmp_path / "retry.zarr")
+    # Without retries the failures surface, the rest is written, --resume finishes.
+    flags2 = tmp_path / "flags2"
+    flags2.mkdir()
+    with pytest.raises(CampaignError, match=r"2 of 24 chunks failed.*chunks \[3, 9\]"):
+        run_toy(tmp_path / "noretry.zarr", client=client, progress=False, retries=0,
+                fail_once_dir=str(flags2), fail_chunks=(3, 9), **TOY)
+    mask = done_mask(tmp_path / "noretry.zarr")
+    assert list(np.flatnonzero(~mask)) == [3, 9]
+    s = run_toy(tmp_path / "noretry.zarr", client=client, progress=False, retries=0, resume=True,
+                fail_once_dir=str(flags2), fail_chunks=(3, 9), **TOY)
+    assert (s.chunks_run, s.chunks_skipped) == (2, N_CHUNKS - 2)
+    assert_same_as(reference, tmp_path / "noretry.zarr")
+
+
+def _toy_cmd(out: Path, extra: list[str]) -> list[str]:
+    return [sys.executable, "-m", "ideas_hpc.engine.toy", "--out", str(out), "--resume",
+            "--no-progress", "--n-samples", str(TOY["n_samples"]),
+            "--chunk-size", str(TOY["chunk_size"]), "--n-vertex", str(TOY["n_vertex"]),
+            "--n-time", str(TOY["n_time"]), "--work", str(TOY["work"]),
+            "--seed", str(TOY["seed"]), *extra]
+
+
+def _n_done(out: Path) -> int:
+    try:
+        return int(done_mask(out).sum())
+    except Exception:  # not created yet
+        return -1
+
+
+def kill_and_resume(out: Path, extra: list[str], n_kills: int, rng: np.random.Generator,
+                    log: list) -> None:
+    """SIGKILL the campaign process ``n_kills`` times at random points, then let it finish."""
+    kills = 0
+    attempts = 0
+    while kills < n_kills:
+        attempts += 1
+        assert attempts < 4 * n_kills, f"could not land {n_kills} kills: {log}"
+        before = _n_done(out)
+        if before >= N_CHUNKS:
+            break
+        proc = subprocess.Popen(_toy_cmd(out, extra), stdout=subprocess.DEVNULL,
+                                stderr=subprocess.DEVNULL)
+        try:
+            if kills == 0 or rng.random() < 0.25:
+                # Anywhere from start-up (imports, store creation, lock) to early chunks.
+                time.sleep(rng.uniform(0.2, 3.5))
+            else:
+                # After a few more chunks finish, plus a random offset inside a chunk.
+                target = max(before, 0) + int(rng.integers(1, 4))
+                t_end = time.monotonic() + 60
+                while _n_done(out) < target and proc.poll() is None and time.monotonic() < t_end:
+                    time.sleep(0.02)
+                time.sleep(rng.uniform(0.0, 0.15))
+            if proc.poll() is None:
+                proc.send_signal(signal.SIGKILL)
+                proc.wait()
+                kills += 1
+                log.append((before, _n_done(out)))
+            else:
+                log.append((before, "finished"))
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+    done = _n_done(out)
+    assert done < N_CHUNKS, f"campaign finished before the last kill: {log}"
+    final = subprocess.run(_toy_cmd(out, extra), capture_output=True, text=True, timeout=300)
+    assert final.returncode == 0, final.stderr[-2000:]
+    assert f"{N_CHUNKS} skipped" not in final.stdout  # the last run had work left
+
+
+def test_sigkill_campaign_process_then_resume(cluster2, reference, tmp_path):
+    lc, _ = cluster2
+    out = tmp_path / "killed.zarr"
+    log: list = []
+    kill_and_resume(out, ["--scheduler", lc.scheduler_address], 5, np.random.default_rng(11), log)
+    print("kills (chunks done before, after):", log)
+    mid_run = [a for b, a in log if isinstance(a, int) and 0 < a < N_CHUNKS]
+    assert len(mid_run) >= 3, log  # most kills landed while chunks were being written
+    assert_same_as(reference, out)
+    assert not lock_path(out).exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["killed.zarr"]  # no partial stores
+
+
+@pytest.mark.slow
+def test_sigkill_campaign_with_own_cluster_many_times(reference, tmp_path):
+    # The killed process owns its LocalCluster: its workers die with it.
+    out = tmp_path / "killed_own.zarr"
+    log: list = []
+    kill_and_resume(out, ["--workers", "2"], 12, np.random.default_rng(12), log)
+    print("kills (chunks done before, after):", log)
+    assert_same_as(reference, out)
+    assert not lock_path(out).exists()
+
+
+def _pid():
+    return os.getpid()
+
+
+def test_kill_worker_during_run(cluster2, reference, tmp_path):
+    lc, client = cluster2
+    out = tmp_path / "wkill.zarr"
+    pids_before = set(client.run(_pid).values())
+    result: dict = {}
+
+    def campaign():
+        try:
+            result["summary"] = run_toy(out, client=client, progress=False, retries=2, **TOY)
+        except BaseException as exc:  # reported by the assertion below
+            result["error"] = exc
+
+    th = threading.Thread(target=campaign)
+    th.start()
+    t_end = time.monotonic() + 120
+    while _n_done(out) < 4 and time.monotonic() < t_end and th.is_alive():
+        time.sleep(0.02)
+    assert _n_done(out) < N_CHUNKS - 4, "campaign too fast to kill a worker mid-run"
+    victim = sorted(pids_before)[0]
+    os.kill(victim, signal.SIGKILL)
+    th.join(timeout=240)
+    assert not th.is_alive()
+    assert "error" not in result, repr(result.get("error"))
+    assert_same_as(reference, out)
+    client.wait_for_workers(2, timeout=60)
+    pids_after = set(client.run(_pid).values())
+    assert victim not in pids_after  # the worker really died and was replaced
