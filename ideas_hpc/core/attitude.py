@@ -88,6 +88,26 @@ def rw_eom(x, u, L_ext, I_rw, J_s, xdot):
 
 
 @njit(cache=True)
+def _eom_s(s1, s2, s3, w1, w2, w3, W1, W2, W3, u1, u2, u3, L1, L2, L3,
+           iI1, iI2, iI3, I1, I2, I3, J1, J2, J3, iJ1, iJ2, iJ3):
+    """Scalar form of :func:`rw_eom` (inverse inertias passed in); returns a 9-tuple."""
+    ss = s1 * s1 + s2 * s2 + s3 * s3
+    sw = s1 * w1 + s2 * w2 + s3 * w3
+    a = 1.0 - ss
+    h1 = I1 * w1 + J1 * (W1 + w1)
+    h2 = I2 * w2 + J2 * (W2 + w2)
+    h3 = I3 * w3 + J3 * (W3 + w3)
+    wd1 = (-(w2 * h3 - w3 * h2) - u1 + L1) * iI1
+    wd2 = (-(w3 * h1 - w1 * h3) - u2 + L2) * iI2
+    wd3 = (-(w1 * h2 - w2 * h1) - u3 + L3) * iI3
+    return (0.25 * (a * w1 + 2.0 * (s2 * w3 - s3 * w2) + 2.0 * sw * s1),
+            0.25 * (a * w2 + 2.0 * (s3 * w1 - s1 * w3) + 2.0 * sw * s2),
+            0.25 * (a * w3 + 2.0 * (s1 * w2 - s2 * w1) + 2.0 * sw * s3),
+            wd1, wd2, wd3,
+            u1 * iJ1 - wd1, u2 * iJ2 - wd2, u3 * iJ3 - wd3)
+
+
+@njit(cache=True)
 def rk4_step_into(x, u, L_ext, I_rw, J_s, dt, work, out):
     """One fixed-step RK4 step of :func:`rw_eom` with ``u`` and ``L_ext`` held.
 
@@ -103,33 +123,71 @@ def rk4_step_into(x, u, L_ext, I_rw, J_s, dt, work, out):
     dt : float
         Step, s.
     work : (5, 9) float64
-        Scratch space (four stage derivatives and a stage state).
+        Scratch space (kept for interface stability; the stages live in registers).
     out : (9,) float64
         Output: state at ``t + dt``. May be the same array as ``x``.
     """
-    k1 = work[0]
-    k2 = work[1]
-    k3 = work[2]
-    k4 = work[3]
-    xt = work[4]
-    rw_eom(x, u, L_ext, I_rw, J_s, k1)
-    for j in range(9):
-        xt[j] = x[j] + 0.5 * dt * k1[j]
-    rw_eom(xt, u, L_ext, I_rw, J_s, k2)
-    for j in range(9):
-        xt[j] = x[j] + 0.5 * dt * k2[j]
-    rw_eom(xt, u, L_ext, I_rw, J_s, k3)
-    for j in range(9):
-        xt[j] = x[j] + dt * k3[j]
-    rw_eom(xt, u, L_ext, I_rw, J_s, k4)
-    c = dt / 6.0
-    for j in range(9):
-        out[j] = x[j] + c * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
-    ss = out[0] * out[0] + out[1] * out[1] + out[2] * out[2]
+    I1 = I_rw[0]
+    I2 = I_rw[1]
+    I3 = I_rw[2]
+    J1 = J_s[0]
+    J2 = J_s[1]
+    J3 = J_s[2]
+    iI1 = 1.0 / I1
+    iI2 = 1.0 / I2
+    iI3 = 1.0 / I3
+    iJ1 = 1.0 / J1
+    iJ2 = 1.0 / J2
+    iJ3 = 1.0 / J3
+    u1 = u[0]
+    u2 = u[1]
+    u3 = u[2]
+    L1 = L_ext[0]
+    L2 = L_ext[1]
+    L3 = L_ext[2]
+    x0 = x[0]
+    x1 = x[1]
+    x2 = x[2]
+    x3 = x[3]
+    x4 = x[4]
+    x5 = x[5]
+    x6 = x[6]
+    x7 = x[7]
+    x8 = x[8]
+    h = 0.5 * dt
+    a0, a1, a2, a3, a4, a5, a6, a7, a8 = _eom_s(
+        x0, x1, x2, x3, x4, x5, x6, x7, x8, u1, u2, u3, L1, L2, L3,
+        iI1, iI2, iI3, I1, I2, I3, J1, J2, J3, iJ1, iJ2, iJ3)
+    b0, b1, b2, b3, b4, b5, b6, b7, b8 = _eom_s(
+        x0 + h * a0, x1 + h * a1, x2 + h * a2, x3 + h * a3, x4 + h * a4, x5 + h * a5,
+        x6 + h * a6, x7 + h * a7, x8 + h * a8, u1, u2, u3, L1, L2, L3,
+        iI1, iI2, iI3, I1, I2, I3, J1, J2, J3, iJ1, iJ2, iJ3)
+    c0, c1, c2, c3, c4, c5, c6, c7, c8 = _eom_s(
+        x0 + h * b0, x1 + h * b1, x2 + h * b2, x3 + h * b3, x4 + h * b4, x5 + h * b5,
+        x6 + h * b6, x7 + h * b7, x8 + h * b8, u1, u2, u3, L1, L2, L3,
+        iI1, iI2, iI3, I1, I2, I3, J1, J2, J3, iJ1, iJ2, iJ3)
+    d0, d1, d2, d3, d4, d5, d6, d7, d8 = _eom_s(
+        x0 + dt * c0, x1 + dt * c1, x2 + dt * c2, x3 + dt * c3, x4 + dt * c4,
+        x5 + dt * c5, x6 + dt * c6, x7 + dt * c7, x8 + dt * c8, u1, u2, u3, L1, L2, L3,
+        iI1, iI2, iI3, I1, I2, I3, J1, J2, J3, iJ1, iJ2, iJ3)
+    k = dt / 6.0
+    s0 = x0 + k * (a0 + 2.0 * b0 + 2.0 * c0 + d0)
+    s1 = x1 + k * (a1 + 2.0 * b1 + 2.0 * c1 + d1)
+    s2 = x2 + k * (a2 + 2.0 * b2 + 2.0 * c2 + d2)
+    out[3] = x3 + k * (a3 + 2.0 * b3 + 2.0 * c3 + d3)
+    out[4] = x4 + k * (a4 + 2.0 * b4 + 2.0 * c4 + d4)
+    out[5] = x5 + k * (a5 + 2.0 * b5 + 2.0 * c5 + d5)
+    out[6] = x6 + k * (a6 + 2.0 * b6 + 2.0 * c6 + d6)
+    out[7] = x7 + k * (a7 + 2.0 * b7 + 2.0 * c7 + d7)
+    out[8] = x8 + k * (a8 + 2.0 * b8 + 2.0 * c8 + d8)
+    ss = s0 * s0 + s1 * s1 + s2 * s2
     if ss > 1.0:
-        out[0] = -out[0] / ss
-        out[1] = -out[1] / ss
-        out[2] = -out[2] / ss
+        s0 = -s0 / ss
+        s1 = -s1 / ss
+        s2 = -s2 / ss
+    out[0] = s0
+    out[1] = s1
+    out[2] = s2
 
 
 @njit(cache=True)
@@ -139,6 +197,19 @@ def rk4_step(x, u, L_ext, I_rw, J_s, dt):
     out = np.empty(9)
     rk4_step_into(x, u, L_ext, I_rw, J_s, dt, work, out)
     return out
+
+
+@njit(cache=True)
+def wheel_limit_s(v, Omega_j, J_j, u_max, h_max):
+    """Scalar actuator limit for one wheel (see :func:`wheel_limits_into`), N m."""
+    if v > u_max:
+        v = u_max
+    elif v < -u_max:
+        v = -u_max
+    h = J_j * Omega_j
+    if (h >= h_max and v > 0.0) or (h <= -h_max and v < 0.0):
+        v = 0.0
+    return v
 
 
 @njit(cache=True)
@@ -164,15 +235,7 @@ def wheel_limits_into(u_cmd, Omega, J_s, u_max, h_max, out):
         Output: applied torques, N m. May be ``u_cmd``.
     """
     for j in range(3):
-        v = u_cmd[j]
-        if v > u_max:
-            v = u_max
-        elif v < -u_max:
-            v = -u_max
-        h = J_s[j] * Omega[j]
-        if (h >= h_max and v > 0.0) or (h <= -h_max and v < 0.0):
-            v = 0.0
-        out[j] = v
+        out[j] = wheel_limit_s(u_cmd[j], Omega[j], J_s[j], u_max, h_max)
 
 
 @njit(cache=True)

@@ -25,8 +25,11 @@ from .reference import reference_into
 
 
 @njit(cache=True)
-def _dcm_BT(x, spin_rate, t, out):
-    """``[B T] = [B N][T N]^T`` with ``[T N] = R3(w_s t)``; writes ``out`` (3, 3)."""
+def _dcm_BT(x, spin_rate, t, out, a, b, c_):
+    """``[B T] = [B N][T N]^T`` with ``[T N] = R3(w_s t)``; writes ``out[a, b, c_]`` (3, 3).
+
+    (Indices instead of a view: creating array views in the hot loop costs
+    more than the whole step.)"""
     s1 = x[0]
     s2 = x[1]
     s3 = x[2]
@@ -46,15 +49,15 @@ def _dcm_BT(x, spin_rate, t, out):
     c = np.cos(spin_rate * t)
     s = np.sin(spin_rate * t)
     # [TN]^T = [[c, -s, 0], [s, c, 0], [0, 0, 1]]
-    out[0, 0] = b00 * c + b01 * s
-    out[0, 1] = -b00 * s + b01 * c
-    out[0, 2] = b02
-    out[1, 0] = b10 * c + b11 * s
-    out[1, 1] = -b10 * s + b11 * c
-    out[1, 2] = b12
-    out[2, 0] = b20 * c + b21 * s
-    out[2, 1] = -b20 * s + b21 * c
-    out[2, 2] = b22
+    out[a, b, c_, 0, 0] = b00 * c + b01 * s
+    out[a, b, c_, 0, 1] = -b00 * s + b01 * c
+    out[a, b, c_, 0, 2] = b02
+    out[a, b, c_, 1, 0] = b10 * c + b11 * s
+    out[a, b, c_, 1, 1] = -b10 * s + b11 * c
+    out[a, b, c_, 1, 2] = b12
+    out[a, b, c_, 2, 0] = b20 * c + b21 * s
+    out[a, b, c_, 2, 1] = -b20 * s + b21 * c
+    out[a, b, c_, 2, 2] = b22
 
 
 @njit(cache=True)
@@ -169,7 +172,7 @@ def simulate_batch(mode, dcm_RT_all, spin_rate, periods, theta_max,
         for k in range(n_steps + 1):
             t = k * dt
             if k % img_every == 0:
-                _dcm_BT(x, spin_rate, t, dcm_BT[smp, i, k // img_every])
+                _dcm_BT(x, spin_rate, t, dcm_BT, smp, i, k // img_every)
             for j in range(3):
                 h = abs(J_s[j] * x[6 + j])
                 if h > mh:
@@ -179,15 +182,18 @@ def simulate_batch(mode, dcm_RT_all, spin_rate, periods, theta_max,
                 r = k // decimate
                 for j in range(3):
                     wheel[smp, i, r, j] = x[6 + j]
+            # closed_loop_step written out (a call with this many array
+            # arguments is not inlined and costs more than the step itself);
+            # at the final time only the errors and the next torque are formed
+            reference_into(mode, t, spin_rate, sigma_RT, dcm_RT, theta_max, period, ref)
+            sliding_mode_into(x, z, ref, k_p, k_i, eta, phi, I_rw, J_s, L_ext,
+                              u_max, h_max, u, err)
             if k < n_steps:
-                closed_loop_step(mode, t, x, z, sigma_RT, dcm_RT, spin_rate, theta_max,
-                                 period, k_p, k_i, eta, phi, int_limit, I_rw, J_s, L_ext, u_max,
-                                 h_max, dt, ref, u, err, work)
-            else:
-                # final time: errors and the torque the law would command next
-                reference_into(mode, t, spin_rate, sigma_RT, dcm_RT, theta_max, period, ref)
-                sliding_mode_into(x, z, ref, k_p, k_i, eta, phi, I_rw, J_s, L_ext,
-                                  u_max, h_max, u, err)
+                rk4_step_into(x, u, L_ext, I_rw, J_s, dt, work, x)
+                if err[0] * err[0] + err[1] * err[1] + err[2] * err[2] < int_limit * int_limit:
+                    z[0] += err[0] * dt
+                    z[1] += err[1] * dt
+                    z[2] += err[2] * dt
             for j in range(3):
                 a = abs(u[j])
                 if a > mu:

@@ -22,7 +22,8 @@ feeding forward the gyroscopic term::
 
     u_s = -[I_RW] omega'_cmd - omega x ([I_RW] omega + h_s) + L_known
 
-followed by the actuator limits (``core.attitude.wheel_limits_into``).
+followed by the actuator limits (``core.attitude.wheel_limits_into``, per wheel
+``wheel_limit_s``).
 
 All gains are per axis (B components): ``K_P`` 1/s, ``K_I`` 1/s^2,
 ``eta`` rad/s^2, ``phi`` s/rad.
@@ -44,7 +45,7 @@ from __future__ import annotations
 
 from numba import njit
 
-from .attitude import wheel_limits_into
+from .attitude import wheel_limit_s
 from .reference import mrp_rotate_s, mrp_sub_s
 
 
@@ -117,10 +118,12 @@ def sliding_mode_into(x, z, ref, k_p, k_i, eta, phi, I_rw, J_s, L_known,
     h1 = I_rw[0] * w1 + J_s[0] * (x[6] + w1)
     h2 = I_rw[1] * w2 + J_s[1] * (x[7] + w2)
     h3 = I_rw[2] * w3 + J_s[2] * (x[8] + w3)
-    u_out[0] = -I_rw[0] * wd1 - (w2 * h3 - w3 * h2) + L_known[0]
-    u_out[1] = -I_rw[1] * wd2 - (w3 * h1 - w1 * h3) + L_known[1]
-    u_out[2] = -I_rw[2] * wd3 - (w1 * h2 - w2 * h1) + L_known[2]
-    wheel_limits_into(u_out, x[6:9], J_s, u_max, h_max, u_out)
+    u_out[0] = wheel_limit_s(-I_rw[0] * wd1 - (w2 * h3 - w3 * h2) + L_known[0],
+                             x[6], J_s[0], u_max, h_max)
+    u_out[1] = wheel_limit_s(-I_rw[1] * wd2 - (w3 * h1 - w1 * h3) + L_known[1],
+                             x[7], J_s[1], u_max, h_max)
+    u_out[2] = wheel_limit_s(-I_rw[2] * wd3 - (w1 * h2 - w2 * h1) + L_known[2],
+                             x[8], J_s[2], u_max, h_max)
     err_out[0] = d1
     err_out[1] = d2
     err_out[2] = d3

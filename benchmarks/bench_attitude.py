@@ -1,0 +1,133 @@
+"""Closed-loop attitude (SPEC section 5): compiled batch vs a plain NumPy RK4 loop.
+
+Case: 8 spacecraft of the paper's Eros NP swarm, 600 s at 0.1 s (48 000
+spacecraft-steps), Table 5 gains, outputs every step. The NumPy reference is
+the same model (ring-frame reference, sliding-mode law, wheel limits, RK4 with
+the torque held, MRP shadow switch, conditional integral), vectorised over the
+8 spacecraft, timed over the first 600 steps and checked against the compiled
+result there. Last line: ``attitude: <R>x faster than numpy RK4``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from ideas_hpc.attitude import GAIN_PRESETS, default_spacecraft, initial_conditions
+from ideas_hpc.core.attitude_batch import simulate_batch
+from ideas_hpc.core.frames import dcm_RT
+
+W = 2 * math.pi / (5.270 * 3600)
+THETA = np.array([0.2, 1.7, 2.4, 2.9, 3.3, 3.5, 5.6, 6.0])
+DT, N_STEPS = 0.1, 6000
+
+
+def _cross(a, b):
+    return np.stack([a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1],
+                     a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
+                     a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]], axis=1)
+
+
+def _dcm(s):
+    """[BN] from MRPs (n, 3) -> (n, 3, 3), S&J 3.153."""
+    ss = (s * s).sum(1)
+    sx = np.zeros((s.shape[0], 3, 3))
+    sx[:, 0, 1], sx[:, 0, 2], sx[:, 1, 2] = -s[:, 2], s[:, 1], -s[:, 0]
+    sx[:, 1, 0], sx[:, 2, 0], sx[:, 2, 1] = s[:, 2], -s[:, 1], s[:, 0]
+    return (np.eye(3) + (8 * sx @ sx - 4 * (1 - ss)[:, None, None] * sx)
+            / ((1 + ss) ** 2)[:, None, None])
+
+
+def _mrp(c):
+    """Short MRP from DCMs (n, 3, 3) via the quaternion (trace branch; fine off 180 deg)."""
+    q0 = 0.5 * np.sqrt(np.maximum(1 + np.trace(c, axis1=1, axis2=2), 1e-300))
+    qv = np.stack([c[:, 1, 2] - c[:, 2, 1], c[:, 2, 0] - c[:, 0, 2],
+                   c[:, 0, 1] - c[:, 1, 0]], axis=1) / (4 * q0[:, None])
+    return qv / (1 + q0[:, None])
+
+
+def _bmat_mul(s, w):
+    ss = (s * s).sum(1)[:, None]
+    return (1 - ss) * w + 2 * _cross(s, w) + 2 * (s * w).sum(1)[:, None] * s
+
+
+def numpy_run(x, n_steps, rt, k_p, k_i, eta, phi, lim, I, J, u_max, h_max):
+    z = np.zeros((x.shape[0], 3))
+    w_r_R = rt[:, :, 2] * W
+    sig_out = np.empty((n_steps, x.shape[0], 3))
+    for k in range(n_steps):
+        t = k * DT
+        c, s = math.cos(W * t), math.sin(W * t)
+        rn = rt @ np.array([[c, s, 0], [-s, c, 0], [0, 0, 1.0]])
+        br = _dcm(x[:, :3]) @ np.transpose(rn, (0, 2, 1))
+        ds = _mrp(br)
+        w = x[:, 3:6]
+        w_r = np.einsum("nij,nj->ni", br, w_r_R)
+        dw = w - w_r
+        sv = dw + k_p * ds + k_i * z
+        wd = (-k_p * 0.25 * _bmat_mul(ds, dw) - k_i * ds - eta * np.clip(phi * sv, -1, 1)
+              - _cross(w, w_r))
+        u = -I * wd - _cross(w, I * w + J * (x[:, 6:9] + w))
+        u = np.clip(u, -u_max, u_max)
+        hw = J * x[:, 6:9]
+        u[((hw >= h_max) & (u > 0)) | ((hw <= -h_max) & (u < 0))] = 0.0
+
+        def f(y):
+            om = y[:, 3:6]
+            od = (-_cross(om, I * om + J * (y[:, 6:9] + om)) - u) / I
+            return np.concatenate([0.25 * _bmat_mul(y[:, :3], om), od, u / J - od], axis=1)
+
+        k1 = f(x)
+        k2 = f(x + 0.5 * DT * k1)
+        k3 = f(x + 0.5 * DT * k2)
+        k4 = f(x + DT * k3)
+        x = x + DT / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        ss = (x[:, :3] ** 2).sum(1)
+        big = ss > 1
+        x[big, :3] = -x[big, :3] / ss[big, None]
+        inside = (ds * ds).sum(1) < lim * lim
+        z[inside] += ds[inside] * DT
+        sig_out[k] = ds
+    return sig_out
+
+
+def main():
+    sc = default_spacecraft()
+    g = GAIN_PRESETS["np"]
+    k_p, k_i, eta, phi = g.arrays(DT)
+    rt = np.ascontiguousarray(np.array([dcm_RT(t, np.eye(3)) for t in THETA]))
+    s0, w0, W0 = (a[None].copy() for a in initial_conditions(1, 0, THETA.size))
+    args = (0, rt, W, np.ones(THETA.size), 0.0, k_p, k_i, eta, phi, g.int_limit,
+            sc.inertia_rw, sc.J_s, sc.u_max, sc.h_max, DT)
+    simulate_batch(*args, 10, 1, 2, s0, w0, W0)  # compile / load cache
+    best = math.inf
+    for _ in range(5):
+        t0 = time.perf_counter()
+        out = simulate_batch(*args, N_STEPS, 1, 2, s0, w0, W0)
+        best = min(best, time.perf_counter() - t0)
+    n_sc_steps = THETA.size * N_STEPS
+    us_nb = best / n_sc_steps * 1e6
+
+    n_np = 600
+    x0 = np.concatenate([s0[0], w0[0], W0[0]], axis=1)
+    t0 = time.perf_counter()
+    sig_np = numpy_run(x0, n_np, rt, k_p, k_i, eta, phi, g.int_limit, sc.inertia_rw, sc.J_s,
+                       sc.u_max, sc.h_max)
+    t_np = time.perf_counter() - t0
+    us_np = t_np / (THETA.size * n_np) * 1e6
+    diff = np.abs(np.transpose(sig_np, (1, 0, 2)) - out[0][0, :, :n_np]).max()
+    ratio = us_np / us_nb
+    print(f"case: {THETA.size} spacecraft x {N_STEPS * DT:.0f} s at {DT} s "
+          f"({n_sc_steps} spacecraft-steps), Eros NP, Table 5 gains, outputs every step")
+    print(f"numba batch : {best * 1e3:8.2f} ms total, {us_nb:7.3f} us per spacecraft-step "
+          f"(Basilisk C++ ~16 us/step)")
+    print(f"numpy RK4   : {us_np:8.2f} us per spacecraft-step (vectorised over spacecraft, "
+          f"{n_np} steps timed)")
+    print(f"max |sigma_B/R| difference numpy vs numba over {n_np} steps: {diff:.2e}")
+    print(f"attitude: {ratio:.0f}x faster than numpy RK4")
+
+
+if __name__ == "__main__":
+    main()
