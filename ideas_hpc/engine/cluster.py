@@ -94,28 +94,60 @@ def load_slurm_config(path: str | os.PathLike | None = None) -> dict:
     return dict(section)
 
 
+def _slurm_kwarg_names() -> set[str]:
+    import inspect
+
+    from dask_jobqueue.core import Job, JobQueueCluster
+    from dask_jobqueue.slurm import SLURMJob
+
+    names: set[str] = set()
+    for fn in (SLURMJob.__init__, Job.__init__, JobQueueCluster.__init__):
+        names |= set(inspect.signature(fn).parameters)
+    return names - {"self", "scheduler", "config_name", "n_workers", "job_cls", "loop",
+                    "asynchronous", "base_class_kwargs", "job_kwargs", "name"}
+
+
+def slurm_kwargs(section: dict, source: str | None = None) -> dict:
+    """SLURMCluster keyword arguments from a ``jobqueue.slurm`` config mapping.
+
+    Dask-config spelling (``job-extra-directives``) becomes the keyword
+    (``job_extra_directives``); ``name`` is the job name; null values are
+    dropped so dask-jobqueue's defaults apply. Unknown keys are refused.
+    """
+    allowed = _slurm_kwarg_names()
+    out = {}
+    for key, value in section.items():
+        kw = str(key).replace("-", "_")
+        if kw == "name":
+            kw = "job_name"
+        if kw not in allowed:
+            raise InputError(f"unknown SLURMCluster option (known: {', '.join(sorted(allowed))})",
+                             field=f"jobqueue.slurm.{key}", file=source)
+        if value is not None:
+            out[kw] = value
+    return out
+
+
 def slurm_cluster(config_path: str | os.PathLike | None = None, **overrides: Any):
     """A :class:`dask_jobqueue.SLURMCluster` from a jobqueue config file.
 
-    The file's ``jobqueue.slurm`` section is laid over dask's defaults for the
-    duration of the construction (so it behaves exactly like a dask config
-    file), and ``overrides`` are passed as keyword arguments. No job is
-    submitted until the cluster is scaled, so ``job_script()`` works without
-    a SLURM controller.
+    The file's ``jobqueue.slurm`` section (:func:`load_slurm_config`) is
+    turned into keyword arguments (:func:`slurm_kwargs`) and ``overrides``
+    are laid over them. No job is submitted until the cluster is scaled, so
+    ``job_script()`` works without a SLURM controller.
     """
-    import dask
     from dask_jobqueue import SLURMCluster
 
-    section = load_slurm_config(config_path)
-    merged = {**dask.config.get("jobqueue.slurm", default={}), **section}
-    with dask.config.set({"jobqueue.slurm": merged}):
-        return SLURMCluster(**overrides)
+    path = Path(config_path) if config_path is not None else DEFAULT_SLURM_CONFIG
+    kwargs = slurm_kwargs(load_slurm_config(path), str(path))
+    kwargs.update(overrides)
+    return SLURMCluster(**kwargs)
 
 
 @contextlib.contextmanager
 def connect(*, cluster: str = "local", workers: int | None = None, scheduler: str | None = None,
             slurm_config: str | os.PathLike | None = None, worker_timeout: float = 300.0,
-            **cluster_kwargs: Any) -> Iterator:
+            log_directory: str | os.PathLike | None = None, **cluster_kwargs: Any) -> Iterator:
     """Yield a :class:`distributed.Client` on the requested cluster; close what it started.
 
     Parameters
@@ -131,6 +163,10 @@ def connect(*, cluster: str = "local", workers: int | None = None, scheduler: st
         jobqueue config for ``cluster='slurm'`` (default ``slurm/jobqueue.yaml``).
     worker_timeout : float
         Seconds to wait for the first SLURM worker before giving up.
+    log_directory : path, optional
+        Where SLURM writes the worker jobs' output when the config sets no
+        ``log-directory`` (otherwise SLURM writes ``slurm-JOBID.out`` in the
+        current directory).
     """
     from distributed import Client
 
@@ -154,6 +190,9 @@ def connect(*, cluster: str = "local", workers: int | None = None, scheduler: st
             yield client
         return
     n_jobs = _check_workers(workers) if workers is not None else 1
+    if log_directory is not None and not load_slurm_config(slurm_config).get("log-directory"):
+        Path(log_directory).mkdir(parents=True, exist_ok=True)
+        cluster_kwargs.setdefault("log_directory", str(log_directory))
     with slurm_cluster(slurm_config, **cluster_kwargs) as sc:
         sc.scale(jobs=n_jobs)
         with Client(sc) as client:

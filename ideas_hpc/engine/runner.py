@@ -128,8 +128,9 @@ def run_chunks(store_path: str | os.PathLike, chunk_fn: ChunkFn, plan: ChunkPlan
             if client is not None:
                 _submit_all(client, path, chunk_fn, todo, summary, progress, retries)
             else:
+                logs = path.absolute().parent / f"{path.name}.slurm-logs"
                 with connect(cluster=cluster, workers=workers, scheduler=scheduler,
-                             slurm_config=slurm_config) as cl:
+                             slurm_config=slurm_config, log_directory=logs) as cl:
                     _submit_all(cl, path, chunk_fn, todo, summary, progress, retries)
     summary.wall_s = time.perf_counter() - t0
     if summary.failed:

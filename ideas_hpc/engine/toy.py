@@ -189,6 +189,8 @@ def main(argv: list[str] | None = None) -> int:
 
     p = argparse.ArgumentParser(prog="python -m ideas_hpc.engine.toy",
                                 description="Run the engine's toy campaign into a zarr store.")
+    p.add_argument("campaign", nargs="?", default="toy",
+                   help="ignored (lets slurm/run_campaign.sbatch launch the toy like a campaign)")
     p.add_argument("--out", required=True)
     p.add_argument("--n-samples", type=int, default=64)
     p.add_argument("--chunk-size", type=int, default=4)

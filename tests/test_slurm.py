@@ -1,0 +1,165 @@
+"""SLURM through dask-jobqueue.
+
+* ``job_script()`` of the configured SLURMCluster, checked without any SLURM
+  controller (runs by default).
+* ``@pytest.mark.slurm``: real jobs against a running slurmctld (CI starts a
+  one-node cluster with ``slurm/ci_local_slurm.sh start``); skipped when
+  ``sinfo`` is absent or no node is idle.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from ideas_hpc.engine.cluster import DEFAULT_SLURM_CONFIG, load_slurm_config, slurm_cluster
+from ideas_hpc.engine.store import done_mask
+from ideas_hpc.engine.toy import run_toy, run_toy_serial
+from ideas_hpc.errors import InputError
+
+REPO = Path(__file__).resolve().parent.parent
+TOY = dict(n_samples=24, chunk_size=4, n_vertex=32, n_time=8, work=20_000, seed=3)
+SAMPLE_VARS = ("coverage", "observed", "first_seen", "times_seen", "sigma_error", "sample_seed")
+
+
+def test_job_script_from_repo_config():
+    assert DEFAULT_SLURM_CONFIG == REPO / "slurm" / "jobqueue.yaml"
+    cfg = load_slurm_config()
+    assert cfg["interface"] == "lo" and cfg["cores"] == 1
+    with slurm_cluster() as cluster:
+        script = cluster.job_script()
+        addr = cluster.scheduler_address
+    lines = script.splitlines()
+    assert lines[0].startswith("#!")
+    sbatch = [ln for ln in lines if ln.startswith("#SBATCH")]
+    for want in ("#SBATCH -J ideas-worker", "#SBATCH --cpus-per-task=1", "#SBATCH --mem=2G",
+                 "#SBATCH -t 01:00:00", "#SBATCH --export=ALL"):
+        assert want in sbatch, (want, sbatch)
+    assert "export NUMBA_NUM_THREADS=1" in lines
+    worker = [ln for ln in lines if "distributed.cli.dask_worker" in ln]
+    assert len(worker) == 1
+    cmd = worker[0].split()
+    assert cmd[0] == sys.executable and cmd[1:3] == ["-m", "distributed.cli.dask_worker"]
+    assert addr in cmd and addr.startswith("tcp://127.0.0.1:")  # scheduler bound to lo
+    assert cmd[cmd.index("--interface") + 1] == "lo"
+    assert cmd[cmd.index("--nthreads") + 1] == "1"
+    # The prologue comes before the worker starts.
+    assert lines.index("export NUMBA_NUM_THREADS=1") < lines.index(worker[0])
+
+
+def test_job_script_from_toml_with_queue_and_account(tmp_path):
+    cfg = tmp_path / "site.toml"
+    cfg.write_text(
+        '[jobqueue.slurm]\ncores = 4\nprocesses = 2\nmemory = "8GiB"\nqueue = "short"\n'
+        'account = "proj42"\nwalltime = "00:10:00"\ninterface = "lo"\n'
+        'job-extra-directives = ["--constraint=skylake"]\n'
+        'scheduler-options = { interface = "lo" }\n')
+    with slurm_cluster(cfg, walltime="00:20:00") as cluster:
+        script = cluster.job_script()
+    for want in ("#SBATCH -p short", "#SBATCH -A proj42", "#SBATCH --cpus-per-task=4",
+                 "#SBATCH --mem=8G", "#SBATCH -t 00:20:00", "#SBATCH --constraint=skylake"):
+        assert want in script, (want, script)
+    worker = next(ln for ln in script.splitlines() if "dask_worker" in ln)
+    assert "--nworkers 2" in worker and "--nthreads 2" in worker
+
+
+def test_slurm_config_errors(tmp_path):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("jobqueue:\n  slurm:\n    cores: 1\n    memory: 1GiB\n    coers: 2\n")
+    with pytest.raises(InputError) as ei:
+        slurm_cluster(bad)
+    assert ei.value.field == "jobqueue.slurm.coers" and ei.value.file == str(bad)
+    empty = tmp_path / "empty.yaml"
+    empty.write_text("jobqueue:\n  pbs: {}\n")
+    with pytest.raises(InputError, match="jobqueue.slurm"):
+        load_slurm_config(empty)
+    with pytest.raises(InputError, match="cannot read"):
+        load_slurm_config(tmp_path / "missing.yaml")
+
+
+# ------------------------------------------------------------------ real SLURM
+
+def _idle_node() -> bool:
+    if shutil.which("sinfo") is None:
+        return False
+    try:
+        out = subprocess.run(["sinfo", "-h", "-o", "%T"], capture_output=True, text=True,
+                             timeout=20)
+    except (OSError, subprocess.SubprocessError):
+        return False
+    return out.returncode == 0 and any(s.strip() in ("idle", "mixed") for s in out.stdout.split())
+
+
+needs_slurm = pytest.mark.skipif(not _idle_node(), reason="no SLURM controller with an idle node "
+                                 "(start one with slurm/ci_local_slurm.sh start)")
+
+
+@pytest.fixture(scope="module")
+def toy_reference(tmp_path_factory):
+    p = tmp_path_factory.mktemp("slurm_ref") / "serial.zarr"
+    run_toy_serial(p, **TOY)
+    return xr.load_dataset(p, engine="zarr")
+
+
+def _assert_same(ref, path):
+    assert done_mask(path).all()
+    ds = xr.load_dataset(path, engine="zarr")
+    for name in SAMPLE_VARS:
+        np.testing.assert_array_equal(ds[name].values, ref[name].values, err_msg=name)
+
+
+def _our_jobs(name: str) -> list[str]:
+    out = subprocess.run(["squeue", "-h", "-n", name, "-o", "%i"], capture_output=True,
+                         text=True, timeout=20)
+    return out.stdout.split()
+
+
+@pytest.mark.slurm
+@needs_slurm
+def test_toy_campaign_through_slurmcluster(toy_reference, tmp_path):
+    out = tmp_path / "slurm.zarr"
+    t0 = time.perf_counter()
+    s = run_toy(out, cluster="slurm", workers=2, progress=False, **TOY)
+    wall = time.perf_counter() - t0
+    print(f"SLURM toy campaign: {s}; {wall:.1f} s including job start")
+    assert s.chunks_run == 6 and s.n_workers >= 1
+    _assert_same(toy_reference, out)
+    logs = tmp_path / "slurm.zarr.slurm-logs"
+    assert any(logs.glob("ideas-worker-*.err"))  # jobs really ran under SLURM
+    # Closing the cluster cancelled the worker jobs.
+    t_end = time.monotonic() + 30
+    while _our_jobs("ideas-worker") and time.monotonic() < t_end:
+        time.sleep(0.5)
+    assert not _our_jobs("ideas-worker")
+
+
+@pytest.mark.slurm
+@needs_slurm
+def test_sbatch_script_runs_a_campaign(toy_reference, tmp_path):
+    # slurm/run_campaign.sbatch as a user would submit it, with the toy as the command.
+    out = tmp_path / "batch.zarr"
+    env = dict(os.environ, IDEAS_HPC_REPO=str(REPO), IDEAS_HPC_WORKERS="1",
+               IDEAS_HPC_RUN=f"{sys.executable} -m ideas_hpc.engine.toy")
+    args = ["--no-progress"] + [f"--{k.replace('_', '-')}={v}" for k, v in TOY.items()]
+    sub = subprocess.run(["sbatch", "--parsable", f"--output={tmp_path}/batch-%j.out",
+                          str(REPO / "slurm" / "run_campaign.sbatch"), "toy", str(out), *args],
+                         capture_output=True, text=True, env=env, cwd=tmp_path, timeout=30)
+    assert sub.returncode == 0, sub.stderr
+    job = sub.stdout.strip().split(";")[0]
+    t_end = time.monotonic() + 240
+    while time.monotonic() < t_end:
+        q = subprocess.run(["squeue", "-h", "-j", job], capture_output=True, text=True)
+        if not q.stdout.strip():
+            break
+        time.sleep(1)
+    log = (tmp_path / f"batch-{job}.out").read_text()
+    assert "6 chunks run" in log, log[-3000:]
+    _assert_same(toy_reference, out)
