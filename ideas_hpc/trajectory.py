@@ -35,7 +35,7 @@ import numpy as np
 
 from .constants import AU, G, MU_SUN, P_SUN_1AU
 from .core import propagate as _prop
-from .core.ephemeris import sun_T_batch
+from .core.ephemeris import ephemeris_precompute, sun_T_batch
 from .core.gravity import polyhedron_precompute, sh_derivative_tables, sh_unnormalise
 from .core.targeting import target_batch
 from .errors import InputError
@@ -259,6 +259,9 @@ def pack_force_model(body, force_model: ForceModel = ForceModel(),
                                              params.orbit_nu)
     if params.pole_ra is not None and params.pole_dec is not None:
         consts[_prop.K_POLE:_prop.K_POLE + 3] = (params.pole_ra, params.pole_dec, 1.0)
+    consts[_prop.K_EPH:] = ephemeris_precompute(
+        consts[_prop.K_ELEM:_prop.K_ELEM + 6].copy(), consts[_prop.K_POLE:_prop.K_POLE + 3].copy(),
+        params.spin_rate, params.prime_meridian, MU_SUN)
     e3 = _EMPTY3
     sh_c = sh_s = e3
     pv = np.zeros((1, 3))

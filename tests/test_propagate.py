@@ -169,3 +169,22 @@ def test_ephemeris_kepler_and_frames():
     rb = body_position_N(1e6, el, MU_SUN)
     s3 = sun_direction_T(p2, [1e6])[0]
     assert s3[2] == pytest.approx(-rb[2] / np.linalg.norm(rb), abs=1e-14)
+
+
+def test_fast_ephemeris_matches_reference_path():
+    """The propagator's precomputed Sun direction equals the element-by-element one."""
+    import dataclasses
+
+    from ideas_hpc.core.ephemeris import ephemeris_precompute, sun_T, sun_T_fast
+    for par in (PAR, dataclasses.replace(PAR, pole_ra=0.4, pole_dec=1.1, prime_meridian=2.0)):
+        el = np.array([par.orbit_a, par.orbit_e, par.orbit_i, par.orbit_raan, par.orbit_argp,
+                       par.orbit_nu])
+        pole = np.array([par.pole_ra or 0.0, par.pole_dec or 0.0,
+                         1.0 if par.pole_ra is not None else 0.0])
+        eph = ephemeris_precompute(el, pole, par.spin_rate, par.prime_meridian, MU_SUN)
+        for t in (0.0, 300.0, 3.7e6, 2.0e7):
+            a, b = np.zeros(3), np.zeros(3)
+            d1 = sun_T(t, el, pole, par.spin_rate, par.prime_meridian, MU_SUN, a)
+            d2 = sun_T_fast(t, eph, b)
+            assert d2 == pytest.approx(d1, rel=1e-12)
+            assert np.allclose(a, b, rtol=0, atol=1e-12)

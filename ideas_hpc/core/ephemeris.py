@@ -159,3 +159,61 @@ def sun_T_batch(times, elements, pole, spin_rate, w0, mu_sun, dirs, dist):
     """:func:`sun_T` over an array of times (``dirs (T, 3)``, ``dist (T,)`` outputs)."""
     for k in range(times.shape[0]):
         dist[k] = sun_T(times[k], elements, pole, spin_rate, w0, mu_sun, dirs[k])
+
+
+#: Length of the derived-constant vector of :func:`ephemeris_precompute`.
+N_EPH = 13
+
+
+@njit(cache=True)
+def ephemeris_precompute(elements, pole, spin_rate, w0, mu_sun):
+    """Time-independent part of :func:`sun_T`, for the propagator's hot loop.
+
+    Returns ``(N_EPH,)``: mean motion n (rad/s), mean anomaly at t0 (rad), e,
+    a (m), b = a sqrt(1 - e^2) (m), spin rate (rad/s), W0 (rad), and the
+    perifocal unit vectors P, Q (periapsis and 90 deg ahead) in the
+    body-equator frame P (3 + 3 values). Then
+    ``r_body = a (cos E - e) P + b sin E Q`` (Kepler), no angle conversions.
+    """
+    a, e, inc, raan, argp, nu0 = (elements[0], elements[1], elements[2],
+                                  elements[3], elements[4], elements[5])
+    out = np.empty(N_EPH)
+    out[0] = np.sqrt(mu_sun / (a * a * a))
+    E0 = 2.0 * np.arctan2(np.sqrt(1.0 - e) * np.sin(0.5 * nu0),
+                          np.sqrt(1.0 + e) * np.cos(0.5 * nu0))
+    out[1] = E0 - e * np.sin(E0)
+    out[2] = e
+    out[3] = a
+    out[4] = a * np.sqrt(1.0 - e * e)
+    out[5] = spin_rate
+    out[6] = w0
+    cO, sO = np.cos(raan), np.sin(raan)
+    ci, si = np.cos(inc), np.sin(inc)
+    cw, sw = np.cos(argp), np.sin(argp)
+    pN = np.array([cO * cw - sO * sw * ci, sO * cw + cO * sw * ci, sw * si])
+    qN = np.array([-cO * sw - sO * cw * ci, -sO * sw + cO * cw * ci, cw * si])
+    pn = dcm_PN(elements, pole)
+    for i in range(3):
+        out[7 + i] = pn[i, 0] * pN[0] + pn[i, 1] * pN[1] + pn[i, 2] * pN[2]
+        out[10 + i] = pn[i, 0] * qN[0] + pn[i, 1] * qN[1] + pn[i, 2] * qN[2]
+    return out
+
+
+@njit(cache=True)
+def sun_T_fast(t, eph, out):
+    """:func:`sun_T` from :func:`ephemeris_precompute` constants; returns the distance (m)."""
+    e = eph[2]
+    E = kepler_E(eph[1] + eph[0] * t, e)
+    cE = np.cos(E)
+    xp = eph[3] * (cE - e)
+    yq = eph[4] * np.sin(E)
+    s0 = -(xp * eph[7] + yq * eph[10])
+    s1 = -(xp * eph[8] + yq * eph[11])
+    s2 = -(xp * eph[9] + yq * eph[12])
+    d = np.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
+    w = eph[6] + eph[5] * t
+    c, sn = np.cos(w), np.sin(w)
+    out[0] = (c * s0 + sn * s1) / d
+    out[1] = (-sn * s0 + c * s1) / d
+    out[2] = s2 / d
+    return d

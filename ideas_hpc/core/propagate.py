@@ -41,7 +41,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .ephemeris import sun_T
+from .ephemeris import N_EPH, sun_T_fast
 from .gravity import degree2, point_mass, polyhedron_gravity, sh_gravity
 
 # indices into ``consts``
@@ -57,7 +57,8 @@ K_W0 = 8
 K_MU_SUN = 9
 K_ELEM = 10   # 6 values: a, e, i, RAAN, argp, nu0
 K_POLE = 16   # 3 values: ra, dec, flag
-N_CONSTS = 19
+K_EPH = 19    # N_EPH derived ephemeris constants (ephemeris_precompute)
+N_CONSTS = 19 + N_EPH
 
 MODEL_POINT_MASS = 0
 MODEL_DEGREE2 = 1
@@ -214,14 +215,14 @@ _N_STAGES = 12
 
 
 @njit(cache=True)
-def gravity_T(r_T, model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd, acc, grad):
+def gravity_T(r_T, model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd, acc, grad, a2, g2):
     """Gravity acceleration (m/s^2) and gradient (1/s^2) of the packed force model.
 
     Returns the potential (m^2/s^2). See the module docstring for ``model``
     and ``consts``; ``sh_c, sh_s`` are the tables of
     :func:`ideas_hpc.core.gravity.sh_derivative_tables`, ``pv, pf, pe, ped,
     pfd`` the polyhedron vertices, faces, edges, edge and face dyads (unused
-    arrays may be empty).
+    arrays may be empty); ``a2, g2`` are (3,), (3, 3) work arrays.
     """
     if model == MODEL_SH:
         kk = sh_c.shape[1]
@@ -232,8 +233,6 @@ def gravity_T(r_T, model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd, acc, grad):
         return polyhedron_gravity(r_T, consts[K_GRHO], pv, pf, pe, ped, pfd, acc, grad)
     u = point_mass(r_T, consts[K_MU], acc, grad)
     if model == MODEL_DEGREE2:
-        a2 = np.empty(3)
-        g2 = np.empty((3, 3))
         u += degree2(r_T, consts[K_MU], consts[K_C20], consts[K_C22], a2, g2)
         for i in range(3):
             acc[i] += a2[i]
@@ -244,14 +243,17 @@ def gravity_T(r_T, model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd, acc, grad):
 
 @njit(cache=True)
 def srp_T(t, consts, out):
-    """Cannonball SRP acceleration in T at time t (m/s^2), written to ``out``."""
+    """Cannonball SRP acceleration in T at time t (m/s^2), written to ``out``.
+
+    ``consts`` must hold the ephemeris constants of
+    :func:`ideas_hpc.core.ephemeris.ephemeris_precompute` at ``K_EPH``.
+    """
     if consts[K_SRP] == 0.0:
         out[0] = 0.0
         out[1] = 0.0
         out[2] = 0.0
         return
-    d = sun_T(t, consts[K_ELEM:K_ELEM + 6], consts[K_POLE:K_POLE + 3], consts[K_SPIN],
-              consts[K_W0], consts[K_MU_SUN], out)
+    d = sun_T_fast(t, consts[K_EPH:K_EPH + N_EPH], out)
     f = -consts[K_SRP] / (d * d)
     out[0] *= f
     out[1] *= f
@@ -268,12 +270,18 @@ def rhs(t, y, dy, model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd):
         s after t0 (the Sun ephemeris and the spin angle are referred to t0 = 0).
     y, dy : (6,) or (42,) float64
         State ``[r (m), v (m/s), Phi (row-major)]`` in T, and its derivative (output).
+    model ... pfd
+        Packed force model (module docstring).
     """
+    _rhs_w(t, y, dy, model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd,
+           np.empty(3), np.empty((3, 3)), np.empty(3), np.empty((3, 3)), np.empty(3))
+
+
+@njit(cache=True)
+def _rhs_w(t, y, dy, model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd, acc, grad, a2, g2, asrp):
+    """:func:`rhs` with caller-owned work arrays (no allocation in the hot loop)."""
     w = consts[K_SPIN]
-    acc = np.empty(3)
-    grad = np.empty((3, 3))
-    gravity_T(y[:3], model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd, acc, grad)
-    asrp = np.empty(3)
+    gravity_T(y[:3], model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd, acc, grad, a2, g2)
     srp_T(t, consts, asrp)
     x, yy = y[0], y[1]
     vx, vy, vz = y[3], y[4], y[5]
@@ -347,6 +355,11 @@ def dop853(y0, t0, tf, rtol, atol, t_out, y_out, max_steps,
     """
     n = y0.shape[0]
     K = np.empty((16, n))
+    wa = np.empty(3)
+    wg = np.empty((3, 3))
+    wa2 = np.empty(3)
+    wg2 = np.empty((3, 3))
+    ws = np.empty(3)
     y = y0.copy()
     ynew = np.empty(n)
     ytmp = np.empty(n)
@@ -356,7 +369,8 @@ def dop853(y0, t0, tf, rtol, atol, t_out, y_out, max_steps,
     t = t0
     nfev = 0
     f = np.empty(n)
-    rhs(t, y, f, model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd)
+    _rhs_w(t, y, f,
+               model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd, wa, wg, wa2, wg2, ws)
     nfev += 1
     # initial step, Hairer et al. II.4 (as scipy select_initial_step)
     for i in range(n):
@@ -370,7 +384,8 @@ def dop853(y0, t0, tf, rtol, atol, t_out, y_out, max_steps,
     h0 = min(h0, tf - t0)
     for i in range(n):
         ytmp[i] = y[i] + h0 * f[i]
-    rhs(t0 + h0, ytmp, K[1], model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd)
+    _rhs_w(t0 + h0, ytmp, K[1],
+               model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd, wa, wg, wa2, wg2, ws)
     nfev += 1
     for i in range(n):
         e3[i] = K[1, i] - f[i]
@@ -418,14 +433,16 @@ def dop853(y0, t0, tf, rtol, atol, t_out, y_out, max_steps,
                     for j in range(s):
                         acc += _A[s, j] * K[j, i]
                     ytmp[i] = y[i] + h * acc
-                rhs(t + _C[s] * h, ytmp, K[s], model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd)
+                _rhs_w(t + _C[s] * h, ytmp, K[s],
+               model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd, wa, wg, wa2, wg2, ws)
             nfev += _N_STAGES - 1
             for i in range(n):
                 acc = 0.0
                 for j in range(_N_STAGES):
                     acc += _B[j] * K[j, i]
                 ynew[i] = y[i] + h * acc
-            rhs(t_new, ynew, K[_N_STAGES], model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd)
+            _rhs_w(t_new, ynew, K[_N_STAGES],
+               model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd, wa, wg, wa2, wg2, ws)
             nfev += 1
             finite = True
             for i in range(n):
@@ -476,7 +493,8 @@ def dop853(y0, t0, tf, rtol, atol, t_out, y_out, max_steps,
                     for j in range(s):
                         acc += _A[s, j] * Kd[j, i]
                     yd[i] = y[i] + h * acc
-                rhs(t + _C[s] * h, yd, fd, model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd)
+                _rhs_w(t + _C[s] * h, yd, fd,
+               model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd, wa, wg, wa2, wg2, ws)
                 for i in range(6):
                     Kd[s, i] = fd[i]
             nfev += 3
@@ -492,15 +510,15 @@ def dop853(y0, t0, tf, rtol, atol, t_out, y_out, max_steps,
                     F[3 + q, i] = h * acc
             while k_out < n_out and t_out[k_out] <= t_new:
                 x = (t_out[k_out] - t) / h
+                x1 = 1.0 - x
                 for i in range(m_out):
-                    val = 0.0
-                    for q in range(7):
-                        val += F[6 - q, i]
-                        if q % 2 == 0:
-                            val *= x
-                        else:
-                            val *= 1.0 - x
-                    y_out[k_out, i] = val + y[i]
+                    val = F[6, i] * x + F[5, i]
+                    val = val * x1 + F[4, i]
+                    val = val * x + F[3, i]
+                    val = val * x1 + F[2, i]
+                    val = val * x + F[1, i]
+                    val = val * x1 + F[0, i]
+                    y_out[k_out, i] = val * x + y[i]
                 k_out += 1
         for i in range(n):
             y[i] = ynew[i]
