@@ -24,7 +24,7 @@ from .mrp import mrp_from_dcm
 from .reference import reference_into
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _dcm_BT(x, spin_rate, t, out, a, b, c_):
     """``[B T] = [B N][T N]^T`` with ``[T N] = R3(w_s t)``; writes ``out[a, b, c_]`` (3, 3).
 
@@ -60,7 +60,7 @@ def _dcm_BT(x, spin_rate, t, out, a, b, c_):
     out[a, b, c_, 2, 2] = b22
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def closed_loop_step(mode, t, x, z, sigma_RT, dcm_RT, spin_rate, theta_max, period,
                      k_p, k_i, eta, phi, int_limit, I_rw, J_s, L_ext, u_max, h_max, dt,
                      ref, u, err, work):
@@ -81,7 +81,7 @@ def closed_loop_step(mode, t, x, z, sigma_RT, dcm_RT, spin_rate, theta_max, peri
         z[2] += err[2] * dt
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, error_model="numpy")
 def simulate_batch(mode, dcm_RT_all, spin_rate, periods, theta_max,
                    k_p, k_i, eta, phi, int_limit, I_rw, J_s, u_max, h_max,
                    dt, n_steps, decimate, img_every, sigma0, omega0, wheel0):
@@ -169,17 +169,25 @@ def simulate_batch(mode, dcm_RT_all, spin_rate, periods, theta_max,
                 x[j] = -x[j] / ss
         mu = 0.0
         mh = 0.0
+        # counters instead of k % n: integer division is a visible share of a step
+        c_img = 0
+        n_img_done = 0
+        c_rec = 0
+        r = 0
         for k in range(n_steps + 1):
             t = k * dt
-            if k % img_every == 0:
-                _dcm_BT(x, spin_rate, t, dcm_BT, smp, i, k // img_every)
+            if c_img == 0:
+                _dcm_BT(x, spin_rate, t, dcm_BT, smp, i, n_img_done)
+                n_img_done += 1
+            c_img += 1
+            if c_img == img_every:
+                c_img = 0
             for j in range(3):
                 h = abs(J_s[j] * x[6 + j])
                 if h > mh:
                     mh = h
-            rec = k % decimate == 0
+            rec = c_rec == 0
             if rec:
-                r = k // decimate
                 for j in range(3):
                     wheel[smp, i, r, j] = x[6 + j]
             # closed_loop_step written out (a call with this many array
@@ -203,6 +211,10 @@ def simulate_batch(mode, dcm_RT_all, spin_rate, periods, theta_max,
                     sig_err[smp, i, r, j] = err[j]
                     om_err[smp, i, r, j] = err[3 + j]
                     torque[smp, i, r, j] = u[j]
+                r += 1
+            c_rec += 1
+            if c_rec == decimate:
+                c_rec = 0
         max_u[smp, i] = mu
         max_h[smp, i] = mh
     return sig_err, om_err, wheel, torque, dcm_BT, max_u, max_h

@@ -49,7 +49,7 @@ from .attitude import wheel_limit_s
 from .reference import mrp_rotate_s, mrp_sub_s
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def sliding_mode_into(x, z, ref, k_p, k_i, eta, phi, I_rw, J_s, L_known,
                       u_max, h_max, u_out, err_out):
     """Sliding-mode wheel torques for one spacecraft (SPEC section 5).
@@ -91,7 +91,12 @@ def sliding_mode_into(x, z, ref, k_p, k_i, eta, phi, I_rw, J_s, L_known,
     d1, d2, d3 = mrp_sub_s(s1, s2, s3, ref[0], ref[1], ref[2])
     # reference rate and inertial acceleration in B components
     r1, r2, r3 = mrp_rotate_s(d1, d2, d3, ref[3], ref[4], ref[5])
-    a1, a2, a3 = mrp_rotate_s(d1, d2, d3, ref[6], ref[7], ref[8])
+    if ref[6] == 0.0 and ref[7] == 0.0 and ref[8] == 0.0:  # NP: no reference acceleration
+        a1 = 0.0
+        a2 = 0.0
+        a3 = 0.0
+    else:
+        a1, a2, a3 = mrp_rotate_s(d1, d2, d3, ref[6], ref[7], ref[8])
     e1 = w1 - r1
     e2 = w2 - r2
     e3 = w3 - r3

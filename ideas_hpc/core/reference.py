@@ -46,7 +46,7 @@ NP_MODE = 0
 FOV_MODE = 1
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _switch(a, b, c):
     ss = a * a + b * b + c * c
     if ss > 1.0:
@@ -54,7 +54,7 @@ def _switch(a, b, c):
     return a, b, c
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def mrp_add_s(a1, a2, a3, b1, b2, b3):
     """Scalar ``core.mrp.mrp_add``: ``sigma1 = sigma_BN``, ``sigma2 = sigma_FB`` -> ``sigma_FN``
     (S&J 3.160), short set returned as a 3-tuple."""
@@ -78,7 +78,7 @@ def mrp_add_s(a1, a2, a3, b1, b2, b3):
                    (p * b3 + q * a3 - 2.0 * c3) / den)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def mrp_sub_s(a1, a2, a3, r1, r2, r3):
     """Scalar ``core.mrp.mrp_sub``: ``sigma_BN``, ``sigma_RN`` -> ``sigma_BR`` (S&J 3.161)."""
     srs = r1 * r1 + r2 * r2 + r3 * r3
@@ -101,7 +101,7 @@ def mrp_sub_s(a1, a2, a3, r1, r2, r3):
                    (p * a3 - q * r3 + 2.0 * c3) / den)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def mrp_rotate_s(s1, s2, s3, v1, v2, v3):
     """``dcm_from_mrp(sigma) @ v`` without forming the matrix (S&J 3.153)::
 
@@ -121,7 +121,7 @@ def mrp_rotate_s(s1, s2, s3, v1, v2, v3):
             v3 + (8.0 * b3 - k * a3) * d)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def nadir_reference_into(t, spin_rate, sigma_RT, dcm_RT, ref):
     """Nadir Pointing reference: the ring frame ``R_i`` (SPEC section 5).
 
@@ -154,7 +154,7 @@ def nadir_reference_into(t, spin_rate, sigma_RT, dcm_RT, ref):
     ref[8] = 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def fov_reference_into(t, spin_rate, sigma_RT, dcm_RT, theta_max, period, ref):
     """FoV Sweeping reference ``F_i`` (paper eqs. 20-24, SPEC section 5).
 
@@ -204,7 +204,7 @@ def fov_reference_into(t, spin_rate, sigma_RT, dcm_RT, theta_max, period, ref):
     ref[8] = -of2 * thd
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def reference_into(mode, t, spin_rate, sigma_RT, dcm_RT, theta_max, period, ref):
     """Dispatch: ``mode`` 0 = Nadir Pointing, 1 = FoV Sweeping."""
     if mode == FOV_MODE:
@@ -213,7 +213,7 @@ def reference_into(mode, t, spin_rate, sigma_RT, dcm_RT, theta_max, period, ref)
         nadir_reference_into(t, spin_rate, sigma_RT, dcm_RT, ref)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def reference(mode, t, spin_rate, dcm_RT, theta_max, period):
     """Allocating form: returns ``(sigma_RN, omega_RN_R, omegadot_RN_R)`` (see module doc)."""
     ref = np.empty(9)
@@ -222,7 +222,7 @@ def reference(mode, t, spin_rate, dcm_RT, theta_max, period):
     return ref[0:3].copy(), ref[3:6].copy(), ref[6:9].copy()
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def reference_dcm_BT(mode, dcm_RT_all, theta_max, periods, times):
     """Camera DCM ``[B T]`` under perfect tracking (``B`` = reference frame).
 
