@@ -153,6 +153,26 @@ def test_brute_force_agrees_exactly(small_body, cfg):
     np.testing.assert_array_equal(mask, per_all)
 
 
+@pytest.fixture(scope="module")
+def medium_body():
+    return ellipsoid_mesh(1500.0, 700.0, 500.0, 3)
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(cfg=configurations(), narrow=st.floats(0.02, 0.3))
+def test_brute_force_tile_pruning(medium_body, cfg, narrow):
+    """642 vertices in 21 tiles with narrow fields of view: the tiled kernel's
+    conservative tile rejection (bounding sphere vs frustum, normal cone vs
+    culling) must not change any count."""
+    r, C, times, _, near, far, exact, active = cfg
+    obs, first, count, _ = brute_force(medium_body, r, C, times, narrow, near, far, exact,
+                                       active)
+    res = compute_coverage(medium_body, r, C, times, narrow, near, far, active=active,
+                           options=CoverageOptions(mode="exact" if exact else "paper"))
+    np.testing.assert_array_equal(res.times_seen, count)
+    np.testing.assert_array_equal(res.first_seen, first)
+
+
 @settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(cfg=configurations(), elev=st.floats(0.0, 1.2), rng_frac=st.floats(0.3, 1.2))
 def test_brute_force_strict_elevation_range(small_body, cfg, elev, rng_frac):

@@ -52,8 +52,12 @@ from numba import njit, prange
 
 from .bvh import segment_blocked
 
-#: Vertices per tile of the tiled counting kernel (fits L1 with the image data).
-BLOCK = 64
+#: Vertices per tile of the tiled counting kernel.
+BLOCK = 32
+#: Relative slack of the conservative tile rejection tests (DCMs are accepted
+#: by the boundary when orthonormal to 1e-6, so |C d| may differ from |d| by
+#: that much; 1e-5 keeps the tile tests strictly on the safe side).
+_SLACK = 1e-5
 
 
 @njit(cache=True)
@@ -84,14 +88,123 @@ def coverage_fractions(observed, vertex_areas):
     return a_obs / a_tot, n_obs / observed.shape[0]
 
 
+
+@njit(cache=True)
+def spatial_order(vertices, block):
+    """Permutation that groups vertices into compact tiles of ``block`` (k-d median splits).
+
+    Splits happen at multiples of ``block`` along the longest extent, so every
+    tile but the last holds exactly ``block`` vertices, close together in space
+    (and, on a surface, with similar normals).
+    """
+    nv = vertices.shape[0]
+    order = np.arange(nv)
+    stack = np.empty((2 * nv // max(block, 1) + 64, 2), dtype=np.int64)
+    stack[0, 0] = 0
+    stack[0, 1] = nv
+    sp = 1
+    while sp > 0:
+        sp -= 1
+        start = stack[sp, 0]
+        count = stack[sp, 1]
+        if count <= block:
+            continue
+        lo = np.full(3, np.inf)
+        hi = np.full(3, -np.inf)
+        for i in range(start, start + count):
+            for k in range(3):
+                x = vertices[order[i], k]
+                lo[k] = min(lo[k], x)
+                hi[k] = max(hi[k], x)
+        ext = hi - lo
+        axis = 0
+        if ext[1] > ext[axis]:
+            axis = 1
+        if ext[2] > ext[axis]:
+            axis = 2
+        seg = order[start:start + count].copy()
+        keys = np.empty(count)
+        for i in range(count):
+            keys[i] = vertices[seg[i], axis]
+        srt = np.argsort(keys, kind="mergesort")
+        for i in range(count):
+            order[start + i] = seg[srt[i]]
+        nblk = (count + block - 1) // block
+        left = (nblk // 2) * block
+        stack[sp, 0] = start
+        stack[sp, 1] = left
+        stack[sp + 1, 0] = start + left
+        stack[sp + 1, 1] = count - left
+        sp += 2
+    return order
+
+
+@njit(cache=True)
+def _tile_bounds(px, py, pz, nx, ny, nz, nb):
+    """Bounding sphere (centre, radius) and normal cone (axis, cos and sin of half angle)."""
+    cx = 0.0
+    cy = 0.0
+    cz = 0.0
+    ax = 0.0
+    ay = 0.0
+    az = 0.0
+    for jj in range(nb):
+        cx += px[jj]
+        cy += py[jj]
+        cz += pz[jj]
+        ax += nx[jj]
+        ay += ny[jj]
+        az += nz[jj]
+    cx /= nb
+    cy /= nb
+    cz /= nb
+    rho = 0.0
+    for jj in range(nb):
+        rho = max(rho, np.sqrt((px[jj] - cx) ** 2 + (py[jj] - cy) ** 2 + (pz[jj] - cz) ** 2))
+    an = np.sqrt(ax * ax + ay * ay + az * az)
+    cos_a = -1.0
+    if an > 0.0:
+        ax /= an
+        ay /= an
+        az /= an
+        cos_a = 1.0
+        for jj in range(nb):
+            cos_a = min(cos_a, ax * nx[jj] + ay * ny[jj] + az * nz[jj])
+    cos_a = max(-1.0, cos_a - 1e-9)
+    sin_a = np.sqrt(max(0.0, 1.0 - cos_a * cos_a))
+    return cx, cy, cz, rho * (1.0 + _SLACK) + 1e-9, ax, ay, az, cos_a, sin_a
+
+
+@njit(cache=True, inline="always")
+def _max_cos_in_cone(ux, uy, uz, ax, ay, az, cos_a, sin_a):
+    """max over unit n within angle alpha of axis a of u . n, for unit u."""
+    cb = ux * ax + uy * ay + uz * az
+    if cb >= cos_a:
+        return 1.0
+    sb = np.sqrt(max(0.0, 1.0 - cb * cb))
+    return cb * cos_a + sb * sin_a
+
+
 @njit(parallel=True, cache=True)
 def coverage_counts(vertices, normals, vertex_areas, r_T, dcm_BT, image_times,
                     tan_eta, near, far, exact, active):
     """Full per-vertex counts, culling + clipping only (paper eq. 25-26), tiled.
 
-    Every (spacecraft, image, vertex) triple is tested, so ``times_seen`` is
-    complete. Vertices are processed in tiles of :data:`BLOCK`, one tile per
-    ``prange`` iteration, with a branch-free inner loop over the tile.
+    Every (spacecraft, image, vertex) triple counts, so ``times_seen`` is
+    complete. Vertices are grouped into compact tiles of :data:`BLOCK`
+    (:func:`spatial_order`), one tile per ``prange`` iteration. For each
+    (tile, image) pair two conservative tests may skip the whole tile:
+
+    * the tile's bounding sphere lies entirely outside one of the six
+      frustum planes (no vertex can pass clipping);
+    * the tile's normal cone faces away from the spacecraft for every normal
+      in it (no vertex can pass culling): ``max r . n < 0`` (paper) or
+      ``max (r - p) . n <= 0`` (exact), bounded through the cone half angle
+      and the sphere radius.
+
+    Both tests carry a relative slack (:data:`_SLACK`) so they never reject a
+    tile that holds a visible vertex; the per-vertex tests that follow are
+    the exact ones, in a branch-free loop the compiler vectorises.
 
     Parameters
     ----------
@@ -126,64 +239,161 @@ def coverage_counts(vertices, normals, vertex_areas, r_T, dcm_BT, image_times,
     nv = vertices.shape[0]
     nsc = r_T.shape[0]
     nimg = r_T.shape[1]
+    order = spatial_order(vertices, BLOCK)
     times_seen = np.zeros(nv, dtype=np.int32)
     first_seen = np.full(nv, np.nan)
+    # distance from a point to a side plane |x| = t z is (x - t z) / sqrt(1 + t^2)
+    inv_side = 1.0 / np.sqrt(1.0 + tan_eta * tan_eta)
+    # Per image: camera data in one contiguous row, and whether the body's
+    # bounding sphere can meet the frustum at all (images that cannot are dropped).
+    bx = 0.0
+    by = 0.0
+    bz = 0.0
+    for j in range(nv):
+        bx += vertices[j, 0]
+        by += vertices[j, 1]
+        bz += vertices[j, 2]
+    bx /= nv
+    by /= nv
+    bz /= nv
+    brho = 0.0
+    for j in range(nv):
+        brho = max(brho, np.sqrt((vertices[j, 0] - bx) ** 2 + (vertices[j, 1] - by) ** 2
+                                 + (vertices[j, 2] - bz) ** 2))
+    brho = brho * (1.0 + _SLACK) + 1e-9
+    m_all = nsc * nimg
+    img = np.empty((m_all, 17))
+    keep = np.zeros(m_all, dtype=np.bool_)
+    for m in prange(m_all):
+        k = m // nimg
+        i = m - k * nimg
+        for a in range(3):
+            for b in range(3):
+                img[m, 3 * a + b] = dcm_BT[k, i, a, b]
+        rx = r_T[k, i, 0]
+        ry = r_T[k, i, 1]
+        rz = r_T[k, i, 2]
+        img[m, 9] = rx
+        img[m, 10] = ry
+        img[m, 11] = rz
+        rn = np.sqrt(rx * rx + ry * ry + rz * rz)
+        img[m, 12] = rn
+        if rn > 0.0:
+            img[m, 13] = rx / rn
+            img[m, 14] = ry / rn
+            img[m, 15] = rz / rn
+        else:
+            img[m, 13] = 0.0
+            img[m, 14] = 0.0
+            img[m, 15] = 0.0
+        img[m, 16] = image_times[i]
+        ex = bx - rx
+        ey = by - ry
+        ez = bz - rz
+        sx = dcm_BT[k, i, 0, 0] * ex + dcm_BT[k, i, 0, 1] * ey + dcm_BT[k, i, 0, 2] * ez
+        sy = dcm_BT[k, i, 1, 0] * ex + dcm_BT[k, i, 1, 1] * ey + dcm_BT[k, i, 1, 2] * ez
+        sz = dcm_BT[k, i, 2, 0] * ex + dcm_BT[k, i, 2, 1] * ey + dcm_BT[k, i, 2, 2] * ez
+        marg = brho + _SLACK * (abs(sx) + abs(sy) + abs(sz))
+        keep[m] = active[k] and not (
+            sz + marg < near or sz - marg > far
+            or (abs(sx) - tan_eta * sz) * inv_side > marg
+            or (abs(sy) - tan_eta * sz) * inv_side > marg)
+    sel = np.flatnonzero(keep)
+    nsel = sel.shape[0]
     nblk = (nv + BLOCK - 1) // BLOCK
     for blk in prange(nblk):
         j0 = blk * BLOCK
         nb = min(nv, j0 + BLOCK) - j0
-        px = np.empty(BLOCK)
-        py = np.empty(BLOCK)
-        pz = np.empty(BLOCK)
-        nx = np.empty(BLOCK)
-        ny = np.empty(BLOCK)
-        nz = np.empty(BLOCK)
+        px = np.zeros(BLOCK)
+        py = np.zeros(BLOCK)
+        pz = np.zeros(BLOCK)
+        nx = np.zeros(BLOCK)
+        ny = np.zeros(BLOCK)
+        nz = np.zeros(BLOCK)
         cnt = np.zeros(BLOCK, dtype=np.int32)
         fs = np.full(BLOCK, np.inf)
+        pn_min = np.inf
         for jj in range(nb):
-            px[jj] = vertices[j0 + jj, 0]
-            py[jj] = vertices[j0 + jj, 1]
-            pz[jj] = vertices[j0 + jj, 2]
-            nx[jj] = normals[j0 + jj, 0]
-            ny[jj] = normals[j0 + jj, 1]
-            nz[jj] = normals[j0 + jj, 2]
-        for k in range(nsc):
-            if not active[k]:
+            j = order[j0 + jj]
+            px[jj] = vertices[j, 0]
+            py[jj] = vertices[j, 1]
+            pz[jj] = vertices[j, 2]
+            nx[jj] = normals[j, 0]
+            ny[jj] = normals[j, 1]
+            nz[jj] = normals[j, 2]
+            pn_min = min(pn_min, px[jj] * nx[jj] + py[jj] * ny[jj] + pz[jj] * nz[jj])
+        cx, cy, cz, rho, ax, ay, az, cos_a, sin_a = _tile_bounds(px, py, pz, nx, ny, nz, nb)
+        # r . n < 0 for every n in the cone iff angle(r, axis) > 90 deg + alpha;
+        # a cone wider than a hemisphere (alpha > 90 deg) never rejects.
+        cone_lim = -sin_a - _SLACK if cos_a > 0.0 else -2.0
+        for s_ in range(nsel):
+            m = sel[s_]
+            cb = img[m, 13] * ax + img[m, 14] * ay + img[m, 15] * az
+            if cb < cone_lim:
+                if not exact:
+                    continue
+                # (r - p) . n <= |r| max(r_hat . n) - min(p . n)
+                mc = cb * cos_a + np.sqrt(max(0.0, 1.0 - cb * cb)) * sin_a
+                if img[m, 12] * mc - pn_min < -_SLACK * (img[m, 12] + abs(pn_min)):
+                    continue
+            rx = img[m, 9]
+            ry = img[m, 10]
+            rz = img[m, 11]
+            c00 = img[m, 0]
+            c01 = img[m, 1]
+            c02 = img[m, 2]
+            c10 = img[m, 3]
+            c11 = img[m, 4]
+            c12 = img[m, 5]
+            c20 = img[m, 6]
+            c21 = img[m, 7]
+            c22 = img[m, 8]
+            # frustum test of the tile's bounding sphere
+            ex = cx - rx
+            ey = cy - ry
+            ez = cz - rz
+            sx = c00 * ex + c01 * ey + c02 * ez
+            sy = c10 * ex + c11 * ey + c12 * ez
+            sz = c20 * ex + c21 * ey + c22 * ez
+            marg = rho + _SLACK * (abs(sx) + abs(sy) + abs(sz))
+            if (sz + marg < near or sz - marg > far
+                    or (abs(sx) - tan_eta * sz) * inv_side > marg
+                    or (abs(sy) - tan_eta * sz) * inv_side > marg):
                 continue
-            for i in range(nimg):
-                t = image_times[i]
-                rx = r_T[k, i, 0]
-                ry = r_T[k, i, 1]
-                rz = r_T[k, i, 2]
-                c00 = dcm_BT[k, i, 0, 0]
-                c01 = dcm_BT[k, i, 0, 1]
-                c02 = dcm_BT[k, i, 0, 2]
-                c10 = dcm_BT[k, i, 1, 0]
-                c11 = dcm_BT[k, i, 1, 1]
-                c12 = dcm_BT[k, i, 1, 2]
-                c20 = dcm_BT[k, i, 2, 0]
-                c21 = dcm_BT[k, i, 2, 1]
-                c22 = dcm_BT[k, i, 2, 2]
-                for jj in range(nb):
+            t = img[m, 16]
+            if exact:
+                for jj in range(BLOCK):
                     dx = px[jj] - rx
                     dy = py[jj] - ry
                     dz = pz[jj] - rz
-                    if exact:
-                        cull = (-dx) * nx[jj] + (-dy) * ny[jj] + (-dz) * nz[jj] > 0.0
-                    else:
-                        cull = rx * nx[jj] + ry * ny[jj] + rz * nz[jj] >= 0.0
                     qx = c00 * dx + c01 * dy + c02 * dz
                     qy = c10 * dx + c11 * dy + c12 * dz
                     qz = c20 * dx + c21 * dy + c22 * dz
                     lim = tan_eta * qz
-                    hit = (cull & (qz > 0.0) & (abs(qx) <= lim) & (abs(qy) <= lim)
+                    hit = (((-dx) * nx[jj] + (-dy) * ny[jj] + (-dz) * nz[jj] > 0.0)
+                           & (qz > 0.0) & (abs(qx) <= lim) & (abs(qy) <= lim)
                            & (qz >= near) & (qz <= far))
-                    cnt[jj] += np.int32(hit)
+                    cnt[jj] += hit
+                    fs[jj] = min(fs[jj], t if hit else np.inf)
+            else:
+                for jj in range(BLOCK):
+                    dx = px[jj] - rx
+                    dy = py[jj] - ry
+                    dz = pz[jj] - rz
+                    qx = c00 * dx + c01 * dy + c02 * dz
+                    qy = c10 * dx + c11 * dy + c12 * dz
+                    qz = c20 * dx + c21 * dy + c22 * dz
+                    lim = tan_eta * qz
+                    hit = ((rx * nx[jj] + ry * ny[jj] + rz * nz[jj] >= 0.0)
+                           & (qz > 0.0) & (abs(qx) <= lim) & (abs(qy) <= lim)
+                           & (qz >= near) & (qz <= far))
+                    cnt[jj] += hit
                     fs[jj] = min(fs[jj], t if hit else np.inf)
         for jj in range(nb):
-            times_seen[j0 + jj] = cnt[jj]
+            j = order[j0 + jj]
+            times_seen[j] = cnt[jj]
             if fs[jj] < np.inf:
-                first_seen[j0 + jj] = fs[jj]
+                first_seen[j] = fs[jj]
     observed = times_seen > 0
     cov, cov_n = coverage_fractions(observed, vertex_areas)
     return observed, first_seen, times_seen, cov, cov_n
