@@ -6,6 +6,13 @@ and the ``ideas-hpc`` command line (``size``, ``run``, ``report``).
 
 from __future__ import annotations
 
+import os as _os
+
+# Numba's OpenMP threads busy-wait by default; on a small shared machine two
+# spinning threads slowed the parallel kernels ~5x (measured in
+# benchmarks/bench_targeting.py). Must be set before numba loads its runtime.
+_os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+
 from ._version import __version__
 from .bodies import Body, load_body
 from .errors import InputError

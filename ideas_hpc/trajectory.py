@@ -37,7 +37,7 @@ from .constants import AU, G, MU_SUN, P_SUN_1AU
 from .core import propagate as _prop
 from .core.ephemeris import ephemeris_precompute, sun_T_batch
 from .core.gravity import polyhedron_precompute, sh_derivative_tables, sh_unnormalise
-from .core.targeting import target_batch
+from .core.targeting import propagate_batch, target_batch
 from .errors import InputError
 from .params import PhysicalParams
 
@@ -494,6 +494,47 @@ def target_swarm(body, r0_T, r_target_T, t0, tf, *, force_model: ForceModel = Fo
         raise TargetingError(f"targeting did not converge to {tol:g} m for {detail}",
                              failed, res)
     return res
+
+
+def propagate_swarm(body, r0_T, v0_T, t0, tf, *, force_model: ForceModel = ForceModel(),
+                    dt_sample: float = 0.1, params_override=None,
+                    packed: PackedForceModel | None = None):
+    """Fly every spacecraft from given initial states, without targeting.
+
+    Monte Carlo use: the designed ``v0`` (from :func:`target_swarm` on the
+    nominal model) flown from a dispersed start through a perturbed field.
+
+    Returns
+    -------
+    times : (T,) s
+    position_T, velocity_T : (N, T, 3)
+        m and m/s, frame T.
+
+    Raises
+    ------
+    InputError
+        As :func:`target_swarm` for the states and times.
+    RuntimeError
+        When the integrator fails for a spacecraft (step limit).
+    """
+    r0 = _states("r0_T", r0_T)
+    v0 = _states("v0_T", v0_T)
+    if v0.shape != r0.shape:
+        raise InputError(f"shape {v0.shape} differs from r0_T {r0.shape}", field="v0_T")
+    t0 = _scalar("t0", t0)
+    tf = _scalar("tf", tf)
+    if tf <= t0:
+        raise InputError(f"must be > t0 ({t0:g} s), got {tf:g} s", field="tf")
+    dt_sample = _scalar("dt_sample", dt_sample, positive=True)
+    pk = packed if packed is not None else pack_force_model(body, force_model, params_override)
+    times = sample_times(t0, tf, dt_sample)
+    states, status = propagate_batch(r0, v0, t0, tf, force_model.rtol, force_model.atol,
+                                     MAX_STEPS, times, *pk.args())
+    if np.any(status != 0):
+        bad = np.where(status != 0)[0].tolist()
+        raise RuntimeError(f"propagation failed for spacecraft {bad} (status {status[bad]})")
+    return (times, np.ascontiguousarray(states[:, :, :3]),
+            np.ascontiguousarray(states[:, :, 3:]))
 
 
 def ring_states(body, angles, d_sep, z_start, z_stop):

@@ -173,3 +173,29 @@ def target_batch(r0, r_target, t0, tf, tol, max_iter, rtol, atol, max_steps, t_o
         propagate(r0[i], v0[i], t0, tf, False, rtol, atol, t_out, states[i], max_steps,
                   model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd)
     return v0, miss, n_iter, converged, states, nfev
+
+
+@njit(cache=True, parallel=True)
+def propagate_batch(r0, v0, t0, tf, rtol, atol, max_steps, t_out,
+                    model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd):
+    """Propagate every spacecraft from given ``(r0, v0)`` (``prange`` over spacecraft).
+
+    For Monte Carlo flights of a designed trajectory with dispersed initial
+    states and force parameters (no retargeting: the spacecraft flies its
+    nominal ``v0`` through the perturbed field).
+
+    Returns
+    -------
+    states : (N, T, 6) float64
+        ``[r, v]`` at ``t_out`` (m, m/s, frame T).
+    status : (N,) int64
+        The integrator's status per spacecraft (0: success).
+    """
+    n = r0.shape[0]
+    states = np.full((n, t_out.shape[0], 6), np.nan)
+    status = np.zeros(n, dtype=np.int64)
+    for i in prange(n):
+        y, nf, st = propagate(r0[i], v0[i], t0, tf, False, rtol, atol, t_out, states[i],
+                              max_steps, model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd)
+        status[i] = st
+    return states, status
