@@ -28,6 +28,11 @@ the validation targets and both switchable (see :class:`Gains`):
    accumulated while ``|ds| < int_limit`` (default 0.005, about 1.1 deg):
    the acquisition then runs on ``K_P`` alone (``exp(-K_P t / 4)``) and the
    integral acts in fine pointing. ``int_limit = inf`` restores SPEC as written.
+
+With both, 800 random initial conditions (100 samples x 8 spacecraft of the
+paper's Eros NP swarm) reach a worst MRP error of 3.9e-4 after 120 s and
+1.0e-11 at 600 s, torques within 0.007 N m and wheel momenta below 0.015 N m s
+(``tests/test_attitude.py``, slow test).
 """
 
 from __future__ import annotations

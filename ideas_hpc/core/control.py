@@ -34,11 +34,15 @@ reaching law is linear, ``s' = -eta phi s``, and its sampled form is
 ``s_{k+1} = (1 - eta phi dt) s_k``. With Table 5/6 values (``eta phi = 50 1/s``,
 ``dt = 0.1 s``) the factor is -4: the sampled loop is unstable inside the
 layer and settles into a period-2 limit cycle of amplitude about
-``eta dt / 2`` = 0.025 rad/s in ``s``, which holds the MRP error near 1e-3
-with torque chatter and never reaches the 1e-5 pointing target. The boundary
+``eta dt / 2`` = 0.025 rad/s in ``s``, which holds the MRP error near 2e-2
+(measured, Eros NP) with torque chatter and never reaches the 1e-5 target. The boundary
 layer gain is therefore capped by the caller at ``eta phi dt <= 1``
 (``phi_eff = min(phi, phi_dt_cap / (eta dt))``, deadbeat at the cap). The
 continuous-time design is unchanged; see ``ideas_hpc.attitude.Gains``.
+
+The integral state ``z`` is advanced by the caller (``core.attitude_batch``),
+only while ``|ds| < int_limit`` (conditional integration, anti-windup; the
+reason is in the ``ideas_hpc.attitude`` module docstring).
 """
 
 from __future__ import annotations
