@@ -6,10 +6,12 @@ checks the arguments (raising :class:`~ideas_hpc.errors.InputError` that names
 the argument), converts config units (deg, um, cm) to SI, builds the BVH when an
 option needs it, and chooses the kernel:
 
-* no strict option, full counts: :func:`~ideas_hpc.core.coverage.coverage_counts`
-  (tiled over vertices);
-* otherwise, or ``counts=False``: :func:`~ideas_hpc.core.coverage.coverage_vertices`
-  (``prange`` over vertices, early-out when counts are not wanted).
+* no strict option: :func:`~ideas_hpc.core.coverage.coverage_counts` (spatial
+  tiles of vertices with conservative tile pruning; early-out per tile when
+  counts are not wanted);
+* a strict option: :func:`~ideas_hpc.core.coverage.coverage_vertices`
+  (``prange`` over vertices with ray queries, early-out when counts are not
+  wanted).
 
 Results map onto the store variables of SPEC section 9: ``observed``,
 ``first_seen`` (s, NaN never), ``times_seen``, ``coverage`` and ``coverage_count``.
@@ -318,8 +320,9 @@ def compute_coverage(shape, r_T, dcm_BT, image_times, eta, near, far, *,
     t = np.ascontiguousarray(t)
     v, n, a = _mesh(shape)
     exact = options.mode == "exact"
-    if not options.strict and counts:
-        out = _cov.coverage_counts(v, n, a, r, c, t, tan_eta, near, far, exact, act)
+    if not options.strict:
+        out = _cov.coverage_counts(v, n, a, r, c, t, tan_eta, near, far, exact, act,
+                                   bool(counts))
     else:
         sin_e, max_r, occ, ill, s, tree = _strict_args(shape, options, sun_T, r.shape[1])
         out = _cov.coverage_vertices(v, n, a, r, c, t, tan_eta, near, far, exact, act,

@@ -187,7 +187,7 @@ def _max_cos_in_cone(ux, uy, uz, ax, ay, az, cos_a, sin_a):
 
 @njit(parallel=True, cache=True)
 def coverage_counts(vertices, normals, vertex_areas, r_T, dcm_BT, image_times,
-                    tan_eta, near, far, exact, active):
+                    tan_eta, near, far, exact, active, count_all=True):
     """Full per-vertex counts, culling + clipping only (paper eq. 25-26), tiled.
 
     Every (spacecraft, image, vertex) triple counts, so ``times_seen`` is
@@ -226,6 +226,11 @@ def coverage_counts(vertices, normals, vertex_areas, r_T, dcm_BT, image_times,
         Exact culling ``(r - p) . n > 0`` instead of the paper's ``r . n >= 0``.
     active : (N,) bool
         Spacecraft that take part (failed ones are False).
+    count_all : bool
+        True: full counts. False: union and first-seen time only; the images
+        of all spacecraft are then visited in time order and a tile stops as
+        soon as all its vertices have been seen (early-out), and
+        ``times_seen`` is 0/1.
 
     Returns
     -------
@@ -300,6 +305,11 @@ def coverage_counts(vertices, normals, vertex_areas, r_T, dcm_BT, image_times,
             or (abs(sy) - tan_eta * sz) * inv_side > marg)
     sel = np.flatnonzero(keep)
     nsel = sel.shape[0]
+    if not count_all:
+        tsel = np.empty(nsel)
+        for s_ in range(nsel):
+            tsel[s_] = img[sel[s_], 16]
+        sel = sel[np.argsort(tsel, kind="mergesort")]
     nblk = (nv + BLOCK - 1) // BLOCK
     for blk in prange(nblk):
         j0 = blk * BLOCK
@@ -389,9 +399,15 @@ def coverage_counts(vertices, normals, vertex_areas, r_T, dcm_BT, image_times,
                            & (qz >= near) & (qz <= far))
                     cnt[jj] += hit
                     fs[jj] = min(fs[jj], t if hit else np.inf)
+            if not count_all:
+                unseen = 0
+                for jj in range(nb):
+                    unseen += fs[jj] == np.inf
+                if unseen == 0:
+                    break
         for jj in range(nb):
             j = order[j0 + jj]
-            times_seen[j] = cnt[jj]
+            times_seen[j] = cnt[jj] if count_all else min(cnt[jj], 1)
             if fs[jj] < np.inf:
                 first_seen[j] = fs[jj]
     observed = times_seen > 0
