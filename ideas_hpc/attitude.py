@@ -240,7 +240,7 @@ class Gains:
     phi_dt_max: float = 1.0
 
     def arrays(self, dt: float):
-        """``(k_p, k_i, eta, phi_eff)`` as (3,) float64 for the kernels, ``phi`` capped for ``dt``."""
+        """``(k_p, k_i, eta, phi_eff)`` as (3,) float64 (``phi`` capped for ``dt``)."""
         k_p = np.broadcast_to(np.asarray(self.k_p, float), (3,)).copy()
         k_i = np.broadcast_to(np.asarray(self.k_i, float), (3,)).copy()
         eta = np.broadcast_to(np.asarray(self.eta, float), (3,)).copy()
