@@ -1,0 +1,47 @@
+"""``ideas-hpc run`` and ``ideas-hpc report`` (SPEC section 9)."""
+
+from __future__ import annotations
+
+
+def _cmd_run(args) -> int:
+    from .run import run_file
+
+    run_file(args.campaign, out=args.out, overrides=args.set, workers=args.workers,
+             scheduler=args.scheduler, resume=args.resume, cluster=args.cluster,
+             slurm_config=args.slurm_config, progress=not args.no_progress)
+    return 0
+
+
+def _cmd_report(args) -> int:
+    from .report import write_report
+
+    out = write_report(args.store, args.out)
+    print(out.read_text() if out.suffix == ".txt" else out)
+    return 0
+
+
+def add_commands(sub) -> None:
+    p = sub.add_parser("run", help="run a campaign file and write a zarr store",
+                       description="Run a campaign (flyby, design-nadir, design-fov, "
+                                   "monte-carlo) and write its zarr store.")
+    p.add_argument("campaign", help="campaign TOML file")
+    p.add_argument("--out", help="store path (default: CAMPAIGN_NAME.zarr here)")
+    p.add_argument("--set", action="append", default=[], metavar="dotted.key=value",
+                   help="override a campaign field (TOML value), repeatable")
+    p.add_argument("--workers", type=int, default=None,
+                   help="local dask worker processes, or SLURM jobs (default: CPU count)")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="use an existing dask scheduler (tcp://host:8786)")
+    p.add_argument("--cluster", choices=("local", "slurm"), default="local",
+                   help="start a local cluster (default) or SLURM jobs via dask-jobqueue")
+    p.add_argument("--slurm-config", default=None,
+                   help="dask-jobqueue config for --cluster slurm (default slurm/jobqueue.yaml)")
+    p.add_argument("--resume", action="store_true",
+                   help="continue an interrupted store (skips finished chunks)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(handler=_cmd_run)
+
+    r = sub.add_parser("report", help="write figures and a text summary of a store")
+    r.add_argument("store", help="zarr store written by 'ideas-hpc run'")
+    r.add_argument("--out", default=None, help="output folder (default: STORE-report)")
+    r.set_defaults(handler=_cmd_report)

@@ -1,0 +1,138 @@
+"""``ideas-hpc report STORE``: the paper's figures that apply, and a text summary."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from ..errors import InputError
+from ..plots import figures
+
+KM, DEG = 1e3, np.pi / 180.0
+
+
+def _shape(ds):
+    from ..shape import build_shape
+
+    return build_shape(ds["vertex_position"].values, ds["face_vertices"].values.astype(np.int64),
+                       name=str(ds.attrs.get("shape_model", "body")), source="store")
+
+
+def _summary(ds, figs) -> str:
+    a = ds.attrs
+    lines = [f"ideas_hpc report: kind {a.get('kind')}, code {a.get('code_version')}",
+             f"body: {a.get('body_note', a.get('body'))}"]
+    if "d_sep_m" in a:
+        lines.append(f"ring radius d_sep {a['d_sep_m'] / KM:.3f} km, half angle "
+                     f"{a['half_angle_rad'] / DEG:.4f} deg, far field {a['far_m'] / KM:.3f} km, "
+                     f"maneuver {a.get('maneuver')}, attitude {a.get('attitude_mode')}, "
+                     f"coverage mode {a.get('coverage_mode')}")
+    if "swarm_angle" in ds and "sample" not in ds["swarm_angle"].dims:
+        ang = " ".join(f"{x:.2f}" for x in ds["swarm_angle"].values)
+        lines.append(f"swarm: N = {ds.sizes['spacecraft']}, angles (rad) {ang}")
+        if "sweep_period" in ds:
+            lines.append("sweep periods (min): "
+                         + " ".join(f"{p / 60:.1f}" for p in ds["sweep_period"].values))
+    if "best_fitness" in ds:
+        lines.append(f"GA: {ds.sizes['generation']} generations, population "
+                     f"{ds.sizes['individual']}, {a.get('ga_evaluations')} designs evaluated in "
+                     f"{a.get('ga_wall_s', float('nan')):.1f} s; best swarm size "
+                     f"{int(ds['best_swarm_size'])}, coverage {100 * float(ds['best_coverage']):.3f} %"
+                     f" (target {100 * a.get('target_coverage', 1.0):.3f} %)")
+        for note in json.loads(a.get("notes", "[]")):
+            lines.append(f"note: {note}")
+    if "coverage" in ds:
+        cov = np.atleast_1d(ds["coverage"].values) * 100
+        cnt = np.atleast_1d(ds["coverage_count"].values) * 100
+        if cov.size == 1:
+            lines.append(f"coverage: {cov[0]:.3f} % of the area, {cnt[0]:.3f} % of the vertices")
+        else:
+            ok = np.isfinite(cov)
+            lines.append(f"coverage over {ok.sum()} samples: mean {cov[ok].mean():.3f} %, min "
+                         f"{cov[ok].min():.3f} %, 5th percentile {np.percentile(cov[ok], 5):.3f} %,"
+                         f" max {cov[ok].max():.3f} %")
+    if "targeting_miss" in ds:
+        m = ds["targeting_miss"].values
+        last = np.nanmin(np.where(np.isfinite(m), m, np.inf), axis=-1)
+        lines.append(f"targeting: worst final miss {np.max(last) * 1e3:.3f} mm "
+                     f"(tolerance {a.get('targeting_tolerance_m', float('nan')) * 1e3:.0f} mm)")
+    for var, unit, scale in (("sigma_error", "", 1.0), ("wheel_torque", "N m", 1.0),
+                             ("wheel_speed", "rpm", figures.RPM)):
+        if var in ds:
+            v = np.abs(ds[var].values) * scale
+            lines.append(f"{var}: max |.| {np.nanmax(v):.4g} {unit}; at the end "
+                         f"{np.nanmax(v[..., -1, :]):.3g} {unit}")
+    lines.append("figures: " + ", ".join(p.name for p in figs))
+    return "\n".join(lines) + "\n"
+
+
+def write_report(store, out=None) -> Path:
+    """Write PNGs and ``summary.txt`` for a store; returns the summary path."""
+    store = Path(store)
+    if not store.exists():
+        raise InputError("no such store", field="STORE", file=store)
+    try:
+        ds = xr.open_zarr(store)
+    except Exception as exc:
+        raise InputError(f"not a readable zarr store: {exc}", file=store) from None
+    out = Path(out) if out else store.with_name(store.name.removesuffix(".zarr") + "-report")
+    out.mkdir(parents=True, exist_ok=True)
+    figs: list[Path] = []
+    kind = ds.attrs.get("kind", "")
+    if "best_fitness" in ds:
+        design = "nadir" if kind == "design-nadir" else "fov"
+        n = "19" if design == "nadir" else "30"
+        figs.append(figures.ga_fitness(ds, out / f"fig{n}_ga_fitness.png",
+                                       title=f"{kind}: best and mean fitness"))
+        n = "20" if design == "nadir" else "31"
+        figs.append(figures.population_histogram(ds, out / f"fig{n}_final_population.png",
+                                                 design=design))
+    shape = _shape(ds) if "vertex_position" in ds else None
+    if "position" in ds:
+        figs.append(figures.trajectories(ds, out / "fig22_trajectories.png",
+                                         vertices=shape.vertices_T if shape else None,
+                                         faces=shape.faces if shape else None))
+    if "targeting_miss" in ds:
+        figs.append(figures.targeting_error(ds, out / "fig23_targeting_error.png"))
+    if "camera_dcm_BT" in ds and shape is not None and "sample" not in ds["position"].dims:
+        snap_t = ds["snapshot_time"].values
+        j = len(snap_t) // 2
+        k = int(np.argmin(np.abs(ds["time"].values - snap_t[j])))
+        n = "33" if ds.attrs.get("maneuver") == "fov" else "24"
+        figs.append(figures.fov_pyramids(out / f"fig{n}_fov_pyramids.png",
+                                         ds["position"].values[:, k],
+                                         ds["camera_dcm_BT"].values[:, j],
+                                         float(ds.attrs["half_angle_rad"]), float(snap_t[j]),
+                                         vertices=shape.vertices_T, faces=shape.faces))
+    if "observed" in ds and shape is not None:
+        from ..plots.coverage_map import render_coverage_map
+
+        obs = ds["observed"].values
+        fs = ds["first_seen"].values
+        if obs.ndim == 2:  # Monte Carlo: fraction of samples that saw each vertex
+            obs = np.nanmean(obs.astype(float), axis=0)
+            figs.append(render_coverage_map(shape, obs, out / "fig25_coverage_map.png",
+                                            kind="first_seen",
+                                            title="fraction of samples that saw each vertex"))
+        else:
+            figs.append(render_coverage_map(shape, obs, out / "fig25_coverage_map.png",
+                                            kind="observed"))
+            figs.append(render_coverage_map(shape, fs, out / "fig25b_first_seen.png",
+                                            kind="first_seen"))
+    fov = ds.attrs.get("maneuver") == "fov"
+    base = 34 if fov else 26
+    for i, (var, label, scale) in enumerate((("sigma_error", "MRP error", 1.0),
+                                             ("omega_error", "rate error, rad/s", 1.0),
+                                             ("wheel_speed", "wheel speed, rpm", figures.RPM),
+                                             ("wheel_torque", "wheel torque, N m", 1.0))):
+        if var in ds:
+            figs.append(figures.attitude_series(ds, var, out / f"fig{base + i}_{var}.png",
+                                                ylabel=label, scale=scale))
+    if "sample" in ds.dims and "coverage" in ds:
+        figs.append(figures.mc_coverage(ds, out / "mc_coverage.png"))
+    summary = out / "summary.txt"
+    summary.write_text(_summary(ds, figs))
+    return summary

@@ -1,0 +1,261 @@
+"""The campaign file schema (SPEC sections 7-9), validated once at load.
+
+Tables and their keys, in the file's units (converted to SI here):
+
+``kind`` (``flyby``, ``design-nadir``, ``design-fov``, ``monte-carlo``), ``seed``.
+
+``[body]`` ``name`` (name or path), ``params`` (preset name or a table of
+:func:`ideas_hpc.params.params_from_mapping` keys), ``resolution`` (analytic
+bodies), ``data_path``.
+
+``[instrument]`` ``ground_resolution_m``, ``aperture_cm``, ``wavelength_um``,
+``min_elevation_deg``, ``near_field_mm``, ``image_rate_hz``, ``half_angle_deg``
+(default: the sizing's eta_N for nadir pointing, eta_N/2 for FoV sweeping).
+
+``[flyby]`` ``configuration`` (``ring`` or ``helix``), ``t0_s``, ``tf_s``,
+``z_start_km``, ``z_stop_km``, ``helix_rise_km`` (helix: extra z_start per full
+turn of swarm angle), ``d_sep_km`` (default from the sizing), ``tolerance_m``,
+``max_iterations``, ``dt_s`` (attitude step and trajectory sampling).
+
+``[swarm]`` ``angles_rad`` and ``sweep_periods_min`` (flyby and Monte Carlo).
+
+``[attitude]`` ``mode`` (``ideal`` or ``simulated``), ``maneuver`` (``nadir``
+or ``fov``), ``decimate`` (keep every k-th attitude step in the store),
+``theta_max_deg`` (default eta_N / 2).
+
+``[dynamics]``, ``[spacecraft]``, ``[controller]``, ``[coverage]``: passed to
+the owning modules' ``*_from_config`` (see their docstrings).
+
+``[design]`` (GA) ``population``, ``generations``, ``n_max``, ``eps_tol_pct``,
+``angle_step_rad``, ``p_min_min``, ``p_max_min``, ``period_step_min``,
+``parents``, ``elitism``, ``mutation_probability``, ``stall_generations``.
+
+``[monte_carlo]`` ``samples`` and the dispersions (see :data:`MC_SCHEMA`).
+
+``[run]`` ``chunk_size``, ``workers``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+from ..config import CampaignSource, load_campaign
+from ..errors import InputError
+from ..schema import Field, validate
+
+KINDS = ("flyby", "design-nadir", "design-fov", "monte-carlo")
+DEG = math.pi / 180.0
+
+BODY = {
+    "name": Field("str", "eros", doc="body name or shape file"),
+    "params": Field("any", None, nullable=True, doc="preset name or table"),
+    "resolution": Field("int", 3, lo=1, hi=7),
+    "data_path": Field("str", None, nullable=True),
+}
+
+INSTRUMENT = {
+    "ground_resolution_m": Field("float", 1.0, lo=0, lo_open=True),
+    "aperture_cm": Field("float", 8.0, to_si=1e-2, lo=0, lo_open=True),
+    "wavelength_um": Field("float", 0.55, to_si=1e-6, lo=0, lo_open=True),
+    "min_elevation_deg": Field("float", 5.0, to_si=DEG, lo=0, hi=90, hi_open=True),
+    "near_field_mm": Field("float", 0.1, to_si=1e-3, lo=0, lo_open=True),
+    "image_rate_hz": Field("float", 5.0, lo=0, lo_open=True),
+    "half_angle_deg": Field("float", None, nullable=True, to_si=DEG, lo=0, hi=90,
+                            lo_open=True, hi_open=True),
+}
+
+FLYBY = {
+    "configuration": Field("str", "ring", choices=("ring", "helix")),
+    "t0_s": Field("float", 0.0),
+    "tf_s": Field("float", 600.0),
+    "z_start_km": Field("float", -30.0, to_si=1e3),
+    "z_stop_km": Field("float", 30.0, to_si=1e3),
+    "helix_rise_km": Field("float", 0.0, to_si=1e3),
+    "d_sep_km": Field("float", None, nullable=True, to_si=1e3, lo=0, lo_open=True),
+    "tolerance_m": Field("float", 0.01, lo=0, lo_open=True),
+    "max_iterations": Field("int", 25, lo=0),
+    "dt_s": Field("float", 0.1, lo=0, lo_open=True),
+}
+
+SWARM = {
+    "angles_rad": Field("floats", None, nullable=True, lo=-10.0, hi=10.0),
+    "sweep_periods_min": Field("floats", None, nullable=True, to_si=60.0, lo=0, lo_open=True),
+}
+
+ATTITUDE = {
+    "mode": Field("str", "ideal", choices=("ideal", "simulated")),
+    "maneuver": Field("str", "nadir", choices=("nadir", "fov")),
+    "decimate": Field("int", 10, lo=1),
+    "theta_max_deg": Field("float", None, nullable=True, to_si=DEG, lo=0, lo_open=True, hi=90),
+}
+
+DESIGN = {
+    "population": Field("int", 100, lo=2, doc="GA population size"),
+    "generations": Field("int", 115, lo=1),
+    "n_max": Field("int", 20, lo=1, hi=200),
+    "eps_tol_pct": Field("float", 0.1, lo=0, hi=100),
+    "angle_step_rad": Field("float", 0.01, lo=0, hi=1.0),
+    "p_min_min": Field("float", 0.3, to_si=60.0, lo=0, lo_open=True),
+    "p_max_min": Field("float", 10.0, to_si=60.0, lo=0, lo_open=True),
+    "period_step_min": Field("float", 0.1, to_si=60.0, lo=0),
+    "parents": Field("int", None, nullable=True, lo=2),
+    "elitism": Field("int", 2, lo=0),
+    "mutation_probability": Field("float", 0.1, lo=0, hi=1),
+    "stall_generations": Field("int", 0, lo=0, doc="stop after this many generations "
+                                                     "without improvement (0: never)"),
+    "chunk_size": Field("int", 32, lo=1, doc="spacecraft per dask task"),
+    "nadir_store": Field("str", None, nullable=True, doc="design-fov: take the swarm from "
+                                                          "this design-nadir store"),
+}
+
+MC_SCHEMA = {
+    "samples": Field("int", 64, lo=1),
+    "attitude_dispersion": Field("bool", True, doc="random initial attitude, rates, wheels"),
+    "sigma_c20_pct": Field("float", 0.0, lo=0, doc="1-sigma relative C20 error, %"),
+    "sigma_c22_pct": Field("float", 0.0, lo=0),
+    "sigma_gm_pct": Field("float", 0.0, lo=0),
+    "reflectivity_min": Field("float", 0.6, lo=0, hi=1),
+    "reflectivity_max": Field("float", 0.6, lo=0, hi=1),
+    "sigma_position_m": Field("float", 0.0, lo=0, doc="1-sigma initial position error per axis"),
+    "sigma_velocity_mm_s": Field("float", 0.0, to_si=1e-3, lo=0),
+    "failures_k": Field("int", 0, lo=0, doc="exactly k of N spacecraft lost"),
+    "failure_probability": Field("float", 0.0, lo=0, hi=1, doc="per-spacecraft loss probability"),
+    "sigma_misalignment_deg": Field("float", 0.0, to_si=DEG, lo=0, hi=90),
+}
+
+RUN = {
+    "chunk_size": Field("int", 8, lo=1, doc="samples per dask task"),
+    "workers": Field("int", None, nullable=True, lo=1),
+}
+
+SCHEMA = {
+    "kind": Field("str", choices=KINDS, doc="campaign kind"),
+    "seed": Field("int", 2026, lo=0),
+    "description": Field("str", ""),
+    "body": BODY,
+    "instrument": INSTRUMENT,
+    "flyby": FLYBY,
+    "swarm": SWARM,
+    "attitude": ATTITUDE,
+    "dynamics": Field("any", None, nullable=True),
+    "spacecraft": Field("any", None, nullable=True),
+    "controller": Field("any", None, nullable=True),
+    "coverage": Field("any", None, nullable=True),
+    "design": DESIGN,
+    "monte_carlo": MC_SCHEMA,
+    "run": RUN,
+}
+
+
+@dataclass
+class Campaign:
+    """A validated campaign: SI values (``cfg``), the raw data and its source."""
+
+    cfg: dict
+    raw: dict
+    source: CampaignSource
+    extras: dict = field(default_factory=dict)
+
+    @property
+    def kind(self) -> str:
+        return self.cfg["kind"]
+
+    def error(self, message: str, dotted: str) -> InputError:
+        return self.source.error(message, dotted)
+
+
+def _sub_table(cfg: dict, key: str) -> dict:
+    v = cfg.get(key)
+    if v is None:
+        return {}
+    if not isinstance(v, dict):
+        raise InputError(f"must be a table, got {v!r}", field=key)
+    return v
+
+
+def _cross_checks(cfg: dict) -> None:
+    fb = cfg["flyby"]
+    if fb["tf_s"] <= fb["t0_s"]:
+        raise InputError(f"must be > flyby.t0_s ({fb['t0_s']:g} s)", field="flyby.tf_s")
+    d = cfg["design"]
+    if d["p_min_min"] >= d["p_max_min"]:
+        raise InputError(f"must be > design.p_min_min ({d['p_min_min'] / 60:g} min)",
+                         field="design.p_max_min")
+    mc = cfg["monte_carlo"]
+    if mc["reflectivity_min"] > mc["reflectivity_max"]:
+        raise InputError("must be >= monte_carlo.reflectivity_min",
+                         field="monte_carlo.reflectivity_max")
+    sw = cfg["swarm"]
+    if cfg["kind"] in ("flyby", "monte-carlo", "design-fov"):
+        if not sw["angles_rad"] and not (cfg["kind"] == "design-fov"
+                                         and cfg["design"]["nadir_store"]):
+            raise InputError(f"is required for kind {cfg['kind']!r}", field="swarm.angles_rad")
+        if (sw["sweep_periods_min"] is not None and sw["angles_rad"] is not None
+                and len(sw["sweep_periods_min"]) != len(sw["angles_rad"])):
+            raise InputError(f"has {len(sw['sweep_periods_min'])} periods for "
+                             f"{len(sw['angles_rad'])} spacecraft", field="swarm.sweep_periods_min")
+    if cfg["attitude"]["maneuver"] == "fov" and cfg["kind"] in ("flyby", "monte-carlo"):
+        if sw["sweep_periods_min"] is None:
+            raise InputError("is required for attitude.maneuver = 'fov'",
+                             field="swarm.sweep_periods_min")
+    if mc["failures_k"] and sw["angles_rad"] and mc["failures_k"] > len(sw["angles_rad"]):
+        raise InputError(f"cannot exceed the swarm size {len(sw['angles_rad'])}",
+                         field="monte_carlo.failures_k")
+    step = fb["dt_s"]
+    img = 1.0 / cfg["instrument"]["image_rate_hz"]
+    if abs(img / step - round(img / step)) > 1e-9:
+        raise InputError(f"attitude step {step:g} s does not divide the image period {img:g} s",
+                         field="flyby.dt_s")
+    span = (fb["tf_s"] - fb["t0_s"]) / step
+    if abs(span - round(span)) > 1e-6:
+        raise InputError(f"step {step:g} s does not divide the flyby duration", field="flyby.dt_s")
+
+
+def validate_campaign(source: CampaignSource) -> Campaign:
+    """Validate a loaded source; every error carries the field, file and line."""
+    try:
+        cfg = validate(source.data, SCHEMA)
+        _cross_checks(cfg)
+        extras = build_models(cfg)
+    except InputError as exc:
+        raise source.locate(exc) from None
+    return Campaign(cfg=cfg, raw=source.data, source=source, extras=extras)
+
+
+def build_models(cfg: dict) -> dict:
+    """Build the sub-models whose schemas live with their modules.
+
+    The ``[dynamics]``, ``[spacecraft]``, ``[controller]`` and ``[coverage]``
+    tables are validated by the modules that own them, so a field is checked
+    in one place only.
+    """
+    from ..attitude import gains_from_config, spacecraft_from_config
+    from ..mapping import coverage_options_from_config
+    from ..trajectory import force_model_from_config
+
+    ctrl = _sub_table(cfg, "controller")
+    if not ctrl:
+        ctrl = {"preset": "fov" if cfg["attitude"]["maneuver"] == "fov" else "np"}
+    return {
+        "force_model": force_model_from_config(_sub_table(cfg, "dynamics"), prefix="dynamics."),
+        "spacecraft": spacecraft_from_config(_sub_table(cfg, "spacecraft"), prefix="spacecraft."),
+        "gains": gains_from_config(ctrl, prefix="controller."),
+        "coverage": coverage_options_from_config(_sub_table(cfg, "coverage"), prefix="coverage."),
+    }
+
+
+def load(path, overrides: list[str] | None = None) -> Campaign:
+    """Load, override and validate a campaign file."""
+    return validate_campaign(load_campaign(path, overrides))
+
+
+def resolved_config(c: Campaign) -> dict[str, Any]:
+    """The resolved configuration (user units, defaults filled) for store attrs.
+
+    The raw file values plus every default, so the store alone re-creates the run.
+    """
+    out = dict(c.raw)
+    out.setdefault("seed", c.cfg["seed"])
+    return out

@@ -1,0 +1,272 @@
+"""One flyby simulation: sizing -> targeting -> attitude -> coverage (SPEC sections 2-6).
+
+Orchestration only: every step is a compiled kernel behind its boundary
+module (:mod:`ideas_hpc.sizing`, :mod:`ideas_hpc.trajectory`,
+:mod:`ideas_hpc.attitude`, :mod:`ideas_hpc.mapping`). Two attitude options:
+
+``ideal``
+    perfect tracking: the camera frame is the reference frame at every image
+    (fast, deterministic);
+``simulated``
+    closed-loop reaction-wheel attitude with the sliding-mode controller, from
+    seeded random initial conditions (SPEC section 5).
+
+Geometry choices (SPEC section 3): the ring swarm flies at radius ``d_sep`` in
+the body's xy-plane from ``z_start`` to ``z_stop``. The helical configuration
+raises each spacecraft's start and stop by ``helix_rise * theta_i / (2 pi)``;
+its ring frame keeps z horizontal toward the spin axis (``[TS] = I``), so each
+spacecraft's pointing depends on its own angle only and swarms stay unions of
+independent spacecraft (which the GA relies on).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from .attitude import Gains, SpacecraftModel, ideal_dcm_BT, initial_conditions, simulate_attitude
+from .bodies import Body, load_body
+from .core.mrp import dcm_from_mrp, mrp_from_prv
+from .errors import InputError
+from .mapping import CoverageOptions, CoverageResult, compute_coverage, observed_per_spacecraft
+from .sizing import Sizing, size_flyby
+from .trajectory import (ForceModel, TargetingResult, ring_states,
+                         sun_direction_T, target_swarm)
+
+TWO_PI = 2.0 * math.pi
+
+
+@dataclass(frozen=True)
+class FlybySetup:
+    """Everything a flyby needs, resolved to SI once (picklable, sent to workers)."""
+
+    body: Body
+    sizing: Sizing
+    t0: float
+    tf: float
+    dt: float
+    image_dt: float
+    d_sep: float
+    z_start: float
+    z_stop: float
+    configuration: str
+    helix_rise: float
+    eta: float
+    near: float
+    far: float
+    theta_max: float
+    maneuver: str
+    attitude_mode: str
+    decimate: int
+    tol: float
+    max_iter: int
+    seed: int
+    force_model: ForceModel = field(default_factory=ForceModel)
+    spacecraft: SpacecraftModel | None = None
+    gains: Gains | None = None
+    coverage: CoverageOptions = field(default_factory=CoverageOptions)
+    p_min: float = 18.0
+
+    @property
+    def att_mode(self) -> str:
+        return "fov" if self.maneuver == "fov" else "np"
+
+    @property
+    def image_every(self) -> int:
+        return int(round(self.image_dt / self.dt))
+
+    @property
+    def image_times(self) -> np.ndarray:
+        n = int(round((self.tf - self.t0) / self.image_dt))
+        return self.t0 + self.image_dt * np.arange(n + 1)
+
+    def with_(self, **kw) -> "FlybySetup":
+        return replace(self, **kw)
+
+
+def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
+    """Resolve a validated :class:`~ideas_hpc.campaign.schema.Campaign` to a setup."""
+    cfg = c.cfg
+    b = cfg["body"]
+    params = b["params"]
+    if isinstance(params, dict):
+        from .params import params_from_mapping
+        try:
+            params = params_from_mapping(params, prefix="body.params.")
+        except InputError as exc:
+            raise c.source.locate(exc) from None
+    try:
+        body = load_body(b["name"], data_path=b["data_path"], resolution=b["resolution"],
+                         params=params)
+        body.require_params()
+    except InputError as exc:
+        if exc.field in (None, "body", "body.params", "data_path"):
+            f = {"data_path": "body.data_path", None: "body.name"}.get(exc.field, exc.field)
+            raise c.error(exc.message, "body.name" if f == "body" else f) from None
+        raise c.source.locate(exc) from None
+    inst = cfg["instrument"]
+    sizing = size_flyby(r_max=body.shape.r_max, r_min=body.shape.r_min,
+                        ground_resolution=inst["ground_resolution_m"],
+                        aperture=inst["aperture_cm"], wavelength=inst["wavelength_um"],
+                        min_elevation=inst["min_elevation_deg"], near=inst["near_field_mm"])
+    man = maneuver or cfg["attitude"]["maneuver"]
+    if cfg["kind"] == "design-fov":
+        man = "fov"
+    eta = inst["half_angle_deg"]
+    if eta is None:
+        eta = sizing.eta_fov if man == "fov" else sizing.eta_nadir
+    fb = cfg["flyby"]
+    att = cfg["attitude"]
+    ex = c.extras
+    return FlybySetup(
+        body=body, sizing=sizing, t0=fb["t0_s"], tf=fb["tf_s"], dt=fb["dt_s"],
+        image_dt=1.0 / inst["image_rate_hz"],
+        d_sep=fb["d_sep_km"] if fb["d_sep_km"] is not None else sizing.d_sep,
+        z_start=fb["z_start_km"], z_stop=fb["z_stop_km"], configuration=fb["configuration"],
+        helix_rise=fb["helix_rise_km"], eta=eta, near=sizing.near, far=sizing.far,
+        theta_max=att["theta_max_deg"] if att["theta_max_deg"] is not None else sizing.theta_max,
+        maneuver=man, attitude_mode=att["mode"], decimate=att["decimate"],
+        tol=fb["tolerance_m"], max_iter=fb["max_iterations"], seed=cfg["seed"],
+        force_model=ex["force_model"], spacecraft=ex["spacecraft"],
+        gains=ex["gains"], coverage=ex["coverage"], p_min=cfg["design"]["p_min_min"])
+
+
+def endpoints(setup: FlybySetup, theta) -> tuple[np.ndarray, np.ndarray]:
+    """Start and target positions (N, 3) in T for swarm angles ``theta`` (rad)."""
+    th = np.asarray(theta, dtype=np.float64).ravel()
+    rise = 0.0
+    if setup.configuration == "helix":
+        rise = setup.helix_rise * (np.mod(th, TWO_PI) / TWO_PI)
+    return ring_states(setup.body, th, setup.d_sep, setup.z_start + rise, setup.z_stop + rise)
+
+
+def misalignment_dcms(rng: np.random.Generator, n: int, sigma_angle: float) -> np.ndarray:
+    """Fixed camera misalignments ``[C B]`` (n, 3, 3): a rotation about a random axis
+    by a normally distributed angle of standard deviation ``sigma_angle`` (rad)."""
+    out = np.empty((n, 3, 3))
+    for i in range(n):
+        axis = rng.normal(size=3)
+        axis /= np.linalg.norm(axis)
+        out[i] = dcm_from_mrp(mrp_from_prv(axis * rng.normal(0.0, sigma_angle)))
+    return out
+
+
+@dataclass
+class FlybyOutcome:
+    """What one flyby produced (arrays in SI, frame T)."""
+
+    theta: np.ndarray
+    periods: np.ndarray | None
+    targeting: TargetingResult
+    image_times: np.ndarray
+    r_img_T: np.ndarray                 # (N, n_img, 3)
+    dcm_BT: np.ndarray                  # (N, n_img, 3, 3) camera frame at images
+    coverage: CoverageResult
+    attitude: object | None = None      # AttitudeResult for 'simulated'
+    extras: dict = field(default_factory=dict)
+
+
+def camera_dcms(setup: FlybySetup, theta, periods=None, *, sigma0=None, omega0=None,
+                wheel0=None, spin_rate=None):
+    """Camera DCMs at the image times, and the attitude result when simulated.
+
+    Returns ``(dcm_BT (N, n_img, 3, 3), AttitudeResult or None)``.
+    """
+    th = np.asarray(theta, dtype=np.float64)
+    ws = setup.body.params.spin_rate if spin_rate is None else spin_rate
+    duration = setup.tf - setup.t0
+    img_t = setup.image_times - setup.t0
+    kw = dict(mode=setup.att_mode, periods=periods, theta_max=setup.theta_max, p_min=setup.p_min)
+    if setup.attitude_mode == "ideal":
+        return ideal_dcm_BT(th, ws, img_t, **kw), None
+    if sigma0 is None:
+        sigma0, omega0, wheel0 = initial_conditions(setup.seed, 0, th.size)
+    res = simulate_attitude(th, ws, duration, gains=setup.gains, spacecraft=setup.spacecraft,
+                            dt=setup.dt, image_dt=setup.image_dt, sigma0=sigma0, omega0=omega0,
+                            wheel0=wheel0, decimate=setup.decimate, **kw)
+    return np.ascontiguousarray(res.dcm_BT[0]), res
+
+
+def fly(setup: FlybySetup, theta, periods=None, *, sample: int = 0, ics=None,
+        params_override=None, active=None, misalignment=None, counts: bool = True,
+        raise_on_failure: bool = True) -> FlybyOutcome:
+    """Simulate one flyby of a swarm and compute what it imaged.
+
+    Parameters
+    ----------
+    theta : (N,) rad
+        Swarm angles.
+    periods : (N,) s, optional
+        Sweep periods (FoV sweeping).
+    sample : int
+        Sample index whose seeded initial attitude is used (``simulated``).
+    ics : tuple of (N, 3) arrays, optional
+        Explicit ``(sigma0, omega0, wheel0)``.
+    params_override : dict, optional
+        Perturbed ``mu``, ``c20``, ``c22``, ``reflectivity`` (SI) for this flyby.
+    active : (N,) bool, optional
+        False marks a failed spacecraft.
+    misalignment : (N, 3, 3), optional
+        Camera misalignments ``[C B]``.
+    """
+    th = np.asarray(theta, dtype=np.float64).ravel()
+    if th.size == 0:
+        raise InputError("needs at least one spacecraft", field="swarm.angles_rad")
+    r0, rt = endpoints(setup, th)
+    tgt = target_swarm(setup.body, r0, rt, setup.t0, setup.tf, force_model=setup.force_model,
+                       dt_sample=setup.dt, tol=setup.tol, max_iter=setup.max_iter,
+                       raise_on_failure=raise_on_failure, params_override=params_override)
+    step = setup.image_every
+    r_img = np.ascontiguousarray(tgt.position_T[:, ::step])
+    if ics is None and setup.attitude_mode == "simulated":
+        ics = initial_conditions(setup.seed, sample, th.size)
+    s0, w0, W0 = ics if ics is not None else (None, None, None)
+    dcm, att = camera_dcms(setup, th, periods, sigma0=s0, omega0=w0, wheel0=W0)
+    if misalignment is not None:
+        dcm = np.ascontiguousarray(np.einsum("nij,ntjk->ntik", misalignment, dcm))
+    img_t = setup.image_times
+    sun = None
+    if setup.coverage.illumination:
+        sun = sun_direction_T(setup.body.params, img_t)
+    cov = compute_coverage(setup.body.shape, r_img, dcm, img_t, setup.eta, setup.near,
+                           setup.far, options=setup.coverage, sun_T=sun, active=active,
+                           counts=counts)
+    return FlybyOutcome(theta=th, periods=None if periods is None else np.asarray(periods),
+                        targeting=tgt, image_times=img_t, r_img_T=r_img, dcm_BT=dcm,
+                        coverage=cov, attitude=att)
+
+
+def candidate_masks(setup: FlybySetup, keys) -> np.ndarray:
+    """Per-candidate-spacecraft observed masks for the GA (:class:`~ideas_hpc.swarm_eval.MaskBank`).
+
+    ``keys``: list of ``(theta rad, period s (0 = nadir), ic key)``. All
+    candidates are targeted in one compiled call, flown (ideal, or simulated
+    from ``initial_conditions(seed, ic_key, 1)``), and imaged.
+
+    Returns
+    -------
+    (K, V) bool
+    """
+    th = np.array([k[0] for k in keys], dtype=np.float64)
+    per = np.array([k[1] for k in keys], dtype=np.float64)
+    r0, rt = endpoints(setup, th)
+    tgt = target_swarm(setup.body, r0, rt, setup.t0, setup.tf, force_model=setup.force_model,
+                       dt_sample=setup.dt, tol=setup.tol, max_iter=setup.max_iter,
+                       raise_on_failure=True)
+    r_img = np.ascontiguousarray(tgt.position_T[:, ::setup.image_every])
+    periods = per if setup.att_mode == "fov" else None
+    if setup.attitude_mode == "simulated":
+        draws = [initial_conditions(setup.seed, int(k[2]), 1) for k in keys]
+        s0, w0, W0 = (np.ascontiguousarray(np.concatenate([d[j] for d in draws])) for j in range(3))
+        dcm, _ = camera_dcms(setup.with_(decimate=max(1, int(round((setup.tf - setup.t0)
+                                                                    / setup.dt)))),
+                             th, periods, sigma0=s0, omega0=w0, wheel0=W0)
+    else:
+        dcm, _ = camera_dcms(setup, th, periods)
+    sun = None
+    if setup.coverage.illumination:
+        sun = sun_direction_T(setup.body.params, setup.image_times)
+    return observed_per_spacecraft(setup.body.shape, r_img, dcm, setup.eta, setup.near,
+                                   setup.far, options=setup.coverage, sun_T=sun)

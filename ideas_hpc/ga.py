@@ -1,0 +1,203 @@
+"""Genetic-algorithm swarm designers (SPEC section 7; paper eqs. 15-18), on pygad.
+
+pygad runs the search; the fitness of a whole generation is one call to a
+batch evaluator (pygad's ``fitness_batch_size`` = population size), which
+evaluates every member in compiled code (see :mod:`ideas_hpc.swarm_eval`).
+
+NP design (eqs. 15-16): genes ``[N, theta_1 .. theta_Nmax]``, N an integer in
+[1, N_max], theta in [0, 2 pi) (only the first N are used). Minimise N subject
+to ``|A_obs - A_target| <= eps_tol``. pygad maximises, so the fitness is::
+
+    feasible:    -N                              in [-N_max, -1]
+    infeasible:  -(N_max + 1) - shortfall_pct    below every feasible design
+
+which ranks every feasible swarm above every infeasible one and, among the
+infeasible, rewards coverage. ``A_target`` is 100 %, or the highest coverage
+any swarm can reach when that is less (strict mode: some concavities are never
+visible from a ring); the result says which.
+
+FoV design (eqs. 17-18): genes ``P_i`` in [P_min, P_max] per spacecraft of a
+given swarm; fitness = coverage in percent (maximised).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from .errors import InputError
+
+TWO_PI = 2.0 * math.pi
+
+
+@dataclass
+class GAResult:
+    """History and outcome of a GA run (store variables of SPEC section 9)."""
+
+    best_fitness: np.ndarray          # (generation,)
+    mean_fitness: np.ndarray          # (generation,)
+    population: np.ndarray            # (individual, gene), final generation
+    fitness: np.ndarray               # (individual,)
+    coverage: np.ndarray              # (individual,) area fraction of the final population
+    best_genome: np.ndarray           # (gene,)
+    best_fitness_value: float
+    best_coverage: float
+    best_swarm_size: int
+    evaluations: int
+    target_coverage: float
+    notes: list[str] = field(default_factory=list)
+
+
+def _check_ga(population: int, generations: int) -> None:
+    if int(population) < 2:
+        raise InputError(f"must be >= 2, got {population}", field="design.population")
+    if int(generations) < 1:
+        raise InputError(f"must be >= 1, got {generations}", field="design.generations")
+
+
+def nadir_fitness(cov: np.ndarray, n: np.ndarray, n_max: int, target: float,
+                  eps_tol: float) -> np.ndarray:
+    """Penalised NP fitness (module docstring); ``cov`` and ``target`` are fractions."""
+    shortfall = np.maximum(0.0, target - cov)
+    feasible = shortfall <= eps_tol + 1e-12
+    return np.where(feasible, -n.astype(float), -(n_max + 1.0) - 100.0 * shortfall)
+
+
+def _run_pygad(*, num_genes, gene_type, gene_space, population, generations, seed,
+               batch_fitness, parents, elitism, mutation_probability, stall, progress):
+    import pygad
+
+    history_best: list[float] = []
+    history_mean: list[float] = []
+    state = {"stall": 0, "best": -np.inf}
+
+    def fitness_func(ga, solutions, idx):
+        return list(batch_fitness(np.atleast_2d(np.asarray(solutions, dtype=float))))
+
+    def on_generation(ga):
+        f = np.asarray(ga.last_generation_fitness, dtype=float)
+        history_best.append(float(f.max()))
+        history_mean.append(float(f.mean()))
+        if progress is not None:
+            progress(len(history_best), float(f.max()), float(f.mean()))
+        if f.max() > state["best"] + 1e-12:
+            state["best"] = float(f.max())
+            state["stall"] = 0
+        else:
+            state["stall"] += 1
+        if stall and state["stall"] >= stall:
+            return "stop"
+        return None
+
+    ga = pygad.GA(
+        num_generations=int(generations),
+        num_parents_mating=int(parents or max(2, population // 2)),
+        fitness_func=fitness_func,
+        fitness_batch_size=int(population),
+        sol_per_pop=int(population),
+        num_genes=num_genes,
+        gene_type=gene_type,
+        gene_space=gene_space,
+        parent_selection_type="tournament",
+        K_tournament=3,
+        keep_elitism=int(elitism),
+        crossover_type="uniform",
+        mutation_type="random",
+        mutation_probability=float(mutation_probability),
+        mutation_by_replacement=True,
+        on_generation=on_generation,
+        random_seed=int(seed) % (2**32),
+        suppress_warnings=True,
+    )
+    ga.run()
+    return ga, np.asarray(history_best), np.asarray(history_mean)
+
+
+def run_nadir_ga(evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]], *,
+                 n_max: int, population: int, generations: int, seed: int,
+                 eps_tol: float, angle_step: float, target: float = 1.0,
+                 parents: int | None = None, elitism: int = 2,
+                 mutation_probability: float = 0.1, stall_generations: int = 0,
+                 progress=None) -> GAResult:
+    """NP swarm-size design.
+
+    Parameters
+    ----------
+    evaluate : callable
+        ``evaluate(genomes (P, 1 + n_max)) -> (coverage (P,), n (P,))``, the
+        batch evaluator (coverage as a fraction).
+    angle_step : float
+        Gene step of the angles, rad (0: continuous).
+    target : float
+        Coverage fraction to reach (1.0, or the reachable maximum).
+    eps_tol : float
+        Allowed shortfall, fraction (0.001 = 0.1 %).
+    """
+    _check_ga(population, generations)
+    if int(n_max) < 1:
+        raise InputError(f"must be >= 1, got {n_max}", field="design.n_max")
+    ang = {"low": 0.0, "high": TWO_PI}
+    if angle_step > 0:
+        ang["step"] = float(angle_step)
+    gene_space = [{"low": 1, "high": int(n_max) + 1, "step": 1}] + [ang] * int(n_max)
+    gene_type = [int] + [float] * int(n_max)
+    count = {"n": 0}
+
+    def batch(genomes):
+        cov, n = evaluate(genomes)
+        count["n"] += len(genomes)
+        return nadir_fitness(cov, n, n_max, target, eps_tol)
+
+    ga, hb, hm = _run_pygad(num_genes=1 + int(n_max), gene_type=gene_type, gene_space=gene_space,
+                            population=population, generations=generations, seed=seed,
+                            batch_fitness=batch, parents=parents, elitism=elitism,
+                            mutation_probability=mutation_probability, stall=stall_generations,
+                            progress=progress)
+    pop = np.asarray(ga.population, dtype=float)
+    cov, n = evaluate(pop)
+    fit = nadir_fitness(cov, n, n_max, target, eps_tol)
+    b = int(np.argmax(fit))
+    return GAResult(best_fitness=hb, mean_fitness=hm, population=pop, fitness=fit, coverage=cov,
+                    best_genome=pop[b].copy(), best_fitness_value=float(fit[b]),
+                    best_coverage=float(cov[b]), best_swarm_size=int(n[b]),
+                    evaluations=count["n"], target_coverage=float(target))
+
+
+def run_fov_ga(evaluate: Callable[[np.ndarray], np.ndarray], *, n_spacecraft: int,
+               p_min: float, p_max: float, period_step: float, population: int,
+               generations: int, seed: int, parents: int | None = None, elitism: int = 2,
+               mutation_probability: float = 0.1, stall_generations: int = 0,
+               progress=None) -> GAResult:
+    """FoV sweep-period design: maximise coverage over periods ``P_i`` (s).
+
+    ``evaluate(genomes (P, N)) -> coverage (P,)`` as fractions.
+    """
+    _check_ga(population, generations)
+    if not (p_min > 0 and p_max > p_min):
+        raise InputError(f"P_min ({p_min / 60:g} min) must be below P_max ({p_max / 60:g} min)",
+                         field="design.p_min_min")
+    space = {"low": float(p_min), "high": float(p_max)}
+    if period_step > 0:
+        space["step"] = float(period_step)
+    count = {"n": 0}
+
+    def batch(genomes):
+        count["n"] += len(genomes)
+        return 100.0 * evaluate(genomes)
+
+    ga, hb, hm = _run_pygad(num_genes=int(n_spacecraft), gene_type=float,
+                            gene_space=[space] * int(n_spacecraft), population=population,
+                            generations=generations, seed=seed, batch_fitness=batch,
+                            parents=parents, elitism=elitism,
+                            mutation_probability=mutation_probability, stall=stall_generations,
+                            progress=progress)
+    pop = np.asarray(ga.population, dtype=float)
+    cov = evaluate(pop)
+    b = int(np.argmax(cov))
+    return GAResult(best_fitness=hb, mean_fitness=hm, population=pop, fitness=100.0 * cov,
+                    coverage=cov, best_genome=pop[b].copy(), best_fitness_value=100.0 * cov[b],
+                    best_coverage=float(cov[b]), best_swarm_size=int(n_spacecraft),
+                    evaluations=count["n"], target_coverage=1.0)

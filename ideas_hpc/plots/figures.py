@@ -1,0 +1,181 @@
+"""Report figures from a result store (paper Figs. 19-37), matplotlib Agg.
+
+Each function takes an ``xarray.Dataset`` opened from a store (SPEC section 9
+names), writes one PNG and returns its path. Units on the axes are the
+reader's: km, deg, rpm, min.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+RPM = 60.0 / (2.0 * np.pi)
+
+
+def _save(fig, path) -> Path:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def ga_fitness(ds, path, *, title="GA fitness") -> Path:
+    """Best and mean fitness per generation (paper Figs. 19 and 30)."""
+    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    g = np.arange(1, ds.sizes["generation"] + 1)
+    ax.plot(g, ds["best_fitness"].values, "o-", ms=3, label="best")
+    ax.plot(g, ds["mean_fitness"].values, "s-", ms=3, label="population mean")
+    ax.set_xlabel("generation")
+    ax.set_ylabel(ds["best_fitness"].attrs.get("long_name", "fitness"))
+    ax.set_title(title)
+    ax.grid(alpha=0.3)
+    ax.legend()
+    return _save(fig, path)
+
+
+def population_histogram(ds, path, *, design: str) -> Path:
+    """Final population: swarm sizes (NP, Fig. 20) or coverage (FoV, Fig. 31)."""
+    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    if design == "nadir":
+        n = np.rint(ds["population"].values[:, 0]).astype(int)
+        bins = np.arange(n.min() - 0.5, n.max() + 1.5)
+        ax.hist(n, bins=bins, color="tab:blue", edgecolor="k")
+        ax.set_xlabel("swarm size N")
+    else:
+        c = 100.0 * ds["population_coverage"].values
+        ax.hist(c, bins=20, color="tab:green", edgecolor="k")
+        ax.set_xlabel("area coverage, %")
+    ax.set_ylabel("individuals in the final generation")
+    ax.grid(alpha=0.3)
+    return _save(fig, path)
+
+
+def _body_wire(ax, vertices_km, faces, every=1):
+    tri = faces[::every]
+    ax.plot_trisurf(vertices_km[:, 0], vertices_km[:, 1], vertices_km[:, 2], triangles=tri,
+                    color="0.7", alpha=0.5, linewidth=0)
+
+
+def trajectories(ds, path, *, vertices=None, faces=None) -> Path:
+    """Targeted trajectories in frame T (paper Fig. 22)."""
+    fig = plt.figure(figsize=(6.4, 5.6))
+    ax = fig.add_subplot(projection="3d")
+    pos = ds["position"].values / 1e3
+    if pos.ndim == 4:
+        pos = pos[0]
+    for i in range(pos.shape[0]):
+        ax.plot(pos[i, :, 0], pos[i, :, 1], pos[i, :, 2], lw=1.5,
+                label=f"sc {i + 1}" if pos.shape[0] <= 10 else None)
+        ax.scatter(*pos[i, 0], marker="o", s=10, color="k")
+    if vertices is not None:
+        _body_wire(ax, vertices / 1e3, faces)
+    ax.set_xlabel("x_T, km")
+    ax.set_ylabel("y_T, km")
+    ax.set_zlabel("z_T, km")
+    ax.set_title("Targeted trajectories (frame T)")
+    if pos.shape[0] <= 10:
+        ax.legend(fontsize=7, loc="upper left")
+    return _save(fig, path)
+
+
+def targeting_error(ds, path) -> Path:
+    """|dr_k| per Newton iteration and spacecraft (paper Fig. 23)."""
+    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    miss = ds["targeting_miss"].values
+    if miss.ndim == 3:
+        miss = miss[0]
+    for i in range(miss.shape[0]):
+        m = miss[i]
+        k = np.isfinite(m)
+        ax.semilogy(np.arange(m.size)[k], m[k], "o-", ms=4, label=f"sc {i + 1}")
+    tol = ds.attrs.get("targeting_tolerance_m")
+    if tol:
+        ax.axhline(float(tol), color="k", ls="--", lw=1, label="tolerance")
+    ax.set_xlabel("iteration k")
+    ax.set_ylabel("|Δr_k|, m")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=7, ncol=2)
+    return _save(fig, path)
+
+
+def attitude_series(ds, var, path, *, ylabel, scale=1.0, title=None, log=False) -> Path:
+    """Per-spacecraft time series of a 3-component variable (paper Figs. 26-29, 34-37).
+
+    A sample dimension, if present, is drawn as a min-max envelope per spacecraft.
+    """
+    da = ds[var]
+    t = ds["time"].values / 60.0
+    vals = da.values * scale
+    fig, axes = plt.subplots(3, 1, figsize=(6.8, 6.4), sharex=True)
+    labels = da.attrs.get("components", ["1", "2", "3"])
+    for c in range(3):
+        ax = axes[c]
+        if vals.ndim == 4:  # sample, spacecraft, time, comp
+            for i in range(vals.shape[1]):
+                y = np.abs(vals[:, i, :, c]) if log else vals[:, i, :, c]
+                ax.fill_between(t, y.min(axis=0), y.max(axis=0), alpha=0.3)
+        else:
+            for i in range(vals.shape[0]):
+                y = np.abs(vals[i, :, c]) if log else vals[i, :, c]
+                ax.plot(t, y, lw=1, label=f"sc {i + 1}" if c == 0 else None)
+        if log:
+            ax.set_yscale("log")
+        ax.set_ylabel(f"{ylabel} [{labels[c]}]")
+        ax.grid(alpha=0.3)
+    axes[-1].set_xlabel("time, min")
+    if vals.ndim == 3 and vals.shape[0] <= 10:
+        axes[0].legend(fontsize=7, ncol=4)
+    if title:
+        axes[0].set_title(title)
+    return _save(fig, path)
+
+
+def fov_pyramids(path, r_T, dcm_BT, eta, time_s, *, vertices, faces) -> Path:
+    """FoV pyramids of every spacecraft at one instant, with the body (Figs. 24, 33).
+
+    ``r_T`` (N, 3) m and ``dcm_BT`` (N, 3, 3) at time ``time_s``; ``eta`` rad.
+    """
+    fig = plt.figure(figsize=(6.4, 5.6))
+    ax = fig.add_subplot(projection="3d")
+    _body_wire(ax, vertices / 1e3, faces)
+    t = np.tan(eta)
+    for r, c_bt in zip(r_T, dcm_BT):
+        length = np.linalg.norm(r)
+        corners_b = np.array([[t, t, 1], [-t, t, 1], [-t, -t, 1], [t, -t, 1]]) * length
+        corners = (c_bt.T @ corners_b.T).T + r
+        for q in corners:
+            ax.plot(*np.c_[r, q] / 1e3, color="tab:orange", lw=0.8)
+        loop = np.vstack([corners, corners[:1]]) / 1e3
+        ax.plot(loop[:, 0], loop[:, 1], loop[:, 2], color="tab:orange", lw=0.8)
+        ax.scatter(*(r / 1e3), color="tab:blue", s=12)
+    ax.set_aspect("equal")
+    ax.set_title(f"FoV pyramids at t = {time_s / 60.0:.2f} min")
+    ax.set_xlabel("x_T, km")
+    ax.set_ylabel("y_T, km")
+    ax.set_zlabel("z_T, km")
+    return _save(fig, path)
+
+
+def mc_coverage(ds, path) -> Path:
+    """Monte Carlo: coverage distribution, and coverage against failed spacecraft."""
+    cov = 100.0 * ds["coverage"].values
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    axes[0].hist(cov, bins=min(30, max(5, cov.size // 4)), color="tab:blue", edgecolor="k")
+    axes[0].set_xlabel("area coverage, %")
+    axes[0].set_ylabel("samples")
+    if "n_failed" in ds:
+        nf = ds["n_failed"].values
+        axes[1].scatter(nf + np.random.default_rng(0).uniform(-0.1, 0.1, nf.size), cov, s=8)
+        axes[1].set_xlabel("failed spacecraft")
+        axes[1].set_ylabel("area coverage, %")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    return _save(fig, path)
