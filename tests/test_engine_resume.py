@@ -26,8 +26,8 @@ from ideas_hpc.engine.store import done_mask, store_attrs
 from ideas_hpc.engine.toy import run_toy, run_toy_serial, toy_chunk
 from ideas_hpc.errors import InputError
 
-# 24 chunks of ~0.1 s each: long enough to kill mid-run, short enough for CI.
-TOY = dict(n_samples=96, chunk_size=4, n_vertex=64, n_time=16, work=100_000, seed=7)
+# 24 chunks of ~0.05 s each: long enough to kill mid-run, short enough for CI.
+TOY = dict(n_samples=96, chunk_size=4, n_vertex=64, n_time=16, work=60_000, seed=7)
 N_CHUNKS = 24
 SAMPLE_VARS = ("coverage", "observed", "first_seen", "times_seen", "sigma_error", "sample_seed")
 
@@ -113,6 +113,28 @@ def test_failed_tasks_retried_then_resumed(cluster2, reference, tmp_path):
     assert_same_as(reference, tmp_path / "noretry.zarr")
 
 
+def test_chunk_written_but_not_marked_is_redone(cluster2, reference, tmp_path):
+    # The state a kill between the region write and the done flag leaves behind,
+    # made deterministic: chunk 2 holds garbage and is not marked done.
+    from ideas_hpc.engine.store import create_store
+    from ideas_hpc.engine.toy import toy_config, toy_template
+
+    _, client = cluster2
+    out = tmp_path / "torn.zarr"
+    kw = {k: TOY[k] for k in ("n_vertex", "n_time", "work")}
+    create_store(out, toy_template(TOY["n_samples"], TOY["n_vertex"], TOY["n_time"]),
+                 config=toy_config(TOY["n_samples"], TOY["chunk_size"], seed=TOY["seed"], **kw),
+                 campaign_seed=TOY["seed"], chunk_size=TOY["chunk_size"],
+                 attrs={"kind": "toy", "title": "engine test workload"})
+    garbage = xr.Dataset({"coverage": ("sample", np.full(4, -1.0)),
+                          "first_seen": (("sample", "vertex"), np.zeros((4, TOY["n_vertex"])))})
+    garbage.to_zarr(out, region={"sample": slice(8, 12)}, consolidated=False)
+    assert not done_mask(out).any()
+    s = run_toy(out, client=client, progress=False, resume=True, **TOY)
+    assert s.chunks_run == N_CHUNKS
+    assert_same_as(reference, out)
+
+
 def _toy_cmd(out: Path, extra: list[str]) -> list[str]:
     return [sys.executable, "-m", "ideas_hpc.engine.toy", "--out", str(out), "--resume",
             "--no-progress", "--n-samples", str(TOY["n_samples"]),
@@ -144,13 +166,13 @@ def kill_and_resume(out: Path, extra: list[str], n_kills: int, rng: np.random.Ge
         try:
             if kills == 0 or rng.random() < 0.25:
                 # Anywhere from start-up (imports, store creation, lock) to early chunks.
-                time.sleep(rng.uniform(0.2, 3.5))
+                time.sleep(rng.uniform(0.2, 2.5))
             else:
                 # After a few more chunks finish, plus a random offset inside a chunk.
                 target = max(before, 0) + int(rng.integers(1, 4))
                 t_end = time.monotonic() + 60
                 while _n_done(out) < target and proc.poll() is None and time.monotonic() < t_end:
-                    time.sleep(0.02)
+                    time.sleep(0.05)
                 time.sleep(rng.uniform(0.0, 0.15))
             if proc.poll() is None:
                 proc.send_signal(signal.SIGKILL)
