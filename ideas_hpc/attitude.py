@@ -162,6 +162,17 @@ def default_spacecraft() -> SpacecraftModel:
     return SpacecraftModel()
 
 
+_SPACECRAFT_KEYS = ("mass", "size", "wheel_mass", "wheel_radius", "u_max", "h_max", "inertia")
+_CONTROLLER_KEYS = ("preset", "gains", "k_p", "k_i", "eta", "phi", "int_limit", "phi_dt_max")
+
+
+def _reject_unknown(table: dict, allowed, prefix: str) -> None:
+    unknown = sorted(set(table) - set(allowed))
+    if unknown:
+        raise InputError(f"unknown key {unknown[0]!r}; allowed: {', '.join(allowed)}",
+                         field=prefix + unknown[0])
+
+
 def spacecraft_from_config(table, prefix: str = "spacecraft.") -> SpacecraftModel:
     """Build a :class:`SpacecraftModel` from a config table (SI units).
 
@@ -169,9 +180,11 @@ def spacecraft_from_config(table, prefix: str = "spacecraft.") -> SpacecraftMode
     ``size`` (3 lengths, m), ``wheel_mass`` (kg), ``wheel_radius`` (m),
     ``u_max`` (N m), ``h_max`` (N m s), ``inertia`` (3 principal moments or a
     3x3 matrix, kg m^2; a matrix must be diagonal because the wheels sit on the
-    principal axes). Other keys are left for other modules (e.g. SRP).
+    principal axes). Any other key is an error naming it (SRP mass and area
+    live in ``[dynamics]``).
     """
     table = dict(table or {})
+    _reject_unknown(table, _SPACECRAFT_KEYS, prefix)
     kw = {}
     for key in ("mass", "wheel_mass", "wheel_radius", "u_max", "h_max"):
         if key in table:
@@ -291,8 +304,8 @@ def gains_from_config(table, prefix: str = "controller.") -> Gains:
 
     A table may name a ``preset`` (or ``gains``) and override ``k_p``, ``k_i``,
     ``eta``, ``phi`` (scalar or 3-vector), ``int_limit``, ``phi_dt_max``;
-    without a preset all of ``k_p`` and ``k_i`` must be given. Other keys are
-    ignored (they belong to other modules).
+    without a preset all of ``k_p`` and ``k_i`` must be given. Any other key
+    is an error naming it.
     """
     if table is None:
         return GAIN_PRESETS["np"]
@@ -304,6 +317,7 @@ def gains_from_config(table, prefix: str = "controller.") -> Gains:
                              field=prefix + "preset")
         return GAIN_PRESETS[table]
     table = dict(table)
+    _reject_unknown(table, _CONTROLLER_KEYS, prefix)
     pkey = "preset" if "preset" in table else ("gains" if "gains" in table else None)
     if pkey is not None:
         name = table[pkey]

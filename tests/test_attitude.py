@@ -342,9 +342,14 @@ def test_config_parsing():
     assert g.k_p == (0.4, 0.4, 0.4)
     assert gains_from_config("np") == GAIN_PRESETS["np"]
     assert gains_from_config({"preset": "np", "int_limit": "inf"}).int_limit == math.inf
-    sc = spacecraft_from_config({"mass": 5.0, "inertia": np.diag([0.1, 0.1, 0.02]).tolist(),
-                                 "reflectivity": 0.6})
+    sc = spacecraft_from_config({"mass": 5.0, "inertia": np.diag([0.1, 0.1, 0.02]).tolist()})
     np.testing.assert_allclose(sc.inertia_hub, [0.1, 0.1, 0.02])
+    with pytest.raises(InputError, match="unknown key 'reflectivity'") as ei:
+        spacecraft_from_config({"reflectivity": 0.6})
+    assert ei.value.field == "spacecraft.reflectivity"
+    with pytest.raises(InputError) as ei:
+        gains_from_config({"preset": "np", "kp": 1.0})
+    assert ei.value.field == "controller.kp"
 
 
 def test_result_to_dataset():
