@@ -54,6 +54,8 @@ from .bvh import segment_blocked
 
 #: Vertices per tile of the tiled counting kernel.
 BLOCK = 32
+#: Images gathered per pass for a tile (SoA buffer of 13 x CHUNK doubles, ~27 kB).
+CHUNK = 256
 #: Relative slack of the conservative tile rejection tests (DCMs are accepted
 #: by the boundary when orthonormal to 1e-6, so |C d| may differ from |d| by
 #: that much; 1e-5 keeps the tile tests strictly on the safe side).
@@ -267,34 +269,13 @@ def coverage_counts(vertices, normals, vertex_areas, r_T, dcm_BT, image_times,
                                  + (vertices[j, 2] - bz) ** 2))
     brho = brho * (1.0 + _SLACK) + 1e-9
     m_all = nsc * nimg
-    img = np.empty((m_all, 17))
     keep = np.zeros(m_all, dtype=np.bool_)
     for m in prange(m_all):
         k = m // nimg
         i = m - k * nimg
-        for a in range(3):
-            for b in range(3):
-                img[m, 3 * a + b] = dcm_BT[k, i, a, b]
-        rx = r_T[k, i, 0]
-        ry = r_T[k, i, 1]
-        rz = r_T[k, i, 2]
-        img[m, 9] = rx
-        img[m, 10] = ry
-        img[m, 11] = rz
-        rn = np.sqrt(rx * rx + ry * ry + rz * rz)
-        img[m, 12] = rn
-        if rn > 0.0:
-            img[m, 13] = rx / rn
-            img[m, 14] = ry / rn
-            img[m, 15] = rz / rn
-        else:
-            img[m, 13] = 0.0
-            img[m, 14] = 0.0
-            img[m, 15] = 0.0
-        img[m, 16] = image_times[i]
-        ex = bx - rx
-        ey = by - ry
-        ez = bz - rz
+        ex = bx - r_T[k, i, 0]
+        ey = by - r_T[k, i, 1]
+        ez = bz - r_T[k, i, 2]
         sx = dcm_BT[k, i, 0, 0] * ex + dcm_BT[k, i, 0, 1] * ey + dcm_BT[k, i, 0, 2] * ez
         sy = dcm_BT[k, i, 1, 0] * ex + dcm_BT[k, i, 1, 1] * ey + dcm_BT[k, i, 1, 2] * ez
         sz = dcm_BT[k, i, 2, 0] * ex + dcm_BT[k, i, 2, 1] * ey + dcm_BT[k, i, 2, 2] * ez
@@ -305,12 +286,37 @@ def coverage_counts(vertices, normals, vertex_areas, r_T, dcm_BT, image_times,
             or (abs(sy) - tan_eta * sz) * inv_side > marg)
     sel = np.flatnonzero(keep)
     nsel = sel.shape[0]
-    if not count_all:
-        tsel = np.empty(nsel)
-        for s_ in range(nsel):
-            tsel[s_] = img[sel[s_], 16]
-        sel = sel[np.argsort(tsel, kind="mergesort")]
+    # time order (stable): the first hit in list order is then the earliest
+    tsel = np.empty(nsel)
+    for s_ in range(nsel):
+        tsel[s_] = image_times[sel[s_] % nimg]
+    sel = sel[np.argsort(tsel, kind="mergesort")]
+    # Kept images as structure-of-arrays rows, so the per-tile classification
+    # and the per-vertex tests both vectorise over images:
+    # 0-8 C (row major), 9-11 r, 12 |r|, 13-15 r/|r|, 16 t
+    G = np.empty((17, nsel))
+    for s_ in prange(nsel):
+        m = sel[s_]
+        k = m // nimg
+        i = m - k * nimg
+        for a in range(3):
+            for b in range(3):
+                G[3 * a + b, s_] = dcm_BT[k, i, a, b]
+        rx = r_T[k, i, 0]
+        ry = r_T[k, i, 1]
+        rz = r_T[k, i, 2]
+        G[9, s_] = rx
+        G[10, s_] = ry
+        G[11, s_] = rz
+        rn = np.sqrt(rx * rx + ry * ry + rz * rz)
+        G[12, s_] = rn
+        inv_rn = 1.0 / rn if rn > 0.0 else 0.0
+        G[13, s_] = rx * inv_rn
+        G[14, s_] = ry * inv_rn
+        G[15, s_] = rz * inv_rn
+        G[16, s_] = image_times[i]
     nblk = (nv + BLOCK - 1) // BLOCK
+    big = np.int64(1) << 62
     for blk in prange(nblk):
         j0 = blk * BLOCK
         nb = min(nv, j0 + BLOCK) - j0
@@ -320,9 +326,12 @@ def coverage_counts(vertices, normals, vertex_areas, r_T, dcm_BT, image_times,
         nx = np.zeros(BLOCK)
         ny = np.zeros(BLOCK)
         nz = np.zeros(BLOCK)
-        cnt = np.zeros(BLOCK, dtype=np.int32)
+        cnt = np.zeros(BLOCK, dtype=np.int64)
         fs = np.full(BLOCK, np.inf)
+        cls = np.empty(CHUNK, dtype=np.int64)
+        buf = np.empty((13, CHUNK))
         pn_min = np.inf
+        pn_max = -np.inf
         for jj in range(nb):
             j = order[j0 + jj]
             px[jj] = vertices[j, 0]
@@ -331,85 +340,152 @@ def coverage_counts(vertices, normals, vertex_areas, r_T, dcm_BT, image_times,
             nx[jj] = normals[j, 0]
             ny[jj] = normals[j, 1]
             nz[jj] = normals[j, 2]
-            pn_min = min(pn_min, px[jj] * nx[jj] + py[jj] * ny[jj] + pz[jj] * nz[jj])
+            pn = px[jj] * nx[jj] + py[jj] * ny[jj] + pz[jj] * nz[jj]
+            pn_min = min(pn_min, pn)
+            pn_max = max(pn_max, pn)
         cx, cy, cz, rho, ax, ay, az, cos_a, sin_a = _tile_bounds(px, py, pz, nx, ny, nz, nb)
-        # r . n < 0 for every n in the cone iff angle(r, axis) > 90 deg + alpha;
-        # a cone wider than a hemisphere (alpha > 90 deg) never rejects.
-        cone_lim = -sin_a - _SLACK if cos_a > 0.0 else -2.0
-        for s_ in range(nsel):
-            m = sel[s_]
-            cb = img[m, 13] * ax + img[m, 14] * ay + img[m, 15] * az
-            if cb < cone_lim:
-                if not exact:
+        # r . n < 0 for every n in the cone iff angle(r, axis) > 90 deg + alpha,
+        # r . n > 0 for every n in the cone iff angle(r, axis) < 90 deg - alpha;
+        # a cone wider than a hemisphere (alpha > 90 deg) decides nothing.
+        cone_none = -sin_a - _SLACK if cos_a > 0.0 else -2.0
+        cone_all = sin_a + _SLACK if cos_a > 0.0 else 2.0
+        sl_min = _SLACK * abs(pn_min)
+        sl_max = _SLACK * abs(pn_max)
+        n_full = 0
+        t_full = np.inf
+        done = False
+        for c0 in range(0, nsel, CHUNK):
+            nq = min(nsel, c0 + CHUNK) - c0
+            # classify (branch-free): 0 no vertex can pass, 2 all pass, 1 test each
+            g0 = G[0, c0:c0 + nq]
+            g1 = G[1, c0:c0 + nq]
+            g2 = G[2, c0:c0 + nq]
+            g3 = G[3, c0:c0 + nq]
+            g4 = G[4, c0:c0 + nq]
+            g5 = G[5, c0:c0 + nq]
+            g6 = G[6, c0:c0 + nq]
+            g7 = G[7, c0:c0 + nq]
+            g8 = G[8, c0:c0 + nq]
+            g9 = G[9, c0:c0 + nq]
+            g10 = G[10, c0:c0 + nq]
+            g11 = G[11, c0:c0 + nq]
+            g12 = G[12, c0:c0 + nq]
+            g13 = G[13, c0:c0 + nq]
+            g14 = G[14, c0:c0 + nq]
+            g15 = G[15, c0:c0 + nq]
+            for q in range(nq):
+                cb = g13[q] * ax + g14[q] * ay + g15[q] * az
+                if exact:
+                    # (r - p) . n within |r| [min, max](r_hat . n) - [max, min](p . n)
+                    sb = np.sqrt(max(0.0, 1.0 - cb * cb))
+                    rn = g12[q]
+                    none_c = (cb < cone_none) & (
+                        rn * (cb * cos_a + sb * sin_a) - pn_min < -_SLACK * rn - sl_min)
+                    all_c = (cb > cone_all) & (
+                        rn * (cb * cos_a - sb * sin_a) - pn_max > _SLACK * rn + sl_max)
+                else:
+                    none_c = cb < cone_none
+                    all_c = cb > cone_all
+                ex = cx - g9[q]
+                ey = cy - g10[q]
+                ez = cz - g11[q]
+                sx = abs(g0[q] * ex + g1[q] * ey + g2[q] * ez)
+                sy = abs(g3[q] * ex + g4[q] * ey + g5[q] * ez)
+                sz = g6[q] * ex + g7[q] * ey + g8[q] * ez
+                marg = rho + _SLACK * (sx + sy + abs(sz))
+                tz = tan_eta * sz
+                outside = ((sz + marg < near) | (sz - marg > far)
+                           | ((sx - tz) * inv_side > marg) | ((sy - tz) * inv_side > marg))
+                inside = ((sz - marg >= near) & (sz + marg <= far)
+                          & ((tz - sx) * inv_side >= marg) & ((tz - sy) * inv_side >= marg))
+                cls[q] = 0 if (outside | none_c) else (2 if (inside & all_c) else 1)
+            nbuf = 0
+            for q in range(nq):
+                if cls[q] == 0:
                     continue
-                # (r - p) . n <= |r| max(r_hat . n) - min(p . n)
-                mc = cb * cos_a + np.sqrt(max(0.0, 1.0 - cb * cb)) * sin_a
-                if img[m, 12] * mc - pn_min < -_SLACK * (img[m, 12] + abs(pn_min)):
+                m = c0 + q
+                if cls[q] == 2:
+                    n_full += 1
+                    t_full = min(t_full, G[16, m])
+                    if not count_all:
+                        break  # time order: nothing later can be earlier
                     continue
-            rx = img[m, 9]
-            ry = img[m, 10]
-            rz = img[m, 11]
-            c00 = img[m, 0]
-            c01 = img[m, 1]
-            c02 = img[m, 2]
-            c10 = img[m, 3]
-            c11 = img[m, 4]
-            c12 = img[m, 5]
-            c20 = img[m, 6]
-            c21 = img[m, 7]
-            c22 = img[m, 8]
-            # frustum test of the tile's bounding sphere
-            ex = cx - rx
-            ey = cy - ry
-            ez = cz - rz
-            sx = c00 * ex + c01 * ey + c02 * ez
-            sy = c10 * ex + c11 * ey + c12 * ez
-            sz = c20 * ex + c21 * ey + c22 * ez
-            marg = rho + _SLACK * (abs(sx) + abs(sy) + abs(sz))
-            if (sz + marg < near or sz - marg > far
-                    or (abs(sx) - tan_eta * sz) * inv_side > marg
-                    or (abs(sy) - tan_eta * sz) * inv_side > marg):
-                continue
-            t = img[m, 16]
-            if exact:
-                for jj in range(BLOCK):
-                    dx = px[jj] - rx
-                    dy = py[jj] - ry
-                    dz = pz[jj] - rz
-                    qx = c00 * dx + c01 * dy + c02 * dz
-                    qy = c10 * dx + c11 * dy + c12 * dz
-                    qz = c20 * dx + c21 * dy + c22 * dz
-                    lim = tan_eta * qz
-                    hit = (((-dx) * nx[jj] + (-dy) * ny[jj] + (-dz) * nz[jj] > 0.0)
-                           & (qz > 0.0) & (abs(qx) <= lim) & (abs(qy) <= lim)
-                           & (qz >= near) & (qz <= far))
-                    cnt[jj] += hit
-                    fs[jj] = min(fs[jj], t if hit else np.inf)
-            else:
-                for jj in range(BLOCK):
-                    dx = px[jj] - rx
-                    dy = py[jj] - ry
-                    dz = pz[jj] - rz
-                    qx = c00 * dx + c01 * dy + c02 * dz
-                    qy = c10 * dx + c11 * dy + c12 * dz
-                    qz = c20 * dx + c21 * dy + c22 * dz
-                    lim = tan_eta * qz
-                    hit = ((rx * nx[jj] + ry * ny[jj] + rz * nz[jj] >= 0.0)
-                           & (qz > 0.0) & (abs(qx) <= lim) & (abs(qy) <= lim)
-                           & (qz >= near) & (qz <= far))
-                    cnt[jj] += hit
-                    fs[jj] = min(fs[jj], t if hit else np.inf)
-            if not count_all:
-                unseen = 0
+                for c in range(13):
+                    buf[c, nbuf] = G[c if c < 12 else 16, m]
+                nbuf += 1
+            if nbuf > 0:
+                c00 = buf[0, :nbuf]
+                c01 = buf[1, :nbuf]
+                c02 = buf[2, :nbuf]
+                c10 = buf[3, :nbuf]
+                c11 = buf[4, :nbuf]
+                c12 = buf[5, :nbuf]
+                c20 = buf[6, :nbuf]
+                c21 = buf[7, :nbuf]
+                c22 = buf[8, :nbuf]
+                brx = buf[9, :nbuf]
+                bry = buf[10, :nbuf]
+                brz = buf[11, :nbuf]
                 for jj in range(nb):
-                    unseen += fs[jj] == np.inf
-                if unseen == 0:
+                    pxj = px[jj]
+                    pyj = py[jj]
+                    pzj = pz[jj]
+                    nxj = nx[jj]
+                    nyj = ny[jj]
+                    nzj = nz[jj]
+                    c = np.int64(0)
+                    fi = big
+                    if exact:
+                        for q in range(nbuf):
+                            dx = pxj - brx[q]
+                            dy = pyj - bry[q]
+                            dz = pzj - brz[q]
+                            qx = c00[q] * dx + c01[q] * dy + c02[q] * dz
+                            qy = c10[q] * dx + c11[q] * dy + c12[q] * dz
+                            qz = c20[q] * dx + c21[q] * dy + c22[q] * dz
+                            lim = tan_eta * qz
+                            hit = (((-dx) * nxj + (-dy) * nyj + (-dz) * nzj > 0.0)
+                                   & (qz > 0.0) & (abs(qx) <= lim) & (abs(qy) <= lim)
+                                   & (qz >= near) & (qz <= far))
+                            c += np.int64(hit)
+                            fi = min(fi, np.int64(q) if hit else big)
+                    else:
+                        for q in range(nbuf):
+                            rx = brx[q]
+                            ry = bry[q]
+                            rz = brz[q]
+                            dx = pxj - rx
+                            dy = pyj - ry
+                            dz = pzj - rz
+                            qx = c00[q] * dx + c01[q] * dy + c02[q] * dz
+                            qy = c10[q] * dx + c11[q] * dy + c12[q] * dz
+                            qz = c20[q] * dx + c21[q] * dy + c22[q] * dz
+                            lim = tan_eta * qz
+                            hit = ((rx * nxj + ry * nyj + rz * nzj >= 0.0)
+                                   & (qz > 0.0) & (abs(qx) <= lim) & (abs(qy) <= lim)
+                                   & (qz >= near) & (qz <= far))
+                            c += np.int64(hit)
+                            fi = min(fi, np.int64(q) if hit else big)
+                    cnt[jj] += c
+                    if fi < big:
+                        fs[jj] = min(fs[jj], buf[12, fi])
+            if not count_all:
+                if t_full < np.inf:
+                    done = True
+                else:
+                    unseen = 0
+                    for jj in range(nb):
+                        unseen += fs[jj] == np.inf
+                    done = unseen == 0
+                if done:
                     break
         for jj in range(nb):
             j = order[j0 + jj]
-            times_seen[j] = cnt[jj] if count_all else min(cnt[jj], 1)
-            if fs[jj] < np.inf:
-                first_seen[j] = fs[jj]
+            cc = cnt[jj] + n_full
+            times_seen[j] = cc if count_all else min(cc, 1)
+            f = min(fs[jj], t_full)
+            if f < np.inf:
+                first_seen[j] = f
     observed = times_seen > 0
     cov, cov_n = coverage_fractions(observed, vertex_areas)
     return observed, first_seen, times_seen, cov, cov_n
