@@ -29,7 +29,8 @@ def add_commands(sub) -> None:
     p.add_argument("--set", action="append", default=[], metavar="dotted.key=value",
                    help="override a campaign field (TOML value), repeatable")
     p.add_argument("--workers", type=int, default=None,
-                   help="local dask worker processes, or SLURM jobs (default: CPU count)")
+                   help="local dask worker processes, or SLURM jobs (default: CPU count); "
+                        "0 runs GA designs in this process without dask")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="use an existing dask scheduler (tcp://host:8786)")
     p.add_argument("--cluster", choices=("local", "slurm"), default="local",

@@ -70,7 +70,7 @@ def _write_atomic(ds: xr.Dataset, out: Path) -> None:
         with warnings.catch_warnings():
             # zarr 3 warns about fixed-width string coordinates (axis names) and
             # consolidated metadata; xarray reads both back fine.
-            warnings.simplefilter("ignore", UserWarning)
+            warnings.simplefilter("ignore")
             ds.to_zarr(tmp, mode="w", consolidated=True)
         if out.exists():
             shutil.rmtree(out)
@@ -222,12 +222,13 @@ def run_design(c: Campaign, out: Path, *, workers=None, scheduler=None, cluster=
     setup = setup_from_campaign(c)
     _log(f"body: {setup.body.note}")
     t = time.perf_counter()
-    with connect(cluster=cluster, workers=workers, scheduler=scheduler,
-                 slurm_config=slurm_config) as client:
-        if c.kind == "design-nadir":
-            res, theta, periods = design_nadir(c, setup, client)
-        else:
-            res, theta, periods = design_fov(c, setup, client)
+    design = design_nadir if c.kind == "design-nadir" else design_fov
+    if workers == 0 and scheduler is None and cluster == "local":
+        res, theta, periods = design(c, setup, None)  # in this process, no dask
+    else:
+        with connect(cluster=cluster, workers=workers, scheduler=scheduler,
+                     slurm_config=slurm_config) as client:
+            res, theta, periods = design(c, setup, client)
     wall = time.perf_counter() - t
     _log(f"GA: {res.evaluations} designs evaluated in {wall:.1f} s; best: N = "
          f"{res.best_swarm_size}, coverage {100 * res.best_coverage:.3f} %")

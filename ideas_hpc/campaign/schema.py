@@ -127,7 +127,7 @@ MC_SCHEMA = {
 
 RUN = {
     "chunk_size": Field("int", 8, lo=1, doc="samples per dask task"),
-    "workers": Field("int", None, nullable=True, lo=1),
+    "workers": Field("int", None, nullable=True, lo=0),
 }
 
 SCHEMA = {
@@ -235,6 +235,12 @@ def build_models(cfg: dict) -> dict:
     from ..mapping import coverage_options_from_config
     from ..trajectory import force_model_from_config
 
+    cov = dict(_sub_table(cfg, "coverage"))
+    # The ground-resolution test uses the instrument's lambda and D unless the
+    # coverage table says otherwise (one source of truth for the camera).
+    inst = cfg["instrument"]
+    cov.setdefault("wavelength_um", inst["wavelength_um"] * 1e6)
+    cov.setdefault("aperture_cm", inst["aperture_cm"] * 1e2)
     ctrl = _sub_table(cfg, "controller")
     if not ctrl:
         ctrl = {"preset": "fov" if cfg["attitude"]["maneuver"] == "fov" else "np"}
@@ -242,7 +248,7 @@ def build_models(cfg: dict) -> dict:
         "force_model": force_model_from_config(_sub_table(cfg, "dynamics"), prefix="dynamics."),
         "spacecraft": spacecraft_from_config(_sub_table(cfg, "spacecraft"), prefix="spacecraft."),
         "gains": gains_from_config(ctrl, prefix="controller."),
-        "coverage": coverage_options_from_config(_sub_table(cfg, "coverage"), prefix="coverage."),
+        "coverage": coverage_options_from_config(cov, prefix="coverage."),
     }
 
 
