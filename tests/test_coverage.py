@@ -323,7 +323,7 @@ def test_frustum_planes_inside_outside():
         else:
             normals_p = normals
         obs, first, cnt, cov, covn = ccov.coverage_counts(
-            verts, normals_p, areas, rT, dcm, np.zeros(1), tn, near, far, exact, act)
+            verts, normals_p, areas, rT, dcm, np.zeros(1), tn, near, far, exact, act, True)
         np.testing.assert_array_equal(obs, want)
         obs2 = ccov.coverage_vertices(
             verts, normals_p, areas, rT, dcm, np.zeros(1), tn, near, far, exact, act, True,
@@ -344,9 +344,9 @@ def test_culling_boundaries():
     normals = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])   # r.n = 0 ; r.n > 0
     args = (verts, normals, np.ones(2), r.reshape(1, 1, 3), C.reshape(1, 1, 3, 3),
             np.zeros(1), 1.0, 1.0, 1e4)
-    obs = ccov.coverage_counts(*args, False, np.ones(1, bool))[0]
+    obs = ccov.coverage_counts(*args, False, np.ones(1, bool), True)[0]
     np.testing.assert_array_equal(obs, [True, True])
-    obs = ccov.coverage_counts(*args, True, np.ones(1, bool))[0]
+    obs = ccov.coverage_counts(*args, True, np.ones(1, bool), True)[0]
     np.testing.assert_array_equal(obs, [False, True])
 
 

@@ -43,6 +43,15 @@ fraction.
 Image times must be non-decreasing (the boundary checks it): the early-out
 kernels stop scanning a spacecraft's images at its first hit, and skip images
 later than the earliest hit found so far.
+
+Speed (see ``benchmarks/bench_coverage.py``): :func:`coverage_counts` drops
+images whose frustum misses the body's bounding sphere, groups vertices into
+compact tiles, classifies each (tile, image) pair with the tile's bounding
+sphere and normal cone as *none can pass*, *all pass* or *test each*
+(conservative, with slack, so results are identical to the per-vertex
+tests), and runs the per-vertex tests in a loop over images that the
+compiler vectorises. Strict options need ray queries and go through
+:func:`coverage_vertices`.
 """
 
 from __future__ import annotations
@@ -177,19 +186,9 @@ def _tile_bounds(px, py, pz, nx, ny, nz, nb):
     return cx, cy, cz, rho * (1.0 + _SLACK) + 1e-9, ax, ay, az, cos_a, sin_a
 
 
-@njit(cache=True, inline="always")
-def _max_cos_in_cone(ux, uy, uz, ax, ay, az, cos_a, sin_a):
-    """max over unit n within angle alpha of axis a of u . n, for unit u."""
-    cb = ux * ax + uy * ay + uz * az
-    if cb >= cos_a:
-        return 1.0
-    sb = np.sqrt(max(0.0, 1.0 - cb * cb))
-    return cb * cos_a + sb * sin_a
-
-
 @njit(parallel=True, cache=True)
 def coverage_counts(vertices, normals, vertex_areas, r_T, dcm_BT, image_times,
-                    tan_eta, near, far, exact, active, count_all=True):
+                    tan_eta, near, far, exact, active, count_all):
     """Full per-vertex counts, culling + clipping only (paper eq. 25-26), tiled.
 
     Every (spacecraft, image, vertex) triple counts, so ``times_seen`` is
