@@ -607,6 +607,8 @@ def test_render_coverage_map(tmp_path, small_body):
     fs = np.where(obs, small_body.vertices_T[:, 1], np.nan)
     p = render_coverage_map(small_body, fs, tmp_path / "fs.png", kind="first_seen")
     assert p.stat().st_size > 10_000
+    p = render_coverage_map(small_body, obs * 0.5, tmp_path / "frac.png", kind="fraction")
+    assert p.is_file()
     with pytest.raises(InputError) as ei:
         render_coverage_map(small_body, obs[:-1], tmp_path / "x.png")
     assert ei.value.field == "values"

@@ -4,7 +4,8 @@ The body is drawn twice side by side (the given view and the opposite side,
 azimuth + 180 deg) with the Agg backend. A face takes the mean of its three
 vertex values: for ``kind='observed'`` the fraction of its vertices observed
 (blue = observed, grey = not), for ``kind='first_seen'`` the mean first-seen
-time in s (faces with a never-seen vertex are grey).
+time in s (faces with a never-seen vertex are grey), for ``kind='fraction'`` a
+per-vertex fraction in 0..1 (e.g. of Monte Carlo samples that saw the vertex).
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ import numpy as np
 
 from ..errors import InputError
 
-_KINDS = ("observed", "first_seen")
+_KINDS = ("observed", "first_seen", "fraction")
 
 
 def render_coverage_map(shape, values, path, *, kind: str = "observed", title=None,
@@ -30,7 +31,7 @@ def render_coverage_map(shape, values, path, *, kind: str = "observed", title=No
         NaN for never seen (``kind='first_seen'``).
     path : str or Path
         Output PNG file (parent folders are created).
-    kind : {'observed', 'first_seen'}
+    kind : {'observed', 'first_seen', 'fraction'}
     title : str, optional
     view : (elev, azim)
         Viewing angles of the left panel, deg; the right panel shows the far side.
@@ -65,7 +66,15 @@ def render_coverage_map(shape, values, path, *, kind: str = "observed", title=No
     v_km = shape.vertices_T / 1e3
     tris = v_km[shape.faces]
     grey = np.array([0.78, 0.78, 0.78, 1.0])
-    if kind == "observed":
+    if kind == "fraction":
+        v01 = np.clip(np.nan_to_num(vals.astype(np.float64), nan=0.0), 0.0, 1.0)
+        frac = v01[shape.faces].mean(axis=1)
+        cmap = colors.LinearSegmentedColormap.from_list("frac", [grey[:3], (0.12, 0.35, 0.85)])
+        norm = colors.Normalize(0.0, 1.0)
+        fc = cmap(norm(frac))
+        label = "fraction"
+        stat = f"mean {float(v01.mean()):.3f}"
+    elif kind == "observed":
         frac = vals.astype(bool)[shape.faces].mean(axis=1)
         cmap = colors.LinearSegmentedColormap.from_list("obs", [grey[:3], (0.12, 0.35, 0.85)])
         norm = colors.Normalize(0.0, 1.0)
