@@ -163,3 +163,24 @@ def test_sbatch_script_runs_a_campaign(toy_reference, tmp_path):
     log = (tmp_path / f"batch-{job}.out").read_text()
     assert "6 chunks run" in log, log[-3000:]
     _assert_same(toy_reference, out)
+
+
+@pytest.mark.slurm
+@needs_slurm
+def test_monte_carlo_campaign_through_slurm(tmp_path):
+    """The real Monte Carlo campaign on SLURM worker jobs equals the local run."""
+    from ideas_hpc.campaign.run import run_file
+
+    mc = REPO / "campaigns" / "eros-monte-carlo.toml"
+    sets = ["body.name=\"ellipsoid\"", "flyby.tf_s=60", "flyby.z_start_km=-3",
+            "flyby.z_stop_km=3", "attitude.decimate=10", "monte_carlo.samples=4",
+            "run.chunk_size=2"]
+    local = run_file(mc, out=tmp_path / "local.zarr", overrides=sets, workers=1, progress=False)
+    slurm = run_file(mc, out=tmp_path / "slurm.zarr", overrides=sets, workers=2,
+                     cluster="slurm", slurm_config=REPO / "slurm" / "jobqueue.yaml",
+                     progress=False)
+    a, b = xr.open_zarr(local), xr.open_zarr(slurm)
+    assert bool(b["chunk_done"].all())
+    for name in ("coverage", "observed", "first_seen", "sigma_error", "c20"):
+        np.testing.assert_array_equal(a[name].values, b[name].values, err_msg=name)
+    assert any((tmp_path / "slurm.zarr.slurm-logs").glob("ideas-worker-*.err"))
