@@ -115,7 +115,7 @@ def write_report(store, out=None) -> Path:
         if obs.ndim == 2:  # Monte Carlo: fraction of samples that saw each vertex
             obs = np.nanmean(obs.astype(float), axis=0)
             figs.append(render_coverage_map(shape, obs, out / "fig25_coverage_map.png",
-                                            kind="first_seen",
+                                            kind="fraction",
                                             title="fraction of samples that saw each vertex"))
         else:
             figs.append(render_coverage_map(shape, obs, out / "fig25_coverage_map.png",
