@@ -22,6 +22,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 
+from ideas_hpc.plots.figures import save_png  # noqa: E402
+
 #: Wheel torque limit of the paper's spacecraft, N m (SPEC section 5); a store
 #: whose config sets ``spacecraft.u_max`` uses that value instead.
 U_MAX_DEFAULT = 0.007
@@ -110,15 +112,6 @@ def vertex_observed_fraction(ds: xr.Dataset) -> xr.DataArray:
 
 # ------------------------------------------------------------------- figures
 
-def _save(fig, path) -> Path:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
-
-
 def _bins(values, n_max=30):
     """Histogram edges that also work when every sample has the same value."""
     lo, hi = float(np.min(values)), float(np.max(values))
@@ -153,7 +146,7 @@ def coverage_distribution_figure(ds: xr.Dataset, path) -> Path:
     ax_c.legend(fontsize=8, loc="upper left")
     for ax in (ax_h, ax_c):
         ax.grid(alpha=0.3)
-    return _save(fig, path)
+    return save_png(fig, path)
 
 
 def coverage_vs_failures_figure(ds: xr.Dataset, path) -> Path:
@@ -179,7 +172,7 @@ def coverage_vs_failures_figure(ds: xr.Dataset, path) -> Path:
     ax.set_title("Coverage against spacecraft failures")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="lower left")
-    return _save(fig, path)
+    return save_png(fig, path)
 
 
 def _positive(a):
@@ -238,7 +231,7 @@ def attitude_envelopes_figure(ds: xr.Dataset, path, *, per_spacecraft=True,
     ax_u.set_title("Reaction wheel torque (largest of 3 wheels)")
     ax_u.grid(alpha=0.3)
     ax_u.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
-    return _save(fig, path)
+    return save_png(fig, path)
 
 
 def vertex_observed_fraction_figure(ds: xr.Dataset, path) -> Path:
@@ -265,7 +258,7 @@ def vertex_observed_fraction_figure(ds: xr.Dataset, path) -> Path:
     ax.set_title(f"Per-vertex observation over {ns} samples\n"
                  f"{always} of {frac.size} vertices seen in every sample, {never} never")
     ax.grid(alpha=0.3)
-    return _save(fig, path)
+    return save_png(fig, path)
 
 
 def make_all(ds: xr.Dataset, out) -> dict:

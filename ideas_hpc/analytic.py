@@ -7,27 +7,15 @@ scaled to the semi-axes. Lengths are in m.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from .errors import InputError
+from .errors import InputError, positive_number
 from .shape import Shape, build_shape
 
 #: Eros-sized stand-in used when the real shape model is not on the data path:
 #: semi-axes close to Eros' 34.4 x 11.2 x 11.2 km bounding box (Yeomans et al.
 #: 2000), which gives R_av near Table 1's 10.4 km.
 EROS_ELLIPSOID_AXES_M = (17.0e3, 5.6e3, 5.4e3)
-
-
-def _check_positive(value, field: str) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"must be a number, got {value!r}", field=field) from None
-    if not math.isfinite(x) or x <= 0.0:
-        raise InputError(f"must be > 0, got {value!r}", field=field)
-    return x
 
 
 def _check_resolution(resolution) -> int:
@@ -45,9 +33,9 @@ def _check_resolution(resolution) -> int:
 def ellipsoid_mesh(a: float, b: float, c: float, resolution: int = 3, *,
                    name: str = "ellipsoid") -> Shape:
     """Triaxial ellipsoid with semi-axes ``a, b, c`` (m) along x, y, z of frame T."""
-    a = _check_positive(a, "a")
-    b = _check_positive(b, "b")
-    c = _check_positive(c, "c")
+    a = positive_number(a, "a")
+    b = positive_number(b, "b")
+    c = positive_number(c, "c")
     res = _check_resolution(resolution)
     import trimesh
 
@@ -59,7 +47,7 @@ def ellipsoid_mesh(a: float, b: float, c: float, resolution: int = 3, *,
 
 def sphere_mesh(radius: float, resolution: int = 3, *, name: str = "sphere") -> Shape:
     """Sphere of ``radius`` (m) as a geodesic icosphere with vertices on the sphere."""
-    r = _check_positive(radius, "radius")
+    r = positive_number(radius, "radius")
     shape = ellipsoid_mesh(r, r, r, resolution, name=name)
     object.__setattr__(shape, "source", f"built-in sphere R = {r / 1e3:g} km, "
                                         f"resolution {resolution}")

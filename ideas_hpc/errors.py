@@ -7,6 +7,8 @@ exits with status 2, without a traceback.
 
 from __future__ import annotations
 
+import math
+
 
 class InputError(ValueError):
     """Bad user input: a config field, a data file line, a function argument.
@@ -46,3 +48,14 @@ class InputError(ValueError):
 
 class DataNotFoundError(InputError, FileNotFoundError):
     """A named data set (shape model, gravity field) was not found on the data path."""
+
+
+def positive_number(value, field: str) -> float:
+    """``float(value)`` if it is a finite number > 0, else an :class:`InputError` naming ``field``."""
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"must be a number, got {value!r}", field=field) from None
+    if not math.isfinite(x) or x <= 0.0:
+        raise InputError(f"must be > 0, got {value!r}", field=field)
+    return x

@@ -22,7 +22,7 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass
 
-from .errors import InputError
+from .errors import InputError, positive_number
 
 KM = 1e3
 DEG = math.pi / 180.0
@@ -71,16 +71,6 @@ class Sizing:
         ]
 
 
-def _positive(x, name: str) -> float:
-    try:
-        v = float(x)
-    except (TypeError, ValueError):
-        raise InputError(f"must be a number, got {x!r}", field=name) from None
-    if not math.isfinite(v) or v <= 0.0:
-        raise InputError(f"must be > 0, got {x!r}", field=name)
-    return v
-
-
 def size_flyby(*, r_av: float | None = None, r_max: float | None = None,
                r_min: float | None = None, ground_resolution: float = GROUND_RESOLUTION,
                aperture: float = APERTURE, wavelength: float = WAVELENGTH,
@@ -99,16 +89,16 @@ def size_flyby(*, r_av: float | None = None, r_max: float | None = None,
     if r_av is None:
         if r_max is None or r_min is None:
             raise InputError("give r_av, or both r_max and r_min", field="r_av")
-        r_max = _positive(r_max, "r_max")
-        r_min = _positive(r_min, "r_min")
+        r_max = positive_number(r_max, "r_max")
+        r_min = positive_number(r_min, "r_min")
         if r_min > r_max:
             raise InputError(f"r_min ({r_min:g} m) exceeds r_max ({r_max:g} m)", field="r_min")
         r_av = 0.5 * (r_max + r_min)
-    r_av = _positive(r_av, "r_av")
-    x = _positive(ground_resolution, "ground_resolution")
-    d = _positive(aperture, "aperture")
-    lam = _positive(wavelength, "wavelength")
-    near = _positive(near, "near")
+    r_av = positive_number(r_av, "r_av")
+    x = positive_number(ground_resolution, "ground_resolution")
+    d = positive_number(aperture, "aperture")
+    lam = positive_number(wavelength, "wavelength")
+    near = positive_number(near, "near")
     eps = float(min_elevation)
     if not math.isfinite(eps) or eps < 0.0 or eps >= 0.5 * math.pi:
         raise InputError(f"must be in [0, 90) deg, got {eps / DEG:g} deg", field="min_elevation")

@@ -411,6 +411,19 @@ def _scalar(name, v, *, positive=False):
     return float(v)
 
 
+def _check_arc(other_name, r0_T, other, t0, tf, dt_sample):
+    """Validate start states, a second (N, 3) array of the same shape, and the time span."""
+    r0 = _states("r0_T", r0_T)
+    b = _states(other_name, other)
+    if b.shape != r0.shape:
+        raise InputError(f"shape {b.shape} differs from r0_T {r0.shape}", field=other_name)
+    t0 = _scalar("t0", t0)
+    tf = _scalar("tf", tf)
+    if tf <= t0:
+        raise InputError(f"must be > t0 ({t0:g} s), got {tf:g} s", field="tf")
+    return r0, b, t0, tf, _scalar("dt_sample", dt_sample, positive=True)
+
+
 def sample_times(t0: float, tf: float, dt_sample: float) -> np.ndarray:
     """``t0, t0 + dt, ...`` up to tf (tf included when it is on the grid)."""
     n = int(math.floor((tf - t0) / dt_sample * (1.0 + 1e-12) + 1e-9)) + 1
@@ -458,16 +471,8 @@ def target_swarm(body, r0_T, r_target_T, t0, tf, *, force_model: ForceModel = Fo
     """
     if not isinstance(force_model, ForceModel):
         raise InputError("must be a ForceModel", field="force_model")
-    r0 = _states("r0_T", r0_T)
-    rt = _states("r_target_T", r_target_T)
-    if rt.shape != r0.shape:
-        raise InputError(f"shape {rt.shape} differs from r0_T {r0.shape}", field="r_target_T")
-    t0 = _scalar("t0", t0)
-    tf = _scalar("tf", tf)
-    if tf <= t0:
-        raise InputError(f"must be > t0 ({t0:g} s), got {tf:g} s", field="tf")
+    r0, rt, t0, tf, dt_sample = _check_arc("r_target_T", r0_T, r_target_T, t0, tf, dt_sample)
     tol = _scalar("tol", tol, positive=True)
-    dt_sample = _scalar("dt_sample", dt_sample, positive=True)
     if isinstance(max_iter, bool) or not isinstance(max_iter, (int, np.integer)):
         raise InputError(f"must be an integer, got {max_iter!r}", field="max_iter")
     if max_iter < 0:
@@ -517,15 +522,7 @@ def propagate_swarm(body, r0_T, v0_T, t0, tf, *, force_model: ForceModel = Force
     RuntimeError
         When the integrator fails for a spacecraft (step limit).
     """
-    r0 = _states("r0_T", r0_T)
-    v0 = _states("v0_T", v0_T)
-    if v0.shape != r0.shape:
-        raise InputError(f"shape {v0.shape} differs from r0_T {r0.shape}", field="v0_T")
-    t0 = _scalar("t0", t0)
-    tf = _scalar("tf", tf)
-    if tf <= t0:
-        raise InputError(f"must be > t0 ({t0:g} s), got {tf:g} s", field="tf")
-    dt_sample = _scalar("dt_sample", dt_sample, positive=True)
+    r0, v0, t0, tf, dt_sample = _check_arc("v0_T", r0_T, v0_T, t0, tf, dt_sample)
     pk = packed if packed is not None else pack_force_model(body, force_model, params_override)
     times = sample_times(t0, tf, dt_sample)
     states, status = propagate_batch(r0, v0, t0, tf, force_model.rtol, force_model.atol,

@@ -18,7 +18,8 @@ import numpy as np  # noqa: E402
 RPM = 60.0 / (2.0 * np.pi)
 
 
-def _save(fig, path) -> Path:
+def save_png(fig, path) -> Path:
+    """Tight layout, 120 dpi PNG (parent folders created), figure closed."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.tight_layout()
@@ -38,7 +39,7 @@ def ga_fitness(ds, path, *, title="GA fitness") -> Path:
     ax.set_title(title)
     ax.grid(alpha=0.3)
     ax.legend()
-    return _save(fig, path)
+    return save_png(fig, path)
 
 
 def population_histogram(ds, path, *, design: str) -> Path:
@@ -55,7 +56,7 @@ def population_histogram(ds, path, *, design: str) -> Path:
         ax.set_xlabel("area coverage, %")
     ax.set_ylabel("individuals in the final generation")
     ax.grid(alpha=0.3)
-    return _save(fig, path)
+    return save_png(fig, path)
 
 
 def _body_wire(ax, vertices_km, faces, every=1):
@@ -83,7 +84,7 @@ def trajectories(ds, path, *, vertices=None, faces=None) -> Path:
     ax.set_title("Targeted trajectories (frame T)")
     if pos.shape[0] <= 10:
         ax.legend(fontsize=7, loc="upper left")
-    return _save(fig, path)
+    return save_png(fig, path)
 
 
 def targeting_error(ds, path) -> Path:
@@ -103,7 +104,7 @@ def targeting_error(ds, path) -> Path:
     ax.set_ylabel("|Δr_k|, m")
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=7, ncol=2)
-    return _save(fig, path)
+    return save_png(fig, path)
 
 
 def attitude_series(ds, var, path, *, ylabel, scale=1.0, title=None, log=False) -> Path:
@@ -135,7 +136,7 @@ def attitude_series(ds, var, path, *, ylabel, scale=1.0, title=None, log=False) 
         axes[0].legend(fontsize=7, ncol=4)
     if title:
         axes[0].set_title(title)
-    return _save(fig, path)
+    return save_png(fig, path)
 
 
 def fov_pyramids(path, r_T, dcm_BT, eta, time_s, *, vertices, faces) -> Path:
@@ -161,7 +162,7 @@ def fov_pyramids(path, r_T, dcm_BT, eta, time_s, *, vertices, faces) -> Path:
     ax.set_xlabel("x_T, km")
     ax.set_ylabel("y_T, km")
     ax.set_zlabel("z_T, km")
-    return _save(fig, path)
+    return save_png(fig, path)
 
 
 def mc_coverage(ds, path) -> Path:
@@ -178,4 +179,4 @@ def mc_coverage(ds, path) -> Path:
         axes[1].set_ylabel("area coverage, %")
     for ax in axes:
         ax.grid(alpha=0.3)
-    return _save(fig, path)
+    return save_png(fig, path)
