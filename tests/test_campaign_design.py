@@ -169,3 +169,48 @@ def test_bad_key_in_file_names_file_and_line(tmp_path):
     assert r.returncode == 2, r.stderr
     assert f"bad.toml:{line}: design.n_maxx: unknown key" in r.stderr
     assert "Traceback" not in r.stderr and not (tmp_path / "x.zarr").exists()
+
+
+def test_helix_configuration(tmp_path):
+    """Helical swarm: z_start (and z_stop) grow linearly with the swarm angle."""
+    from ideas_hpc.flyby import endpoints
+
+    sets = ['body.name="ellipsoid"', 'flyby.configuration="helix"', "flyby.helix_rise_km=12.0",
+            'attitude.mode="ideal"', "flyby.tf_s=60", "flyby.z_start_km=-3", "flyby.z_stop_km=3"]
+    c = load(CAMPAIGNS / "eros-flyby.toml", sets)
+    setup = setup_from_campaign(c)
+    th = np.array([0.0, np.pi / 2, np.pi, 1.5 * np.pi])
+    r0, rt = endpoints(setup, th)
+    assert np.allclose(r0[:, 2], -3e3 + 12e3 * th / (2 * np.pi))
+    assert np.allclose(rt[:, 2] - r0[:, 2], 6e3)
+    assert np.allclose(np.hypot(r0[:, 0], r0[:, 1]), setup.d_sep)
+    out = fly(setup, th)
+    assert np.all(out.targeting.converged)
+    assert np.allclose(out.targeting.position_T[:, -1], rt, atol=0.01)
+    assert 0.0 < out.coverage.coverage <= 1.0
+
+
+def test_flyby_campaign_report_has_paper_figures(tmp_path):
+    from ideas_hpc.campaign.report import write_report
+
+    sets = ['body.name="ellipsoid"', "flyby.tf_s=60", "flyby.z_start_km=-3",
+            "flyby.z_stop_km=3"]
+    out = run_file(CAMPAIGNS / "eros-flyby.toml", out=tmp_path / "f.zarr", overrides=sets)
+    ds = xr.open_zarr(out)
+    assert ds["position"].dims == ("spacecraft", "time", "axis")
+    assert ds["sigma_error"].dims == ("spacecraft", "time", "axis")
+    assert ds["targeting_miss"].dims == ("spacecraft", "iteration")
+    assert ds["position"].attrs["units"] == "m" and ds.attrs["kind"] == "flyby"
+    summary = write_report(out, tmp_path / "rep").read_text()
+    names = {p.name for p in (tmp_path / "rep").iterdir()}
+    expect = {"fig22_trajectories.png", "fig23_targeting_error.png", "fig24_fov_pyramids.png",
+              "fig25_coverage_map.png", "fig26_sigma_error.png", "fig27_omega_error.png",
+              "fig28_wheel_speed.png", "fig29_wheel_torque.png", "summary.txt"}
+    assert expect <= names
+    for n in expect - {"summary.txt"}:
+        assert (tmp_path / "rep" / n).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "built-in ellipsoid" in summary and "coverage:" in summary
+    # a second run refuses the existing store, resume keeps it
+    with pytest.raises(InputError, match="already exists"):
+        run_file(CAMPAIGNS / "eros-flyby.toml", out=out, overrides=sets)
+    run_file(CAMPAIGNS / "eros-flyby.toml", out=out, overrides=sets, resume=True)

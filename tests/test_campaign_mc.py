@@ -124,3 +124,13 @@ def test_existing_store_and_incompatible_resume(one_worker):
     before = xr.open_zarr(one_worker)["coverage"].values.copy()
     run_file(MC, out=one_worker, overrides=SHORT, workers=1, progress=False, resume=True)
     assert np.array_equal(before, xr.open_zarr(one_worker)["coverage"].values)
+
+
+def test_mc_on_existing_scheduler(one_worker, tmp_path):
+    """--scheduler ADDRESS: the campaign runs on a cluster somebody else started."""
+    from distributed import LocalCluster
+
+    with LocalCluster(n_workers=1, threads_per_worker=1, dashboard_address=None) as cluster:
+        out = run_file(MC, out=tmp_path / "sched.zarr", overrides=SHORT,
+                       scheduler=cluster.scheduler_address, progress=False)
+    _same(xr.open_zarr(one_worker), xr.open_zarr(out))
