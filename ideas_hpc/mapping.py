@@ -201,16 +201,16 @@ def _check_geometry(shape, r_T, dcm_BT, eta, near, far, active=None):
     if c.shape != r.shape[:2] + (3, 3):
         raise InputError(f"must have shape {r.shape[:2] + (3, 3)} to match r_T, got {c.shape}",
                          field="dcm_BT")
-    if not np.all(np.isfinite(c)):
+    c = np.ascontiguousarray(c)
+    n_bad, err, i_err, det, i_det = _cov.dcm_check(c.reshape(-1, 3, 3))
+    if n_bad:
         raise InputError("has non-finite values", field="dcm_BT")
-    err = np.abs(np.einsum("...ij,...kj->...ik", c, c) - np.eye(3)).max(axis=(-2, -1))
-    if np.any(err > DCM_ORTHO_TOL):
-        k, i = np.unravel_index(int(np.argmax(err)), err.shape)
+    if err > DCM_ORTHO_TOL:
+        k, i = np.unravel_index(i_err, c.shape[:2])
         raise InputError(f"not orthonormal at spacecraft {k}, image {i} "
-                         f"(|C C^T - I| = {err[k, i]:.2e})", field="dcm_BT")
-    det = np.linalg.det(c)
-    if np.any(det < 0.0):
-        k, i = np.unravel_index(int(np.argmin(det)), det.shape)
+                         f"(|C C^T - I| = {err:.2e})", field="dcm_BT")
+    if det < 0.0:
+        k, i = np.unravel_index(i_det, c.shape[:2])
         raise InputError(f"is a reflection (det < 0) at spacecraft {k}, image {i}",
                          field="dcm_BT")
     if active is None:

@@ -99,6 +99,56 @@ def coverage_fractions(observed, vertex_areas):
     return a_obs / a_tot, n_obs / observed.shape[0]
 
 
+@njit(cache=True)
+def dcm_check(dcm):
+    """Validation figures of a stack of 3x3 matrices (for the boundary layer).
+
+    Parameters
+    ----------
+    dcm : (M, 3, 3) float64
+
+    Returns
+    -------
+    n_nonfinite : int
+        Matrices holding a NaN or inf.
+    max_err, i_err : float, int
+        Largest ``max |C C^T - I|`` (entrywise) over the finite matrices and where.
+    min_det, i_det : float, int
+        Smallest determinant and where.
+    """
+    n_bad = 0
+    max_err = 0.0
+    i_err = 0
+    min_det = np.inf
+    i_det = 0
+    for m in range(dcm.shape[0]):
+        fin = True
+        for a in range(3):
+            for b in range(3):
+                fin = fin and np.isfinite(dcm[m, a, b])
+        if not fin:
+            n_bad += 1
+            continue
+        e = 0.0
+        for a in range(3):
+            for c in range(3):
+                s = dcm[m, a, 0] * dcm[m, c, 0] + dcm[m, a, 1] * dcm[m, c, 1] \
+                    + dcm[m, a, 2] * dcm[m, c, 2]
+                if a == c:
+                    s -= 1.0
+                e = max(e, abs(s))
+        if e > max_err:
+            max_err = e
+            i_err = m
+        det = (dcm[m, 0, 0] * (dcm[m, 1, 1] * dcm[m, 2, 2] - dcm[m, 1, 2] * dcm[m, 2, 1])
+               - dcm[m, 0, 1] * (dcm[m, 1, 0] * dcm[m, 2, 2] - dcm[m, 1, 2] * dcm[m, 2, 0])
+               + dcm[m, 0, 2] * (dcm[m, 1, 0] * dcm[m, 2, 1] - dcm[m, 1, 1] * dcm[m, 2, 0]))
+        if det < min_det:
+            min_det = det
+            i_det = m
+    return n_bad, max_err, i_err, min_det, i_det
+
+
 
 @njit(cache=True)
 def spatial_order(vertices, block):
@@ -186,10 +236,456 @@ def _tile_bounds(px, py, pz, nx, ny, nz, nb):
     return cx, cy, cz, rho * (1.0 + _SLACK) + 1e-9, ax, ay, az, cos_a, sin_a
 
 
+@njit(cache=True, inline="always")
+def _seen(j, k, i, vertices, normals, r_T, dcm_BT, tan_eta, near, far, exact,
+          sin_min_elev, max_range, occlusion, illumination, sun_T,
+          node_bounds, node_info, tri, tri_vid):
+    """True when vertex ``j`` is seen by spacecraft ``k`` in image ``i`` (all tests)."""
+    px = vertices[j, 0]
+    py = vertices[j, 1]
+    pz = vertices[j, 2]
+    nx = normals[j, 0]
+    ny = normals[j, 1]
+    nz = normals[j, 2]
+    rx = r_T[k, i, 0]
+    ry = r_T[k, i, 1]
+    rz = r_T[k, i, 2]
+    dx = px - rx
+    dy = py - ry
+    dz = pz - rz
+    # line of sight vertex -> spacecraft is -d
+    los_n = (-dx) * nx + (-dy) * ny + (-dz) * nz
+    if exact:
+        if not los_n > 0.0:
+            return False
+    elif not rx * nx + ry * ny + rz * nz >= 0.0:
+        return False
+    qz = dcm_BT[k, i, 2, 0] * dx + dcm_BT[k, i, 2, 1] * dy + dcm_BT[k, i, 2, 2] * dz
+    if not (qz > 0.0 and qz >= near and qz <= far):
+        return False
+    lim = tan_eta * qz
+    qx = dcm_BT[k, i, 0, 0] * dx + dcm_BT[k, i, 0, 1] * dy + dcm_BT[k, i, 0, 2] * dz
+    if not abs(qx) <= lim:
+        return False
+    qy = dcm_BT[k, i, 1, 0] * dx + dcm_BT[k, i, 1, 1] * dy + dcm_BT[k, i, 1, 2] * dz
+    if not abs(qy) <= lim:
+        return False
+    if sin_min_elev > -1.0 or max_range < np.inf:
+        rng = np.sqrt(dx * dx + dy * dy + dz * dz)
+        if not rng <= max_range:
+            return False
+        if not los_n >= rng * sin_min_elev:
+            return False
+    if illumination:
+        sx = sun_T[i, 0]
+        sy = sun_T[i, 1]
+        sz = sun_T[i, 2]
+        if not sx * nx + sy * ny + sz * nz > 0.0:
+            return False
+    if occlusion:
+        if segment_blocked(node_bounds, node_info, tri, tri_vid, px, py, pz,
+                           -dx, -dy, -dz, 1.0, j):
+            return False
+    if illumination:
+        if segment_blocked(node_bounds, node_info, tri, tri_vid, px, py, pz,
+                           sun_T[i, 0], sun_T[i, 1], sun_T[i, 2], np.inf, j):
+            return False
+    return True
+
+
+# ------------------------------------------------------------ time coherence
+#
+# Derivation of the conservative bounds used by the time tree (all exact
+# arithmetic; floating-point slack is added on top, see ``_classify``).
+#
+# A node of the tree is a run of consecutive images ``k in [i0, i1)`` of one
+# spacecraft with a reference image ``m`` inside it. For a vertex ``p``,
+#
+#     q_k - q_m = C_k (p - r_k) - C_m (p - r_m)
+#               = (C_k - C_m)(p - r_m) + C_k (r_m - r_k),
+#
+# so ``|q_k - q_m| <= ||C_k - C_m||_2 |p - r_m| + ||C_k||_2 |r_k - r_m|
+#                   <= e_C |p - r_m| + e_r =: delta``
+# with ``e_C = max_k ||C_k - C_m||_F`` (Frobenius >= spectral norm) and
+# ``e_r = max_k s_k |r_k - r_m|``, ``s_k = sqrt(1 + ||C_k C_k^T - I||_F) >=
+# ||C_k||_2`` (eigenvalues of C^T C lie within ||C C^T - I|| of 1), so the bound
+# holds for any input matrix, orthonormal or not. Every clipping condition is
+# linear or |linear| in q:
+#
+#     q_z - n >= 0,  f - q_z >= 0          (gradient norm 1)
+#     t q_z - |q_x| >= 0, t q_z - |q_y| >= 0 (|d(t q_z - |q_x|)| <= |dq_x| + t |dq_z|
+#                                            <= sqrt(1 + t^2) |dq|, Cauchy-Schwarz)
+#
+# and culling changes by at most ``|n| |r_k - r_m| <= |n| e_r`` (paper
+# ``r . n``, exact ``(r - p) . n``). Hence if every condition holds at ``m``
+# with margin > its change bound, it holds at every image of the node; if one
+# condition fails at ``m`` by more than its bound, it fails at every image.
+# Otherwise the node is split (children are halves) down to leaves whose images
+# are tested one by one with the same expressions as the brute-force kernels.
+#
+# Node bounds are built bottom-up: for a parent with reference ``M`` and
+# children ``c`` (reference ``m_c``), by the triangle inequality
+# ``||C_k - C_M|| <= e_C,c + ||C_mc - C_M||`` and
+# ``s_k |r_k - r_M| <= e_r,c + S_c |r_mc - r_M|`` with ``S_c = max_k s_k``.
+# Each computed bound is inflated by a relative 1e-12 to cover its own rounding.
+
+#: Images per leaf of the time tree.
+LEAF = 16
+#: Per-node float data: C_m (9, row major), r_m (3), |r_m|, e_C, e_r, S.
+_NF = 17
+
+
+@njit(cache=True)
+def _time_tree_shape(nimg, leaf):
+    """Level offsets of a binary tree over ``ceil(nimg / leaf)`` leaves."""
+    nlev = 1
+    cnt = (nimg + leaf - 1) // leaf
+    while cnt > 1:
+        cnt = (cnt + 1) // 2
+        nlev += 1
+    counts = np.empty(nlev, dtype=np.int64)
+    offs = np.empty(nlev + 1, dtype=np.int64)
+    counts[0] = (nimg + leaf - 1) // leaf
+    offs[0] = 0
+    for lv in range(1, nlev):
+        counts[lv] = (counts[lv - 1] + 1) // 2
+    for lv in range(nlev):
+        offs[lv + 1] = offs[lv] + counts[lv]
+    return counts, offs
+
+
+@njit(cache=True, inline="always")
+def _fill_ref(NF, k, node, r_T, dcm_BT, m):
+    for a in range(3):
+        for b in range(3):
+            NF[k, node, 3 * a + b] = dcm_BT[k, m, a, b]
+    rx = r_T[k, m, 0]
+    ry = r_T[k, m, 1]
+    rz = r_T[k, m, 2]
+    NF[k, node, 9] = rx
+    NF[k, node, 10] = ry
+    NF[k, node, 11] = rz
+    NF[k, node, 12] = np.sqrt(rx * rx + ry * ry + rz * rz)
+
+
+@njit(parallel=True, cache=True)
+def time_tree(r_T, dcm_BT, leaf):
+    """Per spacecraft, a binary tree of image runs with motion bounds (time coherence).
+
+    Parameters
+    ----------
+    r_T : (N, n_img, 3) float64
+        Spacecraft positions in T, m.
+    dcm_BT : (N, n_img, 3, 3) float64
+        Camera DCMs (B <- T).
+    leaf : int
+        Images per leaf.
+
+    Returns
+    -------
+    NF : (N, n_nodes, 17) float64
+        Per node: reference ``C_m`` (9), ``r_m`` (3, m), ``|r_m|`` (m),
+        ``e_C = max ||C_k - C_m||_F``, ``e_r = max s_k |r_k - r_m|`` (m) and
+        ``S = max s_k`` over the node's images (see the derivation above).
+    NI : (n_nodes, 4) int64
+        First image, one past the last image, left and right child (-1: none;
+        leaves have no children). Nodes are stored leaves first, the root last.
+    """
+    nsc = r_T.shape[0]
+    nimg = r_T.shape[1]
+    counts, offs = _time_tree_shape(nimg, leaf)
+    nlev = counts.shape[0]
+    nn = offs[nlev]
+    NF = np.empty((nsc, nn, _NF))
+    NI = np.full((nn, 4), -1, dtype=np.int64)
+    for b in range(counts[0]):
+        NI[b, 0] = b * leaf
+        NI[b, 1] = min(nimg, (b + 1) * leaf)
+    for lv in range(1, nlev):
+        for b in range(counts[lv]):
+            node = offs[lv] + b
+            c0 = offs[lv - 1] + 2 * b
+            c1 = c0 + 1 if 2 * b + 1 < counts[lv - 1] else -1
+            NI[node, 2] = c0
+            NI[node, 3] = c1
+            NI[node, 0] = NI[c0, 0]
+            NI[node, 1] = NI[c1, 1] if c1 >= 0 else NI[c0, 1]
+    grow = 1.0 + 1e-12
+    for k in prange(nsc):
+        for b in range(counts[0]):
+            i0 = NI[b, 0]
+            i1 = NI[b, 1]
+            m = (i0 + i1 - 1) // 2
+            _fill_ref(NF, k, b, r_T, dcm_BT, m)
+            ec = 0.0
+            er = 0.0
+            smax = 0.0
+            for i in range(i0, i1):
+                g = 0.0  # ||C C^T - I||_F^2
+                for a in range(3):
+                    for c in range(3):
+                        s = (dcm_BT[k, i, a, 0] * dcm_BT[k, i, c, 0]
+                             + dcm_BT[k, i, a, 1] * dcm_BT[k, i, c, 1]
+                             + dcm_BT[k, i, a, 2] * dcm_BT[k, i, c, 2])
+                        if a == c:
+                            s -= 1.0
+                        g += s * s
+                sk = np.sqrt(1.0 + np.sqrt(g)) * grow
+                smax = max(smax, sk)
+                dc = 0.0
+                for a in range(3):
+                    for c in range(3):
+                        dc += (dcm_BT[k, i, a, c] - dcm_BT[k, m, a, c]) ** 2
+                ec = max(ec, np.sqrt(dc))
+                dr = np.sqrt((r_T[k, i, 0] - r_T[k, m, 0]) ** 2
+                             + (r_T[k, i, 1] - r_T[k, m, 1]) ** 2
+                             + (r_T[k, i, 2] - r_T[k, m, 2]) ** 2)
+                er = max(er, sk * dr)
+            NF[k, b, 13] = ec * grow
+            NF[k, b, 14] = er * grow
+            NF[k, b, 15] = smax
+            NF[k, b, 16] = 0.0
+        for lv in range(1, nlev):
+            for b in range(counts[lv]):
+                node = offs[lv] + b
+                m = (NI[node, 0] + NI[node, 1] - 1) // 2
+                _fill_ref(NF, k, node, r_T, dcm_BT, m)
+                ec = 0.0
+                er = 0.0
+                smax = 0.0
+                for h in range(2):
+                    c = NI[node, 2 + h]
+                    if c < 0:
+                        continue
+                    dc = 0.0
+                    for a in range(9):
+                        dc += (NF[k, c, a] - NF[k, node, a]) ** 2
+                    dr = np.sqrt((NF[k, c, 9] - NF[k, node, 9]) ** 2
+                                 + (NF[k, c, 10] - NF[k, node, 10]) ** 2
+                                 + (NF[k, c, 11] - NF[k, node, 11]) ** 2)
+                    ec = max(ec, NF[k, c, 13] + np.sqrt(dc))
+                    er = max(er, NF[k, c, 14] + NF[k, c, 15] * dr)
+                    smax = max(smax, NF[k, c, 15])
+                NF[k, node, 13] = ec * grow
+                NF[k, node, 14] = er * grow
+                NF[k, node, 15] = smax
+                NF[k, node, 16] = 0.0
+    return NF, NI
+
+
+#: Relative floating-point slack of the node tests. The per-image tests round
+#: q, r . n and t q_z with errors of a few ulp of |p - r| (resp. |r| |n|);
+#: 1e-10 of those scales is ~1e6 times more than needed.
+_FP = 1e-10
+
+
+@njit(cache=True, inline="always")
+def _classify(NF, k, node, px, py, pz, nx, ny, nz, nabs, tan_eta, sec_eta, near, far,
+              exact):
+    """0: no image of the node can see the vertex, 2: every image sees it, 1: unknown."""
+    dx = px - NF[k, node, 9]
+    dy = py - NF[k, node, 10]
+    dz = pz - NF[k, node, 11]
+    dn = np.sqrt(dx * dx + dy * dy + dz * dz)
+    er = NF[k, node, 14]
+    delta = NF[k, node, 13] * dn + er
+    fp = _FP * (dn + er)
+    m1 = delta + fp
+    m2 = sec_eta * delta + (1.0 + tan_eta) * fp
+    qx = NF[k, node, 0] * dx + NF[k, node, 1] * dy + NF[k, node, 2] * dz
+    qy = NF[k, node, 3] * dx + NF[k, node, 4] * dy + NF[k, node, 5] * dz
+    qz = NF[k, node, 6] * dx + NF[k, node, 7] * dy + NF[k, node, 8] * dz
+    if exact:
+        cul = -(dx * nx + dy * ny + dz * nz)
+        mc = nabs * (er + _FP * (dn + er))
+    else:
+        cul = NF[k, node, 9] * nx + NF[k, node, 10] * ny + NF[k, node, 11] * nz
+        mc = nabs * (er + _FP * (NF[k, node, 12] + er))
+    tz = tan_eta * qz
+    sx = tz - abs(qx)
+    sy = tz - abs(qy)
+    if (cul < -mc) or (qz - near < -m1) or (far - qz < -m1) or (sx < -m2) or (sy < -m2):
+        return 0
+    if (cul > mc) and (qz - near > m1) and (far - qz > m1) and (sx > m2) and (sy > m2):
+        return 2
+    return 1
+
+
+@njit(cache=True, inline="always")
+def _seen_basic(px, py, pz, nx, ny, nz, k, i, r_T, dcm_BT, tan_eta, near, far, exact):
+    """Culling + clipping of one (vertex, spacecraft, image), as in :func:`_seen`."""
+    rx = r_T[k, i, 0]
+    ry = r_T[k, i, 1]
+    rz = r_T[k, i, 2]
+    dx = px - rx
+    dy = py - ry
+    dz = pz - rz
+    if exact:
+        cul = (-dx) * nx + (-dy) * ny + (-dz) * nz > 0.0
+    else:
+        cul = rx * nx + ry * ny + rz * nz >= 0.0
+    qx = dcm_BT[k, i, 0, 0] * dx + dcm_BT[k, i, 0, 1] * dy + dcm_BT[k, i, 0, 2] * dz
+    qy = dcm_BT[k, i, 1, 0] * dx + dcm_BT[k, i, 1, 1] * dy + dcm_BT[k, i, 1, 2] * dz
+    qz = dcm_BT[k, i, 2, 0] * dx + dcm_BT[k, i, 2, 1] * dy + dcm_BT[k, i, 2, 2] * dz
+    lim = tan_eta * qz
+    return (cul & (qz > 0.0) & (abs(qx) <= lim) & (abs(qy) <= lim)
+            & (qz >= near) & (qz <= far))
+
+
+@njit(cache=True, inline="always")
+def _scan(j, k, NF, NI, stack, image_times, best, early, vertices, normals, r_T, dcm_BT,
+          tan_eta, sec_eta, near, far, exact, strict, sin_min_elev, max_range, occlusion,
+          illumination, sun_T, node_bounds, node_info, tri, tri_vid):
+    """Sightings of vertex ``j`` by spacecraft ``k``: (count, earliest time).
+
+    Depth-first over the time tree in image order. ``early``: skip images at
+    or after ``best`` and stop at the first hit. ``strict``: the node test only
+    prunes (culling and clipping are necessary conditions), images of
+    accepted nodes still go through :func:`_seen`.
+    """
+    px = vertices[j, 0]
+    py = vertices[j, 1]
+    pz = vertices[j, 2]
+    nx = normals[j, 0]
+    ny = normals[j, 1]
+    nz = normals[j, 2]
+    nabs = np.sqrt(nx * nx + ny * ny + nz * nz)
+    cnt = 0
+    sp = 1
+    stack[0] = NI.shape[0] - 1
+    while sp > 0:
+        sp -= 1
+        node = stack[sp]
+        i0 = NI[node, 0]
+        i1 = NI[node, 1]
+        if early and image_times[i0] >= best:
+            continue
+        cls = _classify(NF, k, node, px, py, pz, nx, ny, nz, nabs, tan_eta, sec_eta,
+                        near, far, exact)
+        if cls == 0:
+            continue
+        if cls == 2 and not strict:
+            cnt += i1 - i0
+            best = min(best, image_times[i0])
+            continue
+        if cls == 1 and NI[node, 2] >= 0:
+            if NI[node, 3] >= 0:
+                stack[sp] = NI[node, 3]
+                sp += 1
+            stack[sp] = NI[node, 2]
+            sp += 1
+            continue
+        for i in range(i0, i1):
+            if early and image_times[i] >= best:
+                break
+            if strict:
+                hit = _seen(j, k, i, vertices, normals, r_T, dcm_BT, tan_eta, near, far,
+                            exact, sin_min_elev, max_range, occlusion, illumination, sun_T,
+                            node_bounds, node_info, tri, tri_vid)
+            else:
+                hit = _seen_basic(px, py, pz, nx, ny, nz, k, i, r_T, dcm_BT, tan_eta,
+                                  near, far, exact)
+            if hit:
+                cnt += 1
+                best = min(best, image_times[i])
+                if early:
+                    break
+    return cnt, best
+
+
 @njit(parallel=True, cache=True)
 def coverage_counts(vertices, normals, vertex_areas, r_T, dcm_BT, image_times,
                     tan_eta, near, far, exact, active, count_all):
-    """Full per-vertex counts, culling + clipping only (paper eq. 25-26), tiled.
+    """Full per-vertex counts, culling + clipping only (paper eq. 25-26), time tree.
+
+    Every (spacecraft, image, vertex) triple counts, so ``times_seen`` is
+    complete. Camera position and attitude change slowly from image to image,
+    so each spacecraft's images are grouped into a binary tree of runs
+    (:func:`time_tree`, leaves of :data:`LEAF` images) with rigorous bounds on
+    how far ``q = C (p - r)`` can move inside a run (derivation above
+    :data:`LEAF`). ``prange`` over vertices; for each (vertex, spacecraft) the
+    tree is walked depth-first in image order: a run where every condition
+    holds with margin larger than its bound adds its length to the count (and
+    its first image time to first-seen), a run where one condition fails by
+    more than its bound is skipped, any other run is split, and leaves are
+    tested image by image with the exact per-vertex expressions. The bounds
+    carry a floating-point slack (:data:`_FP`), so results are identical to
+    testing every image.
+
+    Parameters
+    ----------
+    vertices, normals : (V, 3) float64
+        Vertex positions (m) and outward unit normals in frame T.
+    vertex_areas : (V,) float64
+        m^2.
+    r_T : (N, n_img, 3) float64
+        Spacecraft positions in T per image, m.
+    dcm_BT : (N, n_img, 3, 3) float64
+        Camera DCM (B <- T) per image; camera boresight is +z_B.
+    image_times : (n_img,) float64
+        s, non-decreasing.
+    tan_eta : float
+        Tangent of the half angle of the square field of view.
+    near, far : float
+        Clipping distances along the boresight, m, ``0 < near < far``.
+    exact : bool
+        Exact culling ``(r - p) . n > 0`` instead of the paper's ``r . n >= 0``.
+    active : (N,) bool
+        Spacecraft that take part (failed ones are False).
+    count_all : bool
+        True: full counts. False: union and first-seen time only (early-out:
+        images at or after the earliest sighting found so far are skipped),
+        and ``times_seen`` is 0/1.
+
+    Returns
+    -------
+    observed : (V,) bool
+    first_seen : (V,) float64
+        s, NaN when never seen.
+    times_seen : (V,) int32
+    coverage, coverage_count : float
+        See :func:`coverage_fractions`.
+    """
+    nv = vertices.shape[0]
+    nsc = r_T.shape[0]
+    NF, NI = time_tree(r_T, dcm_BT, LEAF)
+    sec_eta = np.sqrt(1.0 + tan_eta * tan_eta) * (1.0 + 1e-12)
+    times_seen = np.zeros(nv, dtype=np.int32)
+    first_seen = np.full(nv, np.nan)
+    sun_T = np.zeros((1, 3))
+    nb_ = np.zeros((1, 6))
+    ni_ = np.full((1, 4), -1, dtype=np.int64)
+    tr_ = np.zeros((1, 9))
+    tv_ = np.zeros((1, 3), dtype=np.int64)
+    early = not count_all
+    for j in prange(nv):
+        stack = np.empty(128, dtype=np.int64)
+        best = np.inf
+        cnt = 0
+        for k in range(nsc):
+            if not active[k]:
+                continue
+            c, best = _scan(j, k, NF, NI, stack, image_times, best, early, vertices,
+                            normals, r_T, dcm_BT, tan_eta, sec_eta, near, far, exact,
+                            False, -2.0, np.inf, False, False, sun_T, nb_, ni_, tr_, tv_)
+            cnt += c
+        if cnt > 0:
+            first_seen[j] = best
+            times_seen[j] = cnt if count_all else 1
+    observed = times_seen > 0
+    cov, cov_n = coverage_fractions(observed, vertex_areas)
+    return observed, first_seen, times_seen, cov, cov_n
+
+
+@njit(parallel=True, cache=True)
+def coverage_counts_tiles(vertices, normals, vertex_areas, r_T, dcm_BT, image_times,
+                          tan_eta, near, far, exact, active, count_all):
+    """Previous tiled kernel (spatial tiles only), kept as a second implementation.
+
+    Same arguments and results as :func:`coverage_counts`; it is slower on
+    image sequences (no time coherence) and serves as a cross-check.
+
+    Full per-vertex counts, culling + clipping only (paper eq. 25-26), tiled.
 
     Every (spacecraft, image, vertex) triple counts, so ``times_seen`` is
     complete. Vertices are grouped into compact tiles of :data:`BLOCK`
@@ -490,63 +986,6 @@ def coverage_counts(vertices, normals, vertex_areas, r_T, dcm_BT, image_times,
     return observed, first_seen, times_seen, cov, cov_n
 
 
-@njit(cache=True, inline="always")
-def _seen(j, k, i, vertices, normals, r_T, dcm_BT, tan_eta, near, far, exact,
-          sin_min_elev, max_range, occlusion, illumination, sun_T,
-          node_bounds, node_info, tri, tri_vid):
-    """True when vertex ``j`` is seen by spacecraft ``k`` in image ``i`` (all tests)."""
-    px = vertices[j, 0]
-    py = vertices[j, 1]
-    pz = vertices[j, 2]
-    nx = normals[j, 0]
-    ny = normals[j, 1]
-    nz = normals[j, 2]
-    rx = r_T[k, i, 0]
-    ry = r_T[k, i, 1]
-    rz = r_T[k, i, 2]
-    dx = px - rx
-    dy = py - ry
-    dz = pz - rz
-    # line of sight vertex -> spacecraft is -d
-    los_n = (-dx) * nx + (-dy) * ny + (-dz) * nz
-    if exact:
-        if not los_n > 0.0:
-            return False
-    elif not rx * nx + ry * ny + rz * nz >= 0.0:
-        return False
-    qz = dcm_BT[k, i, 2, 0] * dx + dcm_BT[k, i, 2, 1] * dy + dcm_BT[k, i, 2, 2] * dz
-    if not (qz > 0.0 and qz >= near and qz <= far):
-        return False
-    lim = tan_eta * qz
-    qx = dcm_BT[k, i, 0, 0] * dx + dcm_BT[k, i, 0, 1] * dy + dcm_BT[k, i, 0, 2] * dz
-    if not abs(qx) <= lim:
-        return False
-    qy = dcm_BT[k, i, 1, 0] * dx + dcm_BT[k, i, 1, 1] * dy + dcm_BT[k, i, 1, 2] * dz
-    if not abs(qy) <= lim:
-        return False
-    if sin_min_elev > -1.0 or max_range < np.inf:
-        rng = np.sqrt(dx * dx + dy * dy + dz * dz)
-        if not rng <= max_range:
-            return False
-        if not los_n >= rng * sin_min_elev:
-            return False
-    if illumination:
-        sx = sun_T[i, 0]
-        sy = sun_T[i, 1]
-        sz = sun_T[i, 2]
-        if not sx * nx + sy * ny + sz * nz > 0.0:
-            return False
-    if occlusion:
-        if segment_blocked(node_bounds, node_info, tri, tri_vid, px, py, pz,
-                           -dx, -dy, -dz, 1.0, j):
-            return False
-    if illumination:
-        if segment_blocked(node_bounds, node_info, tri, tri_vid, px, py, pz,
-                           sun_T[i, 0], sun_T[i, 1], sun_T[i, 2], np.inf, j):
-            return False
-    return True
-
-
 @njit(parallel=True, cache=True)
 def coverage_vertices(vertices, normals, vertex_areas, r_T, dcm_BT, image_times,
                       tan_eta, near, far, exact, active, count_all,
@@ -587,28 +1026,25 @@ def coverage_vertices(vertices, normals, vertex_areas, r_T, dcm_BT, image_times,
     """
     nv = vertices.shape[0]
     nsc = r_T.shape[0]
-    nimg = r_T.shape[1]
+    NF, NI = time_tree(r_T, dcm_BT, LEAF)
+    sec_eta = np.sqrt(1.0 + tan_eta * tan_eta) * (1.0 + 1e-12)
+    strict = occlusion or illumination or sin_min_elev > -1.0 or max_range < np.inf
     times_seen = np.zeros(nv, dtype=np.int32)
     first_seen = np.full(nv, np.nan)
+    early = not count_all
     for j in prange(nv):
+        stack = np.empty(128, dtype=np.int64)
         best = np.inf
         cnt = 0
         for k in range(nsc):
             if not active[k]:
                 continue
-            for i in range(nimg):
-                t = image_times[i]
-                if not count_all and t >= best:
-                    break
-                if _seen(j, k, i, vertices, normals, r_T, dcm_BT, tan_eta, near, far,
-                         exact, sin_min_elev, max_range, occlusion, illumination, sun_T,
-                         node_bounds, node_info, tri, tri_vid):
-                    cnt += 1
-                    if t < best:
-                        best = t
-                    if not count_all:
-                        break
-        if best < np.inf:
+            c, best = _scan(j, k, NF, NI, stack, image_times, best, early, vertices,
+                            normals, r_T, dcm_BT, tan_eta, sec_eta, near, far, exact,
+                            strict, sin_min_elev, max_range, occlusion, illumination,
+                            sun_T, node_bounds, node_info, tri, tri_vid)
+            cnt += c
+        if cnt > 0:
             first_seen[j] = best
             times_seen[j] = cnt if count_all else 1
     observed = times_seen > 0
@@ -634,13 +1070,17 @@ def observed_by_spacecraft(vertices, normals, r_T, dcm_BT, tan_eta, near, far, e
     nv = vertices.shape[0]
     nsc = r_T.shape[0]
     nimg = r_T.shape[1]
+    NF, NI = time_tree(r_T, dcm_BT, LEAF)
+    sec_eta = np.sqrt(1.0 + tan_eta * tan_eta) * (1.0 + 1e-12)
+    strict = occlusion or illumination or sin_min_elev > -1.0 or max_range < np.inf
+    idx = np.arange(nimg).astype(np.float64)
     mask = np.zeros((nsc, nv), dtype=np.bool_)
     for j in prange(nv):
+        stack = np.empty(128, dtype=np.int64)
         for k in range(nsc):
-            for i in range(nimg):
-                if _seen(j, k, i, vertices, normals, r_T, dcm_BT, tan_eta, near, far,
-                         exact, sin_min_elev, max_range, occlusion, illumination, sun_T,
-                         node_bounds, node_info, tri, tri_vid):
-                    mask[k, j] = True
-                    break
+            c, _ = _scan(j, k, NF, NI, stack, idx, np.inf, True, vertices, normals, r_T,
+                         dcm_BT, tan_eta, sec_eta, near, far, exact, strict, sin_min_elev,
+                         max_range, occlusion, illumination, sun_T, node_bounds, node_info,
+                         tri, tri_vid)
+            mask[k, j] = c > 0
     return mask
