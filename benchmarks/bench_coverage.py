@@ -7,7 +7,9 @@ culling, half angle 3.827 deg, near 0.1 mm, far 166.347 km.
 Baseline: an honest vectorised NumPy implementation of the same full count
 (observed, first-seen time and times-seen per vertex), evaluated over chunks of
 images x all vertices at once. The headline compares it with the compiled
-tiled kernel doing the same full count. Also timed: the early-out union
+kernel doing the same full count (time tree of image runs with rigorous motion
+bounds, ``prange`` over vertices), timed through ``compute_coverage`` including
+input validation. Also timed: the early-out union
 kernel, strict mode with self-occlusion (BVH build reported separately), and
 the BVH against trimesh's ray engine on the same segments.
 """
@@ -22,6 +24,7 @@ import numpy as np
 from ideas_hpc.analytic import eros_ellipsoid
 from ideas_hpc.bodies import load_body
 from ideas_hpc.core import bvh as cbvh
+from ideas_hpc.core import coverage as ccov
 from ideas_hpc.datapath import have_data_file
 from ideas_hpc.mapping import CoverageOptions, compute_coverage, observed_per_spacecraft
 
@@ -141,6 +144,13 @@ def main():
     assert np.array_equal(res.observed, ref[0])
     n_diff = int(np.abs(res.times_seen - ref[2]).sum())
     fs_diff = float(np.nanmax(np.abs(res.first_seen - ref[1])))
+    kargs = (np.ascontiguousarray(shape.vertices_T), np.ascontiguousarray(shape.vertex_normals_T),
+             np.ascontiguousarray(shape.vertex_areas), r, C, t, math.tan(ETA), NEAR, FAR, False,
+             np.ones(r.shape[0], bool), True)
+    ccov.coverage_counts_tiles(*kargs)
+    t_tl, res_tl = best_of(lambda: ccov.coverage_counts_tiles(*kargs), 3)
+    assert np.array_equal(res_tl[2], res.times_seen)
+    t_k, _ = best_of(lambda: ccov.coverage_counts(*kargs), 7)
     t_eo, res_eo = best_of(lambda: compute_coverage(shape, r, C, t, ETA, NEAR, FAR,
                                                     counts=False), 7)
     assert np.array_equal(res_eo.observed, ref[0])
@@ -150,9 +160,13 @@ def main():
           f"{n_tests / t_np:.3e} vertex-tests/s")
     print(f"numpy vectorised per image:               {t_pi:8.3f} s  "
           f"{n_tests / t_pi:.3e} vertex-tests/s  (numba full counts {t_pi / t_nb:.1f}x faster)")
-    print(f"numba full counts (tiled, prange):          {t_nb:8.3f} s  "
+    print(f"numba full counts (compute_coverage):       {t_nb:8.3f} s  "
           f"{n_tests / t_nb:.3e} vertex-tests/s  ({t_np / t_nb:.1f}x)")
-    print(f"numba union + first-seen (tiles, early-out): {t_eo:8.3f} s  "
+    print(f"  of which kernel (time tree, prange):      {t_k:8.3f} s  "
+          f"(rest is input validation); time tree build {1e3 * best_of(lambda: ccov.time_tree(r, C, ccov.LEAF), 3)[0]:.2f} ms")
+    print(f"numba previous kernel (spatial tiles only): {t_tl:8.3f} s  "
+          f"{n_tests / t_tl:.3e} vertex-tests/s  ({t_np / t_tl:.1f}x), same counts")
+    print(f"numba union + first-seen (tree, early-out):  {t_eo:8.3f} s  "
           f"{n_tests / t_eo:.3e} equivalent vertex-tests/s  ({t_np / t_eo:.1f}x)")
     print(f"coverage {res.coverage * 100:.3f} % area, {res.coverage_count * 100:.3f} % vertices; "
           f"wrap-up: first vertex seen at {np.nanmin(res.first_seen):.1f} s, "

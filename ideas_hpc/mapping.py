@@ -6,12 +6,12 @@ checks the arguments (raising :class:`~ideas_hpc.errors.InputError` that names
 the argument), converts config units (deg, um, cm) to SI, builds the BVH when an
 option needs it, and chooses the kernel:
 
-* no strict option: :func:`~ideas_hpc.core.coverage.coverage_counts` (spatial
-  tiles of vertices with conservative tile pruning; early-out per tile when
-  counts are not wanted);
+* no strict option: :func:`~ideas_hpc.core.coverage.coverage_counts`
+  (``prange`` over vertices, a time tree of image runs with rigorous motion
+  bounds accepts or skips whole runs; early-out when counts are not wanted);
 * a strict option: :func:`~ideas_hpc.core.coverage.coverage_vertices`
-  (``prange`` over vertices with ray queries, early-out when counts are not
-  wanted).
+  (same time tree for pruning, ray queries per image, early-out when counts
+  are not wanted).
 
 Results map onto the store variables of SPEC section 9: ``observed``,
 ``first_seen`` (s, NaN never), ``times_seen``, ``coverage`` and ``coverage_count``.

@@ -616,3 +616,207 @@ def test_render_coverage_map(tmp_path, small_body):
     with pytest.raises(InputError) as ei:
         render_coverage_map(small_body, obs, tmp_path / "x.png", kind="area")
     assert ei.value.field == "kind"
+
+
+# ---------------------------------------------------------------- time-coherence tree
+#
+# The kernels skip or accept whole runs of images with bounds on how far the
+# camera moves (ideas_hpc.core.coverage.time_tree). The truth here is the
+# un-pruned evaluation of every (spacecraft, image, vertex) triple in NumPy
+# with the same floating-point expressions in the same order, so results must
+# agree bit for bit even for vertices placed on a boundary to the last ulp.
+
+def per_image_reference(p, n, r_T, C, times, tan_eta, near, far, exact, active=None):
+    """Every triple tested, vectorised over (spacecraft, image, vertex)."""
+    px, py, pz = (p[None, None, :, a] for a in range(3))
+    nx, ny, nz = (n[None, None, :, a] for a in range(3))
+    rx, ry, rz = (r_T[:, :, None, a] for a in range(3))
+    dx, dy, dz = px - rx, py - ry, pz - rz
+    if exact:
+        cul = (-dx) * nx + (-dy) * ny + (-dz) * nz > 0.0
+    else:
+        cul = rx * nx + ry * ny + rz * nz >= 0.0
+    c = [[C[:, :, a, b][:, :, None] for b in range(3)] for a in range(3)]
+    qx = c[0][0] * dx + c[0][1] * dy + c[0][2] * dz
+    qy = c[1][0] * dx + c[1][1] * dy + c[1][2] * dz
+    qz = c[2][0] * dx + c[2][1] * dy + c[2][2] * dz
+    lim = tan_eta * qz
+    hit = cul & (qz > 0.0) & (np.abs(qx) <= lim) & (np.abs(qy) <= lim) & (qz >= near) \
+        & (qz <= far)
+    if active is not None:
+        hit &= active[:, None, None]
+    count = hit.sum(axis=(0, 1))
+    first = np.where(hit, times[None, :, None], np.inf).min(axis=(0, 1))
+    first[np.isinf(first)] = np.nan
+    per_sc = hit.any(axis=1)
+    return count > 0, first, count, per_sc
+
+
+def _trajectory(rng, kind, N, n_img):
+    """Slow flybys ('smooth'), fast random attitude rates ('spin'), or jumps ('jump')."""
+    t = np.sort(rng.uniform(0.0, 100.0, n_img))
+    if rng.random() < 0.5:
+        t = np.linspace(0.0, 100.0, n_img)
+    r = np.empty((N, n_img, 3))
+    C = np.empty((N, n_img, 3, 3))
+    for k in range(N):
+        u = rng.normal(size=3)
+        u /= np.linalg.norm(u)
+        r0 = u * rng.uniform(2500.0, 6000.0)
+        v = rng.normal(size=3) * rng.uniform(0.0, 40.0)
+        axis = rng.normal(size=3)
+        rate = rng.uniform(0.0, 0.01)
+        for i in range(n_img):
+            r[k, i] = r0 + v * t[i]
+            C[k, i] = rot(axis, rate * t[i]) @ look_at(r[k, i], target=0.2 * r0[::-1])
+        if kind == "spin":
+            # large random rates: attitude changes by up to ~a radian per image
+            for i in range(n_img):
+                C[k, i] = rot(rng.normal(size=3), rng.uniform(0.0, 1.0)) @ C[k, i]
+        elif kind == "jump":
+            for i in rng.integers(0, n_img, 4):
+                r[k, i:] += rng.normal(size=3) * 800.0
+                C[k, i:] = rot(rng.normal(size=3), rng.uniform(0.0, 0.5)) @ C[k, i:]
+    return r, C, t
+
+
+def _boundary_vertices(rng, r, C, tan_eta, near, far, exact, nv):
+    """Vertices placed on a frustum plane or the culling plane of a random image."""
+    N, n_img = r.shape[:2]
+    p = np.empty((nv, 3))
+    n = np.empty((nv, 3))
+    for j in range(nv):
+        k = rng.integers(N)
+        i = rng.integers(n_img)
+        Ck, rk = C[k, i], r[k, i]
+        which = rng.integers(6)
+        qz = rng.uniform(near, min(far, near + 5000.0))
+        qx = rng.uniform(-1.0, 1.0) * tan_eta * qz
+        qy = rng.uniform(-1.0, 1.0) * tan_eta * qz
+        if which == 0:
+            qx = rng.choice([-1.0, 1.0]) * tan_eta * qz
+        elif which == 1:
+            qy = rng.choice([-1.0, 1.0]) * tan_eta * qz
+        elif which == 2:
+            qz = near
+            qx, qy = 0.5 * tan_eta * qz, 0.0
+        elif which == 3:
+            qz = far
+            qx, qy = 0.0, -0.5 * tan_eta * qz
+        p[j] = rk + np.array([qx, qy, qz]) @ Ck
+        if which == 4 or which == 5:
+            # on the culling plane of this image: n perpendicular to r (paper)
+            # or to r - p (exact)
+            a = rk if not exact else rk - p[j]
+            w = np.cross(a, rng.normal(size=3))
+            n[j] = w / np.linalg.norm(w)
+        else:
+            w = (rk - p[j]) / np.linalg.norm(rk - p[j]) + 0.3 * rng.normal(size=3)
+            n[j] = w / np.linalg.norm(w)
+    return np.ascontiguousarray(p), np.ascontiguousarray(n)
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 2**32 - 1), kind=st.sampled_from(["smooth", "spin", "jump"]),
+       exact=st.booleans(), eta=st.floats(0.01, 1.3), n_img=st.integers(1, 300))
+def test_time_tree_exact_on_boundaries(medium_body, seed, kind, exact, eta, n_img):
+    """Mesh vertices plus vertices on a clipping or culling plane of some image (to the
+    ulp), smooth, fast-spinning and jumping cameras: the pruned kernels equal the
+    un-pruned per-image evaluation exactly (counts, first-seen, per-spacecraft)."""
+    rng = np.random.default_rng(seed)
+    N = int(rng.integers(1, 4))
+    r, C, t = _trajectory(rng, kind, N, n_img)
+    tn = math.tan(eta)
+    near = rng.uniform(1.0, 2000.0)
+    far = near + rng.uniform(100.0, 8000.0)
+    pb, nb = _boundary_vertices(rng, r, C, tn, near, far, exact, 120)
+    p = np.ascontiguousarray(np.vstack([medium_body.vertices_T[::3], pb]))
+    n = np.ascontiguousarray(np.vstack([medium_body.vertex_normals_T[::3], nb]))
+    area = np.ones(len(p))
+    act = rng.random(N) < 0.8
+    obs, first, count, _ = per_image_reference(p, n, r, C, t, tn, near, far, exact, act)
+    _, _, _, per_sc = per_image_reference(p, n, r, C, t, tn, near, far, exact)
+    for count_all in (True, False):
+        o, f, c, cov, _ = ccov.coverage_counts(p, n, area, r, C, t, tn, near, far, exact, act,
+                                               count_all)
+        np.testing.assert_array_equal(o, obs)
+        np.testing.assert_array_equal(f, first)
+        np.testing.assert_array_equal(c, count if count_all else obs.astype(int))
+        assert cov == pytest.approx(obs.mean(), rel=1e-12)
+        o2 = ccov.coverage_vertices(p, n, area, r, C, t, tn, near, far, exact, act, count_all,
+                                    -2.0, np.inf, False, False, np.zeros((1, 3)),
+                                    *_dummy_tree())
+        np.testing.assert_array_equal(o2[1], first)
+        np.testing.assert_array_equal(o2[2], count if count_all else obs.astype(int))
+    mask = ccov.observed_by_spacecraft(p, n, r, C, tn, near, far, exact, -2.0, np.inf,
+                                       False, False, np.zeros((1, 3)), *_dummy_tree())
+    np.testing.assert_array_equal(mask, per_sc)
+
+
+@settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(seed=st.integers(0, 2**32 - 1), exact=st.booleans(), scale=st.floats(-0.05, 0.05))
+def test_time_tree_non_orthonormal_dcm(medium_body, seed, exact, scale):
+    """The node bounds use ||C_k||_2 <= sqrt(1 + ||C C^T - I||_F), so even matrices
+    far from orthonormal (the kernel is called directly, without the boundary's
+    check) give the un-pruned result."""
+    rng = np.random.default_rng(seed)
+    r, C, t = _trajectory(rng, "smooth", 2, 200)
+    C = np.ascontiguousarray(C * (1.0 + scale * rng.uniform(0.0, 1.0, (2, 200, 1, 1))))
+    tn, near, far = math.tan(0.3), 100.0, 9000.0
+    p = np.ascontiguousarray(medium_body.vertices_T)
+    n = np.ascontiguousarray(medium_body.vertex_normals_T)
+    obs, first, count, _ = per_image_reference(p, n, r, C, t, tn, near, far, exact)
+    o, f, c, _, _ = ccov.coverage_counts(p, n, np.ones(len(p)), r, C, t, tn, near, far, exact,
+                                         np.ones(2, bool), True)
+    np.testing.assert_array_equal(c, count)
+    np.testing.assert_array_equal(f, first)
+
+
+def test_time_tree_bounds_hold():
+    """Every node's e_C and e_r bound the motion of all its images (direct maxima)."""
+    rng = np.random.default_rng(5)
+    for kind in ("smooth", "spin", "jump"):
+        r, C, _ = _trajectory(rng, kind, 2, 157)
+        NF, NI = ccov.time_tree(r, C, ccov.LEAF)
+        assert NI[-1, 0] == 0 and NI[-1, 1] == 157
+        for k in range(2):
+            for node in range(NI.shape[0]):
+                i0, i1 = NI[node, :2]
+                Cm = NF[k, node, :9].reshape(3, 3)
+                rm = NF[k, node, 9:12]
+                ec = np.linalg.norm(C[k, i0:i1] - Cm, ord=2, axis=(1, 2)).max()
+                er = np.linalg.norm(r[k, i0:i1] - rm, axis=1).max()
+                assert ec <= NF[k, node, 13]
+                assert er <= NF[k, node, 14]
+                if NI[node, 2] >= 0:  # children tile the parent
+                    kids = [c for c in NI[node, 2:] if c >= 0]
+                    assert NI[kids[0], 0] == i0 and NI[kids[-1], 1] == i1
+
+
+def test_paper_like_flyby_matches_per_image(medium_body):
+    """A paper-like slow flyby with nadir pointing, where most runs are accepted or
+    skipped whole: full counts equal the un-pruned evaluation and the previous
+    tiled kernel."""
+    n_img = 1500
+    t = np.linspace(0.0, 600.0, n_img)
+    ang = np.array([0.2, 2.4, 3.5, 5.6])
+    r = np.empty((4, n_img, 3))
+    C = np.zeros((4, n_img, 3, 3))
+    for k, a in enumerate(ang):
+        r[k, :, 0] = 9e3 * math.cos(a)
+        r[k, :, 1] = 9e3 * math.sin(a)
+        r[k, :, 2] = -3e3 + 6e3 * t / 600.0
+        C[k, :, 0] = [0.0, 0.0, 1.0]
+        C[k, :, 1] = [-math.sin(a), math.cos(a), 0.0]
+        C[k, :, 2] = [-math.cos(a), -math.sin(a), 0.0]
+    tn, near, far = math.tan(math.radians(4.0)), 1e-4, 9.5e3
+    p = np.ascontiguousarray(medium_body.vertices_T)
+    n = np.ascontiguousarray(medium_body.vertex_normals_T)
+    obs, first, count, _ = per_image_reference(p, n, r, C, t, tn, near, far, False)
+    assert count.sum() > 1000
+    args = (p, n, np.ones(len(p)), r, C, t, tn, near, far, False, np.ones(4, bool), True)
+    o, f, c, _, _ = ccov.coverage_counts(*args)
+    np.testing.assert_array_equal(c, count)
+    np.testing.assert_array_equal(f, first)
+    o2, f2, c2, _, _ = ccov.coverage_counts_tiles(*args)
+    np.testing.assert_array_equal(c2, count)

@@ -44,14 +44,22 @@ Image times must be non-decreasing (the boundary checks it): the early-out
 kernels stop scanning a spacecraft's images at its first hit, and skip images
 later than the earliest hit found so far.
 
-Speed (see ``benchmarks/bench_coverage.py``): :func:`coverage_counts` drops
-images whose frustum misses the body's bounding sphere, groups vertices into
-compact tiles, classifies each (tile, image) pair with the tile's bounding
-sphere and normal cone as *none can pass*, *all pass* or *test each*
-(conservative, with slack, so results are identical to the per-vertex
-tests), and runs the per-vertex tests in a loop over images that the
-compiler vectorises. Strict options need ray queries and go through
-:func:`coverage_vertices`.
+Speed (see ``benchmarks/bench_coverage.py``): camera position and attitude
+change slowly from image to image, so :func:`time_tree` groups each
+spacecraft's images into a binary tree of runs with rigorous bounds on how
+far the camera coordinates ``q`` of any vertex can move inside a run (the
+derivation is written above :data:`LEAF`). For each (vertex, spacecraft) the
+kernels walk the tree: a run whose reference image passes every condition
+with margin larger than the bound is accepted whole, one that fails a
+condition by more than the bound is skipped, other runs are split, and leaf
+runs are tested image by image with the exact expressions. The bounds carry
+floating-point slack, so the results are identical to testing every image
+(tests compare bit for bit with an un-pruned evaluation, including vertices
+placed on a clipping or culling plane and fast-spinning or jumping cameras).
+With strict options the tree only prunes (culling and clipping are
+necessary), the images of accepted runs still go through the ray queries.
+:func:`coverage_counts_tiles` is the previous kernel (spatial vertex tiles
+only), kept as an independent cross-check.
 """
 
 from __future__ import annotations
