@@ -450,8 +450,6 @@ def write_chunk_region(path: str | os.PathLike, chunk_id: int, start: int, stop:
         Every sample variable of the store, each of shape
         ``(stop - start, *other dims)``, castable to the stored dtype.
     """
-    import zarr
-
     path = Path(path)
     lay = _layout(path)
     plan: ChunkPlan = lay["plan"]
@@ -473,14 +471,33 @@ def write_chunk_region(path: str | os.PathLike, chunk_id: int, start: int, stop:
         data[name] = (spec["dims"], arr.astype(spec["dtype"], copy=False))
     # Region writes straight into the zarr arrays: the store's sample variables
     # carry no CF encoding (no scale/offset, no time units), so the stored
-    # values are the arrays themselves, and skipping xarray's per-call store
-    # opening and region checks cut the per-chunk write from ~0.2 s to ~0.02 s
+    # values are the arrays themselves; skipping xarray's per-call store opening
+    # and region checks cut the per-chunk write from ~0.2 s to ~0.04 s
     # (benchmarks/bench_campaign.py). Nothing touches the shared metadata.
-    group = zarr.open_group(str(path), mode="r+")
-    sl = slice(int(start), int(stop))
-    for name, (_, arr) in data.items():
-        group[name][sl] = arr
-    group[DONE_VAR][int(chunk_id)] = True  # last: the chunk counts only once all is written
+    arrays = {name: arr for name, (_, arr) in data.items()}
+    _write_arrays(str(path), arrays, slice(int(start), int(stop)), int(chunk_id))
+
+
+def _write_arrays(path: str, arrays: dict, sl: slice, chunk_id: int) -> None:
+    """Write every array's sample slice concurrently (zarr's async API), then the done flag.
+
+    zarr 3 spends a few ms of fixed cost per array write; issuing them together
+    halves a chunk's write time (22 variables: ~80 ms -> ~40 ms). The done flag
+    is written only after every array write has completed.
+    """
+    import asyncio
+
+    import zarr.api.asynchronous as za
+    from zarr.core.sync import sync
+
+    async def run():
+        group = await za.open_group(store=path, mode="r+")
+        handles = await asyncio.gather(*(group.getitem(n) for n in arrays))
+        await asyncio.gather(*(h.setitem(sl, arrays[n]) for h, n in zip(handles, arrays)))
+        done = await group.getitem(DONE_VAR)
+        await done.setitem(slice(chunk_id, chunk_id + 1), np.ones(1, dtype=bool))
+
+    sync(run())
 
 
 def done_mask(path: str | os.PathLike) -> np.ndarray:
