@@ -51,7 +51,8 @@ def run(n_workers: int, c, setup, nom, out: Path):
     from distributed import Client
 
     mc = c.cfg["monte_carlo"]
-    fn = functools.partial(mc_chunk, setup=setup, nominal=nom, mc=mc, seed=c.cfg["seed"])
+    fn = functools.partial(mc_chunk, setup=setup, nominal=nom.for_tasks(), mc=mc,
+                           seed=c.cfg["seed"])
     with local_cluster(n_workers) as cluster, Client(cluster) as client:
         _warm(client, fn)
         s = run_campaign(out, mc_template(setup, nom, mc["samples"]), fn, config=resolved(c),

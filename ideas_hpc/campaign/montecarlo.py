@@ -126,6 +126,13 @@ class Nominal:
     velocity_T: np.ndarray
     miss: np.ndarray
 
+    def for_tasks(self) -> "Nominal":
+        """What a chunk task needs (start states and arrival points): the sampled
+        trajectory stays on the client instead of being shipped with every task."""
+        return Nominal(self.theta, self.periods, self.r0_T, self.v0_T, self.times[-1:],
+                       np.ascontiguousarray(self.position_T[:, -1:]),
+                       np.ascontiguousarray(self.velocity_T[:, -1:]), self.miss)
+
 
 def design_nominal(setup: FlybySetup, theta, periods) -> Nominal:
     th = np.asarray(theta, dtype=float)
@@ -271,7 +278,8 @@ def run_monte_carlo(c: Campaign, out, *, workers=None, scheduler=None, resume=Fa
     mc = c.cfg["monte_carlo"]
     n = mc["samples"]
     template = mc_template(setup, nom, n)
-    fn = functools.partial(mc_chunk, setup=setup, nominal=nom, mc=mc, seed=c.cfg["seed"])
+    fn = functools.partial(mc_chunk, setup=setup, nominal=nom.for_tasks(), mc=mc,
+                           seed=c.cfg["seed"])
     attrs = _base_attrs(c, setup)
     for key in ("config", "config_hash"):
         attrs.pop(key)

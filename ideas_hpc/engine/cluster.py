@@ -21,7 +21,12 @@ from typing import Any, Iterator
 from ..errors import InputError
 
 WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1",
-              "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+              "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
+              # dask's statistical profiler samples every task thread's stack
+              # every 10 ms; with long compiled calls that cost a second thread
+              # ~50 % of a core per worker here (top -H), i.e. a 2-core run lost
+              # a third of its throughput. Chunk timings are reported anyway.
+              "DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED": "False"}
 
 #: The repository's SLURM configuration (a checkout has ``slurm/`` beside the package).
 DEFAULT_SLURM_CONFIG = Path(__file__).resolve().parents[2] / "slurm" / "jobqueue.yaml"
