@@ -300,6 +300,16 @@ def sun_direction_T(params: PhysicalParams, times) -> np.ndarray:
     -------
     (T, 3) float64
     """
+    return _sun(params, times)[0]
+
+
+def sun_distance(params: PhysicalParams, times) -> np.ndarray:
+    """Heliocentric distance of the body (m) at ``times`` (s after the element epoch)."""
+    return _sun(params, times)[1]
+
+
+def _sun(params: PhysicalParams, times):
+    """(unit directions body -> Sun in T (T, 3), distances (T,) m) from the ephemeris kernel."""
     t = np.atleast_1d(np.asarray(times, dtype=np.float64))
     if t.ndim != 1 or not np.all(np.isfinite(t)):
         raise InputError("must be a 1-D array of finite times (s)", field="times")
@@ -310,19 +320,7 @@ def sun_direction_T(params: PhysicalParams, times) -> np.ndarray:
     sun_T_batch(t, consts[_prop.K_ELEM:_prop.K_ELEM + 6].copy(),
                 consts[_prop.K_POLE:_prop.K_POLE + 3].copy(), params.spin_rate,
                 params.prime_meridian, MU_SUN, dirs, dist)
-    return dirs
-
-
-def sun_distance(params: PhysicalParams, times) -> np.ndarray:
-    """Heliocentric distance of the body (m) at ``times`` (s after the element epoch)."""
-    t = np.ascontiguousarray(np.atleast_1d(np.asarray(times, dtype=np.float64)))
-    consts = pack_params_only(params)
-    dirs = np.empty((t.shape[0], 3))
-    dist = np.empty(t.shape[0])
-    sun_T_batch(t, consts[_prop.K_ELEM:_prop.K_ELEM + 6].copy(),
-                consts[_prop.K_POLE:_prop.K_POLE + 3].copy(), params.spin_rate,
-                params.prime_meridian, MU_SUN, dirs, dist)
-    return dist
+    return dirs, dist
 
 
 def pack_params_only(params: PhysicalParams) -> np.ndarray:
