@@ -60,7 +60,12 @@ def local_cluster(workers: int | None = None, **kwargs: Any):
     opts = dict(n_workers=_check_workers(workers), threads_per_worker=1, processes=True,
                 env=dict(WORKER_ENV), dashboard_address=None, silence_logs=logging.WARNING)
     opts.update(kwargs)
-    return LocalCluster(**opts)
+    import dask
+
+    # Workers take the spawning process's dask config (env vars are applied
+    # after dask is imported there), so the profiler switch must be set here.
+    with dask.config.set({"distributed.worker.profile.enabled": False}):
+        return LocalCluster(**opts)
 
 
 def load_slurm_config(path: str | os.PathLike | None = None) -> dict:
