@@ -225,7 +225,7 @@ def fly(setup: FlybySetup, theta, periods=None, *, sample: int = 0, ics=None,
     s0, w0, W0 = ics if ics is not None else (None, None, None)
     dcm, att = camera_dcms(setup, th, periods, sigma0=s0, omega0=w0, wheel0=W0)
     if misalignment is not None:
-        dcm = np.ascontiguousarray(np.einsum("nij,ntjk->ntik", misalignment, dcm))
+        dcm = np.ascontiguousarray(np.matmul(misalignment[:, None], dcm))
     img_t = setup.image_times
     sun = None
     if setup.coverage.illumination:

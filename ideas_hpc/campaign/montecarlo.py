@@ -156,7 +156,7 @@ def fly_sample(setup: FlybySetup, nom: Nominal, d: Draws):
     dcm, att = camera_dcms(setup, nom.theta, nom.periods, sigma0=d.sigma0, omega0=d.omega0,
                            wheel0=d.wheel0)
     mis = np.stack([dcm_from_mrp(mrp_from_prv(v)) for v in d.misalignment_prv])
-    dcm = np.ascontiguousarray(np.einsum("nij,ntjk->ntik", mis, dcm))
+    dcm = np.ascontiguousarray(np.matmul(mis[:, None], dcm))  # [CB][BT] per image
     sun = sun_direction_T(p, setup.image_times) if setup.coverage.illumination else None
     cov = compute_coverage(setup.body.shape, r_img, dcm, setup.image_times, setup.eta,
                            setup.near, setup.far, options=setup.coverage, sun_T=sun,
