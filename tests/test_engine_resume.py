@@ -22,14 +22,14 @@ import xarray as xr
 
 from ideas_hpc.engine.lock import lock_path
 from ideas_hpc.engine.runner import CampaignError
-from ideas_hpc.engine.store import done_mask, store_attrs
-from ideas_hpc.engine.toy import run_toy, run_toy_serial, toy_chunk
+from ideas_hpc.engine.store import done_mask
+from ideas_hpc.engine.toy import run_toy
 from ideas_hpc.errors import InputError
+from toy_stores import assert_same_as, serial_reference
 
 # 24 chunks of ~0.05 s each: long enough to kill mid-run, short enough for CI.
 TOY = dict(n_samples=96, chunk_size=4, n_vertex=64, n_time=16, work=60_000, seed=7)
 N_CHUNKS = 24
-SAMPLE_VARS = ("coverage", "observed", "first_seen", "times_seen", "sigma_error", "sample_seed")
 
 
 def _warm():
@@ -52,19 +52,7 @@ def cluster2():
 
 @pytest.fixture(scope="module")
 def reference(tmp_path_factory):
-    p = tmp_path_factory.mktemp("ref") / "serial.zarr"
-    run_toy_serial(p, **TOY)
-    return xr.load_dataset(p, engine="zarr")
-
-
-def assert_same_as(reference, path):
-    """Store at ``path`` is complete and bit-identical to the serial reference."""
-    assert done_mask(path).all(), f"not all chunks done: {done_mask(path)}"
-    ds = xr.load_dataset(path, engine="zarr")
-    for name in SAMPLE_VARS:
-        np.testing.assert_array_equal(ds[name].values, reference[name].values, err_msg=name)
-    assert np.isfinite(ds.coverage.values).all()  # no chunk left at its NaN fill
-    assert store_attrs(path)["config_hash"] == reference.attrs["config_hash"]
+    return serial_reference(tmp_path_factory, TOY)
 
 
 def test_two_workers_match_serial(cluster2, reference, tmp_path):

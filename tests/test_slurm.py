@@ -21,13 +21,12 @@ import pytest
 import xarray as xr
 
 from ideas_hpc.engine.cluster import DEFAULT_SLURM_CONFIG, load_slurm_config, slurm_cluster
-from ideas_hpc.engine.store import done_mask
-from ideas_hpc.engine.toy import run_toy, run_toy_serial
+from ideas_hpc.engine.toy import run_toy
 from ideas_hpc.errors import InputError
+from toy_stores import assert_same_as, serial_reference
 
 REPO = Path(__file__).resolve().parent.parent
 TOY = dict(n_samples=24, chunk_size=4, n_vertex=32, n_time=8, work=20_000, seed=3)
-SAMPLE_VARS = ("coverage", "observed", "first_seen", "times_seen", "sigma_error", "sample_seed")
 
 
 def test_job_script_from_repo_config():
@@ -104,16 +103,7 @@ needs_slurm = pytest.mark.skipif(not _idle_node(), reason="no SLURM controller w
 
 @pytest.fixture(scope="module")
 def toy_reference(tmp_path_factory):
-    p = tmp_path_factory.mktemp("slurm_ref") / "serial.zarr"
-    run_toy_serial(p, **TOY)
-    return xr.load_dataset(p, engine="zarr")
-
-
-def _assert_same(ref, path):
-    assert done_mask(path).all()
-    ds = xr.load_dataset(path, engine="zarr")
-    for name in SAMPLE_VARS:
-        np.testing.assert_array_equal(ds[name].values, ref[name].values, err_msg=name)
+    return serial_reference(tmp_path_factory, TOY, "slurm_ref")
 
 
 def _our_jobs(name: str) -> list[str]:
@@ -131,7 +121,7 @@ def test_toy_campaign_through_slurmcluster(toy_reference, tmp_path):
     wall = time.perf_counter() - t0
     print(f"SLURM toy campaign: {s}; {wall:.1f} s including job start")
     assert s.chunks_run == 6 and s.n_workers >= 1
-    _assert_same(toy_reference, out)
+    assert_same_as(toy_reference, out)
     logs = tmp_path / "slurm.zarr.slurm-logs"
     assert any(logs.glob("ideas-worker-*.err"))  # jobs really ran under SLURM
     # Closing the cluster cancelled the worker jobs.
@@ -162,7 +152,7 @@ def test_sbatch_script_runs_a_campaign(toy_reference, tmp_path):
         time.sleep(1)
     log = (tmp_path / f"batch-{job}.out").read_text()
     assert "6 chunks run" in log, log[-3000:]
-    _assert_same(toy_reference, out)
+    assert_same_as(toy_reference, out)
 
 
 @pytest.mark.slurm
