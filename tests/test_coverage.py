@@ -359,6 +359,20 @@ def test_culling_boundaries():
 
 # ---------------------------------------------------------------- occlusion vs trimesh
 
+@pytest.fixture(scope="module")
+def eros_rays(eros1708):
+    """trimesh's ray engine on eros001708, and each vertex's faces (skipped as the ray's own)."""
+    import trimesh
+
+    shape = eros1708.shape
+    mesh = trimesh.Trimesh(shape.vertices_T, shape.faces, process=False)
+    adjacency = [set() for _ in range(shape.n_vertices)]
+    for f, tri in enumerate(shape.faces):
+        for v in tri:
+            adjacency[v].add(f)
+    return mesh, adjacency
+
+
 def _trimesh_blocked(mesh, shape, origins_idx, targets, adjacency):
     """Segment p_j -> target blocked by a face not containing j (trimesh ray casting)."""
     p = shape.vertices_T[origins_idx]
@@ -376,15 +390,9 @@ def _trimesh_blocked(mesh, shape, origins_idx, targets, adjacency):
     return blocked
 
 
-def test_occlusion_matches_trimesh_on_eros(eros1708):
-    import trimesh
-
+def test_occlusion_matches_trimesh_on_eros(eros1708, eros_rays):
     shape = eros1708.shape
-    mesh = trimesh.Trimesh(shape.vertices_T, shape.faces, process=False)
-    adjacency = [set() for _ in range(shape.n_vertices)]
-    for f, tri in enumerate(shape.faces):
-        for v in tri:
-            adjacency[v].add(f)
+    mesh, adjacency = eros_rays
     rng = np.random.default_rng(20240605)
     n_view = 24
     r = np.empty((n_view, 1, 3))
@@ -417,15 +425,9 @@ def test_occlusion_matches_trimesh_on_eros(eros1708):
     assert mismatches == 0, f"{mismatches} of {total} facing vertices disagree"
 
 
-def test_shadow_rays_match_trimesh_on_eros(eros1708):
-    import trimesh
-
+def test_shadow_rays_match_trimesh_on_eros(eros1708, eros_rays):
     shape = eros1708.shape
-    mesh = trimesh.Trimesh(shape.vertices_T, shape.faces, process=False)
-    adjacency = [set() for _ in range(shape.n_vertices)]
-    for f, tri in enumerate(shape.faces):
-        for v in tri:
-            adjacency[v].add(f)
+    mesh, adjacency = eros_rays
     tree = cbvh.build_bvh(shape.vertices_T, shape.faces)
     rng = np.random.default_rng(7)
     total_shadow = 0
