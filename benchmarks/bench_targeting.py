@@ -30,7 +30,7 @@ from numba import njit
 from scipy.integrate import solve_ivp
 
 from ideas_hpc.bodies import load_body
-from ideas_hpc.constants import AU, MU_SUN, P_SUN_1AU
+from ideas_hpc.constants import MU_SUN
 from ideas_hpc.core import propagate as P
 from ideas_hpc.trajectory import ForceModel, pack_force_model, ring_states, target_swarm
 

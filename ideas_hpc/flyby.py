@@ -142,15 +142,10 @@ def endpoints(setup: FlybySetup, theta) -> tuple[np.ndarray, np.ndarray]:
     return ring_states(setup.body, th, setup.d_sep, setup.z_start + rise, setup.z_stop + rise)
 
 
-def misalignment_dcms(rng: np.random.Generator, n: int, sigma_angle: float) -> np.ndarray:
-    """Fixed camera misalignments ``[C B]`` (n, 3, 3): a rotation about a random axis
-    by a normally distributed angle of standard deviation ``sigma_angle`` (rad)."""
-    out = np.empty((n, 3, 3))
-    for i in range(n):
-        axis = rng.normal(size=3)
-        axis /= np.linalg.norm(axis)
-        out[i] = dcm_from_mrp(mrp_from_prv(axis * rng.normal(0.0, sigma_angle)))
-    return out
+def misalignment_dcms(prv) -> np.ndarray:
+    """Fixed camera misalignments ``[C B]`` (N, 3, 3) from principal rotation vectors (N, 3), rad."""
+    prv = np.asarray(prv, dtype=np.float64).reshape(-1, 3)
+    return np.stack([dcm_from_mrp(mrp_from_prv(np.ascontiguousarray(v))) for v in prv])
 
 
 @dataclass

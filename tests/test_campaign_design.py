@@ -214,3 +214,14 @@ def test_flyby_campaign_report_has_paper_figures(tmp_path):
     with pytest.raises(InputError, match="already exists"):
         run_file(CAMPAIGNS / "eros-flyby.toml", out=out, overrides=sets)
     run_file(CAMPAIGNS / "eros-flyby.toml", out=out, overrides=sets, resume=True)
+
+
+def test_misalignment_dcms_match_scipy():
+    """[CB] from principal rotation vectors equals scipy's passive rotation (transpose)."""
+    from scipy.spatial.transform import Rotation
+
+    from ideas_hpc.flyby import misalignment_dcms
+
+    prv = np.random.default_rng(5).normal(0, 0.01, (6, 3))
+    expect = Rotation.from_rotvec(prv).as_matrix().transpose(0, 2, 1)
+    assert np.allclose(misalignment_dcms(prv), expect, atol=1e-14)

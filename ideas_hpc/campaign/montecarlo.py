@@ -35,9 +35,9 @@ import xarray as xr
 
 from ..attitude import initial_conditions
 from ..core.frames import dcm_RT
-from ..core.mrp import dcm_from_mrp, mrp_from_dcm, mrp_from_prv
+from ..core.mrp import mrp_from_dcm
 from ..engine.runner import run_campaign
-from ..flyby import FlybySetup, camera_dcms, endpoints, setup_from_campaign
+from ..flyby import FlybySetup, camera_dcms, endpoints, misalignment_dcms, setup_from_campaign
 from ..mapping import compute_coverage
 from ..trajectory import propagate_swarm, sun_direction_T, target_swarm
 from . import datasets
@@ -155,7 +155,7 @@ def fly_sample(setup: FlybySetup, nom: Nominal, d: Draws):
     r_img = np.ascontiguousarray(pos[:, ::setup.image_every])
     dcm, att = camera_dcms(setup, nom.theta, nom.periods, sigma0=d.sigma0, omega0=d.omega0,
                            wheel0=d.wheel0)
-    mis = np.stack([dcm_from_mrp(mrp_from_prv(v)) for v in d.misalignment_prv])
+    mis = misalignment_dcms(d.misalignment_prv)
     dcm = np.ascontiguousarray(np.matmul(mis[:, None], dcm))  # [CB][BT] per image
     sun = sun_direction_T(p, setup.image_times) if setup.coverage.illumination else None
     cov = compute_coverage(setup.body.shape, r_img, dcm, setup.image_times, setup.eta,
