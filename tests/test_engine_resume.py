@@ -12,6 +12,7 @@ import os
 import signal
 import subprocess
 import sys
+import textwrap
 import threading
 import time
 from pathlib import Path
@@ -53,6 +54,80 @@ def cluster2():
 @pytest.fixture(scope="module")
 def reference(tmp_path_factory):
     return serial_reference(tmp_path_factory, TOY)
+
+
+def _worker_settings():
+    import dask
+
+    return ({k: os.environ.get(k) for k in ("MALLOC_MMAP_THRESHOLD_", "MALLOC_TRIM_THRESHOLD_",
+                                             "IDEAS_HPC_TASK_THREADS")},
+            {k: dask.config.get(k) for k in ("distributed.admin.tick.interval",
+                                             "distributed.worker.memory.monitor-interval",
+                                             "distributed.worker.profile.enabled")})
+
+
+def test_local_workers_get_campaign_settings(cluster2):
+    from ideas_hpc.engine.cluster import (QUIET_CLUSTER_CONFIG, TASK_THREADS_ENV, WORKER_ENV,
+                                          WORKER_MALLOC_ENV)
+
+    _, client = cluster2
+    for env, cfg in client.run(_worker_settings).values():
+        # dask's own default (MALLOC_TRIM_THRESHOLD_=65536) made chunks 20-30 % slower.
+        assert env == {**WORKER_MALLOC_ENV, TASK_THREADS_ENV: WORKER_ENV[TASK_THREADS_ENV]}
+        assert cfg["distributed.worker.profile.enabled"] is False
+        for key in ("distributed.admin.tick.interval",
+                    "distributed.worker.memory.monitor-interval"):
+            assert cfg[key] == QUIET_CLUSTER_CONFIG[key]
+
+
+@pytest.mark.skipif(len(os.sched_getaffinity(0)) < 2,
+                    reason="one CPU: Numba's pool has 1 thread anyway")
+def test_local_worker_tasks_run_one_numba_thread(tmp_path):
+    # A spawned worker re-imports the launching script before the nanny's env
+    # arrives, so a script that imports Numba at the top sized every worker's
+    # pool to all cores; the chunk task must still run single-threaded.
+    script = tmp_path / "campaign_script.py"
+    script.write_text(textwrap.dedent(f"""
+        import numba  # before the cluster starts, like any user script
+        import numpy as np
+
+        from ideas_hpc.engine.runner import run_campaign
+        from ideas_hpc.engine.toy import toy_chunk, toy_config, toy_template
+
+
+        def chunk(cid, start, stop):
+            out = toy_chunk(cid, start, stop, campaign_seed=1, n_vertex=8, n_time=2, work=1)
+            out["coverage"][:] = numba.get_num_threads()
+            numba.njit(lambda x: x + 1)(cid)  # compiling after the pool started must work
+            return out
+
+
+        @numba.njit(parallel=True)
+        def total(x):
+            s = 0.0
+            for i in numba.prange(x.size):
+                s += x[i]
+            return s
+
+
+        if __name__ == "__main__":
+            total(np.ones(10))  # the parent's thread pool is running
+            run_campaign({str(tmp_path / "t.zarr")!r}, toy_template(4, 8, 2), chunk,
+                         config=toy_config(4, 2, 8, 2, 1, 1), campaign_seed=1, chunk_size=2,
+                         workers=1, progress=False)
+            # Numba refuses a changed NUMBA_NUM_THREADS at the next compilation
+            # once its pool runs: the cluster must not have set it in this process.
+            numba.njit(lambda x: x + 1)(1)
+            print("parent pool", numba.get_num_threads(), "of", numba.config.NUMBA_DEFAULT_NUM_THREADS)
+    """))
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_NUM_THREADS"}
+    res = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                         env=env, timeout=300)
+    assert res.returncode == 0, res.stderr[-3000:]
+    pool = res.stdout.split("parent pool")[1].split()
+    assert pool[0] == pool[2] != "1"  # the client keeps every core
+    coverage = xr.open_zarr(tmp_path / "t.zarr")["coverage"].values
+    np.testing.assert_array_equal(coverage, 1.0)
 
 
 def test_two_workers_match_serial(cluster2, reference, tmp_path):
@@ -123,12 +198,12 @@ def test_chunk_written_but_not_marked_is_redone(cluster2, reference, tmp_path):
     assert_same_as(reference, out)
 
 
-def _toy_cmd(out: Path, extra: list[str]) -> list[str]:
+def _toy_cmd(out: Path, extra: list[str], toy: dict) -> list[str]:
     return [sys.executable, "-m", "ideas_hpc.engine.toy", "--out", str(out), "--resume",
-            "--no-progress", "--n-samples", str(TOY["n_samples"]),
-            "--chunk-size", str(TOY["chunk_size"]), "--n-vertex", str(TOY["n_vertex"]),
-            "--n-time", str(TOY["n_time"]), "--work", str(TOY["work"]),
-            "--seed", str(TOY["seed"]), *extra]
+            "--no-progress", "--n-samples", str(toy["n_samples"]),
+            "--chunk-size", str(toy["chunk_size"]), "--n-vertex", str(toy["n_vertex"]),
+            "--n-time", str(toy["n_time"]), "--work", str(toy["work"]),
+            "--seed", str(toy["seed"]), *extra]
 
 
 def _n_done(out: Path) -> int:
@@ -139,17 +214,18 @@ def _n_done(out: Path) -> int:
 
 
 def kill_and_resume(out: Path, extra: list[str], n_kills: int, rng: np.random.Generator,
-                    log: list) -> None:
+                    log: list, toy: dict = TOY) -> None:
     """SIGKILL the campaign process ``n_kills`` times at random points, then let it finish."""
+    n_chunks = -(-toy["n_samples"] // toy["chunk_size"])
     kills = 0
     attempts = 0
     while kills < n_kills:
         attempts += 1
         assert attempts < 4 * n_kills, f"could not land {n_kills} kills: {log}"
         before = _n_done(out)
-        if before >= N_CHUNKS:
+        if before >= n_chunks:
             break
-        proc = subprocess.Popen(_toy_cmd(out, extra), stdout=subprocess.DEVNULL,
+        proc = subprocess.Popen(_toy_cmd(out, extra, toy), stdout=subprocess.DEVNULL,
                                 stderr=subprocess.DEVNULL)
         try:
             if kills == 0 or rng.random() < 0.25:
@@ -174,10 +250,10 @@ def kill_and_resume(out: Path, extra: list[str], n_kills: int, rng: np.random.Ge
                 proc.kill()
                 proc.wait()
     done = _n_done(out)
-    assert done < N_CHUNKS, f"campaign finished before the last kill: {log}"
-    final = subprocess.run(_toy_cmd(out, extra), capture_output=True, text=True, timeout=300)
+    assert done < n_chunks, f"campaign finished before the last kill: {log}"
+    final = subprocess.run(_toy_cmd(out, extra, toy), capture_output=True, text=True, timeout=300)
     assert final.returncode == 0, final.stderr[-2000:]
-    assert f"{N_CHUNKS} skipped" not in final.stdout  # the last run had work left
+    assert f"{n_chunks} skipped" not in final.stdout  # the last run had work left
 
 
 def test_sigkill_campaign_process_then_resume(cluster2, reference, tmp_path):
@@ -193,12 +269,18 @@ def test_sigkill_campaign_process_then_resume(cluster2, reference, tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["killed.zarr"]  # no partial stores
 
 
+# 12 kills need more chunks than TOY has: a kill lands 1-3 chunks (often 5-10: the
+# toy chunks are short) after the previous one, so 24 or even 64 chunks ran out.
+TOY_LONG = dict(TOY, n_samples=512)
+
+
 @pytest.mark.slow
-def test_sigkill_campaign_with_own_cluster_many_times(reference, tmp_path):
+def test_sigkill_campaign_with_own_cluster_many_times(tmp_path_factory, tmp_path):
     # The killed process owns its LocalCluster: its workers die with it.
+    reference = serial_reference(tmp_path_factory, TOY_LONG, "ref_long")
     out = tmp_path / "killed_own.zarr"
     log: list = []
-    kill_and_resume(out, ["--workers", "2"], 12, np.random.default_rng(12), log)
+    kill_and_resume(out, ["--workers", "2"], 12, np.random.default_rng(12), log, TOY_LONG)
     print("kills (chunks done before, after):", log)
     assert_same_as(reference, out)
     assert not lock_path(out).exists()

@@ -20,7 +20,8 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from ideas_hpc.engine.cluster import DEFAULT_SLURM_CONFIG, load_slurm_config, slurm_cluster
+from ideas_hpc.engine.cluster import (DEFAULT_SLURM_CONFIG, WORKER_MALLOC_ENV, load_slurm_config,
+                                      slurm_cluster)
 from ideas_hpc.engine.toy import run_toy
 from ideas_hpc.errors import InputError
 from toy_stores import assert_same_as, serial_reference
@@ -43,6 +44,8 @@ def test_job_script_from_repo_config():
                  "#SBATCH -t 01:00:00", "#SBATCH --export=ALL"):
         assert want in sbatch, (want, sbatch)
     assert "export NUMBA_NUM_THREADS=1" in lines
+    for key, value in WORKER_MALLOC_ENV.items():  # as local workers get them
+        assert f"export {key}={value}" in lines
     worker = [ln for ln in lines if "distributed.cli.dask_worker" in ln]
     assert len(worker) == 1
     cmd = worker[0].split()

@@ -62,9 +62,41 @@ class RunSummary:
                 f"{self.compute_s:.2f} s computing, {self.write_s:.2f} s writing)")
 
 
+def limit_task_threads() -> int | None:
+    """Cap the calling thread's Numba parallel threads at ``IDEAS_HPC_TASK_THREADS``.
+
+    Local workers must run each chunk on one thread (N workers fill N cores).
+    ``NUMBA_NUM_THREADS`` cannot say so: a spawned dask worker re-imports the
+    launching script (``__mp_main__``) before the nanny's ``env`` reaches
+    ``os.environ``, and when that script imports this package, Numba has
+    already sized its pool to every core. Each worker's ``prange`` kernels then
+    ran on all cores: 2 workers on 2 cores ran 4 busy threads (measured: task
+    thread 52 % of a core, the OpenMP helper 26 %), and setting the variable
+    late makes Numba raise at its next compilation. The cap is set per thread
+    (``numba.set_num_threads``), where the chunk runs.
+
+    Returns the cap applied, or None when the variable is unset (then Numba's
+    own ``NUMBA_NUM_THREADS``, read at import, applies; SLURM jobs export it
+    before Python starts).
+    """
+    from .cluster import TASK_THREADS_ENV
+
+    want = os.environ.get(TASK_THREADS_ENV, "").strip()
+    if not want:
+        return None
+    if not want.isdigit() or int(want) < 1:
+        raise InputError(f"must be a positive integer, got {want!r}", field=TASK_THREADS_ENV)
+    import numba
+
+    n = min(int(want), numba.config.NUMBA_NUM_THREADS)
+    numba.set_num_threads(n)
+    return n
+
+
 def _run_chunk(store_path: str, chunk_fn: ChunkFn, chunk_id: int, start: int,
                stop: int) -> tuple[int, int, float, float]:
     """The task: compute one chunk, write its region, then its done flag."""
+    limit_task_threads()
     t0 = time.perf_counter()
     arrays = chunk_fn(chunk_id, start, stop)
     t1 = time.perf_counter()
