@@ -15,7 +15,7 @@ goes first; the headline is the ratio of the aggregate throughputs (all
 samples over all wall time of each configuration). Last line
 ``campaign: <R>x throughput with 2 workers vs 1``.
 
-Usage: ``python benchmarks/bench_campaign.py [--samples 256] [--chunk 8] [--rounds 3]``.
+Usage: ``python benchmarks/bench_campaign.py [--samples 256] [--chunk 8] [--rounds 5]``.
 """
 
 from __future__ import annotations
@@ -76,7 +76,7 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--samples", type=int, default=256)
     ap.add_argument("--chunk", type=int, default=8)
-    ap.add_argument("--rounds", type=int, default=3,
+    ap.add_argument("--rounds", type=int, default=5,
                     help="1-worker/2-worker campaign pairs, order alternating (shared VMs drift)")
     args = ap.parse_args()
     c = load(ROOT / "campaigns" / "eros-monte-carlo.toml",
