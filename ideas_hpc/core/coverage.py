@@ -709,42 +709,9 @@ def coverage_counts_tiles(vertices, normals, vertex_areas, r_T, dcm_BT, image_ti
 
     Both tests carry a relative slack (:data:`_SLACK`) so they never reject a
     tile that holds a visible vertex; the per-vertex tests that follow are
-    the exact ones, in a branch-free loop the compiler vectorises.
-
-    Parameters
-    ----------
-    vertices, normals : (V, 3) float64
-        Vertex positions (m) and outward unit normals in frame T.
-    vertex_areas : (V,) float64
-        m^2.
-    r_T : (N, n_img, 3) float64
-        Spacecraft positions in T per image, m.
-    dcm_BT : (N, n_img, 3, 3) float64
-        Camera DCM (B <- T) per image; camera boresight is +z_B.
-    image_times : (n_img,) float64
-        s, non-decreasing.
-    tan_eta : float
-        Tangent of the half angle of the square field of view.
-    near, far : float
-        Clipping distances along the boresight, m, ``0 < near < far``.
-    exact : bool
-        Exact culling ``(r - p) . n > 0`` instead of the paper's ``r . n >= 0``.
-    active : (N,) bool
-        Spacecraft that take part (failed ones are False).
-    count_all : bool
-        True: full counts. False: union and first-seen time only; the images
-        of all spacecraft are then visited in time order and a tile stops as
-        soon as all its vertices have been seen (early-out), and
-        ``times_seen`` is 0/1.
-
-    Returns
-    -------
-    observed : (V,) bool
-    first_seen : (V,) float64
-        s, NaN when never seen.
-    times_seen : (V,) int32
-    coverage, coverage_count : float
-        See :func:`coverage_fractions`.
+    the exact ones, in a branch-free loop the compiler vectorises. With
+    ``count_all`` False the images of all spacecraft are visited in time
+    order and a tile stops once all its vertices have been seen.
     """
     nv = vertices.shape[0]
     nsc = r_T.shape[0]

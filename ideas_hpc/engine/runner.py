@@ -24,7 +24,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from ..errors import InputError
-from .cluster import connect
+from .cluster import TASK_THREADS_ENV, connect
 from .lock import StoreLock
 from .store import ChunkPlan, create_store, done_mask, store_plan, write_chunk_region
 
@@ -79,8 +79,6 @@ def limit_task_threads() -> int | None:
     own ``NUMBA_NUM_THREADS``, read at import, applies; SLURM jobs export it
     before Python starts).
     """
-    from .cluster import TASK_THREADS_ENV
-
     want = os.environ.get(TASK_THREADS_ENV, "").strip()
     if not want:
         return None

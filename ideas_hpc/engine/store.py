@@ -466,72 +466,71 @@ def write_chunk_region(path: str | os.PathLike, chunk_id: int, start: int, stop:
     if missing or extra:
         raise InputError(f"chunk arrays must be exactly the store's sample variables; "
                          f"missing {sorted(missing)}, unknown {sorted(extra)}", field="arrays")
-    data = {}
+    out = {}
     n = int(stop) - int(start)
     for name, spec in lay["layout"].items():
         arr = np.asarray(arrays[name])
         want = (n, *spec["shape"][1:])
         if arr.shape != want:
             raise InputError(f"shape {arr.shape}, expected {want}", field=f"arrays.{name}")
-        data[name] = (spec["dims"], arr.astype(spec["dtype"], copy=False))
-    # Region writes straight into the zarr arrays: the store's sample variables
-    # carry no CF encoding (no scale/offset, no time units), so the stored
-    # values are the arrays themselves; skipping xarray's per-call store opening
-    # and region checks cut the per-chunk write from ~0.2 s to ~0.04 s
-    # (benchmarks/bench_campaign.py). Nothing touches the shared metadata.
-    arrays = {name: arr for name, (_, arr) in data.items()}
-    _write_arrays(str(path), lay, arrays, slice(int(start), int(stop)), int(chunk_id))
+        out[name] = arr.astype(spec["dtype"], copy=False)
+    # The store's sample variables carry no CF encoding (no scale/offset, no
+    # time units), so the stored values are the arrays themselves and the
+    # write skips xarray; nothing touches the shared metadata.
+    handles = lay["handles"]
+    if handles is None:
+        handles = lay["handles"] = _open_handles(str(path), [*lay["layout"], DONE_VAR],
+                                                 plan.chunk_size)
+    chunk_id = int(chunk_id)
+    _write_chunk(handles, out, chunk_id, slice(int(start), int(stop)))
+    _write_chunk(handles, {DONE_VAR: np.ones(1, dtype=bool)}, chunk_id,
+                 slice(chunk_id, chunk_id + 1))  # last: the chunk is complete
 
 
-def _write_arrays(path: str, lay: dict, arrays: dict, sl: slice, chunk_id: int) -> None:
-    """Write every array's chunk, then the done flag.
+def _open_handles(path: str, names: list[str], chunk_size: int) -> dict:
+    """``{name: (AsyncArray, whole-chunk writer or None)}``, once per worker and store.
 
-    The array handles (and their whole-chunk writers) are opened once per
-    worker and store (``lay["handles"]``): opening the group parses the
-    consolidated metadata of every array, ~4 ms of CPU. Arrays that
-    :func:`~ideas_hpc.engine.chunk_files.whole_chunk_writer` can write go
-    straight to their chunk files (~0.5 ms each); any other goes through
-    zarr's async ``setitem``, issued together (zarr spends a few ms of fixed
-    cost per call). The done flag is written only after every array write has
-    completed.
+    Opening the group parses the consolidated metadata of every array (~4 ms
+    of CPU), so the handles are kept with the cached layout.
+    """
+    import asyncio
+
+    import zarr.api.asynchronous as za
+    from zarr.core.sync import sync
+
+    from .chunk_files import whole_chunk_writer
+
+    async def run():
+        group = await za.open_group(store=path, mode="r+")
+        return await asyncio.gather(*(group.getitem(n) for n in names))
+
+    return {n: (a, whole_chunk_writer(a, 1 if n == DONE_VAR else chunk_size))
+            for n, a in zip(names, sync(run()))}
+
+
+def _write_chunk(handles: dict, arrays: dict, chunk_id: int, sl: slice) -> None:
+    """Write chunk ``chunk_id`` of each array: its own chunk file when
+    :func:`~ideas_hpc.engine.chunk_files.whole_chunk_writer` supports the
+    array (~0.5 ms each), otherwise zarr's async ``setitem`` on slice ``sl``,
+    issued together (zarr spends a few ms of fixed cost per call). Returns
+    when every write has completed.
     """
     import asyncio
 
     from zarr.core.sync import sync
 
-    handles = lay["handles"]
-    if handles is None:
-        handles = lay["handles"] = sync(_open_handles(path, [*lay["layout"], DONE_VAR],
-                                                      lay["plan"].chunk_size))
-    direct = {n: a for n, a in arrays.items() if handles[n][1] is not None}
-    rest = {n: a for n, a in arrays.items() if handles[n][1] is None}
-    for name, arr in direct.items():
-        handles[name][1](chunk_id, arr)
+    rest = {}
+    for name, arr in arrays.items():
+        write = handles[name][1]
+        if write is not None:
+            write(chunk_id, arr)
+        else:
+            rest[name] = arr
     if rest:
         async def run():
             await asyncio.gather(*(handles[n][0].setitem(sl, a) for n, a in rest.items()))
 
         sync(run())
-    flag = np.ones(1, dtype=bool)
-    done, write_done = handles[DONE_VAR]
-    if write_done is not None:
-        write_done(chunk_id, flag)
-    else:
-        sync(done.setitem(slice(chunk_id, chunk_id + 1), flag))
-
-
-async def _open_handles(path: str, names: list[str], chunk_size: int) -> dict:
-    """``{name: (AsyncArray, whole-chunk writer or None)}`` for a store's written arrays."""
-    import asyncio
-
-    import zarr.api.asynchronous as za
-
-    from .chunk_files import whole_chunk_writer
-
-    group = await za.open_group(store=path, mode="r+")
-    arrays = await asyncio.gather(*(group.getitem(n) for n in names))
-    return {n: (a, whole_chunk_writer(a, 1 if n == DONE_VAR else chunk_size))
-            for n, a in zip(names, arrays)}
 
 
 def done_mask(path: str | os.PathLike) -> np.ndarray:
