@@ -32,7 +32,7 @@ from .core.mrp import dcm_from_mrp, mrp_from_prv
 from .errors import InputError
 from .mapping import CoverageOptions, CoverageResult, compute_coverage, observed_per_spacecraft
 from .sizing import Sizing, size_flyby
-from .trajectory import (ForceModel, TargetingResult, ring_states,
+from .trajectory import (ForceModel, TargetingResult, propagate_swarm, ring_states,
                          sun_direction_T, target_swarm)
 
 TWO_PI = 2.0 * math.pi
@@ -148,19 +148,36 @@ def misalignment_dcms(prv) -> np.ndarray:
     return np.stack([dcm_from_mrp(mrp_from_prv(np.ascontiguousarray(v))) for v in prv])
 
 
+@dataclass(frozen=True)
+class Perturbation:
+    """How one flyby departs from the nominal one (SI, frame T); None: nominal.
+
+    The Monte Carlo dispersions (:mod:`ideas_hpc.montecarlo.dispersions`) are
+    turned into one of these per sample and flown by :func:`fly_open_loop`.
+    """
+
+    ics: tuple | None = None                  # (sigma0, omega0, wheel0), each (N, 3)
+    params_override: dict | None = None       # mu, c20, c22, reflectivity
+    position_error_T: np.ndarray | None = None  # (N, 3) m
+    velocity_error_T: np.ndarray | None = None  # (N, 3) m/s
+    active: np.ndarray | None = None          # (N,) bool, False: failed
+    misalignment_prv: np.ndarray | None = None  # (N, 3) rad, camera [CB] as a PRV
+
+
 @dataclass
 class FlybyOutcome:
     """What one flyby produced (arrays in SI, frame T)."""
 
     theta: np.ndarray
     periods: np.ndarray | None
-    targeting: TargetingResult
+    targeting: TargetingResult | None
     image_times: np.ndarray
     r_img_T: np.ndarray                 # (N, n_img, 3)
     dcm_BT: np.ndarray                  # (N, n_img, 3, 3) camera frame at images
     coverage: CoverageResult
     attitude: object | None = None      # AttitudeResult for 'simulated'
     extras: dict = field(default_factory=dict)
+    position_T: np.ndarray | None = None  # (N, T, 3) m, the flown trajectory (open loop)
 
 
 def camera_dcms(setup: FlybySetup, theta, periods=None, *, sigma0=None, omega0=None,
@@ -185,9 +202,10 @@ def camera_dcms(setup: FlybySetup, theta, periods=None, *, sigma0=None, omega0=N
 
 
 def fly(setup: FlybySetup, theta, periods=None, *, sample: int = 0, ics=None,
-        params_override=None, active=None, misalignment=None, counts: bool = True,
-        raise_on_failure: bool = True) -> FlybyOutcome:
-    """Simulate one flyby of a swarm and compute what it imaged.
+        counts: bool = True, raise_on_failure: bool = True) -> FlybyOutcome:
+    """Target a swarm on the nominal model, fly it and compute what it imaged.
+
+    A perturbed flyby of a designed swarm is :func:`fly_open_loop`.
 
     Parameters
     ----------
@@ -199,12 +217,8 @@ def fly(setup: FlybySetup, theta, periods=None, *, sample: int = 0, ics=None,
         Sample index whose seeded initial attitude is used (``simulated``).
     ics : tuple of (N, 3) arrays, optional
         Explicit ``(sigma0, omega0, wheel0)``.
-    params_override : dict, optional
-        Perturbed ``mu``, ``c20``, ``c22``, ``reflectivity`` (SI) for this flyby.
-    active : (N,) bool, optional
-        False marks a failed spacecraft.
-    misalignment : (N, 3, 3), optional
-        Camera misalignments ``[C B]``.
+    counts : bool
+        Also count images per vertex (``times_seen``).
     """
     th = np.asarray(theta, dtype=np.float64).ravel()
     if th.size == 0:
@@ -212,25 +226,53 @@ def fly(setup: FlybySetup, theta, periods=None, *, sample: int = 0, ics=None,
     r0, rt = endpoints(setup, th)
     tgt = target_swarm(setup.body, r0, rt, setup.t0, setup.tf, force_model=setup.force_model,
                        dt_sample=setup.dt, tol=setup.tol, max_iter=setup.max_iter,
-                       raise_on_failure=raise_on_failure, params_override=params_override)
-    step = setup.image_every
-    r_img = np.ascontiguousarray(tgt.position_T[:, ::step])
+                       raise_on_failure=raise_on_failure)
+    r_img = np.ascontiguousarray(tgt.position_T[:, ::setup.image_every])
     if ics is None and setup.attitude_mode == "simulated":
         ics = initial_conditions(setup.seed, sample, th.size)
+    dcm, att, cov = _image(setup, th, periods, r_img, ics, None, None, counts)
+    return FlybyOutcome(theta=th, periods=None if periods is None else np.asarray(periods),
+                        targeting=tgt, image_times=setup.image_times, r_img_T=r_img, dcm_BT=dcm,
+                        coverage=cov, attitude=att)
+
+
+def fly_open_loop(setup: FlybySetup, theta, periods, r0_T, v0_T,
+                  perturbation: Perturbation = Perturbation()) -> FlybyOutcome:
+    """Fly a designed swarm open loop (no retargeting) through a perturbed world.
+
+    The Monte Carlo sample: the start states ``r0_T``, ``v0_T`` (N, 3; m, m/s)
+    targeted on the nominal model, plus the perturbation's state errors, are
+    propagated through its gravity and SRP, its attitude initial conditions
+    are flown, its camera misalignments applied and its failed spacecraft left
+    out of the coverage.
+    """
+    th = np.asarray(theta, dtype=np.float64).ravel()
+    p = perturbation
+    r0 = r0_T if p.position_error_T is None else r0_T + p.position_error_T
+    v0 = v0_T if p.velocity_error_T is None else v0_T + p.velocity_error_T
+    _, pos, _ = propagate_swarm(setup.body, r0, v0, setup.t0, setup.tf,
+                                force_model=setup.force_model, dt_sample=setup.dt,
+                                params_override=p.params_override)
+    r_img = np.ascontiguousarray(pos[:, ::setup.image_every])
+    mis = None if p.misalignment_prv is None else misalignment_dcms(p.misalignment_prv)
+    dcm, att, cov = _image(setup, th, periods, r_img, p.ics, mis, p.active, True)
+    return FlybyOutcome(theta=th, periods=None if periods is None else np.asarray(periods),
+                        targeting=None, image_times=setup.image_times, r_img_T=r_img,
+                        dcm_BT=dcm, coverage=cov, attitude=att, position_T=pos)
+
+
+def _image(setup: FlybySetup, th, periods, r_img, ics, misalignment, active, counts):
+    """Attitude at the images, camera misalignment, Sun, coverage: the common tail of a flyby."""
     s0, w0, W0 = ics if ics is not None else (None, None, None)
     dcm, att = camera_dcms(setup, th, periods, sigma0=s0, omega0=w0, wheel0=W0)
     if misalignment is not None:
-        dcm = np.ascontiguousarray(np.matmul(misalignment[:, None], dcm))
+        dcm = np.ascontiguousarray(np.matmul(misalignment[:, None], dcm))  # [CB][BT]
     img_t = setup.image_times
-    sun = None
-    if setup.coverage.illumination:
-        sun = sun_direction_T(setup.body.params, img_t)
+    sun = sun_direction_T(setup.body.params, img_t) if setup.coverage.illumination else None
     cov = compute_coverage(setup.body.shape, r_img, dcm, img_t, setup.eta, setup.near,
                            setup.far, options=setup.coverage, sun_T=sun, active=active,
                            counts=counts)
-    return FlybyOutcome(theta=th, periods=None if periods is None else np.asarray(periods),
-                        targeting=tgt, image_times=img_t, r_img_T=r_img, dcm_BT=dcm,
-                        coverage=cov, attitude=att)
+    return dcm, att, cov
 
 
 def candidate_masks(setup: FlybySetup, keys) -> np.ndarray:

@@ -1,23 +1,14 @@
 """Monte Carlo campaigns over initial attitudes and perturbations (SPEC section 8).
 
-The swarm's trajectories are designed once on the nominal model (targeted
-``v0``). Each sample then flies that design open loop through its own world:
-
-* initial attitude, body rates and wheel speeds (SPEC section 5);
-* C20, C22 and GM scaled by ``1 + sigma * N(0, 1)``;
-* SRP reflectivity uniform in ``[reflectivity_min, reflectivity_max]``;
-* initial position and velocity errors, ``N(0, sigma)`` per axis;
-* spacecraft failures: exactly ``failures_k`` of N lost, and/or each lost with
-  ``failure_probability``;
-* camera misalignment: a fixed rotation about a random axis by ``N(0, sigma)``.
-
-Seeds: sample ``k`` of campaign seed ``s`` owns ``SeedSequence(s, spawn_key=(k,))``.
-Its attitude initial conditions come from that sequence itself (so they equal
-:func:`ideas_hpc.attitude.initial_conditions` ``(s, k, N)``), every other
-dispersion from its child ``SeedSequence(s, spawn_key=(k, 1))``, drawn in a
-fixed order whether or not a dispersion is switched on (so switching one on
-does not shift the others). Every draw is stored, so a sample re-runs alone:
-``ideas_hpc.campaign.montecarlo.run_sample(campaign, k)``.
+The campaign kind ``monte-carlo``: store layout, chunk task and run. The swarm's
+trajectories are designed once on the nominal model (targeted ``v0``,
+:func:`~ideas_hpc.montecarlo.sample.design_nominal`). Each sample then flies
+that design open loop through its own world
+(:func:`~ideas_hpc.montecarlo.sample.fly_sample`), perturbed by the declared
+dispersions of :mod:`ideas_hpc.montecarlo.dispersions` (attitude, gravity,
+reflectivity, initial state, failures, misalignment), whose module docstring
+gives the seed streams and draw order. Every draw is stored, so a sample
+re-runs alone: ``ideas_hpc.campaign.montecarlo.run_sample(campaign, k)``.
 
 Work is split into chunks of samples (``run.chunk_size``); each chunk is one
 dask task that flies its samples and writes its region of the store
@@ -28,151 +19,16 @@ from __future__ import annotations
 
 import functools
 import sys
-from dataclasses import dataclass
 
 import numpy as np
 import xarray as xr
 
-from ..attitude import initial_conditions
-from ..core.frames import dcm_RT
-from ..core.mrp import mrp_from_dcm
 from ..engine.runner import run_campaign
-from ..flyby import FlybySetup, camera_dcms, endpoints, misalignment_dcms, setup_from_campaign
-from ..mapping import compute_coverage
-from ..trajectory import propagate_swarm, sun_direction_T, target_swarm
+from ..flyby import FlybySetup, Perturbation, setup_from_campaign
+from ..montecarlo.dispersions import DISPERSION_ORDER, DISPERSION_VARS, draw_sample
+from ..montecarlo.sample import Nominal, design_nominal, fly_sample
 from . import datasets
 from .schema import Campaign
-
-DISPERSION_CHILD = 1
-
-
-@dataclass
-class Draws:
-    """Every random quantity of one sample (SI)."""
-
-    sigma0: np.ndarray          # (N, 3)
-    omega0: np.ndarray          # (N, 3) rad/s
-    wheel0: np.ndarray          # (N, 3) rad/s
-    c20_factor: float
-    c22_factor: float
-    gm_factor: float
-    reflectivity: float
-    position_error: np.ndarray  # (N, 3) m
-    velocity_error: np.ndarray  # (N, 3) m/s
-    active: np.ndarray          # (N,) bool
-    misalignment_prv: np.ndarray  # (N, 3) rad
-
-
-def draw_sample(mc: dict, seed: int, k: int, theta: np.ndarray, setup: FlybySetup) -> Draws:
-    """The dispersions of sample ``k`` (see the module docstring for the streams)."""
-    n = theta.size
-    if mc["attitude_dispersion"]:
-        s0, w0, W0 = initial_conditions(seed, k, n)
-    else:
-        s0, w0, W0 = reference_start(setup, theta)
-    rng = np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(int(k),
-                                                                              DISPERSION_CHILD)))
-    z = rng.standard_normal(3)
-    refl = rng.uniform(0.0, 1.0)
-    dr = rng.standard_normal((n, 3))
-    dv = rng.standard_normal((n, 3))
-    perm = rng.permutation(n)
-    bern = rng.uniform(0.0, 1.0, n)
-    axes = rng.standard_normal((n, 3))
-    angles = rng.standard_normal(n)
-    active = np.ones(n, dtype=bool)
-    if mc["failures_k"]:
-        active[perm[:mc["failures_k"]]] = False
-    active &= bern >= mc["failure_probability"]
-    axes /= np.linalg.norm(axes, axis=1)[:, None]
-    return Draws(
-        sigma0=s0, omega0=w0, wheel0=W0,
-        c20_factor=1.0 + mc["sigma_c20_pct"] / 100.0 * z[0],
-        c22_factor=1.0 + mc["sigma_c22_pct"] / 100.0 * z[1],
-        gm_factor=1.0 + mc["sigma_gm_pct"] / 100.0 * z[2],
-        reflectivity=mc["reflectivity_min"] + (mc["reflectivity_max"] - mc["reflectivity_min"])
-        * refl,
-        position_error=mc["sigma_position_m"] * dr,
-        velocity_error=mc["sigma_velocity_mm_s"] * dv,
-        active=active,
-        misalignment_prv=axes * (mc["sigma_misalignment_deg"] * angles)[:, None])
-
-
-def reference_start(setup: FlybySetup, theta: np.ndarray):
-    """Initial state on the reference (no attitude dispersion): ``B = R_i`` at t0
-    (``[TN](t0) = I``), turning with the body at its spin rate; wheels at rest."""
-    ws = setup.body.params.spin_rate
-    n = theta.size
-    s0 = np.empty((n, 3))
-    w0 = np.empty((n, 3))
-    eye = np.eye(3)
-    for i in range(n):
-        c = dcm_RT(float(theta[i]), eye)
-        s0[i] = mrp_from_dcm(c)
-        w0[i] = c @ np.array([0.0, 0.0, ws])
-    return s0, w0, np.zeros((n, 3))
-
-
-@dataclass(frozen=True)
-class Nominal:
-    """The designed swarm: angles, periods and the nominal targeted trajectory."""
-
-    theta: np.ndarray
-    periods: np.ndarray | None
-    r0_T: np.ndarray
-    v0_T: np.ndarray
-    times: np.ndarray
-    position_T: np.ndarray
-    velocity_T: np.ndarray
-    miss: np.ndarray
-
-    def for_tasks(self) -> "Nominal":
-        """What a chunk task needs (start states and arrival points): the sampled
-        trajectory stays on the client instead of being shipped with every task."""
-        return Nominal(self.theta, self.periods, self.r0_T, self.v0_T, self.times[-1:],
-                       np.ascontiguousarray(self.position_T[:, -1:]),
-                       np.ascontiguousarray(self.velocity_T[:, -1:]), self.miss)
-
-
-def design_nominal(setup: FlybySetup, theta, periods) -> Nominal:
-    th = np.asarray(theta, dtype=float)
-    r0, rt = endpoints(setup, th)
-    tg = target_swarm(setup.body, r0, rt, setup.t0, setup.tf, force_model=setup.force_model,
-                      dt_sample=setup.dt, tol=setup.tol, max_iter=setup.max_iter)
-    return Nominal(th, None if periods is None else np.asarray(periods, float), r0, tg.v0_T,
-                   tg.times, tg.position_T, tg.velocity_T, tg.miss)
-
-
-def fly_sample(setup: FlybySetup, nom: Nominal, d: Draws):
-    """One Monte Carlo sample: open-loop flight, attitude, coverage. Returns a dict."""
-    p = setup.body.params
-    override = {"mu": p.mu * d.gm_factor, "c20": p.c20 * d.c20_factor,
-                "c22": p.c22 * d.c22_factor, "reflectivity": d.reflectivity}
-    _, pos, _ = propagate_swarm(setup.body, nom.r0_T + d.position_error, nom.v0_T
-                                + d.velocity_error, setup.t0, setup.tf,
-                                force_model=setup.force_model, dt_sample=setup.dt,
-                                params_override=override)
-    r_img = np.ascontiguousarray(pos[:, ::setup.image_every])
-    dcm, att = camera_dcms(setup, nom.theta, nom.periods, sigma0=d.sigma0, omega0=d.omega0,
-                           wheel0=d.wheel0)
-    mis = misalignment_dcms(d.misalignment_prv)
-    dcm = np.ascontiguousarray(np.matmul(mis[:, None], dcm))  # [CB][BT] per image
-    sun = sun_direction_T(p, setup.image_times) if setup.coverage.illumination else None
-    cov = compute_coverage(setup.body.shape, r_img, dcm, setup.image_times, setup.eta,
-                           setup.near, setup.far, options=setup.coverage, sun_T=sun,
-                           active=d.active)
-    out = {"coverage": cov.coverage, "coverage_count": cov.coverage_count,
-           "observed": cov.observed, "first_seen": cov.first_seen,
-           "times_seen": cov.times_seen, "arrival_error": np.linalg.norm(
-               pos[:, -1] - nom.position_T[:, -1], axis=1)}
-    if att is not None:
-        for name in ("sigma_error", "omega_error", "wheel_speed", "wheel_torque"):
-            out[name] = getattr(att, name)[0]
-    return out
-
-
-SAMPLE_DRAW_VARS = ("sigma0", "omega0", "wheel0", "position_error", "velocity_error",
-                    "misalignment_prv")
 
 
 def mc_chunk(chunk_id: int, start: int, stop: int, *, setup: FlybySetup, nominal: Nominal,
@@ -180,13 +36,9 @@ def mc_chunk(chunk_id: int, start: int, stop: int, *, setup: FlybySetup, nominal
     """Chunk task: fly samples ``start..stop-1`` and return their arrays (sample first)."""
     rows = []
     for k in range(start, stop):
-        d = draw_sample(mc, seed, k, nominal.theta, setup)
-        r = fly_sample(setup, nominal, d)
-        r.update({name: getattr(d, name) for name in SAMPLE_DRAW_VARS})
-        r.update({"c20": setup.body.params.c20 * d.c20_factor,
-                  "c22": setup.body.params.c22 * d.c22_factor,
-                  "mu": setup.body.params.mu * d.gm_factor, "reflectivity": d.reflectivity,
-                  "active": d.active, "n_failed": int((~d.active).sum())})
+        values, pert = draw_sample(mc, seed, k, nominal.theta, setup)
+        r = fly_sample(setup, nominal, Perturbation(**pert))
+        r.update(values)
         rows.append(r)
     return {name: np.stack([np.asarray(r[name]) for r in rows]) for name in rows[0]}
 
@@ -214,31 +66,16 @@ def mc_template(setup: FlybySetup, nom: Nominal, n_samples: int) -> xr.Dataset:
         "times_seen": (s + ("vertex",), _lazy((ns, nv), np.int32)),
         "arrival_error": (s + ("spacecraft",), _lazy((ns, n), np.float64),
                           {"units": "m", "long_name": "final position minus nominal"}),
-        "c20": (s, _lazy((ns,), np.float64), {"units": "m^2", "long_name": "C20 (dispersed)"}),
-        "c22": (s, _lazy((ns,), np.float64), {"units": "m^2", "long_name": "C22 (dispersed)"}),
-        "mu": (s, _lazy((ns,), np.float64), {"units": "m^3/s^2", "long_name": "GM (dispersed)"}),
-        "reflectivity": (s, _lazy((ns,), np.float64), {"units": "1"}),
-        "active": (s + ("spacecraft",), _lazy((ns, n), bool),
-                   {"long_name": "spacecraft working (False: failed)"}),
-        "n_failed": (s, _lazy((ns,), np.int32), {"long_name": "failed spacecraft"}),
-        "sigma0": (s + ("spacecraft", "axis"), _lazy((ns, n, 3), np.float64),
-                   {"units": "1", "long_name": "initial sigma_BN"}),
-        "omega0": (s + ("spacecraft", "axis"), _lazy((ns, n, 3), np.float64),
-                   {"units": "rad/s", "long_name": "initial omega_BN_B"}),
-        "wheel0": (s + ("spacecraft", "wheel"), _lazy((ns, n, 3), np.float64),
-                   {"units": "rad/s", "long_name": "initial wheel speeds"}),
-        "position_error": (s + ("spacecraft", "axis"), _lazy((ns, n, 3), np.float64),
-                           {"units": "m", "long_name": "initial position error, frame T"}),
-        "velocity_error": (s + ("spacecraft", "axis"), _lazy((ns, n, 3), np.float64),
-                           {"units": "m/s", "long_name": "initial velocity error, frame T"}),
-        "misalignment_prv": (s + ("spacecraft", "axis"), _lazy((ns, n, 3), np.float64),
-                             {"units": "rad", "long_name": "camera misalignment (PRV)"}),
         "swarm_angle": (("spacecraft",), nom.theta),
         "position": (("spacecraft", "time", "axis"), nom.position_T[:, ::dec]),
         "velocity": (("spacecraft", "time", "axis"), nom.velocity_T[:, ::dec]),
         "targeting_miss": (("spacecraft", "iteration"), nom.miss),
         **datasets.mesh_vars(setup.body.shape),
     }
+    sizes = {"spacecraft": n, "axis": 3, "wheel": 3}
+    for var in DISPERSION_VARS:
+        v[var.name] = (s + var.dims, _lazy((ns, *(sizes[d] for d in var.dims)), var.dtype),
+                       var.attrs())
     if nom.periods is not None:
         v["sweep_period"] = (("spacecraft",), nom.periods)
     if simulated:
@@ -283,6 +120,7 @@ def run_monte_carlo(c: Campaign, out, *, workers=None, scheduler=None, resume=Fa
     attrs = _base_attrs(c, setup)
     for key in ("config", "config_hash"):
         attrs.pop(key)
+    attrs["dispersion_order"] = list(DISPERSION_ORDER)  # fixes the draw order
     summary = run_campaign(out, template, fn, config=resolved(c), campaign_seed=c.cfg["seed"],
                            chunk_size=c.cfg["run"]["chunk_size"], attrs=attrs, resume=resume,
                            workers=workers, scheduler=scheduler, cluster=cluster,

@@ -1,0 +1,191 @@
+"""The Monte Carlo dispersions, declared once (SPEC section 8).
+
+Each entry of :data:`DISPERSIONS` says what one dispersion draws, how it turns
+into a :class:`~ideas_hpc.flyby.Perturbation` of the flyby, and which store
+variables record it (name, dims, units). The Monte Carlo kind builds its store
+layout, its per-sample draws and its perturbations from this list and nothing
+else, so a new dispersion is one entry here (plus, if it perturbs something
+the flyby cannot perturb yet, one field of ``Perturbation``).
+
+Streams and order
+-----------------
+Sample ``k`` of campaign seed ``s`` owns ``SeedSequence(s, spawn_key=(k,))``.
+Entries with ``stream="sample"`` draw from that sequence itself (the attitude
+initial conditions, equal to :func:`ideas_hpc.attitude.initial_conditions`
+``(s, k, N)``); every other entry draws from the child
+``SeedSequence(s, spawn_key=(k, 1))``, in the order of :data:`DISPERSIONS`,
+and always draws, switched on or not, so switching one on does not shift the
+others. Append new entries at the end: an entry inserted earlier changes the
+numbers of every sample of existing campaigns. The order is stored in the
+store's ``dispersion_order`` attr.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from ..attitude import initial_conditions
+from ..core.frames import dcm_RT
+from ..core.mrp import mrp_from_dcm
+
+DISPERSION_CHILD = 1  # spawn_key suffix of the child stream
+
+
+@dataclass(frozen=True)
+class StoreVar:
+    """One per-sample store variable: extra dims after ``sample``, dtype, attrs."""
+
+    name: str
+    dims: tuple[str, ...]
+    dtype: type
+    units: str | None = None
+    long_name: str | None = None
+
+    def attrs(self) -> dict:
+        return {k: v for k, v in (("units", self.units), ("long_name", self.long_name)) if v}
+
+
+@dataclass(frozen=True)
+class Dispersion:
+    """One declared dispersion.
+
+    ``draw(rng, n, mc, setup, theta)`` returns the sample's values of
+    ``variables`` (SI, per spacecraft where the dims say so) from generator
+    ``rng``; ``perturb(values)`` returns the
+    :class:`~ideas_hpc.flyby.Perturbation` fields it sets.
+    """
+
+    name: str
+    draw: Callable[..., dict]
+    perturb: Callable[[dict], dict]
+    variables: tuple[StoreVar, ...]
+    stream: str = "child"
+
+
+def _attitude(rng, n, mc, setup, theta, *, seed, k):
+    if mc["attitude_dispersion"]:
+        s0, w0, W0 = initial_conditions(seed, k, n)
+    else:
+        s0, w0, W0 = reference_start(setup.body.params.spin_rate, theta)
+    return {"sigma0": s0, "omega0": w0, "wheel0": W0}
+
+
+def reference_start(spin_rate: float, theta: np.ndarray):
+    """Initial state without attitude dispersion: ``B = R_i`` at t0 (``[TN](t0) = I``),
+    turning with the body at ``spin_rate`` (rad/s); wheels at rest."""
+    n = theta.size
+    s0 = np.empty((n, 3))
+    w0 = np.empty((n, 3))
+    eye = np.eye(3)
+    for i in range(n):
+        c = dcm_RT(float(theta[i]), eye)
+        s0[i] = mrp_from_dcm(c)
+        w0[i] = c @ np.array([0.0, 0.0, spin_rate])
+    return s0, w0, np.zeros((n, 3))
+
+
+def _gravity(rng, n, mc, setup, theta):
+    z = rng.standard_normal(3)
+    p = setup.body.params
+    return {"c20": p.c20 * (1.0 + mc["sigma_c20_pct"] / 100.0 * z[0]),
+            "c22": p.c22 * (1.0 + mc["sigma_c22_pct"] / 100.0 * z[1]),
+            "mu": p.mu * (1.0 + mc["sigma_gm_pct"] / 100.0 * z[2])}
+
+
+def _reflectivity(rng, n, mc, setup, theta):
+    u = rng.uniform(0.0, 1.0)
+    lo, hi = mc["reflectivity_min"], mc["reflectivity_max"]
+    return {"reflectivity": lo + (hi - lo) * u}
+
+
+def _state(rng, n, mc, setup, theta):
+    dr = rng.standard_normal((n, 3))
+    dv = rng.standard_normal((n, 3))
+    return {"position_error": mc["sigma_position_m"] * dr,
+            "velocity_error": mc["sigma_velocity_mm_s"] * dv}
+
+
+def _failures(rng, n, mc, setup, theta):
+    perm = rng.permutation(n)
+    bern = rng.uniform(0.0, 1.0, n)
+    active = np.ones(n, dtype=bool)
+    if mc["failures_k"]:
+        active[perm[:mc["failures_k"]]] = False
+    active &= bern >= mc["failure_probability"]
+    return {"active": active, "n_failed": int((~active).sum())}
+
+
+def _misalignment(rng, n, mc, setup, theta):
+    axes = rng.standard_normal((n, 3))
+    angles = rng.standard_normal(n)
+    axes /= np.linalg.norm(axes, axis=1)[:, None]
+    return {"misalignment_prv": axes * (mc["sigma_misalignment_deg"] * angles)[:, None]}
+
+
+SC3 = ("spacecraft", "axis")
+DISPERSIONS: tuple[Dispersion, ...] = (
+    Dispersion("attitude", _attitude,
+               lambda v: {"ics": (v["sigma0"], v["omega0"], v["wheel0"])},
+               (StoreVar("sigma0", SC3, np.float64, "1", "initial sigma_BN"),
+                StoreVar("omega0", SC3, np.float64, "rad/s", "initial omega_BN_B"),
+                StoreVar("wheel0", ("spacecraft", "wheel"), np.float64, "rad/s",
+                         "initial wheel speeds")),
+               stream="sample"),
+    Dispersion("gravity", _gravity,
+               lambda v: {"params_override": {"mu": v["mu"], "c20": v["c20"], "c22": v["c22"]}},
+               (StoreVar("c20", (), np.float64, "m^2", "C20 (dispersed)"),
+                StoreVar("c22", (), np.float64, "m^2", "C22 (dispersed)"),
+                StoreVar("mu", (), np.float64, "m^3/s^2", "GM (dispersed)"))),
+    Dispersion("reflectivity", _reflectivity,
+               lambda v: {"params_override": {"reflectivity": v["reflectivity"]}},
+               (StoreVar("reflectivity", (), np.float64, "1"),)),
+    Dispersion("initial_state", _state,
+               lambda v: {"position_error_T": v["position_error"],
+                          "velocity_error_T": v["velocity_error"]},
+               (StoreVar("position_error", SC3, np.float64, "m",
+                         "initial position error, frame T"),
+                StoreVar("velocity_error", SC3, np.float64, "m/s",
+                         "initial velocity error, frame T"))),
+    Dispersion("failures", _failures, lambda v: {"active": v["active"]},
+               (StoreVar("active", ("spacecraft",), bool, None,
+                         "spacecraft working (False: failed)"),
+                StoreVar("n_failed", (), np.int32, None, "failed spacecraft"))),
+    Dispersion("misalignment", _misalignment,
+               lambda v: {"misalignment_prv": v["misalignment_prv"]},
+               (StoreVar("misalignment_prv", SC3, np.float64, "rad",
+                         "camera misalignment (PRV)"),)),
+)
+DISPERSION_ORDER = tuple(d.name for d in DISPERSIONS)
+DISPERSION_VARS: tuple[StoreVar, ...] = tuple(v for d in DISPERSIONS for v in d.variables)
+
+
+def draw_sample(mc: dict, seed: int, k: int, theta: np.ndarray, setup) -> tuple[dict, dict]:
+    """Every dispersion of sample ``k``, in declared order.
+
+    Returns
+    -------
+    values : dict
+        Store variable -> this sample's value (SI).
+    perturbation : dict
+        Keyword arguments of :class:`~ideas_hpc.flyby.Perturbation`.
+    """
+    n = theta.size
+    child = np.random.default_rng(np.random.SeedSequence(int(seed),
+                                                         spawn_key=(int(k), DISPERSION_CHILD)))
+    values: dict = {}
+    pert: dict = {}
+    for d in DISPERSIONS:
+        if d.stream == "sample":
+            v = d.draw(None, n, mc, setup, theta, seed=seed, k=k)
+        else:
+            v = d.draw(child, n, mc, setup, theta)
+        values.update(v)
+        for key, val in d.perturb(v).items():
+            if isinstance(val, dict):
+                pert.setdefault(key, {}).update(val)
+            else:
+                pert[key] = val
+    return values, pert
