@@ -8,9 +8,6 @@ and ONE factory, :func:`pack_forces`, turns the list into the record
     packed = pack_forces(terms, body.params, body.shape)
 
 Each settings object validates its fields when built (errors name the field).
-Exactly one gravity term (:class:`PointMass`, :class:`Degree2`,
-:class:`SphericalHarmonics`, :class:`Polyhedron`) and at most one
-:class:`CannonballSRP`.
 
 :class:`ForceModel` is the TOML ``[dynamics]`` table (:func:`force_model_from_config`)::
 
@@ -202,7 +199,7 @@ def pack_forces(terms, params: PhysicalParams, shape=None) -> PackedForceModel:
     shape : ideas_hpc.shape.Shape, optional
         Needed by :class:`Polyhedron`.
     """
-    kinds = [type(t) for t in terms]
+    kinds = [type(t) for t in terms]  # one gravity term: the record has one MODEL_ code
     n_grav = sum(k in GRAVITY_TERMS for k in kinds)
     if n_grav != 1:
         raise InputError(f"need exactly one gravity term, got {n_grav}", field="gravity")
@@ -275,12 +272,8 @@ class ForceModel:
         Table name on the data path or a path.
     srp : bool
         Cannonball solar radiation pressure.
-    reflectivity : float
-        ``C_r = 1 + reflectivity``.
-    sc_mass : float
-        kg.
-    sc_area : float
-        m^2.
+    reflectivity, sc_mass, sc_area : float
+        ``C_r = 1 + reflectivity``; kg; m^2 (:class:`CannonballSRP`).
     density : float or None
         kg/m^3 for the polyhedron; None means body mass / shape volume.
     rtol, atol : float
