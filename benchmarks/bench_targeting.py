@@ -32,6 +32,7 @@ from scipy.integrate import solve_ivp
 from ideas_hpc.bodies import load_body
 from ideas_hpc.constants import MU_SUN
 from ideas_hpc.core import propagate as P
+from ideas_hpc.core.forces import K_SRP
 from ideas_hpc.trajectory import ForceModel, pack_force_model, ring_states, target_swarm
 
 ANGLES = [0.2, 1.7, 2.4, 2.9, 3.3, 3.5, 5.6, 6.0]
@@ -121,9 +122,9 @@ def scipy_target(rhs, r0, rt, t0, tf, times, tol=0.01, max_iter=25):
 
 
 @njit(cache=True)
-def _rhs_loop(n, y, dy, model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd):
+def _rhs_loop(n, y, dy, fi, ff):
     for k in range(n):
-        P.rhs(0.1 * k, y, dy, model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd)
+        P.rhs(0.1 * k, y, dy, fi, ff)
         y[6] += 1e-300 * dy[6]  # keep the loop from being optimised away
     return dy[0]
 
@@ -146,7 +147,7 @@ def main():
           f"{int(res.nfev.sum())} RHS evals of 42 states, {res.times.size} samples each)")
 
     pk = pack_force_model(body, fm)
-    srp_coef = pk.consts[P.K_SRP]
+    srp_coef = pk.ff[K_SRP]
     rhs = make_numpy_rhs(params, srp_coef)
     t_sp = math.inf
     for _ in range(3):

@@ -1,290 +1,35 @@
-"""Flyby trajectories: force model, Sun direction and batched Newton targeting (SPEC section 4).
+"""Flyby trajectories: Sun direction and batched Newton targeting (SPEC section 4).
 
-Boundary layer and orchestration for :mod:`ideas_hpc.core.gravity`,
-:mod:`ideas_hpc.core.ephemeris`, :mod:`ideas_hpc.core.propagate` and
+Boundary layer and orchestration for :mod:`ideas_hpc.core.ephemeris` and
 :mod:`ideas_hpc.core.targeting`: it validates inputs (errors name the field),
-packs the force model into arrays once, and calls one compiled kernel for
-the whole swarm.
+packs the force model once (:func:`ideas_hpc.forces.pack_force_model`) and
+calls one compiled kernel for the whole swarm.
 
 Time convention: ``t`` (s) counts from the epoch of the heliocentric elements
 and of the prime-meridian angle (``t = 0``), so ``t0 = 0`` in the paper's
 flyby.
 
-Force-model options (TOML ``[dynamics]`` table, :func:`force_model_from_config`)::
-
-    gravity      = "degree2"   # point_mass | degree2 | spherical_harmonics | polyhedron
-    sh_degree    = 15          # spherical_harmonics: truncation degree
-    sh_file      = "n15acoeff.tab"
-    srp          = true
-    reflectivity = 0.6         # C_r = 1 + reflectivity
-    sc_mass      = 4.0         # kg
-    sc_area      = 0.035       # m^2 (30x10x10 cm box: total area / 4)
-    density      = 2670.0      # kg/m^3, polyhedron (default: body mass / shape volume)
-    rtol         = 1e-12       # integrator tolerances (DOP853)
-    atol         = 1e-9
+The force model (settings objects, the ``[dynamics]`` table and the packing)
+lives in :mod:`ideas_hpc.forces`; its names are re-exported here.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass
-from typing import NamedTuple
 
 import numpy as np
 
-from .constants import AU, G, MU_SUN, P_SUN_1AU
-from .core import propagate as _prop
-from .core.ephemeris import ephemeris_precompute, sun_T_batch
-from .core.gravity import polyhedron_precompute, sh_derivative_tables, sh_unnormalise
+from .constants import MU_SUN
+from .core.ephemeris import sun_T_batch
 from .core.targeting import propagate_batch, target_batch
 from .errors import InputError
+from .forces import (BOX_AREA, GRAVITY_MODELS, ForceModel,  # noqa: F401  (re-exported)
+                     PackedForceModel, elements_and_pole, force_model_from_config,
+                     pack_force_model, pack_forces)
 from .params import PhysicalParams
 
-GRAVITY_MODELS = ("point_mass", "degree2", "spherical_harmonics", "polyhedron")
-_MODEL_CODE = {"point_mass": _prop.MODEL_POINT_MASS, "degree2": _prop.MODEL_DEGREE2,
-               "spherical_harmonics": _prop.MODEL_SH, "polyhedron": _prop.MODEL_POLYHEDRON}
-
-#: 30 x 10 x 10 cm box (SPEC section 4): total surface area / 4, m^2.
-BOX_AREA = (4 * 0.30 * 0.10 + 2 * 0.10 * 0.10) / 4.0
 MAX_STEPS = 100_000
-
-
-@dataclass(frozen=True)
-class ForceModel:
-    """Force model of the flyby dynamics (SPEC section 4). SI units.
-
-    Attributes
-    ----------
-    gravity : {'point_mass', 'degree2', 'spherical_harmonics', 'polyhedron'}
-        ``degree2`` is the point mass plus the C20/C22 field of the body
-        parameters; ``spherical_harmonics`` uses ``sh_file`` (GM and reference
-        radius from its label); ``polyhedron`` the body's shape at ``density``.
-    sh_degree : int
-        Truncation degree of the spherical harmonics.
-    sh_file : str
-        Table name on the data path or a path.
-    srp : bool
-        Cannonball solar radiation pressure.
-    reflectivity : float
-        ``C_r = 1 + reflectivity``.
-    sc_mass : float
-        kg.
-    sc_area : float
-        m^2.
-    density : float or None
-        kg/m^3 for the polyhedron; None means body mass / shape volume.
-    rtol, atol : float
-        DOP853 tolerances (the accuracy contract of SPEC section 4 is checked at
-        1e-12 / 1e-9).
-    """
-
-    gravity: str = "degree2"
-    sh_degree: int = 15
-    sh_file: str = "n15acoeff.tab"
-    srp: bool = True
-    reflectivity: float = 0.6
-    sc_mass: float = 4.0
-    sc_area: float = BOX_AREA
-    density: float | None = None
-    rtol: float = 1e-12
-    atol: float = 1e-9
-
-    def __post_init__(self):
-        _check_force_model(self, "")
-
-
-def _check_force_model(fm: ForceModel, prefix: str) -> None:
-    if fm.gravity not in GRAVITY_MODELS:
-        raise InputError(f"must be one of {', '.join(GRAVITY_MODELS)}, got {fm.gravity!r}",
-                         field=f"{prefix}gravity")
-    if isinstance(fm.sh_degree, bool) or not isinstance(fm.sh_degree, (int, np.integer)) \
-            or not 2 <= fm.sh_degree <= 60:
-        raise InputError(f"must be an integer in [2, 60], got {fm.sh_degree!r}",
-                         field=f"{prefix}sh_degree")
-    if not isinstance(fm.sh_file, str) or not fm.sh_file:
-        raise InputError("must be a file name or path", field=f"{prefix}sh_file")
-    if not isinstance(fm.srp, (bool, np.bool_)):
-        raise InputError(f"must be true or false, got {fm.srp!r}", field=f"{prefix}srp")
-    checks = (("reflectivity", 0.0, 1.0, False), ("sc_mass", 0.0, math.inf, True),
-              ("sc_area", 0.0, math.inf, True), ("rtol", 0.0, 1.0, True),
-              ("atol", 0.0, math.inf, True))
-    for name, lo, hi, lo_open in checks:
-        v = getattr(fm, name)
-        if isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer)) \
-                or not math.isfinite(v) or v < lo or (lo_open and v == lo) or v > hi:
-            rng = f"{'>' if lo_open else '>='} {lo:g}" + ("" if hi == math.inf else f" and <= {hi:g}")
-            raise InputError(f"must be a finite number {rng}, got {v!r}", field=f"{prefix}{name}")
-    if fm.density is not None:
-        v = fm.density
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
-            raise InputError(f"must be a finite number > 0, got {v!r}", field=f"{prefix}density")
-
-
-_FM_FIELDS = {f.name for f in dataclasses.fields(ForceModel)}
-
-
-def force_model_from_config(table: dict | None, prefix: str = "dynamics.") -> ForceModel:
-    """Build a :class:`ForceModel` from a TOML table (keys as the attributes, SI units).
-
-    Unknown keys and bad values raise :class:`InputError` naming ``<prefix><key>``.
-    """
-    table = dict(table or {})
-    for k in table:
-        if k not in _FM_FIELDS:
-            raise InputError(f"unknown key {k!r}; allowed: {', '.join(sorted(_FM_FIELDS))}",
-                             field=f"{prefix}{k}")
-    kw = {}
-    for k, v in table.items():
-        if k in ("reflectivity", "sc_mass", "sc_area", "rtol", "atol", "density") \
-                and isinstance(v, int) and not isinstance(v, bool):
-            v = float(v)
-        kw[k] = v
-    fm = ForceModel.__new__(ForceModel)
-    for f in dataclasses.fields(ForceModel):
-        object.__setattr__(fm, f.name, kw.get(f.name, f.default))
-    _check_force_model(fm, prefix)
-    return fm
-
-
-# -------------------------------------------------------------- packing
-
-
-class PackedForceModel(NamedTuple):
-    """Arrays handed to the kernels (see :mod:`ideas_hpc.core.propagate`)."""
-
-    model: int
-    consts: np.ndarray
-    sh_c: np.ndarray
-    sh_s: np.ndarray
-    pv: np.ndarray
-    pf: np.ndarray
-    pe: np.ndarray
-    ped: np.ndarray
-    pfd: np.ndarray
-
-    def args(self):
-        return (self.model, self.consts, self.sh_c, self.sh_s, self.pv, self.pf, self.pe,
-                self.ped, self.pfd)
-
-
-_EMPTY3 = np.zeros((1, 1, 1))
-_POLY_CACHE: dict = {}
-_SH_CACHE: dict = {}
-
-
-def _poly_data(shape):
-    key = id(shape.vertices_T)
-    hit = _POLY_CACHE.get(key)
-    if hit is None or hit[0] is not shape.vertices_T:
-        v = np.ascontiguousarray(shape.vertices_T, dtype=np.float64)
-        f = np.ascontiguousarray(shape.faces, dtype=np.int64)
-        e, ed, fd = polyhedron_precompute(v, f)
-        hit = (shape.vertices_T, v, f, e, ed, fd)
-        _POLY_CACHE[key] = hit
-    return hit[1:]
-
-
-def _sh_field(fm: ForceModel):
-    from .gravity_field import load_sh_field
-
-    key = fm.sh_file
-    if key not in _SH_CACHE:
-        _SH_CACHE[key] = load_sh_field(fm.sh_file)
-    fld = _SH_CACHE[key]
-    if fm.sh_degree > fld.degree:
-        raise InputError(f"sh_degree {fm.sh_degree} above the table's degree {fld.degree}",
-                         field="dynamics.sh_degree")
-    return fld.truncated(fm.sh_degree)
-
-
-_OVERRIDE_KEYS = ("mu", "c20", "c22", "reflectivity")
-
-
-def _apply_override(params: PhysicalParams, fm: ForceModel, override):
-    """(params, reflectivity, changed-keys) after a Monte Carlo override."""
-    if override is None:
-        return params, fm.reflectivity, set()
-    if isinstance(override, PhysicalParams):
-        return override, fm.reflectivity, {"mu", "c20", "c22"}
-    if not isinstance(override, dict):
-        raise InputError("must be a dict or PhysicalParams", field="params_override")
-    refl = fm.reflectivity
-    rep = {}
-    for k, v in override.items():
-        if k not in _OVERRIDE_KEYS:
-            raise InputError(f"unknown key {k!r}; allowed: {', '.join(_OVERRIDE_KEYS)}",
-                             field=f"params_override.{k}")
-        if isinstance(v, bool) or not isinstance(v, (int, float, np.floating)) \
-                or not math.isfinite(v):
-            raise InputError(f"must be a finite number, got {v!r}", field=f"params_override.{k}")
-        if k == "mu" and v <= 0:
-            raise InputError("must be > 0", field="params_override.mu")
-        if k == "reflectivity":
-            if not 0.0 <= v <= 1.0:
-                raise InputError("must be in [0, 1]", field="params_override.reflectivity")
-            refl = float(v)
-        else:
-            rep[k] = float(v)
-    return dataclasses.replace(params, **rep), refl, set(rep)
-
-
-def pack_force_model(body, force_model: ForceModel = ForceModel(),
-                     params_override=None) -> PackedForceModel:
-    """Pack a force model for the kernels.
-
-    The expensive parts (polyhedron edge data, the spherical-harmonic table and
-    its derivative tables) are cached per shape / file, so a Monte Carlo
-    sample that perturbs ``mu``, ``c20``, ``c22`` or the reflectivity costs
-    only the array packing (and, for spherical harmonics with perturbed
-    C20/C22, one O(N^2) table rebuild).
-
-    ``params_override``: dict with SI keys ``mu`` (m^3/s^2), ``c20``, ``c22``
-    (m^2), ``reflectivity``, or a whole :class:`PhysicalParams`.
-    """
-    params = body.require_params()
-    params, refl, changed = _apply_override(params, force_model, params_override)
-    fm = force_model
-    consts = np.zeros(_prop.N_CONSTS)
-    consts[_prop.K_MU] = params.mu
-    consts[_prop.K_C20] = params.c20
-    consts[_prop.K_C22] = params.c22
-    consts[_prop.K_SPIN] = params.spin_rate
-    if fm.srp:
-        consts[_prop.K_SRP] = P_SUN_1AU * AU * AU * (1.0 + refl) * fm.sc_area / fm.sc_mass
-    consts[_prop.K_W0] = params.prime_meridian
-    consts[_prop.K_MU_SUN] = MU_SUN
-    consts[_prop.K_ELEM:_prop.K_ELEM + 6] = (params.orbit_a, params.orbit_e, params.orbit_i,
-                                             params.orbit_raan, params.orbit_argp,
-                                             params.orbit_nu)
-    if params.pole_ra is not None and params.pole_dec is not None:
-        consts[_prop.K_POLE:_prop.K_POLE + 3] = (params.pole_ra, params.pole_dec, 1.0)
-    consts[_prop.K_EPH:] = ephemeris_precompute(
-        consts[_prop.K_ELEM:_prop.K_ELEM + 6].copy(), consts[_prop.K_POLE:_prop.K_POLE + 3].copy(),
-        params.spin_rate, params.prime_meridian, MU_SUN)
-    e3 = _EMPTY3
-    sh_c = sh_s = e3
-    pv = np.zeros((1, 3))
-    pf = np.zeros((1, 3), dtype=np.int64)
-    pe = np.zeros((1, 2), dtype=np.int64)
-    ped = pfd = e3
-    if fm.gravity == "spherical_harmonics":
-        fld = _sh_field(fm)
-        nominal = body.require_params()
-        gm = fld.gm * (params.mu / nominal.mu if "mu" in changed else 1.0)
-        c, s = sh_unnormalise(fld.cbar, fld.sbar)
-        if "c20" in changed:
-            c[2, 0] = params.c20 / fld.r_ref ** 2
-        if "c22" in changed:
-            c[2, 2] = params.c22 / fld.r_ref ** 2
-        sh_c, sh_s = sh_derivative_tables(c, s)
-        consts[_prop.K_SH_GM] = gm
-        consts[_prop.K_SH_RREF] = fld.r_ref
-    elif fm.gravity == "polyhedron":
-        pv, pf, pe, ped, pfd = _poly_data(body.shape)
-        rho = fm.density if fm.density is not None else params.mu / (G * body.shape.volume)
-        consts[_prop.K_GRHO] = G * rho
-    return PackedForceModel(_MODEL_CODE[fm.gravity], consts, sh_c, sh_s, pv, pf, pe, ped, pfd)
 
 
 # -------------------------------------------------------------- Sun
@@ -314,24 +59,11 @@ def _sun(params: PhysicalParams, times):
     if t.ndim != 1 or not np.all(np.isfinite(t)):
         raise InputError("must be a 1-D array of finite times (s)", field="times")
     t = np.ascontiguousarray(t)
-    consts = pack_params_only(params)
+    elements, pole = elements_and_pole(params)
     dirs = np.empty((t.shape[0], 3))
     dist = np.empty(t.shape[0])
-    sun_T_batch(t, consts[_prop.K_ELEM:_prop.K_ELEM + 6].copy(),
-                consts[_prop.K_POLE:_prop.K_POLE + 3].copy(), params.spin_rate,
-                params.prime_meridian, MU_SUN, dirs, dist)
+    sun_T_batch(t, elements, pole, params.spin_rate, params.prime_meridian, MU_SUN, dirs, dist)
     return dirs, dist
-
-
-def pack_params_only(params: PhysicalParams) -> np.ndarray:
-    """``consts`` with the ephemeris part filled (helper for the Sun direction)."""
-    consts = np.zeros(_prop.N_CONSTS)
-    consts[_prop.K_ELEM:_prop.K_ELEM + 6] = (params.orbit_a, params.orbit_e, params.orbit_i,
-                                             params.orbit_raan, params.orbit_argp,
-                                             params.orbit_nu)
-    if params.pole_ra is not None and params.pole_dec is not None:
-        consts[_prop.K_POLE:_prop.K_POLE + 3] = (params.pole_ra, params.pole_dec, 1.0)
-    return consts
 
 
 # -------------------------------------------------------------- targeting

@@ -17,6 +17,7 @@ from scipy.integrate import solve_ivp
 from ideas_hpc.bodies import load_body
 from ideas_hpc.constants import AU, MU_SUN, P_SUN_1AU
 from ideas_hpc.core import propagate as P
+from ideas_hpc.core.forces import K_SRP
 from ideas_hpc.core.ephemeris import body_position_N
 from ideas_hpc.trajectory import BOX_AREA, ForceModel, pack_force_model, sun_direction_T
 
@@ -85,7 +86,7 @@ V0 = np.array([4.0, -3.2, 100.0])
 def test_propagator_vs_scipy_dop853_1mm():
     pk = pack_force_model(BODY, ForceModel(gravity="degree2", srp=True))
     srp = P_SUN_1AU * AU ** 2 * 1.6 * BOX_AREA / 4.0
-    assert pk.consts[P.K_SRP] == pytest.approx(srp, rel=1e-14)
+    assert pk.ff[K_SRP] == pytest.approx(srp, rel=1e-14)
     t_eval = np.linspace(0.0, 600.0, 61)
     ref = solve_ivp(scipy_rhs(PAR, srp), (0.0, 600.0), np.concatenate([R0, V0]),
                     method="DOP853", rtol=1e-12, atol=1e-9, t_eval=t_eval)

@@ -55,7 +55,7 @@ def _solve3(m, b, out):
 
 @njit(cache=True)
 def target_one(r0, r_target, t0, tf, tol, max_iter, rtol, atol, max_steps,
-               model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd, v0, miss):
+               fi, ff, v0, miss):
     """Newton targeting of one spacecraft.
 
     Parameters
@@ -70,8 +70,8 @@ def target_one(r0, r_target, t0, tf, tol, max_iter, rtol, atol, max_steps,
         Maximum number of Newton updates (25).
     rtol, atol, max_steps
         Integrator settings (:func:`ideas_hpc.core.propagate.dop853`).
-    model ... pfd
-        Packed force model.
+    fi, ff
+        Force record (:mod:`ideas_hpc.core.forces`).
     v0 : (3,) float64
         Output: the final initial velocity, m/s.
     miss : (max_iter + 1,) float64
@@ -100,7 +100,7 @@ def target_one(r0, r_target, t0, tf, tol, max_iter, rtol, atol, max_steps,
     converged = False
     while True:
         y, nf, status = propagate(r0, v0, t0, tf, True, rtol, atol, empty_t, empty_y,
-                                  max_steps, model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd)
+                                  max_steps, fi, ff)
         nfev += nf
         if status != STATUS_OK:
             break
@@ -129,7 +129,7 @@ def target_one(r0, r_target, t0, tf, tol, max_iter, rtol, atol, max_steps,
 
 @njit(cache=True, parallel=True)
 def target_batch(r0, r_target, t0, tf, tol, max_iter, rtol, atol, max_steps, t_out,
-                 model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd):
+                 fi, ff):
     """Target every spacecraft in one call (``prange`` over spacecraft).
 
     Parameters
@@ -140,8 +140,8 @@ def target_batch(r0, r_target, t0, tf, tol, max_iter, rtol, atol, max_steps, t_o
         As :func:`target_one`.
     t_out : (T,) float64
         Sample times in ``[t0, tf]`` (the attitude step, 0.1 s).
-    model ... pfd
-        Packed force model.
+    fi, ff
+        Force record (:mod:`ideas_hpc.core.forces`).
 
     Returns
     -------
@@ -165,19 +165,19 @@ def target_batch(r0, r_target, t0, tf, tol, max_iter, rtol, atol, max_steps, t_o
     states = np.full((n, t_out.shape[0], 6), np.nan)
     for i in prange(n):
         k, ok, nf = target_one(r0[i], r_target[i], t0, tf, tol, max_iter, rtol, atol,
-                               max_steps, model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd,
+                               max_steps, fi, ff,
                                v0[i], miss[i])
         n_iter[i] = k
         converged[i] = ok
         nfev[i] = nf
         propagate(r0[i], v0[i], t0, tf, False, rtol, atol, t_out, states[i], max_steps,
-                  model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd)
+                  fi, ff)
     return v0, miss, n_iter, converged, states, nfev
 
 
 @njit(cache=True, parallel=True)
 def propagate_batch(r0, v0, t0, tf, rtol, atol, max_steps, t_out,
-                    model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd):
+                    fi, ff):
     """Propagate every spacecraft from given ``(r0, v0)`` (``prange`` over spacecraft).
 
     For Monte Carlo flights of a designed trajectory with dispersed initial
@@ -196,6 +196,6 @@ def propagate_batch(r0, v0, t0, tf, rtol, atol, max_steps, t_out,
     status = np.zeros(n, dtype=np.int64)
     for i in prange(n):
         y, nf, st = propagate(r0[i], v0[i], t0, tf, False, rtol, atol, t_out, states[i],
-                              max_steps, model, consts, sh_c, sh_s, pv, pf, pe, ped, pfd)
+                              max_steps, fi, ff)
         status[i] = st
     return states, status
