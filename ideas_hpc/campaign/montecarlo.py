@@ -37,11 +37,12 @@ from ..attitude import initial_conditions
 from ..core.frames import dcm_RT
 from ..core.mrp import mrp_from_dcm
 from ..engine.runner import run_campaign
-from ..flyby import FlybySetup, camera_dcms, endpoints, misalignment_dcms, setup_from_campaign
+from ..flyby import (FlybySetup, camera_dcms, endpoints, misalignment_dcms, setup_from_campaign,
+                     target)
 from ..mapping import compute_coverage
-from ..trajectory import propagate_swarm, sun_direction_T, target_swarm
+from ..trajectory import propagate_swarm, sun_direction_T
 from . import datasets
-from .schema import Campaign
+from .schema import Campaign, resolved_config
 
 DISPERSION_CHILD = 1
 
@@ -136,9 +137,8 @@ class Nominal:
 
 def design_nominal(setup: FlybySetup, theta, periods) -> Nominal:
     th = np.asarray(theta, dtype=float)
-    r0, rt = endpoints(setup, th)
-    tg = target_swarm(setup.body, r0, rt, setup.t0, setup.tf, force_model=setup.force_model,
-                      dt_sample=setup.dt, tol=setup.tol, max_iter=setup.max_iter)
+    r0, _ = endpoints(setup, th)
+    tg = target(setup, th)
     return Nominal(th, None if periods is None else np.asarray(periods, float), r0, tg.v0_T,
                    tg.times, tg.position_T, tg.velocity_T, tg.miss)
 
@@ -271,7 +271,7 @@ def run_sample(c: Campaign, k: int) -> dict:
 def run_monte_carlo(c: Campaign, out, *, workers=None, scheduler=None, resume=False,
                     cluster="local", slurm_config=None, progress=True):
     """Kind ``monte-carlo``: chunked, resumable, on dask (SPEC section 8)."""
-    from .run import _base_attrs, resolved
+    from .run import _base_attrs
 
     setup, nom = _prepare(c)
     print(f"body: {setup.body.note}", file=sys.stderr, flush=True)
@@ -283,7 +283,7 @@ def run_monte_carlo(c: Campaign, out, *, workers=None, scheduler=None, resume=Fa
     attrs = _base_attrs(c, setup)
     for key in ("config", "config_hash"):
         attrs.pop(key)
-    summary = run_campaign(out, template, fn, config=resolved(c), campaign_seed=c.cfg["seed"],
+    summary = run_campaign(out, template, fn, config=resolved_config(c), campaign_seed=c.cfg["seed"],
                            chunk_size=c.cfg["run"]["chunk_size"], attrs=attrs, resume=resume,
                            workers=workers, scheduler=scheduler, cluster=cluster,
                            slurm_config=slurm_config, progress=progress)

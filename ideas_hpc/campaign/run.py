@@ -24,20 +24,13 @@ import xarray as xr
 
 from .._version import code_version
 from ..engine.lock import StoreLock
-from ..engine.store import config_diff, config_hash, config_json
+from ..config import get_path
+from ..engine.store import config_diff, config_hash, config_json, warn_code_version
 from ..errors import InputError
 from ..flyby import candidate_masks, fly, setup_from_campaign
 from ..swarm_eval import MaskBank, fov_keys, nadir_keys, snap_angle
 from . import datasets
-from .schema import Campaign, load
-
-
-def resolved(c: Campaign) -> dict:
-    """The campaign as run: the file's values with ``--set`` applied, plus the kind."""
-    out = json.loads(config_json(c.raw))
-    out["kind"] = c.kind
-    out.setdefault("seed", c.cfg["seed"])
-    return out
+from .schema import EXECUTION_KNOBS, SCHEMA, Campaign, load, resolved_config
 
 
 def _log(msg: str) -> None:
@@ -56,11 +49,13 @@ def _prepare_out(out: Path, c: Campaign, resume: bool) -> bool:
     except Exception as exc:  # not a readable store
         raise InputError(f"{out} exists but is not a readable store ({exc})", field="--out") \
             from None
-    if attrs.get("config_hash") != config_hash(resolved(c)):
+    now = resolved_config(c)
+    if attrs.get("config_hash") != config_hash(now):
         old = json.loads(attrs.get("config", "{}"))
-        diff = "; ".join(config_diff(old, resolved(c))) or "unknown differences"
+        diff = "; ".join(config_diff(old, now)) or "unknown differences"
         raise InputError(f"store {out} was written by an incompatible config ({diff})",
                          field="--resume")
+    warn_code_version(out, attrs)
     return False
 
 
@@ -81,8 +76,10 @@ def _write_atomic(ds: xr.Dataset, out: Path) -> None:
 
 
 def _base_attrs(c: Campaign, setup) -> dict:
-    attrs = {"kind": c.kind, "config": config_json(resolved(c)),
-             "config_hash": config_hash(resolved(c)), "code_version": code_version(),
+    cfg = resolved_config(c)
+    knobs = {k: get_path(c.cfg, k) for k in EXECUTION_KNOBS}
+    attrs = {"kind": c.kind, "config": config_json(cfg), "config_hash": config_hash(cfg),
+             "execution": config_json(knobs), "code_version": code_version(),
              "campaign_seed": int(c.cfg["seed"]), "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
              "campaign_file": str(c.source.path)}
     attrs.update(datasets.setup_attrs(setup))
@@ -261,8 +258,23 @@ RUNNERS = {"flyby": run_flyby, "design-nadir": run_design, "design-fov": run_des
 
 def run_file(path, *, out=None, overrides=None, workers=None, scheduler=None, resume=False,
              cluster="local", slurm_config=None, progress=True) -> Path:
-    """Run any campaign file; returns the store path."""
+    """Run any campaign file; returns the store path.
+
+    Every :class:`~ideas_hpc.errors.InputError` leaves here with the campaign
+    file and line of its field (when it names one), and no store is left.
+    """
     c = load(path, overrides)
+    try:
+        return _run(c, out=out, workers=workers, scheduler=scheduler, resume=resume,
+                    cluster=cluster, slurm_config=slurm_config, progress=progress)
+    except InputError as exc:
+        if (exc.field or "").split(".")[0] not in SCHEMA:  # --out, --resume: no file line
+            raise
+        raise c.source.locate(exc) from None
+
+
+def _run(c: Campaign, *, out, workers, scheduler, resume, cluster, slurm_config,
+         progress) -> Path:
     out = Path(out) if out else Path(Path(c.source.path).stem + ".zarr")
     run_cfg = c.cfg["run"]
     workers = workers if workers is not None else run_cfg["workers"]
