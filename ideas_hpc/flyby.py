@@ -105,7 +105,8 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
     except InputError as exc:
         if exc.field in (None, "body", "body.params", "data_path"):
             f = {"data_path": "body.data_path", None: "body.name"}.get(exc.field, exc.field)
-            raise c.error(exc.message, "body.name" if f == "body" else f) from None
+            msg = f"{exc.message}: {exc.file}" if exc.file else exc.message
+            raise c.error(msg, "body.name" if f == "body" else f) from None
         raise c.source.locate(exc) from None
     inst = cfg["instrument"]
     sizing = size_flyby(r_max=body.shape.r_max, r_min=body.shape.r_min,
