@@ -271,8 +271,6 @@ def run_sample(c: Campaign, k: int) -> dict:
 def run_monte_carlo(c: Campaign, out, *, workers=None, scheduler=None, resume=False,
                     cluster="local", slurm_config=None, progress=True):
     """Kind ``monte-carlo``: chunked, resumable, on dask (SPEC section 8)."""
-    from .run import _base_attrs
-
     setup, nom = _prepare(c)
     print(f"body: {setup.body.note}", file=sys.stderr, flush=True)
     mc = c.cfg["monte_carlo"]
@@ -280,7 +278,7 @@ def run_monte_carlo(c: Campaign, out, *, workers=None, scheduler=None, resume=Fa
     template = mc_template(setup, nom, n)
     fn = functools.partial(mc_chunk, setup=setup, nominal=nom.for_tasks(), mc=mc,
                            seed=c.cfg["seed"])
-    attrs = _base_attrs(c, setup)
+    attrs = datasets.base_attrs(c, setup)
     for key in ("config", "config_hash"):
         attrs.pop(key)
     summary = run_campaign(out, template, fn, config=resolved_config(c), campaign_seed=c.cfg["seed"],

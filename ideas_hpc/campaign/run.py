@@ -22,15 +22,14 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from .._version import code_version
+from .._version import warn_code_version
 from ..engine.lock import StoreLock
-from ..config import get_path
-from ..engine.store import config_diff, config_hash, config_json, warn_code_version
+from ..engine.store import config_diff, config_hash
 from ..errors import InputError
 from ..flyby import candidate_masks, fly, setup_from_campaign
 from ..swarm_eval import MaskBank, fov_keys, nadir_keys, snap_angle
 from . import datasets
-from .schema import EXECUTION_KNOBS, SCHEMA, Campaign, load, resolved_config
+from .schema import SCHEMA, Campaign, load, resolved_config
 
 
 def _log(msg: str) -> None:
@@ -75,17 +74,6 @@ def _write_atomic(ds: xr.Dataset, out: Path) -> None:
             shutil.rmtree(tmp, ignore_errors=True)
 
 
-def _base_attrs(c: Campaign, setup) -> dict:
-    cfg = resolved_config(c)
-    knobs = {k: get_path(c.cfg, k) for k in EXECUTION_KNOBS}
-    attrs = {"kind": c.kind, "config": config_json(cfg), "config_hash": config_hash(cfg),
-             "execution": config_json(knobs), "code_version": code_version(),
-             "campaign_seed": int(c.cfg["seed"]), "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
-             "campaign_file": str(c.source.path)}
-    attrs.update(datasets.setup_attrs(setup))
-    return attrs
-
-
 def run_flyby(c: Campaign, out: Path, **_) -> xr.Dataset:
     """Kind ``flyby``: one flyby of ``swarm.angles_rad``."""
     setup = setup_from_campaign(c)
@@ -98,7 +86,7 @@ def run_flyby(c: Campaign, out: Path, **_) -> xr.Dataset:
          f"(area), {100 * res.coverage.coverage_count:.3f} % (vertices) in "
          f"{time.perf_counter() - t:.1f} s")
     ds = datasets.flyby_dataset(setup, res)
-    ds.attrs.update(_base_attrs(c, setup))
+    ds.attrs.update(datasets.base_attrs(c, setup))
     return ds
 
 
@@ -246,7 +234,7 @@ def run_design(c: Campaign, out: Path, *, workers=None, scheduler=None, cluster=
     ds = xr.merge([ds, datasets.with_attrs(g)], combine_attrs="override")
     ds["best_fitness"].attrs["long_name"] = ("fitness (-N if feasible)" if c.kind == "design-nadir"
                                             else "coverage, %")
-    ds.attrs.update(_base_attrs(c, setup))
+    ds.attrs.update(datasets.base_attrs(c, setup))
     ds.attrs.update({"ga_evaluations": int(res.evaluations), "ga_wall_s": float(wall),
                      "target_coverage": float(res.target_coverage),
                      "notes": json.dumps(res.notes)})

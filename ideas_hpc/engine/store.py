@@ -393,22 +393,6 @@ def _encoding(ds, plan: ChunkPlan, compressors) -> dict:
     return enc
 
 
-def warn_code_version(path, attrs: Mapping) -> None:
-    """One line on stderr when a store being resumed was written by other code.
-
-    Not an error: the config hash guards the numbers' inputs; a code change
-    may or may not change them, and the user decides.
-    """
-    import sys
-
-    from .._version import code_version
-
-    old, now = attrs.get("code_version"), code_version()
-    if old != now:
-        print(f"ideas-hpc: warning: {path} was written by code version {old}, resuming with "
-              f"{now}", file=sys.stderr, flush=True)
-
-
 def _check_compatible(path: Path, chash: str, config: Mapping, plan: ChunkPlan,
                       layout: dict, campaign_seed: int) -> None:
     try:
@@ -433,6 +417,8 @@ def _check_compatible(path: Path, chash: str, config: Mapping, plan: ChunkPlan,
     if problems:
         raise InputError(f"cannot resume store {path}: it was written by an incompatible "
                          "config: " + "; ".join(problems), field="out")
+    from .._version import warn_code_version
+
     warn_code_version(path, attrs)
 
 
