@@ -7,6 +7,8 @@ the field, print no traceback and leave nothing in the output folder.
 
 from __future__ import annotations
 
+import subprocess
+import sys
 import tomllib
 from pathlib import Path
 
@@ -59,3 +61,13 @@ def test_bad_input(case, tmp_path, capsys):
     assert "Traceback" not in text
     assert case["expect"].format(file=campaign) in text, text
     assert not list(out_dir.iterdir()), "a store or partial store was left behind"
+
+
+def test_issue_command_through_the_real_cli(tmp_path):
+    """The command from issue 11, as a user types it: one line, status 2, nothing written."""
+    r = subprocess.run([sys.executable, "-m", "ideas_hpc.cli", "run",
+                        str(CAMPAIGNS / "eros-flyby.toml"), "--set", "flyby.max_iterations=0"],
+                       capture_output=True, text=True, cwd=tmp_path, timeout=120)
+    assert r.returncode == 2
+    assert r.stdout == "" and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert "flyby.max_iterations" in r.stderr and not list(tmp_path.iterdir())

@@ -26,7 +26,7 @@ from .._version import warn_code_version
 from ..engine.lock import StoreLock
 from ..engine.store import config_diff, config_hash
 from ..errors import InputError
-from ..flyby import candidate_masks, fly, setup_from_campaign
+from ..flyby import candidate_masks, fly, setup_from_campaign, target
 from ..swarm_eval import MaskBank, fov_keys, nadir_keys, snap_angle
 from . import datasets
 from .schema import SCHEMA, Campaign, load, resolved_config
@@ -206,6 +206,10 @@ def run_design(c: Campaign, out: Path, *, workers=None, scheduler=None, cluster=
 
     setup = setup_from_campaign(c)
     _log(f"body: {setup.body.note}")
+    # A targeting failure is the user's to fix: find it here, in one line, rather
+    # than as a failed task on every worker (the GA targets these same rings).
+    target(setup, np.linspace(0.0, 2 * np.pi, 16, endpoint=False)
+           if c.kind == "design-nadir" else _fov_swarm(c))
     t = time.perf_counter()
     design = design_nadir if c.kind == "design-nadir" else design_fov
     if workers == 0 and scheduler is None and cluster == "local":
