@@ -58,7 +58,8 @@ def run(n_workers: int, c, setup, nom, out: Path):
     with local_cluster(n_workers) as cluster, Client(cluster) as client:
         _warm(client, fn)
         s = run_campaign(out, mc_template(setup, nom, mc["samples"]), fn,
-                         config=resolved_config(c), campaign_seed=c.cfg["seed"], chunk_size=c.cfg["run"]["chunk_size"],
+                         config=resolved_config(c), campaign_seed=c.cfg["seed"],
+                         chunk_size=c.cfg["run"]["chunk_size"],
                          client=client, progress=False)
     return s
 

@@ -281,8 +281,9 @@ def run_monte_carlo(c: Campaign, out, *, workers=None, scheduler=None, resume=Fa
     attrs = datasets.base_attrs(c, setup)
     for key in ("config", "config_hash"):
         attrs.pop(key)
-    summary = run_campaign(out, template, fn, config=resolved_config(c), campaign_seed=c.cfg["seed"],
-                           chunk_size=c.cfg["run"]["chunk_size"], attrs=attrs, resume=resume,
+    summary = run_campaign(out, template, fn, config=resolved_config(c),
+                           campaign_seed=c.cfg["seed"], chunk_size=c.cfg["run"]["chunk_size"],
+                           attrs=attrs, resume=resume,
                            workers=workers, scheduler=scheduler, cluster=cluster,
                            slurm_config=slurm_config, progress=progress)
     print(str(summary), file=sys.stderr, flush=True)
