@@ -33,7 +33,7 @@ import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 
 from ideas_hpc.campaign.montecarlo import _prepare, mc_chunk, mc_template  # noqa: E402
-from ideas_hpc.campaign.run import resolved  # noqa: E402
+from ideas_hpc.campaign.schema import resolved_config  # noqa: E402
 from ideas_hpc.campaign.schema import load  # noqa: E402
 from ideas_hpc.engine.cluster import local_cluster  # noqa: E402
 from ideas_hpc.engine.runner import run_campaign  # noqa: E402
@@ -57,8 +57,9 @@ def run(n_workers: int, c, setup, nom, out: Path):
                            seed=c.cfg["seed"])
     with local_cluster(n_workers) as cluster, Client(cluster) as client:
         _warm(client, fn)
-        s = run_campaign(out, mc_template(setup, nom, mc["samples"]), fn, config=resolved(c),
-                         campaign_seed=c.cfg["seed"], chunk_size=c.cfg["run"]["chunk_size"],
+        s = run_campaign(out, mc_template(setup, nom, mc["samples"]), fn,
+                         config=resolved_config(c), campaign_seed=c.cfg["seed"],
+                         chunk_size=c.cfg["run"]["chunk_size"],
                          client=client, progress=False)
     return s
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import subprocess
+import sys
 from pathlib import Path
 
 __version__ = "0.1.0"
@@ -22,3 +23,15 @@ def code_version() -> str:
     except (OSError, subprocess.SubprocessError):
         pass
     return __version__
+
+
+def warn_code_version(store, attrs) -> None:
+    """One line on stderr when a store being resumed was written by other code.
+
+    Not an error: the config hash guards what the numbers depend on in the
+    input; whether a code change moves them is for the user to judge.
+    """
+    old, now = attrs.get("code_version"), code_version()
+    if old != now:
+        print(f"ideas-hpc: warning: {store} was written by code version {old}, resuming with "
+              f"{now}", file=sys.stderr, flush=True)

@@ -148,7 +148,14 @@ def load_campaign(path, overrides: list[str] | None = None) -> CampaignSource:
     p = Path(path)
     if not p.is_file():
         raise InputError("campaign file not found", file=p)
-    text = p.read_text(encoding="utf-8")
+    try:
+        text = p.read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
+        line = p.read_bytes()[:exc.start].count(b"\n") + 1
+        raise InputError(f"not a UTF-8 text file (byte {exc.start}); a campaign file is TOML "
+                         "text", file=p, line=line) from None
+    except OSError as exc:
+        raise InputError(f"cannot read the campaign file: {exc.strerror}", file=p) from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

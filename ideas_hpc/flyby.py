@@ -32,8 +32,9 @@ from .core.mrp import dcm_from_mrp, mrp_from_prv
 from .errors import InputError
 from .mapping import CoverageOptions, CoverageResult, compute_coverage, observed_per_spacecraft
 from .sizing import Sizing, size_flyby
-from .trajectory import (ForceModel, TargetingResult, propagate_swarm, ring_states,
-                         sun_direction_T, target_swarm)
+from .swarm_geometry import check_separation
+from .trajectory import (ForceModel, TargetingError, TargetingResult, propagate_swarm,
+                         ring_states, sun_direction_T, target_swarm)
 
 TWO_PI = 2.0 * math.pi
 
@@ -104,7 +105,8 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
     except InputError as exc:
         if exc.field in (None, "body", "body.params", "data_path"):
             f = {"data_path": "body.data_path", None: "body.name"}.get(exc.field, exc.field)
-            raise c.error(exc.message, "body.name" if f == "body" else f) from None
+            msg = f"{exc.message}: {exc.file}" if exc.file else exc.message
+            raise c.error(msg, "body.name" if f == "body" else f) from None
         raise c.source.locate(exc) from None
     inst = cfg["instrument"]
     sizing = size_flyby(r_max=body.shape.r_max, r_min=body.shape.r_min,
@@ -120,10 +122,17 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
     fb = cfg["flyby"]
     att = cfg["attitude"]
     ex = c.extras
+    d_sep = fb["d_sep_km"] if fb["d_sep_km"] is not None else sizing.d_sep
+    sw = cfg["swarm"]
+    if sw["angles_rad"] and fb["configuration"] == "ring":
+        try:
+            check_separation(sw["angles_rad"], d_sep, sw["min_separation_km"])
+        except InputError as exc:
+            raise c.source.locate(exc) from None
     return FlybySetup(
         body=body, sizing=sizing, t0=fb["t0_s"], tf=fb["tf_s"], dt=fb["dt_s"],
         image_dt=1.0 / inst["image_rate_hz"],
-        d_sep=fb["d_sep_km"] if fb["d_sep_km"] is not None else sizing.d_sep,
+        d_sep=d_sep,
         z_start=fb["z_start_km"], z_stop=fb["z_stop_km"], configuration=fb["configuration"],
         helix_rise=fb["helix_rise_km"], eta=eta, near=sizing.near, far=sizing.far,
         theta_max=att["theta_max_deg"] if att["theta_max_deg"] is not None else sizing.theta_max,
@@ -140,6 +149,64 @@ def endpoints(setup: FlybySetup, theta) -> tuple[np.ndarray, np.ndarray]:
     if setup.configuration == "helix":
         rise = setup.helix_rise * (np.mod(th, TWO_PI) / TWO_PI)
     return ring_states(setup.body, th, setup.d_sep, setup.z_start + rise, setup.z_stop + rise)
+
+
+def target(setup: FlybySetup, theta, *, raise_on_failure: bool = True) -> TargetingResult:
+    """Target the swarm ``theta`` (rad) from its start to its arrival point.
+
+    A failure the user can fix becomes an :class:`~ideas_hpc.errors.InputError`
+    naming the campaign field to change (:func:`targeting_input_error`).
+    """
+    th = np.asarray(theta, dtype=np.float64).ravel()
+    r0, rt = endpoints(setup, th)
+    try:
+        return target_swarm(setup.body, r0, rt, setup.t0, setup.tf,
+                            force_model=setup.force_model, dt_sample=setup.dt, tol=setup.tol,
+                            max_iter=setup.max_iter, raise_on_failure=raise_on_failure)
+    except TargetingError as exc:
+        raise targeting_input_error(exc, setup, th) from None
+    except InputError as exc:
+        if exc.field not in ("r0_T", "r_target_T"):
+            raise
+        raise InputError(f"{exc.message}: the flyby starts or ends too close to the body; "
+                         "move flyby.z_start_km / flyby.z_stop_km further out",
+                         field="flyby.z_start_km" if exc.field == "r0_T"
+                         else "flyby.z_stop_km") from None
+
+
+def targeting_input_error(exc: TargetingError, setup: FlybySetup, theta) -> InputError:
+    """One line for a failed targeting: the worst spacecraft, its miss, the field to change.
+
+    The cause is read off the failed spacecraft's last trajectory and miss history:
+
+    * it came within ``R_max`` of the body's centre (or the integrator gave up):
+      the flyby is too close, ``flyby.d_sep_km``;
+    * it used every iteration but the miss stopped shrinking over the last
+      three (Newton converges quadratically until integration noise): the
+      tolerance is tighter than the integration allows, ``flyby.tolerance_m``;
+    * otherwise it ran out of iterations, ``flyby.max_iterations``.
+    """
+    res = exc.result
+    failed = np.asarray(exc.failed, dtype=int)
+    fm = res.final_miss
+    worst = int(failed[np.argmax(np.where(np.isfinite(fm[failed]), fm[failed], np.inf))])
+    n = int(res.n_iter[worst])
+    hist = res.miss[worst, :n + 1]
+    closest = float(np.min(np.linalg.norm(res.position_T[worst], axis=1)))
+    r_max = setup.body.shape.r_max
+    others = f" (and {failed.size - 1} more)" if failed.size > 1 else ""
+    head = (f"targeting did not converge for spacecraft {worst}{others} at swarm angle "
+            f"{theta[worst]:.4g} rad: miss {fm[worst]:.3g} m after {n} iterations, tolerance "
+            f"{setup.tol:g} m; ")
+    if closest <= r_max or not np.all(np.isfinite(hist)) or n < setup.max_iter:
+        return InputError(head + f"its path comes within {closest / 1e3:.3g} km of the body's "
+                          f"centre (R_max {r_max / 1e3:.3g} km): increase flyby.d_sep_km "
+                          f"(now {setup.d_sep / 1e3:.4g} km)", field="flyby.d_sep_km")
+    if n >= 4 and np.min(hist[-3:]) >= 0.5 * np.min(hist[:-3]):
+        return InputError(head + f"the miss stalls near {np.min(hist):.3g} m: loosen "
+                          "flyby.tolerance_m", field="flyby.tolerance_m")
+    return InputError(head + f"raise flyby.max_iterations (now {setup.max_iter})",
+                      field="flyby.max_iterations")
 
 
 def misalignment_dcms(prv) -> np.ndarray:
@@ -223,10 +290,7 @@ def fly(setup: FlybySetup, theta, periods=None, *, sample: int = 0, ics=None,
     th = np.asarray(theta, dtype=np.float64).ravel()
     if th.size == 0:
         raise InputError("needs at least one spacecraft", field="swarm.angles_rad")
-    r0, rt = endpoints(setup, th)
-    tgt = target_swarm(setup.body, r0, rt, setup.t0, setup.tf, force_model=setup.force_model,
-                       dt_sample=setup.dt, tol=setup.tol, max_iter=setup.max_iter,
-                       raise_on_failure=raise_on_failure)
+    tgt = target(setup, th, raise_on_failure=raise_on_failure)
     r_img = np.ascontiguousarray(tgt.position_T[:, ::setup.image_every])
     if ics is None and setup.attitude_mode == "simulated":
         ics = initial_conditions(setup.seed, sample, th.size)
@@ -288,10 +352,7 @@ def candidate_masks(setup: FlybySetup, keys) -> np.ndarray:
     """
     th = np.array([k[0] for k in keys], dtype=np.float64)
     per = np.array([k[1] for k in keys], dtype=np.float64)
-    r0, rt = endpoints(setup, th)
-    tgt = target_swarm(setup.body, r0, rt, setup.t0, setup.tf, force_model=setup.force_model,
-                       dt_sample=setup.dt, tol=setup.tol, max_iter=setup.max_iter,
-                       raise_on_failure=True)
+    tgt = target(setup, th)
     r_img = np.ascontiguousarray(tgt.position_T[:, ::setup.image_every])
     periods = per if setup.att_mode == "fov" else None
     if setup.attitude_mode == "simulated":

@@ -143,3 +143,23 @@ def validate(data: Any, schema: dict, prefix: str = "") -> dict:
             continue
         out[key] = _coerce(data[key], spec, name)
     return out
+
+
+def with_defaults(data: Any, schema: dict) -> dict:
+    """``data`` with every absent key of ``schema`` filled by its default, in the file's units.
+
+    The counterpart of :func:`validate` for the record of a run: no unit
+    conversion, so the result reads like a campaign file with nothing left
+    implicit. Call it on data that :func:`validate` accepted. Required keys
+    without a value and ``any`` fields are copied as they are.
+    """
+    data = data if isinstance(data, dict) else {}
+    out: dict = {}
+    for key, spec in schema.items():
+        if isinstance(spec, dict):
+            out[key] = with_defaults(data.get(key), spec)
+        elif key in data:
+            out[key] = data[key]
+        elif spec.default is not REQUIRED:
+            out[key] = spec.default
+    return out

@@ -138,6 +138,17 @@ def test_mc_bad_input_leaves_nothing(tmp_path, sets, field):
     assert not out.exists() and not any(tmp_path.iterdir())
 
 
+def test_mc_store_holds_the_resolved_config(one_worker):
+    """The engine path records the same fully resolved config as the flyby path."""
+    import json
+
+    from ideas_hpc.campaign.schema import resolved_config
+
+    stored = json.loads(xr.open_zarr(one_worker).attrs["config"])
+    assert stored == resolved_config(load(MC, SHORT))
+    assert stored["monte_carlo"]["sigma_c20_pct"] == 5.0 and "models" in stored
+
+
 def test_existing_store_and_incompatible_resume(one_worker):
     with pytest.raises(InputError, match="exists"):
         run_file(MC, out=one_worker, overrides=SHORT, workers=1, progress=False)

@@ -119,3 +119,23 @@ def setup_attrs(setup) -> dict:
         "attitude_mode": setup.attitude_mode, "coverage_mode": setup.coverage.mode,
         "targeting_tolerance_m": float(setup.tol), "configuration": setup.configuration,
     }
+
+
+def base_attrs(c, setup) -> dict:
+    """Global attrs of every campaign store: kind, resolved config and its hash, code
+    version, seed, execution settings (not hashed) and the setup's sizing."""
+    import time
+
+    from .._version import code_version
+    from ..config import get_path
+    from ..engine.store import config_hash, config_json
+    from .schema import EXECUTION_KNOBS, resolved_config
+
+    cfg = resolved_config(c)
+    knobs = {k: get_path(c.cfg, k) for k in EXECUTION_KNOBS}
+    attrs = {"kind": c.kind, "config": config_json(cfg), "config_hash": config_hash(cfg),
+             "execution": config_json(knobs), "code_version": code_version(),
+             "campaign_seed": int(c.cfg["seed"]), "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+             "campaign_file": str(c.source.path)}
+    attrs.update(setup_attrs(setup))
+    return attrs

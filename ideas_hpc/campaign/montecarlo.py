@@ -28,7 +28,7 @@ from ..flyby import FlybySetup, Perturbation, setup_from_campaign
 from ..montecarlo.dispersions import DISPERSION_ORDER, DISPERSION_VARS, draw_sample
 from ..montecarlo.sample import Nominal, design_nominal, fly_sample
 from . import datasets
-from .schema import Campaign
+from .schema import Campaign, resolved_config
 
 
 def mc_chunk(chunk_id: int, start: int, stop: int, *, setup: FlybySetup, nominal: Nominal,
@@ -108,8 +108,6 @@ def run_sample(c: Campaign, k: int) -> dict:
 def run_monte_carlo(c: Campaign, out, *, workers=None, scheduler=None, resume=False,
                     cluster="local", slurm_config=None, progress=True):
     """Kind ``monte-carlo``: chunked, resumable, on dask (SPEC section 8)."""
-    from .run import _base_attrs, resolved
-
     setup, nom = _prepare(c)
     print(f"body: {setup.body.note}", file=sys.stderr, flush=True)
     mc = c.cfg["monte_carlo"]
@@ -117,12 +115,13 @@ def run_monte_carlo(c: Campaign, out, *, workers=None, scheduler=None, resume=Fa
     template = mc_template(setup, nom, n)
     fn = functools.partial(mc_chunk, setup=setup, nominal=nom.for_tasks(), mc=mc,
                            seed=c.cfg["seed"])
-    attrs = _base_attrs(c, setup)
+    attrs = datasets.base_attrs(c, setup)
     for key in ("config", "config_hash"):
         attrs.pop(key)
     attrs["dispersion_order"] = list(DISPERSION_ORDER)  # fixes the draw order
-    summary = run_campaign(out, template, fn, config=resolved(c), campaign_seed=c.cfg["seed"],
-                           chunk_size=c.cfg["run"]["chunk_size"], attrs=attrs, resume=resume,
+    summary = run_campaign(out, template, fn, config=resolved_config(c),
+                           campaign_seed=c.cfg["seed"], chunk_size=c.cfg["run"]["chunk_size"],
+                           attrs=attrs, resume=resume,
                            workers=workers, scheduler=scheduler, cluster=cluster,
                            slurm_config=slurm_config, progress=progress)
     print(str(summary), file=sys.stderr, flush=True)

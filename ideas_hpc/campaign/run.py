@@ -22,22 +22,14 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from .._version import code_version
+from .._version import warn_code_version
 from ..engine.lock import StoreLock
-from ..engine.store import config_diff, config_hash, config_json
+from ..engine.store import config_diff, config_hash
 from ..errors import InputError
-from ..flyby import candidate_masks, fly, setup_from_campaign
+from ..flyby import candidate_masks, fly, setup_from_campaign, target
 from ..swarm_eval import MaskBank, fov_keys, nadir_keys, snap_angle
 from . import datasets
-from .schema import Campaign, load
-
-
-def resolved(c: Campaign) -> dict:
-    """The campaign as run: the file's values with ``--set`` applied, plus the kind."""
-    out = json.loads(config_json(c.raw))
-    out["kind"] = c.kind
-    out.setdefault("seed", c.cfg["seed"])
-    return out
+from .schema import SCHEMA, Campaign, load, resolved_config
 
 
 def _log(msg: str) -> None:
@@ -56,11 +48,13 @@ def _prepare_out(out: Path, c: Campaign, resume: bool) -> bool:
     except Exception as exc:  # not a readable store
         raise InputError(f"{out} exists but is not a readable store ({exc})", field="--out") \
             from None
-    if attrs.get("config_hash") != config_hash(resolved(c)):
+    now = resolved_config(c)
+    if attrs.get("config_hash") != config_hash(now):
         old = json.loads(attrs.get("config", "{}"))
-        diff = "; ".join(config_diff(old, resolved(c))) or "unknown differences"
+        diff = "; ".join(config_diff(old, now)) or "unknown differences"
         raise InputError(f"store {out} was written by an incompatible config ({diff})",
                          field="--resume")
+    warn_code_version(out, attrs)
     return False
 
 
@@ -80,15 +74,6 @@ def _write_atomic(ds: xr.Dataset, out: Path) -> None:
             shutil.rmtree(tmp, ignore_errors=True)
 
 
-def _base_attrs(c: Campaign, setup) -> dict:
-    attrs = {"kind": c.kind, "config": config_json(resolved(c)),
-             "config_hash": config_hash(resolved(c)), "code_version": code_version(),
-             "campaign_seed": int(c.cfg["seed"]), "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
-             "campaign_file": str(c.source.path)}
-    attrs.update(datasets.setup_attrs(setup))
-    return attrs
-
-
 def run_flyby(c: Campaign, out: Path, **_) -> xr.Dataset:
     """Kind ``flyby``: one flyby of ``swarm.angles_rad``."""
     setup = setup_from_campaign(c)
@@ -101,7 +86,7 @@ def run_flyby(c: Campaign, out: Path, **_) -> xr.Dataset:
          f"(area), {100 * res.coverage.coverage_count:.3f} % (vertices) in "
          f"{time.perf_counter() - t:.1f} s")
     ds = datasets.flyby_dataset(setup, res)
-    ds.attrs.update(_base_attrs(c, setup))
+    ds.attrs.update(datasets.base_attrs(c, setup))
     return ds
 
 
@@ -221,6 +206,10 @@ def run_design(c: Campaign, out: Path, *, workers=None, scheduler=None, cluster=
 
     setup = setup_from_campaign(c)
     _log(f"body: {setup.body.note}")
+    # A targeting failure is the user's to fix: find it here, in one line, rather
+    # than as a failed task on every worker (the GA targets these same rings).
+    target(setup, np.linspace(0.0, 2 * np.pi, 16, endpoint=False)
+           if c.kind == "design-nadir" else _fov_swarm(c))
     t = time.perf_counter()
     design = design_nadir if c.kind == "design-nadir" else design_fov
     if workers == 0 and scheduler is None and cluster == "local":
@@ -249,7 +238,7 @@ def run_design(c: Campaign, out: Path, *, workers=None, scheduler=None, cluster=
     ds = xr.merge([ds, datasets.with_attrs(g)], combine_attrs="override")
     ds["best_fitness"].attrs["long_name"] = ("fitness (-N if feasible)" if c.kind == "design-nadir"
                                             else "coverage, %")
-    ds.attrs.update(_base_attrs(c, setup))
+    ds.attrs.update(datasets.base_attrs(c, setup))
     ds.attrs.update({"ga_evaluations": int(res.evaluations), "ga_wall_s": float(wall),
                      "target_coverage": float(res.target_coverage),
                      "notes": json.dumps(res.notes)})
@@ -261,8 +250,23 @@ RUNNERS = {"flyby": run_flyby, "design-nadir": run_design, "design-fov": run_des
 
 def run_file(path, *, out=None, overrides=None, workers=None, scheduler=None, resume=False,
              cluster="local", slurm_config=None, progress=True) -> Path:
-    """Run any campaign file; returns the store path."""
+    """Run any campaign file; returns the store path.
+
+    Every :class:`~ideas_hpc.errors.InputError` leaves here with the campaign
+    file and line of its field (when it names one), and no store is left.
+    """
     c = load(path, overrides)
+    try:
+        return _run(c, out=out, workers=workers, scheduler=scheduler, resume=resume,
+                    cluster=cluster, slurm_config=slurm_config, progress=progress)
+    except InputError as exc:
+        if (exc.field or "").split(".")[0] not in SCHEMA:  # --out, --resume: no file line
+            raise
+        raise c.source.locate(exc) from None
+
+
+def _run(c: Campaign, *, out, workers, scheduler, resume, cluster, slurm_config,
+         progress) -> Path:
     out = Path(out) if out else Path(Path(c.source.path).stem + ".zarr")
     run_cfg = c.cfg["run"]
     workers = workers if workers is not None else run_cfg["workers"]

@@ -17,7 +17,10 @@ bodies), ``data_path``.
 turn of swarm angle), ``d_sep_km`` (default from the sizing), ``tolerance_m``,
 ``max_iterations``, ``dt_s`` (attitude step and trajectory sampling).
 
-``[swarm]`` ``angles_rad`` and ``sweep_periods_min`` (flyby and Monte Carlo).
+``[swarm]`` ``angles_rad`` and ``sweep_periods_min`` (flyby and Monte Carlo),
+``min_separation_km`` (closest allowed distance between two spacecraft on the
+ring, default 1 km; checked once ``d_sep`` is known, see
+:func:`ideas_hpc.swarm_geometry.check_separation`).
 
 ``[attitude]`` ``mode`` (``ideal`` or ``simulated``), ``maneuver`` (``nadir``
 or ``fov``), ``decimate`` (keep every k-th attitude step in the store),
@@ -37,13 +40,15 @@ the owning modules' ``*_from_config`` (see their docstrings).
 
 from __future__ import annotations
 
+import dataclasses
+import json
 import math
 from dataclasses import dataclass, field
 from typing import Any
 
 from ..config import CampaignSource, load_campaign
 from ..errors import InputError
-from ..schema import Field, validate
+from ..schema import Field, validate, with_defaults
 
 KINDS = ("flyby", "design-nadir", "design-fov", "monte-carlo")
 DEG = math.pi / 180.0
@@ -75,13 +80,15 @@ FLYBY = {
     "helix_rise_km": Field("float", 0.0, to_si=1e3),
     "d_sep_km": Field("float", None, nullable=True, to_si=1e3, lo=0, lo_open=True),
     "tolerance_m": Field("float", 0.01, lo=0, lo_open=True),
-    "max_iterations": Field("int", 25, lo=0),
+    "max_iterations": Field("int", 25, lo=1),
     "dt_s": Field("float", 0.1, lo=0, lo_open=True),
 }
 
 SWARM = {
     "angles_rad": Field("floats", None, nullable=True, lo=-10.0, hi=10.0),
     "sweep_periods_min": Field("floats", None, nullable=True, to_si=60.0, lo=0, lo_open=True),
+    "min_separation_km": Field("float", 1.0, to_si=1e3, lo=0, lo_open=True,
+                               doc="closest allowed distance between two spacecraft"),
 }
 
 ATTITUDE = {
@@ -179,6 +186,9 @@ def _cross_checks(cfg: dict) -> None:
     fb = cfg["flyby"]
     if fb["tf_s"] <= fb["t0_s"]:
         raise InputError(f"must be > flyby.t0_s ({fb['t0_s']:g} s)", field="flyby.tf_s")
+    if fb["z_start_km"] == fb["z_stop_km"]:
+        raise InputError(f"equals flyby.z_start_km ({fb['z_start_km'] / 1e3:g} km): the flyby "
+                         "would start and end at the same point", field="flyby.z_stop_km")
     d = cfg["design"]
     if d["p_min_min"] >= d["p_max_min"]:
         raise InputError(f"must be > design.p_min_min ({d['p_min_min'] / 60:g} min)",
@@ -257,11 +267,29 @@ def load(path, overrides: list[str] | None = None) -> Campaign:
     return validate_campaign(load_campaign(path, overrides))
 
 
-def resolved_config(c: Campaign) -> dict[str, Any]:
-    """The resolved configuration (user units, defaults filled) for store attrs.
+# Settings that change how a run is executed but not its numbers: kept out of
+# the resolved config (and so out of its hash), so a resume may change them.
+EXECUTION_KNOBS = ("run.workers", "run.chunk_size", "design.chunk_size")
 
-    The raw file values plus every default, so the store alone re-creates the run.
+
+def resolved_config(c: Campaign) -> dict[str, Any]:
+    """The campaign as run, with nothing implicit: what a store records and hashes.
+
+    Every schema key with its value or default in the file's units
+    (:func:`ideas_hpc.schema.with_defaults`), and under ``models`` the
+    resolved sub-models of ``[dynamics]``, ``[spacecraft]``, ``[controller]``
+    and ``[coverage]`` (SI, every default of their modules written out). So a
+    changed default changes the hash, and ``--resume`` names the field. The
+    :data:`EXECUTION_KNOBS` are left out: they do not change the numbers.
+    Every store writer (flyby, designs, Monte Carlo) uses this one function.
     """
-    out = dict(c.raw)
-    out.setdefault("seed", c.cfg["seed"])
+    from ..engine.store import config_json  # the engine's canonical JSON, for one hash
+
+    out = json.loads(config_json(with_defaults(c.raw, SCHEMA)))
+    out["models"] = json.loads(config_json({k: dataclasses.asdict(v) if
+                                            dataclasses.is_dataclass(v) else v
+                                            for k, v in c.extras.items()}))
+    for dotted in EXECUTION_KNOBS:
+        table, _, key = dotted.partition(".")
+        out.get(table, {}).pop(key, None)
     return out

@@ -417,6 +417,9 @@ def _check_compatible(path: Path, chash: str, config: Mapping, plan: ChunkPlan,
     if problems:
         raise InputError(f"cannot resume store {path}: it was written by an incompatible "
                          "config: " + "; ".join(problems), field="out")
+    from .._version import warn_code_version
+
+    warn_code_version(path, attrs)
 
 
 # --------------------------------------------------------------------------- chunk writes

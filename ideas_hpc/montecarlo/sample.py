@@ -6,8 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..flyby import FlybySetup, Perturbation, endpoints, fly_open_loop
-from ..trajectory import target_swarm
+from ..flyby import FlybySetup, Perturbation, endpoints, fly_open_loop, target
 
 
 @dataclass(frozen=True)
@@ -33,9 +32,8 @@ class Nominal:
 
 def design_nominal(setup: FlybySetup, theta, periods) -> Nominal:
     th = np.asarray(theta, dtype=float)
-    r0, rt = endpoints(setup, th)
-    tg = target_swarm(setup.body, r0, rt, setup.t0, setup.tf, force_model=setup.force_model,
-                      dt_sample=setup.dt, tol=setup.tol, max_iter=setup.max_iter)
+    r0, _ = endpoints(setup, th)
+    tg = target(setup, th)
     return Nominal(th, None if periods is None else np.asarray(periods, float), r0, tg.v0_T,
                    tg.times, tg.position_T, tg.velocity_T, tg.miss)
 

@@ -1,0 +1,67 @@
+"""``--resume`` compares the fully resolved config; code version changes are reported."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+import xarray as xr
+
+from ideas_hpc.campaign import schema
+from ideas_hpc.campaign.run import run_file
+from ideas_hpc.campaign.schema import EXECUTION_KNOBS, SCHEMA, load, resolved_config
+from ideas_hpc.errors import InputError
+from ideas_hpc.schema import Field
+
+FLYBY = Path(__file__).resolve().parent.parent / "campaigns" / "eros-flyby.toml"
+TINY = ['body.name="ellipsoid"', 'attitude.mode="ideal"', "flyby.tf_s=60", "flyby.z_start_km=-3",
+        "flyby.z_stop_km=3", "swarm.angles_rad=[0.2, 3.3]"]
+
+
+def test_resolved_config_writes_every_default():
+    rc = resolved_config(load(FLYBY))
+    for table, spec in SCHEMA.items():
+        if isinstance(spec, dict):
+            keys = {f"{table}.{k}" for k in spec} - set(EXECUTION_KNOBS)
+            assert {f"{table}.{k}" for k in rc[table]} == keys, table
+    assert rc["flyby"]["helix_rise_km"] == 0.0  # not in the file: its default
+    assert rc["swarm"]["min_separation_km"] == 1.0
+    assert rc["models"]["force_model"]["rtol"] > 0  # a module default, written out
+    assert "workers" not in rc["run"] and "chunk_size" not in rc["design"]
+
+
+@pytest.fixture(scope="module")
+def tiny_store(tmp_path_factory):
+    out = tmp_path_factory.mktemp("resume") / "tiny.zarr"
+    run_file(FLYBY, out=out, overrides=TINY)
+    return out
+
+
+def test_store_holds_the_resolved_config(tiny_store):
+    attrs = xr.open_zarr(tiny_store).attrs
+    assert json.loads(attrs["config"]) == resolved_config(load(FLYBY, TINY))
+
+
+def test_resume_refused_after_a_default_changed(tiny_store, monkeypatch):
+    # near_field_mm is not in the file: only its default changes
+    monkeypatch.setitem(schema.INSTRUMENT, "near_field_mm",
+                        Field("float", 0.2, to_si=1e-3, lo=0, lo_open=True))
+    with pytest.raises(InputError) as ei:
+        run_file(FLYBY, out=tiny_store, overrides=TINY, resume=True)
+    assert "instrument.near_field_mm = 0.1 in the store, 0.2 now" in str(ei.value)
+
+
+def test_resume_ignores_execution_knobs(tiny_store, capsys):
+    run_file(FLYBY, out=tiny_store, overrides=TINY + ["run.workers=3", "design.chunk_size=5"],
+             resume=True)
+    assert "nothing to do" in capsys.readouterr().err
+
+
+def test_resume_warns_once_when_code_version_differs(tiny_store, monkeypatch, capsys):
+    import ideas_hpc._version as v
+
+    monkeypatch.setattr(v, "code_version", lambda: "0.0.0+gdeadbee")
+    run_file(FLYBY, out=tiny_store, overrides=TINY, resume=True)
+    warn = [ln for ln in capsys.readouterr().err.splitlines() if "warning" in ln]
+    assert len(warn) == 1 and "code version" in warn[0] and "0.0.0+gdeadbee" in warn[0]
