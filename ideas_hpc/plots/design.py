@@ -1,0 +1,90 @@
+"""Design figures: the chosen swarm on its ring, the coverage-versus-N trade, the verification.
+
+Each function takes an ``xarray.Dataset`` opened from a design store, writes
+one PNG and returns its path (km, deg, %).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .figures import plt, save_png
+
+KM = 1e3
+
+
+def ring_view(ds, path) -> "Path":  # noqa: F821
+    """Top-down view (frame T, looking down +z) of the ring and the chosen swarm angles.
+
+    The body's vertices are projected onto the xy-plane for scale; each chosen
+    spacecraft is marked at ``d_sep (cos theta, sin theta)`` with its angle.
+    """
+    a = ds.attrs
+    d = float(a["d_sep_m"]) / KM
+    th = np.asarray(ds["swarm_angle"].values, dtype=float)
+    fig, ax = plt.subplots(figsize=(5.6, 5.6))
+    if "vertex_position" in ds:
+        v = ds["vertex_position"].values / KM
+        ax.scatter(v[:, 0], v[:, 1], s=0.3, c="0.6", label="body (vertices)")
+    phi = np.linspace(0, 2 * np.pi, 361)
+    ax.plot(d * np.cos(phi), d * np.sin(phi), "k--", lw=0.8, label=f"ring, d_sep {d:.1f} km")
+    ax.scatter(d * np.cos(th), d * np.sin(th), s=60, c="tab:red", zorder=3,
+               label=f"chosen swarm, N = {th.size}")
+    for t in th:
+        ax.annotate(f"{np.degrees(t):.1f}°", (d * np.cos(t), d * np.sin(t)),
+                    textcoords="offset points", xytext=(8 * np.cos(t), 8 * np.sin(t)),
+                    ha="center", va="center", fontsize=8)
+    status = a.get("solver_status")
+    gap = a.get("optimality_gap")
+    title = "chosen swarm (top view)"
+    if status is not None:
+        title += f": {status}" + ("" if gap is None else f", gap {100 * float(gap):.1f} %")
+    ax.set_title(title)
+    ax.set_xlabel("x_T, km")
+    ax.set_ylabel("y_T, km")
+    ax.set_aspect("equal")
+    ax.grid(alpha=0.3)
+    ax.legend(loc="lower right", fontsize=7)
+    return save_png(fig, path)
+
+
+def coverage_vs_n(ds, path) -> "Path":  # noqa: F821
+    """Best coverage any N spacecraft reach against N (each point proven unless marked)."""
+    n = ds["n_spacecraft"].values
+    c = 100.0 * ds["coverage_vs_n"].values
+    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    ax.plot(n, c, "o-", color="tab:blue", label="best coverage of N spacecraft")
+    if "coverage_vs_n_gap" in ds:
+        open_ = ds["coverage_vs_n_gap"].values > 0
+        if open_.any():
+            ax.plot(n[open_], c[open_], "x", color="tab:orange", ms=9,
+                    label="not proven (time limit): best found")
+    target = ds.attrs.get("target_coverage")
+    if target is not None:
+        ax.axhline(100 * float(target), color="k", ls=":", lw=1,
+                   label=f"target {100 * float(target):.2f} %")
+    if "spacecraft" in ds.sizes:
+        ax.axvline(ds.sizes["spacecraft"], color="tab:red", ls="--", lw=1,
+                   label=f"design: N = {ds.sizes['spacecraft']}")
+    ax.set_xlabel("swarm size N")
+    ax.set_ylabel("area coverage, %")
+    ax.set_title("what each extra spacecraft buys")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    return save_png(fig, path)
+
+
+def verification(ds, path) -> "Path":  # noqa: F821
+    """Monte Carlo verification: coverage distribution of the dispersed samples."""
+    cov = 100.0 * ds["verify_coverage"].values
+    thr = 100.0 * float(ds.attrs["verify_threshold"])
+    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    ax.hist(cov, bins=min(30, max(5, cov.size // 3)), color="tab:green", edgecolor="k")
+    ax.axvline(thr, color="k", ls=":", label=f"target - eps_tol = {thr:.2f} %")
+    ax.set_xlabel("area coverage, %")
+    ax.set_ylabel("samples")
+    ax.set_title(f"P(coverage >= {thr:.2f} %) = {100 * float(ds.attrs['verify_probability']):.1f}"
+                 f" % over {cov.size} samples")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    return save_png(fig, path)
