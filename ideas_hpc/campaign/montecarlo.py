@@ -11,7 +11,8 @@ The swarm's trajectories are designed once on the nominal model (targeted
   ``failure_probability``;
 * camera misalignment: a fixed rotation about a random axis by ``N(0, sigma)``.
 
-Seeds: sample ``k`` of campaign seed ``s`` owns ``SeedSequence(s, spawn_key=(k,))``.
+Seeds (:mod:`ideas_hpc.seeds`): sample ``k`` of campaign seed ``s`` owns
+``SeedSequence(s, spawn_key=(k,))``.
 Its attitude initial conditions come from that sequence itself (so they equal
 :func:`ideas_hpc.attitude.initial_conditions` ``(s, k, N)``), every other
 dispersion from its child ``SeedSequence(s, spawn_key=(k, 1))``, drawn in a
@@ -39,6 +40,7 @@ from ..core.mrp import mrp_from_dcm
 from ..engine.runner import run_campaign
 from ..flyby import FlybySetup, camera_dcms, endpoints, misalignment_dcms, setup_from_campaign
 from ..mapping import compute_coverage
+from ..seeds import sample_rng
 from ..trajectory import propagate_swarm, sun_direction_T, target_swarm
 from . import datasets
 from .schema import Campaign
@@ -70,8 +72,7 @@ def draw_sample(mc: dict, seed: int, k: int, theta: np.ndarray, setup: FlybySetu
         s0, w0, W0 = initial_conditions(seed, k, n)
     else:
         s0, w0, W0 = reference_start(setup, theta)
-    rng = np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(int(k),
-                                                                              DISPERSION_CHILD)))
+    rng = sample_rng(seed, k, DISPERSION_CHILD)
     z = rng.standard_normal(3)
     refl = rng.uniform(0.0, 1.0)
     dr = rng.standard_normal((n, 3))
