@@ -41,11 +41,11 @@ paper's Eros NP swarm) reach a worst MRP error of 3.9e-4 after 120 s and
 (``tests/test_attitude.py``, slow test).
 """
 
+from ..units import RPM
 from .gains import GAIN_PRESETS, Gains, gains_from_config, validate_gains
 from .maneuvers import (MANEUVERS, P_MIN_DEFAULT, THETA_MAX_DEFAULT, Maneuver,
                         get_maneuver)
-from .simulate import (RPM, AttitudeResult, ideal_dcm_BT, initial_conditions,
-                       simulate_attitude)
+from .simulate import AttitudeResult, ideal_dcm_BT, initial_conditions, simulate_attitude
 from .spacecraft import (SpacecraftModel, default_spacecraft, spacecraft_from_config,
                          validate_spacecraft)
 

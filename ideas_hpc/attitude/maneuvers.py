@@ -24,9 +24,10 @@ import numpy as np
 
 from ..core.maneuvers import FOV_MODE, NP_MODE
 from ..errors import InputError
+from ..units import MINUTE
 from .checks import pos_float as _pos_float
 
-P_MIN_DEFAULT = 0.3 * 60.0  #: paper: P_min = 0.3 min/sweep, s
+P_MIN_DEFAULT = 0.3 * MINUTE  #: paper: P_min = 0.3 min/sweep, s
 THETA_MAX_DEFAULT = math.radians(1.9138)  #: SPEC section 2 / Table 6, rad
 
 

@@ -14,12 +14,12 @@ from ..core.frames import dcm_RT as _dcm_RT
 from ..core.maneuvers import reference_dcm_BT
 from ..errors import InputError
 from ..seeds import sample_rng
+from ..units import RPM
 from .checks import check_theta, init_array, pos_float, steps
 from .gains import gains_from_config
 from .maneuvers import P_MIN_DEFAULT, maneuver_args
 from .spacecraft import default_spacecraft, validate_spacecraft
 
-RPM = 2.0 * math.pi / 60.0
 
 
 def initial_conditions(seed: int, sample: int, n_spacecraft: int):

@@ -37,16 +37,15 @@ the owning modules' ``*_from_config`` (see their docstrings).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Any
 
 from ..config import CampaignSource, load_campaign
 from ..errors import InputError
 from ..schema import Field, validate
+from ..units import DEG
 
 KINDS = ("flyby", "design-nadir", "design-fov", "monte-carlo")
-DEG = math.pi / 180.0
 
 BODY = {
     "name": Field("str", "eros", doc="body name or shape file"),
