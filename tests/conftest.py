@@ -13,6 +13,12 @@ ROOT = Path(__file__).resolve().parent.parent
 _SHARED = ROOT.parent / "shared" / "data"
 if not os.environ.get("IDEAS_HPC_DATA") and _SHARED.is_dir():
     os.environ["IDEAS_HPC_DATA"] = str(_SHARED)
+# Subprocesses, dask workers and SLURM jobs started by the tests import the toy
+# campaign (tests/toy_campaign.py) by name.
+_TESTS = str(Path(__file__).resolve().parent)
+if _TESTS not in os.environ.get("PYTHONPATH", "").split(os.pathsep):
+    os.environ["PYTHONPATH"] = os.pathsep.join(
+        p for p in (_TESTS, os.environ.get("PYTHONPATH", "")) if p)
 
 
 @pytest.fixture(scope="session")

@@ -11,7 +11,6 @@ import json
 import os
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -65,16 +64,13 @@ def test_notebook_writes_every_figure(mc_store, tmp_path, monkeypatch):
     monkeypatch.setenv("IDEAS_HPC_STORE", str(mc_store))
     monkeypatch.setenv("IDEAS_HPC_FIGURES", str(figs))
     nb = nbformat.read(NOTEBOOK, as_version=4)
-    t0 = time.perf_counter()
     nbclient.NotebookClient(nb, kernel_name="python3", timeout=300,
                             resources={"metadata": {"path": str(ANALYSIS)}}).execute()
-    elapsed = time.perf_counter() - t0
     for name in plotting.FIGURES:
         _check_png(figs / name)
     shown = sum(1 for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])
                 if "image/png" in o.get("data", {}))
     assert shown == len(plotting.FIGURES)
-    assert elapsed < 120.0, f"notebook took {elapsed:.1f} s"
 
 
 def test_committed_notebook_is_clean():

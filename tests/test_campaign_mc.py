@@ -6,16 +6,17 @@ import os
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 import xarray as xr
 
+from gates import Gate, wait_until
 from ideas_hpc.campaign.montecarlo import run_sample
 from ideas_hpc.campaign.run import run_file
 from ideas_hpc.campaign.schema import load
+from ideas_hpc.engine.store import done_mask
 from ideas_hpc.errors import InputError
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -73,27 +74,50 @@ def test_mc_sample_reruns_alone(one_worker):
         assert np.array_equal(r[v][0], ds[v].values[k], equal_nan=True), v
 
 
+def _n_done(out) -> int:
+    try:
+        return int(done_mask(out).sum())
+    except Exception:  # not created yet
+        return -1
+
+
 def _run_cli(out, extra=(), **kw):
     cmd = [sys.executable, "-m", "ideas_hpc.cli", "run", str(MC), "--out", str(out),
            "--workers", "1", "--no-progress"]
     for s in SHORT:
         cmd += ["--set", s]
-    return subprocess.Popen(cmd + list(extra), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, **kw)
+    return subprocess.Popen(cmd + list(extra), text=True, **kw)
 
 
 def test_mc_killed_and_resumed_is_identical(one_worker, tmp_path):
-    """SIGKILL the campaign process (and its workers) twice, resume: same arrays."""
+    """SIGKILL the campaign process (and its workers) twice, resume: same arrays.
+
+    The chunk tasks wait at a gate (IDEAS_HPC_CHUNK_GATE), so the kills land at
+    known states whatever the machine's speed: once with one chunk done and the
+    second one computing, once with the resumed run's task at the gate.
+    """
     out = tmp_path / "killed.zarr"
-    rng = np.random.default_rng(7)
-    for i in range(2):
-        p = _run_cli(out, ["--resume"] if out.exists() else [], start_new_session=True)
-        time.sleep(float(rng.uniform(4.0, 9.0)))
-        if p.poll() is None:
-            os.killpg(p.pid, signal.SIGKILL)
+    n_chunks = 3
+    log = []
+    for i, moment in enumerate(("inside", "gate")):
+        gate = Gate(tmp_path / f"gate-{i}")
+        err = tmp_path / f"run-{i}.err"
+        with open(err, "w") as fh:
+            p = _run_cli(out, ["--resume"] if out.exists() else [], start_new_session=True,
+                         env=dict(os.environ, **gate.env), stdout=fh, stderr=fh)
+        before = max(_n_done(out), 0)
+        if moment == "inside":
+            gate.allow(2)
+            wait_until(lambda: _n_done(out) >= 1 and gate.claimed() == 2, "chunk 2 running", p, err)
+        else:
+            wait_until(lambda: gate.waiting() >= 1, "a task at the gate", p, err)
+        assert p.poll() is None
+        os.killpg(p.pid, signal.SIGKILL)
         p.wait()
-    p = _run_cli(out, ["--resume"] if out.exists() else [])
-    _, err = p.communicate(timeout=600)
+        log.append((moment, before, _n_done(out)))
+    assert [a for _, _, a in log] and all(0 < a < n_chunks for _, _, a in log), log
+    p = _run_cli(out, ["--resume"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    _, err = p.communicate()
     assert p.returncode == 0, err
     _same(xr.open_zarr(one_worker), xr.open_zarr(out))
 

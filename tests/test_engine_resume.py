@@ -14,18 +14,19 @@ import subprocess
 import sys
 import textwrap
 import threading
-import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 import xarray as xr
 
+from gates import Gate, wait_until
+from ideas_hpc.engine.gate import GATE_ENV
 from ideas_hpc.engine.lock import lock_path
 from ideas_hpc.engine.runner import CampaignError
 from ideas_hpc.engine.store import done_mask
-from ideas_hpc.engine.toy import run_toy
 from ideas_hpc.errors import InputError
+from toy_campaign import run_toy
 from toy_stores import assert_same_as, serial_reference
 
 # 24 chunks of ~0.05 s each: long enough to kill mid-run, short enough for CI.
@@ -34,7 +35,7 @@ N_CHUNKS = 24
 
 
 def _warm():
-    from ideas_hpc.engine.toy import toy_chunk as f
+    from toy_campaign import toy_chunk as f
 
     f(0, 0, 1, campaign_seed=0, n_vertex=2, n_time=1, work=1)  # load the Numba cache once
     return os.getpid()
@@ -92,7 +93,7 @@ def test_local_worker_tasks_run_one_numba_thread(tmp_path):
         import numpy as np
 
         from ideas_hpc.engine.runner import run_campaign
-        from ideas_hpc.engine.toy import toy_chunk, toy_config, toy_template
+        from toy_campaign import toy_chunk, toy_config, toy_template
 
 
         def chunk(cid, start, stop):
@@ -180,7 +181,7 @@ def test_chunk_written_but_not_marked_is_redone(cluster2, reference, tmp_path):
     # The state a kill between the region write and the done flag leaves behind,
     # made deterministic: chunk 2 holds garbage and is not marked done.
     from ideas_hpc.engine.store import create_store
-    from ideas_hpc.engine.toy import toy_config, toy_template
+    from toy_campaign import toy_config, toy_template
 
     _, client = cluster2
     out = tmp_path / "torn.zarr"
@@ -198,8 +199,11 @@ def test_chunk_written_but_not_marked_is_redone(cluster2, reference, tmp_path):
     assert_same_as(reference, out)
 
 
+TOY_SCRIPT = Path(__file__).resolve().parent / "toy_campaign.py"
+
+
 def _toy_cmd(out: Path, extra: list[str], toy: dict) -> list[str]:
-    return [sys.executable, "-m", "ideas_hpc.engine.toy", "--out", str(out), "--resume",
+    return [sys.executable, str(TOY_SCRIPT), "--out", str(out), "--resume",
             "--no-progress", "--n-samples", str(toy["n_samples"]),
             "--chunk-size", str(toy["chunk_size"]), "--n-vertex", str(toy["n_vertex"]),
             "--n-time", str(toy["n_time"]), "--work", str(toy["work"]),
@@ -213,64 +217,84 @@ def _n_done(out: Path) -> int:
         return -1
 
 
+# Where a kill lands, each reached by waiting on the campaign's state:
+#   "store":  the store exists (start-up: lock, store creation, cluster, submission);
+#   "gate":   the tasks are submitted and wait at the gate, no new chunk runs;
+#   "done":   k more chunks are marked done, the workers wait at the gate;
+#   "inside": k chunks done and chunk k+1 claimed, i.e. computing or writing.
+MOMENTS = ("store", "gate", "done", "inside")
+# Tasks that were running when their client died still finish (dask cannot
+# interrupt a thread); each kill can add up to this many chunks after it.
+STALE = 2
+
+
 def kill_and_resume(out: Path, extra: list[str], n_kills: int, rng: np.random.Generator,
-                    log: list, toy: dict = TOY) -> None:
-    """SIGKILL the campaign process ``n_kills`` times at random points, then let it finish."""
+                    log: list, workdir: Path, toy: dict = TOY) -> None:
+    """SIGKILL the campaign process ``n_kills`` times at state-chosen moments, then finish it.
+
+    Every run holds its chunk tasks at its own gate; the test hands out tokens,
+    waits for the state it wants and kills there. The campaign cannot finish
+    before a kill, whatever the machine's speed. ``log`` gets
+    ``(moment, done before, done at the kill)`` per kill.
+    """
     n_chunks = -(-toy["n_samples"] // toy["chunk_size"])
-    kills = 0
-    attempts = 0
-    while kills < n_kills:
-        attempts += 1
-        assert attempts < 4 * n_kills, f"could not land {n_kills} kills: {log}"
-        before = _n_done(out)
-        if before >= n_chunks:
-            break
-        proc = subprocess.Popen(_toy_cmd(out, extra, toy), stdout=subprocess.DEVNULL,
-                                stderr=subprocess.DEVNULL)
+    for i in range(n_kills):
+        before = max(_n_done(out), 0)
+        room = n_chunks - before - 2 * STALE - 2  # chunks this kill may let through
+        moment = "store" if i == 0 else str(rng.choice(MOMENTS[1:] if room >= 2 else ("gate",)))
+        k = int(rng.integers(1, min(3, room - 1) + 1)) if moment in ("done", "inside") else 0
+        gate = Gate(workdir / f"gate-{i}")
+        err = workdir / f"run-{i}.err"
+        with open(err, "w") as fh:
+            proc = subprocess.Popen(_toy_cmd(out, extra, toy), stdout=fh, stderr=fh,
+                                    env=dict(os.environ, **gate.env))
         try:
-            if kills == 0 or rng.random() < 0.25:
-                # Anywhere from start-up (imports, store creation, lock) to early chunks.
-                time.sleep(rng.uniform(0.2, 2.5))
+            if moment == "store":
+                wait_until(lambda: _n_done(out) >= 0, "the store", proc, err)
+            elif moment == "gate":
+                wait_until(lambda: gate.waiting() >= 1, "a task at the gate", proc, err)
             else:
-                # After a few more chunks finish, plus a random offset inside a chunk.
-                target = max(before, 0) + int(rng.integers(1, 4))
-                t_end = time.monotonic() + 60
-                while _n_done(out) < target and proc.poll() is None and time.monotonic() < t_end:
-                    time.sleep(0.05)
-                time.sleep(rng.uniform(0.0, 0.15))
-            if proc.poll() is None:
-                proc.send_signal(signal.SIGKILL)
-                proc.wait()
-                kills += 1
-                log.append((before, _n_done(out)))
-            else:
-                log.append((before, "finished"))
+                gate.allow(k + (moment == "inside"))
+                wait_until(lambda: _n_done(out) >= before + k, f"{k} more chunks done", proc, err)
+                if moment == "inside":
+                    wait_until(lambda: gate.claimed() == k + 1, "a chunk in progress", proc, err)
+            assert proc.poll() is None, f"campaign ended before kill {i}: {err.read_text()[-2000:]}"
+            proc.send_signal(signal.SIGKILL)
+            proc.wait()
+            log.append((moment, before, _n_done(out)))
         finally:
             if proc.poll() is None:
                 proc.kill()
                 proc.wait()
-    done = _n_done(out)
-    assert done < n_chunks, f"campaign finished before the last kill: {log}"
-    final = subprocess.run(_toy_cmd(out, extra, toy), capture_output=True, text=True, timeout=300)
+            gate.open()  # tasks of the dead run still held on a shared cluster may go
+    left = n_chunks - _n_done(out)
+    final = subprocess.run(_toy_cmd(out, extra, toy), capture_output=True, text=True)
     assert final.returncode == 0, final.stderr[-2000:]
-    assert f"{n_chunks} skipped" not in final.stdout  # the last run had work left
+    assert left > 0 and f"{n_chunks} skipped" not in final.stdout  # the last run had work left
+
+
+def _check_kills(log: list, n_kills: int, n_chunks: int) -> None:
+    assert len(log) == n_kills, log
+    for moment, before, at_kill in log:
+        if moment in ("done", "inside"):  # these landed mid-run, by construction
+            assert before < at_kill < n_chunks, log
+    assert sum(m in ("done", "inside") for m, _, _ in log) >= 2, log
 
 
 def test_sigkill_campaign_process_then_resume(cluster2, reference, tmp_path):
     lc, _ = cluster2
     out = tmp_path / "killed.zarr"
     log: list = []
-    kill_and_resume(out, ["--scheduler", lc.scheduler_address], 5, np.random.default_rng(11), log)
-    print("kills (chunks done before, after):", log)
-    mid_run = [a for b, a in log if isinstance(a, int) and 0 < a < N_CHUNKS]
-    assert len(mid_run) >= 3, log  # most kills landed while chunks were being written
+    kill_and_resume(out, ["--scheduler", lc.scheduler_address], 5, np.random.default_rng(11),
+                    log, tmp_path)
+    print("kills (moment, chunks done before, at the kill):", log)
+    _check_kills(log, 5, N_CHUNKS)
     assert_same_as(reference, out)
     assert not lock_path(out).exists()
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["killed.zarr"]  # no partial stores
+    assert sorted(p.name for p in tmp_path.glob("*.zarr")) == ["killed.zarr"]  # no partial stores
 
 
-# 12 kills need more chunks than TOY has: a kill lands 1-3 chunks (often 5-10: the
-# toy chunks are short) after the previous one, so 24 or even 64 chunks ran out.
+# 12 kills need more chunks than TOY has.
 TOY_LONG = dict(TOY, n_samples=512)
 
 
@@ -280,8 +304,10 @@ def test_sigkill_campaign_with_own_cluster_many_times(tmp_path_factory, tmp_path
     reference = serial_reference(tmp_path_factory, TOY_LONG, "ref_long")
     out = tmp_path / "killed_own.zarr"
     log: list = []
-    kill_and_resume(out, ["--workers", "2"], 12, np.random.default_rng(12), log, TOY_LONG)
-    print("kills (chunks done before, after):", log)
+    kill_and_resume(out, ["--workers", "2"], 12, np.random.default_rng(12), log, tmp_path,
+                    TOY_LONG)
+    print("kills (moment, chunks done before, at the kill):", log)
+    _check_kills(log, 12, 128)
     assert_same_as(reference, out)
     assert not lock_path(out).exists()
 
@@ -290,9 +316,11 @@ def _pid():
     return os.getpid()
 
 
-def test_kill_worker_during_run(cluster2, reference, tmp_path):
+def test_kill_worker_during_run(cluster2, reference, tmp_path, monkeypatch):
     lc, client = cluster2
     out = tmp_path / "wkill.zarr"
+    gate = Gate(tmp_path / "gate")
+    monkeypatch.setenv(GATE_ENV, str(gate.path))
     pids_before = set(client.run(_pid).values())
     result: dict = {}
 
@@ -303,17 +331,22 @@ def test_kill_worker_during_run(cluster2, reference, tmp_path):
             result["error"] = exc
 
     th = threading.Thread(target=campaign)
+    gate.allow(4)
     th.start()
-    t_end = time.monotonic() + 120
-    while _n_done(out) < 4 and time.monotonic() < t_end and th.is_alive():
-        time.sleep(0.02)
-    assert _n_done(out) < N_CHUNKS - 4, "campaign too fast to kill a worker mid-run"
-    victim = sorted(pids_before)[0]
-    os.kill(victim, signal.SIGKILL)
-    th.join(timeout=240)
-    assert not th.is_alive()
+    try:
+        # 4 chunks done and both workers holding their next task at the gate.
+        wait_until(lambda: _n_done(out) >= 4 and gate.waiting() >= 6 or not th.is_alive(),
+                   "4 chunks done and 2 tasks at the gate")
+        assert th.is_alive(), repr(result)
+        assert _n_done(out) == 4  # nothing ran past the tokens
+        victim = sorted(pids_before)[0]
+        os.kill(victim, signal.SIGKILL)
+    finally:
+        gate.open()
+        th.join()
     assert "error" not in result, repr(result.get("error"))
+    assert result["summary"].chunks_run == N_CHUNKS
     assert_same_as(reference, out)
-    client.wait_for_workers(2, timeout=60)
+    client.wait_for_workers(2, timeout=120)
     pids_after = set(client.run(_pid).values())
     assert victim not in pids_after  # the worker really died and was replaced

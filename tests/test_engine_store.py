@@ -7,7 +7,6 @@ import os
 import socket
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -19,7 +18,7 @@ from ideas_hpc.engine import lock as lockmod
 from ideas_hpc.engine.lock import StoreLock, StoreLockedError, lock_path
 from ideas_hpc.engine.store import (ChunkPlan, config_hash, create_store, done_mask, sample_rng,
                                     seeds_for, store_attrs, write_chunk_region)
-from ideas_hpc.engine.toy import (run_toy_serial, toy_areas, toy_chunk, toy_config,
+from toy_campaign import (run_toy_serial, toy_areas, toy_chunk, toy_config,
                                   toy_template)
 from ideas_hpc.errors import InputError
 
@@ -293,9 +292,7 @@ def test_stale_lock_taken_over_foreign_host_refused(tmp_path):
 
 def test_serial_reference_is_complete(tmp_path):
     p = tmp_path / "ref.zarr"
-    t0 = time.perf_counter()
     run_toy_serial(p, n_samples=12, chunk_size=5, n_vertex=8, n_time=3, work=30, seed=SEED)
-    assert time.perf_counter() - t0 < 60
     ds = xr.open_zarr(p)
     assert done_mask(p).all()
     assert np.isfinite(ds.coverage.values).all()

@@ -22,7 +22,8 @@ import xarray as xr
 
 from ideas_hpc.engine.cluster import (DEFAULT_SLURM_CONFIG, WORKER_MALLOC_ENV, load_slurm_config,
                                       slurm_cluster)
-from ideas_hpc.engine.toy import run_toy
+from gates import wait_until
+from toy_campaign import run_toy
 from ideas_hpc.errors import InputError
 from toy_stores import assert_same_as, serial_reference
 
@@ -130,10 +131,7 @@ def test_toy_campaign_through_slurmcluster(toy_reference, tmp_path):
     logs = tmp_path / "slurm.zarr.slurm-logs"
     assert any(logs.glob("ideas-worker-*.err"))  # jobs really ran under SLURM
     # Closing the cluster cancelled the worker jobs.
-    t_end = time.monotonic() + 30
-    while _our_jobs("ideas-worker") and time.monotonic() < t_end:
-        time.sleep(0.5)
-    assert not _our_jobs("ideas-worker")
+    wait_until(lambda: not _our_jobs("ideas-worker"), "the worker jobs to leave the queue")
 
 
 @pytest.mark.slurm
@@ -142,19 +140,15 @@ def test_sbatch_script_runs_a_campaign(toy_reference, tmp_path):
     # slurm/run_campaign.sbatch as a user would submit it, with the toy as the command.
     out = tmp_path / "batch.zarr"
     env = dict(os.environ, IDEAS_HPC_REPO=str(REPO), IDEAS_HPC_WORKERS="1",
-               IDEAS_HPC_RUN=f"{sys.executable} -m ideas_hpc.engine.toy")
+               IDEAS_HPC_RUN=f"{sys.executable} {REPO / 'tests' / 'toy_campaign.py'}")
     args = ["--no-progress"] + [f"--{k.replace('_', '-')}={v}" for k, v in TOY.items()]
     sub = subprocess.run(["sbatch", "--parsable", f"--output={tmp_path}/batch-%j.out",
                           str(REPO / "slurm" / "run_campaign.sbatch"), "toy", str(out), *args],
                          capture_output=True, text=True, env=env, cwd=tmp_path, timeout=30)
     assert sub.returncode == 0, sub.stderr
     job = sub.stdout.strip().split(";")[0]
-    t_end = time.monotonic() + 240
-    while time.monotonic() < t_end:
-        q = subprocess.run(["squeue", "-h", "-j", job], capture_output=True, text=True)
-        if not q.stdout.strip():
-            break
-        time.sleep(1)
+    wait_until(lambda: not subprocess.run(["squeue", "-h", "-j", job], capture_output=True,
+                                          text=True).stdout.strip(), f"batch job {job} to end")
     log = (tmp_path / f"batch-{job}.out").read_text()
     assert "6 chunks run" in log, log[-3000:]
     assert_same_as(toy_reference, out)

@@ -6,7 +6,7 @@ import numpy as np
 import xarray as xr
 
 from ideas_hpc.engine.store import done_mask, store_attrs
-from ideas_hpc.engine.toy import run_toy_serial
+from toy_campaign import run_toy_serial
 
 SAMPLE_VARS = ("coverage", "observed", "first_seen", "times_seen", "sigma_error", "sample_seed")
 

@@ -12,7 +12,7 @@ Campaign kinds plug in a template and a chunk function::
 * :mod:`~ideas_hpc.engine.lock`: one writer per store.
 * :mod:`~ideas_hpc.engine.cluster`: LocalCluster, existing scheduler, SLURMCluster.
 * :mod:`~ideas_hpc.engine.runner`: one dask task per chunk, retries, progress.
-* :mod:`~ideas_hpc.engine.toy`: a physics-free workload for tests.
+* :mod:`~ideas_hpc.engine.gate`: hold chunk tasks until released (``IDEAS_HPC_CHUNK_GATE``).
 """
 
 from __future__ import annotations

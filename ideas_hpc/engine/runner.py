@@ -25,6 +25,7 @@ import numpy as np
 
 from ..errors import InputError
 from .cluster import TASK_THREADS_ENV, connect
+from .gate import gate_from_env, pass_gate
 from .lock import StoreLock
 from .store import ChunkPlan, create_store, done_mask, store_plan, write_chunk_region
 
@@ -92,9 +93,15 @@ def limit_task_threads() -> int | None:
 
 
 def _run_chunk(store_path: str, chunk_fn: ChunkFn, chunk_id: int, start: int,
-               stop: int) -> tuple[int, int, float, float]:
-    """The task: compute one chunk, write its region, then its done flag."""
+               stop: int, gate: str | None = None) -> tuple[int, int, float, float]:
+    """The task: compute one chunk, write its region, then its done flag.
+
+    With a ``gate`` folder (see :mod:`~ideas_hpc.engine.gate`) the task first
+    waits for a token there.
+    """
     limit_task_threads()
+    if gate is not None:
+        pass_gate(gate, chunk_id)
     t0 = time.perf_counter()
     arrays = chunk_fn(chunk_id, start, stop)
     t1 = time.perf_counter()
@@ -179,7 +186,8 @@ def _submit_all(client, path: Path, chunk_fn: ChunkFn, todo, summary: RunSummary
     summary.n_workers = len(client.scheduler_info(n_workers=-1).get("workers", {})) \
         if _accepts_n_workers(client) else len(client.scheduler_info().get("workers", {}))
     tag = uuid.uuid4().hex[:8]
-    futures = [client.submit(_run_chunk, str(path), chunk_fn, cid, start, stop,
+    gate = gate_from_env()  # read here, in the client: workers may not share its environment
+    futures = [client.submit(_run_chunk, str(path), chunk_fn, cid, start, stop, gate,
                              key=f"chunk-{cid}-{tag}", pure=False, retries=retries)
                for cid, start, stop in todo]
     bar = tqdm(total=summary.n_chunks, initial=summary.chunks_skipped, unit="chunk",

@@ -8,9 +8,12 @@ iterating a chaotic logistic map ``work`` times per vertex. The chaos makes
 the values sensitive to every bit of the inputs, so "identical arrays" between
 runs really means identical computations; ``work`` sets the time a chunk takes.
 
-Run as a module for the kill/resume tests and the SLURM check::
+A test fixture, not part of the package. Run it as a script for the
+kill/resume tests and the SLURM checks (``tests/`` must be on ``PYTHONPATH``
+so that dask workers can unpickle the chunk function; ``tests/conftest.py``
+sets that for every process the tests start)::
 
-    python -m ideas_hpc.engine.toy --out toy.zarr --n-samples 64 --chunk-size 4 \
+    python tests/toy_campaign.py --out toy.zarr --n-samples 64 --chunk-size 4 \
         --workers 2 [--resume] [--scheduler ADDR | --cluster slurm]
 """
 
@@ -26,7 +29,7 @@ from pathlib import Path
 import numpy as np
 from numba import njit, prange
 
-from .store import sample_rng
+from ideas_hpc.engine.store import sample_rng
 
 N_PARAMS = 4
 
@@ -154,7 +157,7 @@ def run_toy(out, *, n_samples: int = 64, chunk_size: int = 4, n_vertex: int = 64
             n_time: int = 16, work: int = 200, seed: int = 12345, resume: bool = False,
             **run_kwargs):
     """Create/resume and run a toy campaign; returns the :class:`RunSummary`."""
-    from .runner import run_campaign
+    from ideas_hpc.engine.runner import run_campaign
 
     fn = functools.partial(toy_chunk, campaign_seed=seed, n_vertex=n_vertex, n_time=n_time,
                            work=work, **{k: run_kwargs.pop(k) for k in
@@ -172,7 +175,7 @@ def run_toy_serial(out, *, n_samples: int = 64, chunk_size: int = 4, n_vertex: i
 
     The reference the distributed, killed-and-resumed runs must reproduce.
     """
-    from .store import ChunkPlan, create_store, write_chunk_region
+    from ideas_hpc.engine.store import ChunkPlan, create_store, write_chunk_region
 
     create_store(out, toy_template(n_samples, n_vertex, n_time),
                  config=toy_config(n_samples, chunk_size, n_vertex, n_time, work, seed),
@@ -185,9 +188,9 @@ def run_toy_serial(out, *, n_samples: int = 64, chunk_size: int = 4, n_vertex: i
 
 
 def main(argv: list[str] | None = None) -> int:
-    from ..errors import InputError
+    from ideas_hpc.errors import InputError
 
-    p = argparse.ArgumentParser(prog="python -m ideas_hpc.engine.toy",
+    p = argparse.ArgumentParser(prog="python tests/toy_campaign.py",
                                 description="Run the engine's toy campaign into a zarr store.")
     p.add_argument("campaign", nargs="?", default="toy",
                    help="ignored (lets slurm/run_campaign.sbatch launch the toy like a campaign)")
@@ -219,4 +222,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    # Run the module's own copy, not ``__main__``'s: workers unpickle
+    # ``toy_campaign.toy_chunk`` by name.
+    import toy_campaign
+
+    sys.exit(toy_campaign.main())
