@@ -21,7 +21,6 @@ from .maneuvers import P_MIN_DEFAULT, maneuver_args
 from .spacecraft import default_spacecraft, validate_spacecraft
 
 
-
 def initial_conditions(seed: int, sample: int, n_spacecraft: int):
     """Random initial attitude state of one Monte Carlo sample (SPEC section 5).
 
