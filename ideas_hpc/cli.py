@@ -11,9 +11,8 @@ import sys
 
 from . import __version__
 from .errors import InputError
+from .units import CM, DEG, KM, UM
 
-KM = 1e3
-DEG = 3.141592653589793 / 180.0
 
 
 def _add_size(sub) -> None:
@@ -43,8 +42,8 @@ def _cmd_size(args) -> int:
     from .bodies import load_body
     from .sizing import PAPER_R_MAX, PAPER_R_MIN, format_table, size_flyby
 
-    inst = dict(ground_resolution=args.resolution, aperture=args.aperture * 1e-2,
-                wavelength=args.wavelength * 1e-6, min_elevation=args.elevation * DEG)
+    inst = dict(ground_resolution=args.resolution, aperture=args.aperture * CM,
+                wavelength=args.wavelength * UM, min_elevation=args.elevation * DEG)
     paper = size_flyby(r_max=PAPER_R_MAX, r_min=PAPER_R_MIN, **inst)
     if args.paper:
         print(format_table(paper, "Sizing from the paper's R_max 17.670 km, R_min 3.222 km"))

@@ -12,9 +12,8 @@ from dataclasses import asdict, dataclass
 
 from .constants import AU, G
 from .errors import InputError
+from .units import DEG, HOUR, KM
 
-KM = 1000.0
-DEG = math.pi / 180.0
 
 
 @dataclass(frozen=True)
@@ -74,7 +73,7 @@ class PhysicalParams:
 _KEYS = {
     "mass_kg": 1.0,
     "gm_km3_s2": KM ** 3,
-    "spin_period_h": 3600.0,
+    "spin_period_h": HOUR,
     "c20_km2": KM * KM,
     "c22_km2": KM * KM,
     "a_au": AU,

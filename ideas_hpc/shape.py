@@ -16,8 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from .errors import InputError
+from .units import KM
 
-KM = 1000.0
 
 
 @dataclass(frozen=True)

@@ -23,9 +23,8 @@ import math
 from dataclasses import asdict, dataclass
 
 from .errors import InputError, positive_number
+from .units import DEG, KM
 
-KM = 1e3
-DEG = math.pi / 180.0
 
 #: Paper Table 3 defaults, SI.
 GROUND_RESOLUTION = 1.0

@@ -22,7 +22,7 @@ from ideas_hpc.core import mrp
 from ideas_hpc.core.attitude import angular_momentum_N, kinetic_energy, rk4_step
 from ideas_hpc.core.attitude_batch import closed_loop_step
 from ideas_hpc.core.frames import dcm_RT
-from ideas_hpc.core.reference import (mrp_add_s, mrp_rotate_s, mrp_sub_s, reference)
+from ideas_hpc.core.maneuvers import reference
 from ideas_hpc.errors import InputError
 
 W_EROS = 2.0 * math.pi / (5.270 * 3600.0)  # Eros spin, rad/s (SPEC section 1)
@@ -104,17 +104,6 @@ def test_single_axis_slew_matches_analytic():
 
 
 # ---------------------------------------------------------------- references
-def test_scalar_mrp_helpers_match_core_mrp():
-    rng = np.random.default_rng(0)
-    for _ in range(300):
-        a = rng.uniform(-1.5, 1.5, 3)
-        b = rng.uniform(-1.5, 1.5, 3)
-        v = rng.normal(size=3)
-        np.testing.assert_allclose(mrp_add_s(*a, *b), mrp.mrp_add(a, b), atol=1e-14)
-        np.testing.assert_allclose(mrp_sub_s(*a, *b), mrp.mrp_sub(a, b), atol=1e-14)
-        np.testing.assert_allclose(mrp_rotate_s(*a, *v), mrp.dcm_from_mrp(a) @ v, atol=1e-14)
-
-
 def _ref_dcm(mode, t, theta, period):
     c, s = math.cos(W_EROS * t), math.sin(W_EROS * t)
     tn = np.array([[c, s, 0], [-s, c, 0], [0, 0, 1.0]])

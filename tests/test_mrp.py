@@ -113,3 +113,22 @@ def test_near_360_composition(i):
     out = mrp.mrp_add(s, s)
     assert np.all(np.isfinite(out)) and np.linalg.norm(out) <= 1.0
     assert np.allclose(mrp.dcm_from_mrp(out), mrp.dcm_from_mrp(s) @ mrp.dcm_from_mrp(s), atol=1e-9)
+
+
+def test_scalar_forms_against_dcm_algebra():
+    """Outside truth: S&J eqs. 3.160/3.161 in DCM form, [FN] = [FB][BN] and
+    [BR] = [BN][RN]^T, and C v for the rotation; results are short sets."""
+    rng = np.random.default_rng(0)
+    for _ in range(300):
+        a = rng.uniform(-1.5, 1.5, 3)
+        b = rng.uniform(-1.5, 1.5, 3)
+        v = rng.normal(size=3)
+        ca, cb = mrp.dcm_from_mrp(a), mrp.dcm_from_mrp(b)
+        s = np.array(mrp.mrp_add_s(*a, *b))
+        assert s @ s <= 1.0 + 1e-15
+        np.testing.assert_allclose(mrp.dcm_from_mrp(s), cb @ ca, atol=1e-13)
+        d = np.array(mrp.mrp_sub_s(*a, *b))
+        assert d @ d <= 1.0 + 1e-15
+        np.testing.assert_allclose(mrp.dcm_from_mrp(d), ca @ cb.T, atol=1e-13)
+        np.testing.assert_allclose(mrp.mrp_rotate_s(*a, *v), ca @ v, atol=1e-13)
+        np.testing.assert_array_equal(mrp.mrp_add(a, b), s)

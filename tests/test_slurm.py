@@ -32,7 +32,9 @@ TOY = dict(n_samples=24, chunk_size=4, n_vertex=32, n_time=8, work=20_000, seed=
 
 
 def test_job_script_from_repo_config():
-    assert DEFAULT_SLURM_CONFIG == REPO / "slurm" / "jobqueue.yaml"
+    # shipped in the package; the checkout's slurm/jobqueue.yaml is the same file
+    assert DEFAULT_SLURM_CONFIG == REPO / "ideas_hpc" / "engine" / "jobqueue.yaml"
+    assert (REPO / "slurm" / "jobqueue.yaml").resolve() == DEFAULT_SLURM_CONFIG.resolve()
     cfg = load_slurm_config()
     assert cfg["interface"] == "lo" and cfg["cores"] == 1
     with slurm_cluster() as cluster:

@@ -36,7 +36,8 @@ def add_commands(sub) -> None:
     p.add_argument("--cluster", choices=("local", "slurm"), default="local",
                    help="start a local cluster (default) or SLURM jobs via dask-jobqueue")
     p.add_argument("--slurm-config", default=None,
-                   help="dask-jobqueue config for --cluster slurm (default slurm/jobqueue.yaml)")
+                   help="dask-jobqueue config file for --cluster slurm (default: dask.config "
+                        "jobqueue.slurm, i.e. the package's jobqueue.yaml under your dask config)")
     p.add_argument("--resume", action="store_true",
                    help="continue an interrupted store (skips finished chunks)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")

@@ -10,8 +10,8 @@ import xarray as xr
 
 from ..errors import InputError
 from ..plots import figures
+from ..units import DEG, KM
 
-KM, DEG = 1e3, np.pi / 180.0
 
 
 def _shape(ds):

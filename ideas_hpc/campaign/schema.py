@@ -42,16 +42,15 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import math
 from dataclasses import dataclass, field
 from typing import Any
 
 from ..config import CampaignSource, load_campaign
 from ..errors import InputError
 from ..schema import Field, validate, with_defaults
+from ..units import DEG
 
 KINDS = ("flyby", "design-nadir", "design-fov", "monte-carlo")
-DEG = math.pi / 180.0
 
 BODY = {
     "name": Field("str", "eros", doc="body name or shape file"),

@@ -3,7 +3,7 @@
 Each (sample, spacecraft) pair is independent; ``prange`` runs over the
 flattened ``S * N`` index. Per step ``k`` (``t_k = k dt``):
 
-1. reference at ``t_k`` (``core.reference``),
+1. reference at ``t_k`` (``core.maneuvers``),
 2. sliding-mode torques from the state at ``t_k`` (``core.control``), held
    over ``[t_k, t_k + dt]``,
 3. one RK4 step (``core.attitude.rk4_step_into``) with the MRP shadow switch,
@@ -21,7 +21,7 @@ from numba import njit, prange
 from .attitude import rk4_step_into
 from .control import sliding_mode_into
 from .mrp import mrp_from_dcm
-from .reference import reference_into
+from .maneuvers import reference_into
 
 
 @njit(cache=True, error_model="numpy")
@@ -90,7 +90,7 @@ def simulate_batch(mode, dcm_RT_all, spin_rate, periods, theta_max,
     Parameters
     ----------
     mode : int
-        0 Nadir Pointing, 1 FoV Sweeping (``core.reference``).
+        0 Nadir Pointing, 1 FoV Sweeping (``core.maneuvers``).
     dcm_RT_all : (N, 3, 3) float64
         Ring frames ``[R_i T]`` (``core.frames.dcm_RT``).
     spin_rate : float

@@ -50,7 +50,7 @@ from __future__ import annotations
 from numba import njit
 
 from .attitude import wheel_limit_s
-from .reference import mrp_rotate_s, mrp_sub_s
+from .mrp import mrp_rotate_s, mrp_sub_s
 
 
 @njit(cache=True, error_model="numpy")
@@ -66,7 +66,7 @@ def sliding_mode_into(x, z, ref, k_p, k_i, eta, phi, I_rw, J_s, L_known,
         Integral of the MRP error, s.
     ref : (9,) float64
         ``[sigma_RN, omega_RN_R (rad/s), omegadot_RN_R (rad/s^2)]`` from
-        ``core.reference``.
+        ``core.maneuvers``.
     k_p : (3,) float64
         ``K_P``, 1/s.
     k_i : (3,) float64

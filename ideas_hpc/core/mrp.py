@@ -10,7 +10,12 @@ Conventions follow Schaub & Junkins, *Analytical Mechanics of Space Systems*
 * A set with ``|sigma| > 1`` can be replaced by its shadow set
   ``-sigma / |sigma|^2``; both give the same DCM.
 
-All functions are ``@njit(cache=True)`` and take contiguous float64 arrays.
+All functions are ``@njit(cache=True)`` and take contiguous float64 arrays,
+except the scalar forms ``*_s`` (:func:`mrp_switch_s`, :func:`mrp_add_s`,
+:func:`mrp_sub_s`, :func:`mrp_rotate_s`), which take and return 3-tuples of
+floats: hot loops (attitude references, the controller) call them millions of
+times without allocating. The array forms :func:`mrp_add` and :func:`mrp_sub`
+are built on them, so each formula is written once.
 """
 
 from __future__ import annotations
@@ -164,6 +169,91 @@ def prv_from_mrp(sigma):
     return 4.0 * np.arctan(s) * sigma / s
 
 
+@njit(cache=True, error_model="numpy")
+def mrp_switch_s(a, b, c):
+    """Scalar :func:`mrp_switch`: the short set of ``(a, b, c)`` as a 3-tuple."""
+    ss = a * a + b * b + c * c
+    if ss > 1.0:
+        return -a / ss, -b / ss, -c / ss
+    return a, b, c
+
+
+@njit(cache=True, error_model="numpy")
+def mrp_add_s(a1, a2, a3, b1, b2, b3):
+    """Scalar :func:`mrp_add`: ``sigma1 = sigma_BN``, ``sigma2 = sigma_FB`` -> ``sigma_FN``
+    (S&J 3.160), short set returned as a 3-tuple."""
+    s1s = a1 * a1 + a2 * a2 + a3 * a3
+    s2s = b1 * b1 + b2 * b2 + b3 * b3
+    den = 1.0 + s1s * s2s - 2.0 * (a1 * b1 + a2 * b2 + a3 * b3)
+    if abs(den) < 0.1:
+        a1 = -a1 / s1s
+        a2 = -a2 / s1s
+        a3 = -a3 / s1s
+        s1s = 1.0 / s1s
+        den = 1.0 + s1s * s2s - 2.0 * (a1 * b1 + a2 * b2 + a3 * b3)
+    # num = (1 - |s1|^2) s2 + (1 - |s2|^2) s1 - 2 s2 x s1
+    c1 = b2 * a3 - b3 * a2
+    c2 = b3 * a1 - b1 * a3
+    c3 = b1 * a2 - b2 * a1
+    p = 1.0 - s1s
+    q = 1.0 - s2s
+    return mrp_switch_s((p * b1 + q * a1 - 2.0 * c1) / den,
+                   (p * b2 + q * a2 - 2.0 * c2) / den,
+                   (p * b3 + q * a3 - 2.0 * c3) / den)
+
+
+@njit(cache=True, error_model="numpy")
+def mrp_sub_s(a1, a2, a3, r1, r2, r3):
+    """Scalar :func:`mrp_sub`: ``sigma_BN``, ``sigma_RN`` -> ``sigma_BR`` (S&J 3.161)."""
+    srs = r1 * r1 + r2 * r2 + r3 * r3
+    sbs = a1 * a1 + a2 * a2 + a3 * a3
+    den = 1.0 + srs * sbs + 2.0 * (r1 * a1 + r2 * a2 + r3 * a3)
+    if abs(den) < 0.1:
+        r1 = -r1 / srs
+        r2 = -r2 / srs
+        r3 = -r3 / srs
+        srs = 1.0 / srs
+        den = 1.0 + srs * sbs + 2.0 * (r1 * a1 + r2 * a2 + r3 * a3)
+    # num = (1 - |sR|^2) sB - (1 - |sB|^2) sR + 2 sB x sR
+    c1 = a2 * r3 - a3 * r2
+    c2 = a3 * r1 - a1 * r3
+    c3 = a1 * r2 - a2 * r1
+    p = 1.0 - srs
+    q = 1.0 - sbs
+    return mrp_switch_s((p * a1 - q * r1 + 2.0 * c1) / den,
+                   (p * a2 - q * r2 + 2.0 * c2) / den,
+                   (p * a3 - q * r3 + 2.0 * c3) / den)
+
+
+@njit(cache=True, error_model="numpy")
+def mrp_rotate_s(s1, s2, s3, v1, v2, v3):
+    """``dcm_from_mrp(sigma) @ v`` without forming the matrix (S&J 3.153)::
+
+        C v = v + (8 s x (s x v) - 4 (1 - s^2) s x v) / (1 + s^2)^2
+    """
+    ss = s1 * s1 + s2 * s2 + s3 * s3
+    a1 = s2 * v3 - s3 * v2
+    a2 = s3 * v1 - s1 * v3
+    a3 = s1 * v2 - s2 * v1
+    b1 = s2 * a3 - s3 * a2
+    b2 = s3 * a1 - s1 * a3
+    b3 = s1 * a2 - s2 * a1
+    d = 1.0 / ((1.0 + ss) * (1.0 + ss))
+    k = 4.0 * (1.0 - ss)
+    return (v1 + (8.0 * b1 - k * a1) * d,
+            v2 + (8.0 * b2 - k * a2) * d,
+            v3 + (8.0 * b3 - k * a3) * d)
+
+
+@njit(cache=True)
+def _vec(a, b, c):
+    out = np.empty(3)
+    out[0] = a
+    out[1] = b
+    out[2] = c
+    return out
+
+
 @njit(cache=True)
 def mrp_add(sigma1, sigma2):
     """Compose two rotations: ``sigma1 = sigma_BN``, ``sigma2 = sigma_FB`` -> ``sigma_FN``.
@@ -179,16 +269,8 @@ def mrp_add(sigma1, sigma2):
     ``sigma1`` is replaced by its shadow set (same attitude), which moves the
     result to the other branch. The result is switched to ``|sigma| <= 1``.
     """
-    s1 = sigma1.copy()
-    s1s = s1[0] * s1[0] + s1[1] * s1[1] + s1[2] * s1[2]
-    s2s = sigma2[0] * sigma2[0] + sigma2[1] * sigma2[1] + sigma2[2] * sigma2[2]
-    den = 1.0 + s1s * s2s - 2.0 * (s1[0] * sigma2[0] + s1[1] * sigma2[1] + s1[2] * sigma2[2])
-    if abs(den) < 0.1:
-        s1 = -s1 / s1s
-        s1s = 1.0 / s1s
-        den = 1.0 + s1s * s2s - 2.0 * (s1[0] * sigma2[0] + s1[1] * sigma2[1] + s1[2] * sigma2[2])
-    num = (1.0 - s1s) * sigma2 + (1.0 - s2s) * s1 - 2.0 * cross3(sigma2, s1)
-    return mrp_switch(num / den)
+    a, b, c = mrp_add_s(sigma1[0], sigma1[1], sigma1[2], sigma2[0], sigma2[1], sigma2[2])
+    return _vec(a, b, c)
 
 
 @njit(cache=True)
@@ -205,16 +287,8 @@ def mrp_sub(sigma, sigma1):
     Near-zero denominators are handled with the shadow set of ``sigma1``;
     the result has ``|sigma| <= 1``.
     """
-    sr = sigma1.copy()
-    srs = sr[0] * sr[0] + sr[1] * sr[1] + sr[2] * sr[2]
-    sbs = sigma[0] * sigma[0] + sigma[1] * sigma[1] + sigma[2] * sigma[2]
-    den = 1.0 + srs * sbs + 2.0 * (sr[0] * sigma[0] + sr[1] * sigma[1] + sr[2] * sigma[2])
-    if abs(den) < 0.1:
-        sr = -sr / srs
-        srs = 1.0 / srs
-        den = 1.0 + srs * sbs + 2.0 * (sr[0] * sigma[0] + sr[1] * sigma[1] + sr[2] * sigma[2])
-    num = (1.0 - srs) * sigma - (1.0 - sbs) * sr + 2.0 * cross3(sigma, sr)
-    return mrp_switch(num / den)
+    a, b, c = mrp_sub_s(sigma[0], sigma[1], sigma[2], sigma1[0], sigma1[1], sigma1[2])
+    return _vec(a, b, c)
 
 
 @njit(cache=True)

@@ -8,9 +8,13 @@ Campaign kinds plug in a template and a chunk function::
                            resume=args.resume, workers=args.workers,
                            scheduler=args.scheduler, cluster="local")
 
-* :mod:`~ideas_hpc.engine.store`: seeds, chunk plan, store creation, region writes.
+* :mod:`~ideas_hpc.engine.store`: store creation and the resume check; re-exports
+  :mod:`~ideas_hpc.engine.store_meta` (names, chunk plan, config hash, attrs),
+  :mod:`~ideas_hpc.engine.chunk_write` (region writes, ``done_mask``) and the
+  seed helpers of :mod:`ideas_hpc.seeds`.
 * :mod:`~ideas_hpc.engine.lock`: one writer per store.
-* :mod:`~ideas_hpc.engine.cluster`: LocalCluster, existing scheduler, SLURMCluster.
+* :mod:`~ideas_hpc.engine.cluster`: LocalCluster, existing scheduler, SLURMCluster
+  (settings in ``dask.config``, defaults shipped as ``engine/jobqueue.yaml``).
 * :mod:`~ideas_hpc.engine.runner`: one dask task per chunk, retries, progress.
 * :mod:`~ideas_hpc.engine.gate`: hold chunk tasks until released (``IDEAS_HPC_CHUNK_GATE``).
 """

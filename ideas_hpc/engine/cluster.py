@@ -6,9 +6,14 @@
   tuned for the chunks' large temporaries (:data:`WORKER_MALLOC_ENV`).
 * ``scheduler=ADDRESS``: connect to a running dask scheduler; the caller owns
   its workers.
-* ``slurm``: :class:`dask_jobqueue.SLURMCluster` configured from the
-  ``jobqueue.slurm`` section of ``slurm/jobqueue.yaml`` (or any YAML/TOML file
-  in the dask config format), scaled to ``workers`` jobs.
+* ``slurm``: :class:`dask_jobqueue.SLURMCluster`, scaled to ``workers`` jobs.
+  Its settings live in ``dask.config`` under ``jobqueue.slurm``, as in
+  dask-jobqueue: the package ships ``ideas_hpc/engine/jobqueue.yaml``
+  (:data:`DEFAULT_SLURM_CONFIG`; ``slurm/jobqueue.yaml`` in a checkout links to
+  it), registered as defaults by :func:`register_slurm_defaults`, so the
+  user's dask config and ``DASK_JOBQUEUE__SLURM__*`` variables override any
+  key. A campaign may name another file in the dask config format (YAML or
+  TOML), whose ``jobqueue.slurm`` section is passed as keyword arguments.
 """
 
 from __future__ import annotations
@@ -58,8 +63,8 @@ QUIET_CLUSTER_CONFIG = {"distributed.admin.tick.interval": "1s",
                         "distributed.admin.system-monitor.interval": "2s",
                         "distributed.worker.memory.monitor-interval": "1s"}
 
-#: The repository's SLURM configuration (a checkout has ``slurm/`` beside the package).
-DEFAULT_SLURM_CONFIG = Path(__file__).resolve().parents[2] / "slurm" / "jobqueue.yaml"
+#: The package's SLURM settings (package data), dask config format.
+DEFAULT_SLURM_CONFIG = Path(__file__).resolve().with_name("jobqueue.yaml")
 
 CLUSTER_KINDS = ("local", "slurm")
 
@@ -104,32 +109,63 @@ def local_cluster(workers: int | None = None, **kwargs: Any):
         return LocalCluster(**opts)
 
 
+def _read_config_file(path: Path) -> dict:
+    """A dask config file: YAML or JSON read by ``dask.config``, TOML by ``tomllib``."""
+    import dask.config
+
+    if not path.is_file():
+        raise InputError("cannot read SLURM config: no such file", field="slurm_config",
+                         file=str(path))
+    try:
+        if path.suffix == ".toml":
+            import tomllib
+
+            return tomllib.loads(path.read_text())
+        return next(iter(dask.config.collect_yaml([str(path)])), None) or {}
+    except OSError as exc:
+        raise InputError(f"cannot read SLURM config: {exc.strerror}", field="slurm_config",
+                         file=str(path)) from exc
+    except Exception as exc:
+        raise InputError(f"cannot parse SLURM config: {exc}", field="slurm_config",
+                         file=str(path)) from exc
+
+
+_DEFAULTS_REGISTERED = False
+
+
+def register_slurm_defaults() -> None:
+    """Add :data:`DEFAULT_SLURM_CONFIG` to ``dask.config``'s defaults (once per process).
+
+    As dask-jobqueue does with its own file: values the user's dask config
+    sets keep priority, values still at dask-jobqueue's defaults take ours.
+    """
+    global _DEFAULTS_REGISTERED
+    if _DEFAULTS_REGISTERED:
+        return
+    import dask.config
+    import dask_jobqueue  # noqa: F401  (its defaults first, ours over them)
+
+    dask.config.update_defaults(_read_config_file(DEFAULT_SLURM_CONFIG))
+    _DEFAULTS_REGISTERED = True
+
+
 def load_slurm_config(path: str | os.PathLike | None = None) -> dict:
-    """The ``jobqueue.slurm`` mapping of a YAML or TOML dask-config file.
+    """The ``jobqueue.slurm`` settings: of ``dask.config`` (with the package's
+    defaults, :func:`register_slurm_defaults`) when ``path`` is None, else of
+    the YAML or TOML dask-config file ``path``.
 
     Raises
     ------
     InputError
         When the file is missing, unparsable or has no ``jobqueue.slurm`` table.
     """
-    path = Path(path) if path is not None else DEFAULT_SLURM_CONFIG
-    try:
-        text = path.read_text()
-    except OSError as exc:
-        raise InputError(f"cannot read SLURM config: {exc.strerror}", field="slurm_config",
-                         file=str(path)) from exc
-    try:
-        if path.suffix == ".toml":
-            import tomllib
+    if path is None:
+        import dask.config
 
-            data = tomllib.loads(text)
-        else:
-            import yaml
-
-            data = yaml.safe_load(text)
-    except Exception as exc:
-        raise InputError(f"cannot parse SLURM config: {exc}", field="slurm_config",
-                         file=str(path)) from exc
+        register_slurm_defaults()
+        return dict(dask.config.get("jobqueue.slurm"))
+    path = Path(path)
+    data = _read_config_file(path)
     try:
         section = data["jobqueue"]["slurm"]
     except (KeyError, TypeError):
@@ -175,16 +211,21 @@ def slurm_kwargs(section: dict, source: str | None = None) -> dict:
 
 
 def slurm_cluster(config_path: str | os.PathLike | None = None, **overrides: Any):
-    """A :class:`dask_jobqueue.SLURMCluster` from a jobqueue config file.
+    """A :class:`dask_jobqueue.SLURMCluster`, ``overrides`` laid over its settings.
 
-    The file's ``jobqueue.slurm`` section (:func:`load_slurm_config`) is
-    turned into keyword arguments (:func:`slurm_kwargs`) and ``overrides``
-    are laid over them. No job is submitted until the cluster is scaled, so
-    ``job_script()`` works without a SLURM controller.
+    Without ``config_path`` dask-jobqueue reads ``jobqueue.slurm`` from
+    ``dask.config`` (the package's defaults, :func:`register_slurm_defaults`,
+    under the user's dask config). With one, that file's ``jobqueue.slurm``
+    section (:func:`load_slurm_config`) becomes keyword arguments
+    (:func:`slurm_kwargs`). No job is submitted until the cluster is scaled,
+    so ``job_script()`` works without a SLURM controller.
     """
     from dask_jobqueue import SLURMCluster
 
-    path = Path(config_path) if config_path is not None else DEFAULT_SLURM_CONFIG
+    if config_path is None:
+        register_slurm_defaults()
+        return SLURMCluster(**overrides)
+    path = Path(config_path)
     kwargs = slurm_kwargs(load_slurm_config(path), str(path))
     kwargs.update(overrides)
     return SLURMCluster(**kwargs)
@@ -206,7 +247,8 @@ def connect(*, cluster: str = "local", workers: int | None = None, scheduler: st
     scheduler : str, optional
         Address of an existing dask scheduler (``tcp://host:8786``); nothing is started.
     slurm_config : path, optional
-        jobqueue config for ``cluster='slurm'`` (default ``slurm/jobqueue.yaml``).
+        jobqueue config file for ``cluster='slurm'`` (default: ``dask.config``,
+        with the package's ``jobqueue.yaml`` as defaults).
     worker_timeout : float
         Seconds to wait for the first SLURM worker before giving up.
     log_directory : path, optional
@@ -247,6 +289,6 @@ def connect(*, cluster: str = "local", workers: int | None = None, scheduler: st
             except TimeoutError as exc:
                 raise RuntimeError(
                     f"no SLURM worker started within {worker_timeout:g} s; check `squeue` and "
-                    f"the job logs (log-directory in {slurm_config or DEFAULT_SLURM_CONFIG})"
+                    f"the job logs (log-directory in {slurm_config or 'dask.config jobqueue.slurm'})"
                 ) from exc
             yield client

@@ -9,7 +9,7 @@ the flyby cannot perturb yet, one field of ``Perturbation``).
 
 Streams and order
 -----------------
-Sample ``k`` of campaign seed ``s`` owns ``SeedSequence(s, spawn_key=(k,))``.
+The seed scheme is :mod:`ideas_hpc.seeds`. Sample ``k`` of campaign seed ``s`` owns ``SeedSequence(s, spawn_key=(k,))``.
 Entries with ``stream="sample"`` draw from that sequence itself (the attitude
 initial conditions, equal to :func:`ideas_hpc.attitude.initial_conditions`
 ``(s, k, N)``); every other entry draws from the child
@@ -30,6 +30,7 @@ import numpy as np
 from ..attitude import initial_conditions
 from ..core.frames import dcm_RT
 from ..core.mrp import mrp_from_dcm
+from ..seeds import sample_rng
 
 DISPERSION_CHILD = 1  # spawn_key suffix of the child stream
 
@@ -173,8 +174,7 @@ def draw_sample(mc: dict, seed: int, k: int, theta: np.ndarray, setup) -> tuple[
         Keyword arguments of :class:`~ideas_hpc.flyby.Perturbation`.
     """
     n = theta.size
-    child = np.random.default_rng(np.random.SeedSequence(int(seed),
-                                                         spawn_key=(int(k), DISPERSION_CHILD)))
+    child = sample_rng(seed, k, DISPERSION_CHILD)
     values: dict = {}
     pert: dict = {}
     for d in DISPERSIONS:

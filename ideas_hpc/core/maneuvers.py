@@ -1,4 +1,4 @@
-"""Attitude reference generators: Nadir Pointing and FoV Sweeping (SPEC section 5).
+"""Attitude maneuvers: reference generators for Nadir Pointing and FoV Sweeping (SPEC section 5).
 
 Frames (SPEC section 3):
 
@@ -29,10 +29,14 @@ constant in N and ``x_R`` turns with R,
 transport term the paper's eq. 23 omits (it is ``w_s theta'`` ~ 1e-5 rad/s^2
 for Eros, kept because it is right).
 
-The MRP arithmetic below is an allocation-free scalar transcription of
-``core.mrp.mrp_add`` / ``mrp_sub`` / ``dcm_from_mrp`` (same formulas, same
-shadow-set rules; tests check them against ``core.mrp`` to 1e-15). The hot
-loop calls them millions of times, and the array forms allocate.
+The MRP arithmetic uses the allocation-free scalar forms of
+:mod:`ideas_hpc.core.mrp` (``mrp_add_s``): the hot loop calls them millions of
+times.
+
+Adding a maneuver: write its ``*_reference_into`` and ``*_camera_dcm_into``
+kernels here, give it the next mode code and a branch in
+:func:`reference_into` and :func:`camera_dcm_into`, and register it in
+:mod:`ideas_hpc.attitude.maneuvers` (CONTRIBUTING.md, "A new attitude maneuver").
 """
 
 from __future__ import annotations
@@ -40,85 +44,11 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .mrp import mrp_from_dcm
+from .mrp import mrp_add_s, mrp_from_dcm
 
+#: Mode codes of the maneuvers (the dispatch value of :func:`reference_into`).
 NP_MODE = 0
 FOV_MODE = 1
-
-
-@njit(cache=True, error_model="numpy")
-def _switch(a, b, c):
-    ss = a * a + b * b + c * c
-    if ss > 1.0:
-        return -a / ss, -b / ss, -c / ss
-    return a, b, c
-
-
-@njit(cache=True, error_model="numpy")
-def mrp_add_s(a1, a2, a3, b1, b2, b3):
-    """Scalar ``core.mrp.mrp_add``: ``sigma1 = sigma_BN``, ``sigma2 = sigma_FB`` -> ``sigma_FN``
-    (S&J 3.160), short set returned as a 3-tuple."""
-    s1s = a1 * a1 + a2 * a2 + a3 * a3
-    s2s = b1 * b1 + b2 * b2 + b3 * b3
-    den = 1.0 + s1s * s2s - 2.0 * (a1 * b1 + a2 * b2 + a3 * b3)
-    if abs(den) < 0.1:
-        a1 = -a1 / s1s
-        a2 = -a2 / s1s
-        a3 = -a3 / s1s
-        s1s = 1.0 / s1s
-        den = 1.0 + s1s * s2s - 2.0 * (a1 * b1 + a2 * b2 + a3 * b3)
-    # num = (1 - |s1|^2) s2 + (1 - |s2|^2) s1 - 2 s2 x s1
-    c1 = b2 * a3 - b3 * a2
-    c2 = b3 * a1 - b1 * a3
-    c3 = b1 * a2 - b2 * a1
-    p = 1.0 - s1s
-    q = 1.0 - s2s
-    return _switch((p * b1 + q * a1 - 2.0 * c1) / den,
-                   (p * b2 + q * a2 - 2.0 * c2) / den,
-                   (p * b3 + q * a3 - 2.0 * c3) / den)
-
-
-@njit(cache=True, error_model="numpy")
-def mrp_sub_s(a1, a2, a3, r1, r2, r3):
-    """Scalar ``core.mrp.mrp_sub``: ``sigma_BN``, ``sigma_RN`` -> ``sigma_BR`` (S&J 3.161)."""
-    srs = r1 * r1 + r2 * r2 + r3 * r3
-    sbs = a1 * a1 + a2 * a2 + a3 * a3
-    den = 1.0 + srs * sbs + 2.0 * (r1 * a1 + r2 * a2 + r3 * a3)
-    if abs(den) < 0.1:
-        r1 = -r1 / srs
-        r2 = -r2 / srs
-        r3 = -r3 / srs
-        srs = 1.0 / srs
-        den = 1.0 + srs * sbs + 2.0 * (r1 * a1 + r2 * a2 + r3 * a3)
-    # num = (1 - |sR|^2) sB - (1 - |sB|^2) sR + 2 sB x sR
-    c1 = a2 * r3 - a3 * r2
-    c2 = a3 * r1 - a1 * r3
-    c3 = a1 * r2 - a2 * r1
-    p = 1.0 - srs
-    q = 1.0 - sbs
-    return _switch((p * a1 - q * r1 + 2.0 * c1) / den,
-                   (p * a2 - q * r2 + 2.0 * c2) / den,
-                   (p * a3 - q * r3 + 2.0 * c3) / den)
-
-
-@njit(cache=True, error_model="numpy")
-def mrp_rotate_s(s1, s2, s3, v1, v2, v3):
-    """``dcm_from_mrp(sigma) @ v`` without forming the matrix (S&J 3.153)::
-
-        C v = v + (8 s x (s x v) - 4 (1 - s^2) s x v) / (1 + s^2)^2
-    """
-    ss = s1 * s1 + s2 * s2 + s3 * s3
-    a1 = s2 * v3 - s3 * v2
-    a2 = s3 * v1 - s1 * v3
-    a3 = s1 * v2 - s2 * v1
-    b1 = s2 * a3 - s3 * a2
-    b2 = s3 * a1 - s1 * a3
-    b3 = s1 * a2 - s2 * a1
-    d = 1.0 / ((1.0 + ss) * (1.0 + ss))
-    k = 4.0 * (1.0 - ss)
-    return (v1 + (8.0 * b1 - k * a1) * d,
-            v2 + (8.0 * b2 - k * a2) * d,
-            v3 + (8.0 * b3 - k * a3) * d)
 
 
 @njit(cache=True, error_model="numpy")
@@ -223,11 +153,41 @@ def reference(mode, t, spin_rate, dcm_RT, theta_max, period):
 
 
 @njit(cache=True, error_model="numpy")
+def nadir_camera_dcm_into(t, dcm_RT, theta_max, period, out):
+    """Nadir Pointing camera DCM under perfect tracking: ``[B T] = [R T]`` (R fixed in T)."""
+    for a in range(3):
+        for j in range(3):
+            out[a, j] = dcm_RT[a, j]
+
+
+@njit(cache=True, error_model="numpy")
+def fov_camera_dcm_into(t, dcm_RT, theta_max, period, out):
+    """FoV Sweeping camera DCM under perfect tracking: ``[B T] = R1(theta_ref(t)) [R T]``,
+    ``theta_ref = theta_max sin(2 pi t / P)`` (paper eq. 20); angles in rad, times in s."""
+    th = theta_max * np.sin(2.0 * np.pi * t / period)
+    c = np.cos(th)
+    s = np.sin(th)
+    for j in range(3):
+        out[0, j] = dcm_RT[0, j]
+        out[1, j] = c * dcm_RT[1, j] + s * dcm_RT[2, j]
+        out[2, j] = -s * dcm_RT[1, j] + c * dcm_RT[2, j]
+
+
+@njit(cache=True, error_model="numpy")
+def camera_dcm_into(mode, t, dcm_RT, theta_max, period, out):
+    """Dispatch: camera DCM ``[B T]`` (3, 3) of maneuver ``mode`` at ``t`` (s) into ``out``."""
+    if mode == FOV_MODE:
+        fov_camera_dcm_into(t, dcm_RT, theta_max, period, out)
+    else:
+        nadir_camera_dcm_into(t, dcm_RT, theta_max, period, out)
+
+
+@njit(cache=True, error_model="numpy")
 def reference_dcm_BT(mode, dcm_RT_all, theta_max, periods, times):
     """Camera DCM ``[B T]`` under perfect tracking (``B`` = reference frame).
 
     ``[B T] = [R T]`` for Nadir Pointing (constant: R is fixed in T) and
-    ``[B T] = R1(theta_ref(t)) [R T]`` for FoV Sweeping.
+    ``[B T] = R1(theta_ref(t)) [R T]`` for FoV Sweeping (:func:`camera_dcm_into`).
 
     Parameters
     ----------
@@ -250,14 +210,5 @@ def reference_dcm_BT(mode, dcm_RT_all, theta_max, periods, times):
     out = np.empty((n, m, 3, 3))
     for i in range(n):
         for k in range(m):
-            if mode == FOV_MODE:
-                th = theta_max * np.sin(2.0 * np.pi * times[k] / periods[i])
-                c = np.cos(th)
-                s = np.sin(th)
-                for j in range(3):
-                    out[i, k, 0, j] = dcm_RT_all[i, 0, j]
-                    out[i, k, 1, j] = c * dcm_RT_all[i, 1, j] + s * dcm_RT_all[i, 2, j]
-                    out[i, k, 2, j] = -s * dcm_RT_all[i, 1, j] + c * dcm_RT_all[i, 2, j]
-            else:
-                out[i, k] = dcm_RT_all[i]
+            camera_dcm_into(mode, times[k], dcm_RT_all[i], theta_max, periods[i], out[i, k])
     return out

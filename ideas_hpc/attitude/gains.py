@@ -1,0 +1,126 @@
+"""Sliding-mode controller gains and the paper's presets (SPEC section 5, Tables 5 and 6).
+
+The two departures from SPEC section 5 that :class:`Gains` switches
+(``phi_dt_max``, ``int_limit``) are explained in :mod:`ideas_hpc.attitude`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..errors import InputError
+from .checks import reject_unknown as _reject_unknown
+from .checks import vec3 as _vec3
+
+_CONTROLLER_KEYS = ("preset", "gains", "k_p", "k_i", "eta", "phi", "int_limit", "phi_dt_max")
+
+
+@dataclass(frozen=True)
+class Gains:
+    """Sliding-mode gains (SPEC section 5), per body axis.
+
+    Attributes
+    ----------
+    k_p : tuple of 3 floats
+        ``K_P``, 1/s.
+    k_i : tuple of 3 floats
+        ``K_I``, 1/s^2.
+    eta : float or tuple of 3 floats
+        Reaching gain, rad/s^2.
+    phi : float or tuple of 3 floats
+        Boundary-layer slope, s/rad.
+    int_limit : float
+        The error integral accumulates only while ``|sigma_B/R| < int_limit``
+        (conditional integration, module docstring); ``inf`` = SPEC as written.
+    phi_dt_max : float
+        Cap on ``eta phi dt`` for the sampled law (module docstring);
+        ``inf`` = no cap.
+    """
+
+    k_p: tuple
+    k_i: tuple
+    eta: float | tuple = 0.5
+    phi: float | tuple = 100.0
+    int_limit: float = 0.005
+    phi_dt_max: float = 1.0
+
+    def arrays(self, dt: float):
+        """``(k_p, k_i, eta, phi_eff)`` as (3,) float64 (``phi`` capped for ``dt``)."""
+        k_p = np.broadcast_to(np.asarray(self.k_p, float), (3,)).copy()
+        k_i = np.broadcast_to(np.asarray(self.k_i, float), (3,)).copy()
+        eta = np.broadcast_to(np.asarray(self.eta, float), (3,)).copy()
+        phi = np.broadcast_to(np.asarray(self.phi, float), (3,)).copy()
+        if math.isfinite(self.phi_dt_max):
+            with np.errstate(divide="ignore"):
+                cap = np.where(eta > 0, self.phi_dt_max / (eta * dt), np.inf)
+            phi = np.minimum(phi, cap)
+        return k_p, k_i, eta, phi
+
+
+#: Table 5 (NP) and Table 6 (FoV) of the paper.
+GAIN_PRESETS = {
+    "np": Gains(k_p=(0.4, 0.4, 0.4), k_i=(0.01, 0.01, 0.01), eta=0.5, phi=100.0),
+    "fov": Gains(k_p=(4.0, 0.4, 0.4), k_i=(1.0, 0.01, 0.01), eta=0.5, phi=100.0),
+}
+
+
+def validate_gains(g: Gains, prefix: str = "controller.") -> Gains:
+    """Check a :class:`Gains`; raise :class:`InputError` naming the field."""
+    _vec3(g.k_p, prefix + "k_p")
+    _vec3(g.k_i, prefix + "k_i")
+    _vec3(g.eta, prefix + "eta")
+    _vec3(g.phi, prefix + "phi")
+    for key in ("int_limit", "phi_dt_max"):
+        v = getattr(g, key)
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or math.isnan(v) or v <= 0:
+            raise InputError(f"must be positive (inf allowed), got {v!r}", field=prefix + key)
+    return g
+
+
+def gains_from_config(table, prefix: str = "controller.") -> Gains:
+    """Gains from a preset name (``'np'``, ``'fov'``) or a table.
+
+    A table may name a ``preset`` (or ``gains``) and override ``k_p``, ``k_i``,
+    ``eta``, ``phi`` (scalar or 3-vector), ``int_limit``, ``phi_dt_max``;
+    without a preset all of ``k_p`` and ``k_i`` must be given. Any other key
+    is an error naming it.
+    """
+    if table is None:
+        return GAIN_PRESETS["np"]
+    if isinstance(table, Gains):
+        return validate_gains(table, prefix)
+    if isinstance(table, str):
+        if table not in GAIN_PRESETS:
+            raise InputError(f"unknown gain preset {table!r}; known: {sorted(GAIN_PRESETS)}",
+                             field=prefix + "preset")
+        return GAIN_PRESETS[table]
+    table = dict(table)
+    _reject_unknown(table, _CONTROLLER_KEYS, prefix)
+    pkey = "preset" if "preset" in table else ("gains" if "gains" in table else None)
+    if pkey is not None:
+        name = table[pkey]
+        if name not in GAIN_PRESETS:
+            raise InputError(f"unknown gain preset {name!r}; known: {sorted(GAIN_PRESETS)}",
+                             field=prefix + pkey)
+        base = GAIN_PRESETS[name]
+    else:
+        for key in ("k_p", "k_i"):
+            if key not in table:
+                raise InputError("missing (give it or name a preset: 'np', 'fov')",
+                                 field=prefix + key)
+        base = GAIN_PRESETS["np"]
+    kw = {}
+    for key in ("k_p", "k_i", "eta", "phi"):
+        if key in table:
+            v = _vec3(table[key], prefix + key)
+            kw[key] = v if key in ("k_p", "k_i") or len(set(v)) > 1 else v[0]
+    for key in ("int_limit", "phi_dt_max"):
+        if key in table:
+            v = table[key]
+            if isinstance(v, str) and v.lower() in ("inf", "none", "off"):
+                v = math.inf
+            kw[key] = v
+    return validate_gains(replace(base, **kw), prefix)

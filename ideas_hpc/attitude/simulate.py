@@ -1,0 +1,223 @@
+"""Initial conditions, ideal camera attitude and the batched closed-loop simulation
+(SPEC section 5). Orchestration only: the physics is in ``core.attitude``,
+``core.maneuvers``, ``core.control`` and ``core.attitude_batch``."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core.attitude_batch import simulate_batch
+from ..core.frames import dcm_RT as _dcm_RT
+from ..core.maneuvers import reference_dcm_BT
+from ..errors import InputError
+from ..seeds import sample_rng
+from ..units import RPM
+from .checks import check_theta, init_array, pos_float, steps
+from .gains import gains_from_config
+from .maneuvers import P_MIN_DEFAULT, maneuver_args
+from .spacecraft import default_spacecraft, validate_spacecraft
+
+
+def initial_conditions(seed: int, sample: int, n_spacecraft: int):
+    """Random initial attitude state of one Monte Carlo sample (SPEC section 5).
+
+    Drawn from the sample's own stream (:func:`ideas_hpc.seeds.sample_rng`,
+    ``SeedSequence(seed, spawn_key=(sample,))``) in this order: sigma (N, 3) uniform in [-1, 1]
+    then shadow-switched when ``|sigma| > 1``; omega (N, 3) uniform in
+    [-1, 1] rpm; wheel speeds (N, 3) uniform in [-10, 10] rpm.
+
+    Returns
+    -------
+    sigma_BN0 : (N, 3) float64
+    omega_BN0_B : (N, 3) float64, rad/s
+    wheel_speed0 : (N, 3) float64, rad/s
+    """
+    rng = sample_rng(seed, sample)
+    n = int(n_spacecraft)
+    sigma = rng.uniform(-1.0, 1.0, (n, 3))
+    omega = rng.uniform(-1.0, 1.0, (n, 3)) * RPM
+    wheel = rng.uniform(-10.0, 10.0, (n, 3)) * RPM
+    s2 = np.einsum("ij,ij->i", sigma, sigma)
+    big = s2 > 1.0
+    sigma[big] = -sigma[big] / s2[big, None]
+    return sigma, omega, wheel
+
+
+@dataclass
+class AttitudeResult:
+    """Output of :func:`simulate_attitude` (store variables of SPEC section 9).
+
+    Attributes
+    ----------
+    times : (T,) s
+    sigma_error : (S, N, T, 3) ``sigma_B/R`` (MRP)
+    omega_error : (S, N, T, 3) ``omega_B/R`` in B, rad/s
+    wheel_speed : (S, N, T, 3) rad/s
+    wheel_torque : (S, N, T, 3) N m (held from each time on)
+    image_times : (n_img,) s
+    dcm_BT : (S, N, n_img, 3, 3) camera DCM, body <- target frame
+    max_torque : (S, N) max ``|u_s|`` over the run, N m
+    max_momentum : (S, N) max ``|J_s Omega|`` over the run, N m s
+    """
+
+    times: np.ndarray
+    sigma_error: np.ndarray
+    omega_error: np.ndarray
+    wheel_speed: np.ndarray
+    wheel_torque: np.ndarray
+    image_times: np.ndarray
+    dcm_BT: np.ndarray
+    max_torque: np.ndarray
+    max_momentum: np.ndarray
+    attrs: dict = field(default_factory=dict)
+
+    def to_dataset(self):
+        """``xarray.Dataset`` with the SPEC section 9 names and dims."""
+        import xarray as xr
+
+        d4 = ("sample", "spacecraft", "time", "axis")
+        w4 = ("sample", "spacecraft", "time", "wheel")
+        return xr.Dataset(
+            {
+                "sigma_error": (d4, self.sigma_error, {"units": "1", "long_name": "MRP sigma_B/R"}),
+                "omega_error": (d4, self.omega_error, {"units": "rad/s"}),
+                "wheel_speed": (w4, self.wheel_speed, {"units": "rad/s"}),
+                "wheel_torque": (w4, self.wheel_torque, {"units": "N m"}),
+                "dcm_BT": (("sample", "spacecraft", "image_time", "row", "col"), self.dcm_BT,
+                           {"units": "1"}),
+                "max_torque": (("sample", "spacecraft"), self.max_torque, {"units": "N m"}),
+                "max_momentum": (("sample", "spacecraft"), self.max_momentum,
+                                 {"units": "N m s"}),
+            },
+            coords={"time": ("time", self.times, {"units": "s"}),
+                    "image_time": ("image_time", self.image_times, {"units": "s"}),
+                    "axis": ["x", "y", "z"], "wheel": [0, 1, 2]},
+            attrs=dict(self.attrs),
+        )
+
+
+def _ring_dcms(theta, dcm_TS):
+    ts = np.eye(3) if dcm_TS is None else np.ascontiguousarray(dcm_TS, dtype=np.float64)
+    if ts.shape != (3, 3) or not np.allclose(ts @ ts.T, np.eye(3), atol=1e-9) \
+            or np.linalg.det(ts) <= 0:
+        raise InputError("must be a proper rotation matrix (3, 3)", field="dcm_TS")
+    return np.ascontiguousarray(np.array([_dcm_RT(float(t), ts) for t in theta]).reshape(-1, 3, 3))
+
+
+def ideal_dcm_BT(theta, spin_rate, image_times, *, mode="np", periods=None,
+                 theta_max=None, dcm_TS=None, p_min=P_MIN_DEFAULT):
+    """Camera DCM ``[B T]`` under perfect tracking (B = reference frame).
+
+    Parameters
+    ----------
+    theta : (N,) rad
+        Swarm angles.
+    spin_rate : float
+        rad/s (unused: with B fixed to R_i, which is fixed in T, ``[BT]`` does
+        not depend on the spin; kept for a uniform signature).
+    image_times : (n_img,) s
+    mode : str
+        A maneuver of :data:`~ideas_hpc.attitude.maneuvers.MANEUVERS` ('np', 'fov').
+    periods : (N,) s, for 'fov'
+    theta_max : rad, for 'fov' (default 1.9138 deg)
+    dcm_TS : (3, 3), default identity
+
+    Returns
+    -------
+    (N, n_img, 3, 3) float64
+    """
+    th = check_theta(theta)
+    man, p, tm = maneuver_args(mode, th.size, periods, theta_max, p_min)
+    times = np.ascontiguousarray(np.atleast_1d(np.asarray(image_times, dtype=np.float64)))
+    if times.ndim != 1 or not np.all(np.isfinite(times)):
+        raise InputError("must be a 1-D array of finite times in s", field="image_times")
+    return reference_dcm_BT(man.code, _ring_dcms(th, dcm_TS), tm, p, times)
+
+
+def simulate_attitude(theta, spin_rate, t_f, *, mode="np", periods=None, theta_max=None,
+                      gains=None, spacecraft=None, dt=0.1, image_dt=0.2, sigma0=None,
+                      omega0=None, wheel0=None, decimate=1, dcm_TS=None,
+                      p_min=P_MIN_DEFAULT, seed=0, n_samples=1) -> AttitudeResult:
+    """Closed-loop attitude of ``S`` samples of an ``N``-spacecraft swarm (SPEC section 5).
+
+    Parameters
+    ----------
+    theta : (N,) rad
+        Swarm angles (ring frames from ``core.frames.dcm_RT``).
+    spin_rate : float
+        Target spin rate about +z_T, rad/s.
+    t_f : float
+        Duration, s (a multiple of ``dt``).
+    mode : str
+        A maneuver of :data:`~ideas_hpc.attitude.maneuvers.MANEUVERS`: 'np'
+        (Nadir Pointing) or 'fov' (FoV Sweeping).
+    periods : (N,) s
+        Sweep periods for 'fov' (>= ``p_min``).
+    theta_max : float
+        Sweep amplitude, rad (default 1.9138 deg).
+    gains : Gains, preset name, or config table
+        Default: the preset of ``mode`` (Table 5 / Table 6).
+    spacecraft : SpacecraftModel
+        Default :func:`default_spacecraft`.
+    dt : float
+        Integration and control step, s; must divide ``image_dt``.
+    image_dt : float
+        Image period, s (0.2: 5 images/s).
+    sigma0, omega0, wheel0 : (S, N, 3) or (N, 3)
+        Initial ``sigma_BN``, ``omega_BN_B`` (rad/s) and wheel speeds (rad/s).
+        When ``sigma0`` is None all three are drawn by
+        :func:`initial_conditions` for samples ``0 .. n_samples - 1`` of ``seed``.
+    decimate : int
+        Keep every ``decimate``-th step in the time series.
+    dcm_TS : (3, 3)
+        Swarm frame ``[TS]`` (default identity).
+    p_min : float
+        Minimum sweep period, s (paper: 0.3 min).
+
+    Returns
+    -------
+    AttitudeResult
+    """
+    th = check_theta(theta)
+    n = th.size
+    man, p, tm = maneuver_args(mode, n, periods, theta_max, p_min)
+    sc = validate_spacecraft(spacecraft or default_spacecraft())
+    g = gains_from_config(man.gains if gains is None else gains)
+    ws = float(spin_rate)
+    if not math.isfinite(ws):
+        raise InputError("must be finite (rad/s)", field="spin_rate")
+    dt = pos_float(dt, "dt")
+    image_dt = pos_float(image_dt, "image_dt")
+    t_f = pos_float(t_f, "t_f")
+    n_steps = steps(t_f, dt, "t_f")
+    img_every = steps(image_dt, dt, "image_dt")
+    if isinstance(decimate, bool) or int(decimate) != decimate or decimate < 1:
+        raise InputError(f"must be a positive integer, got {decimate!r}", field="decimate")
+    decimate = int(decimate)
+    if sigma0 is None:
+        if omega0 is not None or wheel0 is not None:
+            raise InputError("give sigma0, omega0 and wheel0 together", field="sigma0")
+        draws = [initial_conditions(seed, k, n) for k in range(int(n_samples))]
+        s0, w0, W0 = (np.ascontiguousarray(np.stack([d[j] for d in draws])) for j in range(3))
+    else:
+        if omega0 is None or wheel0 is None:
+            raise InputError("give sigma0, omega0 and wheel0 together", field="omega0")
+        s0 = init_array(sigma0, "sigma0", n)
+        w0 = init_array(omega0, "omega0", n)
+        W0 = init_array(wheel0, "wheel0", n)
+        if not (s0.shape == w0.shape == W0.shape):
+            raise InputError("sigma0, omega0, wheel0 must have the same shape", field="omega0")
+    k_p, k_i, eta, phi = g.arrays(dt)
+    out = simulate_batch(man.code, _ring_dcms(th, dcm_TS), ws, p, tm, k_p, k_i, eta, phi,
+                         float(g.int_limit), sc.inertia_rw, sc.J_s, float(sc.u_max),
+                         float(sc.h_max), dt, n_steps, decimate, img_every, s0, w0, W0)
+    sig, om, wh, tq, dcm, mu, mh = out
+    times = np.arange(0, n_steps + 1, decimate) * dt
+    image_times = np.arange(0, n_steps + 1, img_every) * dt
+    attrs = {"mode": mode, "dt": dt, "image_dt": image_dt, "spin_rate": ws,
+             "theta_max": tm, "k_p": list(k_p), "k_i": list(k_i), "eta": list(eta),
+             "phi_effective": list(phi), "int_limit": float(g.int_limit)}
+    return AttitudeResult(times, sig, om, wh, tq, image_times, dcm, mu, mh, attrs)

@@ -1,0 +1,159 @@
+"""Spacecraft model: rigid body with three reaction wheels (SPEC section 5)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError
+from .checks import pos_float as _pos_float
+from .checks import reject_unknown as _reject_unknown
+
+_SPACECRAFT_KEYS = ("mass", "size", "wheel_mass", "wheel_radius", "u_max", "h_max", "inertia")
+
+
+@dataclass(frozen=True)
+class SpacecraftModel:
+    """Rigid spacecraft with three reaction wheels on its principal axes (SPEC section 5).
+
+    Attributes (SI)
+    ---------------
+    mass : float
+        Hub mass, kg (4).
+    size : tuple of 3 floats
+        Box edges along body x, y, z, m ((0.1, 0.1, 0.3): z along the 30 cm side).
+    wheel_mass : float
+        kg (0.24).
+    wheel_radius : float
+        m (0.029).
+    u_max : float
+        Wheel torque limit, N m (0.007).
+    h_max : float
+        Wheel momentum limit ``|J_s Omega|``, N m s (0.05).
+    inertia : tuple of 3 floats or None
+        Hub principal moments, kg m^2; ``None`` means the uniform box.
+    """
+
+    mass: float = 4.0
+    size: tuple = (0.1, 0.1, 0.3)
+    wheel_mass: float = 0.24
+    wheel_radius: float = 0.029
+    u_max: float = 0.007
+    h_max: float = 0.05
+    inertia: tuple | None = None
+
+    @property
+    def inertia_hub(self) -> np.ndarray:
+        """Hub principal moments, kg m^2: uniform box ``m/12 (b^2 + c^2)`` unless given."""
+        if self.inertia is not None:
+            return np.array(self.inertia, dtype=np.float64)
+        a, b, c = self.size
+        m = self.mass
+        return np.array([m / 12 * (b * b + c * c), m / 12 * (a * a + c * c),
+                         m / 12 * (a * a + b * b)])
+
+    @property
+    def wheel_spin_inertia(self) -> float:
+        """``J_s = m r^2 / 2`` (uniform disc), kg m^2."""
+        return 0.5 * self.wheel_mass * self.wheel_radius ** 2
+
+    @property
+    def wheel_transverse_inertia(self) -> float:
+        """``J_t = m r^2 / 4`` (thin uniform disc about a diameter), kg m^2."""
+        return 0.25 * self.wheel_mass * self.wheel_radius ** 2
+
+    @property
+    def J_s(self) -> np.ndarray:
+        """Wheel spin inertias (3,), kg m^2."""
+        return np.full(3, self.wheel_spin_inertia)
+
+    @property
+    def inertia_rw(self) -> np.ndarray:
+        """Principal moments of ``[I_RW]`` (hub plus wheel transverse inertia), kg m^2.
+
+        Each axis sees the transverse inertia of the two wheels not on it
+        (wheels at the centre of mass; S&J eq. 4.140 with ``[G_s] = I``).
+        """
+        return self.inertia_hub + 2.0 * self.wheel_transverse_inertia
+
+
+def validate_spacecraft(sc: SpacecraftModel, prefix: str = "spacecraft.") -> SpacecraftModel:
+    """Check a :class:`SpacecraftModel`; raise :class:`InputError` naming the field."""
+    _pos_float(sc.mass, prefix + "mass")
+    _pos_float(sc.wheel_mass, prefix + "wheel_mass", allow_zero=True)
+    _pos_float(sc.wheel_radius, prefix + "wheel_radius")
+    if sc.wheel_mass == 0.0:
+        raise InputError("wheel mass must be positive (J_s = m r^2 / 2 > 0)",
+                         field=prefix + "wheel_mass")
+    _pos_float(sc.u_max, prefix + "u_max", allow_zero=True)
+    _pos_float(sc.h_max, prefix + "h_max", allow_zero=True)
+    if sc.inertia is None:
+        size = np.asarray(sc.size, dtype=float)
+        if size.shape != (3,) or not np.all(np.isfinite(size)) or np.any(size <= 0):
+            raise InputError(f"must be three positive lengths in m, got {sc.size!r}",
+                             field=prefix + "size")
+    else:
+        i = np.asarray(sc.inertia, dtype=float)
+        if i.shape != (3,) or not np.all(np.isfinite(i)) or np.any(i <= 0.0):
+            raise InputError(f"inertia is not positive definite: principal moments "
+                             f"{sc.inertia!r} (kg m^2) must all be > 0", field=prefix + "inertia")
+        s = np.sort(i)
+        if s[0] + s[1] < s[2] * (1 - 1e-12):
+            raise InputError(f"principal moments {sc.inertia!r} violate the triangle "
+                             "inequality of a rigid body", field=prefix + "inertia")
+    return sc
+
+
+def default_spacecraft() -> SpacecraftModel:
+    """The paper's 4 kg, 30x10x10 cm spacecraft with Table 5 wheels."""
+    return SpacecraftModel()
+
+
+def spacecraft_from_config(table, prefix: str = "spacecraft.") -> SpacecraftModel:
+    """Build a :class:`SpacecraftModel` from a config table (SI units).
+
+    Keys (all optional, defaults of :func:`default_spacecraft`): ``mass`` (kg),
+    ``size`` (3 lengths, m), ``wheel_mass`` (kg), ``wheel_radius`` (m),
+    ``u_max`` (N m), ``h_max`` (N m s), ``inertia`` (3 principal moments or a
+    3x3 matrix, kg m^2; a matrix must be diagonal because the wheels sit on the
+    principal axes). Any other key is an error naming it (SRP mass and area
+    live in ``[dynamics]``).
+    """
+    table = dict(table or {})
+    _reject_unknown(table, _SPACECRAFT_KEYS, prefix)
+    kw = {}
+    for key in ("mass", "wheel_mass", "wheel_radius", "u_max", "h_max"):
+        if key in table:
+            kw[key] = table[key]
+            if isinstance(kw[key], bool) or not isinstance(kw[key], (int, float)):
+                raise InputError(f"must be a number, got {kw[key]!r}", field=prefix + key)
+            kw[key] = float(kw[key])
+    if "size" in table:
+        try:
+            kw["size"] = tuple(float(v) for v in table["size"])
+        except (TypeError, ValueError):
+            raise InputError(f"must be three lengths in m, got {table['size']!r}",
+                             field=prefix + "size") from None
+    if "inertia" in table:
+        try:
+            m = np.asarray(table["inertia"], dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(f"must be numbers, got {table['inertia']!r}",
+                             field=prefix + "inertia") from None
+        if m.shape == (3, 3):
+            if not np.all(np.isfinite(m)):
+                raise InputError("must be finite", field=prefix + "inertia")
+            if not np.allclose(m, m.T, rtol=0, atol=1e-12 * np.abs(m).max()):
+                raise InputError("inertia matrix is not symmetric", field=prefix + "inertia")
+            if np.linalg.eigvalsh(m).min() <= 0.0:
+                raise InputError("inertia is not positive definite", field=prefix + "inertia")
+            if np.abs(m - np.diag(np.diag(m))).max() > 1e-12 * np.abs(m).max():
+                raise InputError("inertia must be diagonal: the body frame is the principal "
+                                 "frame carrying the wheels", field=prefix + "inertia")
+            m = np.diag(m)
+        if m.shape != (3,):
+            raise InputError(f"must be 3 principal moments or a 3x3 matrix, got shape "
+                             f"{m.shape}", field=prefix + "inertia")
+        kw["inertia"] = tuple(float(v) for v in m)
+    return validate_spacecraft(SpacecraftModel(**kw), prefix)
