@@ -24,7 +24,6 @@ first optimum that survives all its failures is the proven optimum.
 from __future__ import annotations
 
 import itertools
-import math
 import time
 
 import numpy as np
@@ -33,7 +32,8 @@ from scipy.optimize import LinearConstraint
 
 from ..errors import InputError
 from .bank import CandidateBank
-from .exact import FEAS_TOL, ExactResult, _separation_rows, check_time_limit, prepare, solve
+from .exact import (FEAS_TOL, ExactResult, _separation_rows, check_time_limit, min_swarm,
+                    prepare, solve)
 
 #: Grid shifts of each violated failure set added with it (valid rows, fewer rounds).
 SHIFTS = (-2, -1, 1, 2)
@@ -63,7 +63,14 @@ def worst_failure(bank: CandidateBank, swarm, k: int):
 def failure_tolerant(bank: CandidateBank, k: int, *, target: float, eps_tol: float,
                      n_max: int, min_separation: float = 0.0,
                      time_limit: float | None = None) -> ExactResult:
-    """Fewest spacecraft keeping ``target - eps_tol`` after any ``k`` failures (module docstring)."""
+    """Fewest spacecraft keeping ``target - eps_tol`` after any ``k`` failures (module docstring).
+
+    Three steps: the proven lower bound ``N_0 + k`` (removing k spacecraft from a
+    tolerant swarm leaves a plain design); a feasible swarm from the sufficient
+    (k+1)-fold cover (:func:`_master` without scenarios, counting ``v^{k+1}``);
+    when the two differ, the lazy scenario search over the sizes in between,
+    within ``time_limit``. ``status`` is ``"optimal"`` only when the bounds meet.
+    """
     time_limit = check_time_limit(time_limit)
     if k < 0:
         raise InputError(f"must be >= 0, got {k}", field="design.failures_tolerated")
@@ -72,39 +79,47 @@ def failure_tolerant(bank: CandidateBank, k: int, *, target: float, eps_tol: flo
                          field="design.failures_tolerated")
     t0 = time.perf_counter()
     deadline = None if time_limit is None else t0 + time_limit
+    plain = min_swarm(bank, target=target, eps_tol=eps_tol, n_max=n_max,
+                      min_separation=min_separation, time_limit=time_limit)
+    bound = plain.n + k if plain.optimal else int(plain.bound) + k
     red, m = prepare(bank, min_separation, redundancy=True)
     need = target - eps_tol
-    nc, g = red.rep.size, red.n_groups
+    nc = red.rep.size
+    c, cons, integ = _master(red, [], k, need, (k + 1, n_max), m, bank.n_candidates,
+                             fold=True)
+    res, _ = solve(c, cons, integ, _left(deadline))
+    if res.x is None:
+        if res.status == 2:
+            raise InputError(f"no swarm of at most {n_max} spacecraft keeps "
+                             f"{100 * need:.3f} % after any {k} failures",
+                             field="design.failures_tolerated")
+        raise RuntimeError(f"HiGHS found no {k}-fold cover in time: {res.message}")
+    best = np.sort(red.rep[np.flatnonzero(res.x[:nc] > 0.5)])
+    notes = [f"lower bound {bound} = plain optimum {plain.n} + {k} failures; the "
+             f"{k + 1}-fold cover gives {best.size}"]
     scen: list[tuple] = []
     seen_f: set = set()
-    rounds, bound, best = 0, k + 1, None
-    status = "optimal"
-    while True:
-        rounds += 1
-        left = None if deadline is None else deadline - time.perf_counter()
+    rounds = 0
+    while best.size > bound:
+        left = _left(deadline)
         if left is not None and left <= 0:
-            status = "time_limit"
             break
-        c, cons, integ = _master(red, scen, k, need, n_max, m, bank.n_candidates)
+        rounds += 1
+        c, cons, integ = _master(red, scen, k, need, (bound, best.size - 1), m,
+                                 bank.n_candidates)
         res, _ = solve(c, cons, integ, left)
+        if res.status == 2:          # no swarm below best.size survives: best is optimal
+            bound = best.size
+            break
         if res.x is None:
-            if res.status == 2:
-                raise InputError(f"no swarm of at most {n_max} spacecraft keeps "
-                                 f"{100 * need:.3f} % after any {k} failures",
-                                 field="design.failures_tolerated")
-            status = "time_limit"
             break
         s = np.sort(red.rep[np.flatnonzero(res.x[:nc] > 0.5)])
-        lb = getattr(res, "mip_dual_bound", None)
         if res.status == 0:
-            bound = max(bound, s.size)
-        elif lb is not None and np.isfinite(lb):
-            bound = max(bound, math.ceil(lb - 1e-6))
-        worst, _, covs, subsets = worst_failure(bank, s, k)
+            bound = max(bound, s.size)   # optimum of a relaxation
+        _, _, covs, subsets = worst_failure(bank, s, k)
         bad = subsets[covs < need - 1e-12]
         if bad.size == 0:
             best = s
-            status = "optimal" if res.status == 0 else "time_limit"
             break
         for f in bad:
             for d in (0,) + SHIFTS:
@@ -112,66 +127,70 @@ def failure_tolerant(bank: CandidateBank, k: int, *, target: float, eps_tol: flo
                 if key not in seen_f and len(set(key)) == k:
                     seen_f.add(key)
                     scen.append(key)
-        last = s
-    if best is None:  # out of time: a feasible swarm by greedy augmentation of the last try
-        best = _greedy_complete(bank, last if rounds > 1 else np.zeros(0, np.int64), k, need,
-                                n_max)
+    if rounds:
+        notes.append(f"{rounds} rounds of lazy failure scenarios ({len(scen)} scenarios)")
     n = best.size
     bound = min(bound, n)
     gap = (n - bound) / n
-    if gap > 0 and status == "optimal":
-        status = "feasible"
+    status = "optimal" if gap == 0 else ("time_limit" if deadline is not None
+                                         and time.perf_counter() >= deadline else "feasible")
     worst, failed, _, _ = worst_failure(bank, best, k)
-    cov = float(bank.coverage([best])[0])
-    r = ExactResult(indices=best, theta=bank.theta[best], n=n, coverage=cov, target=target,
-                    status=status if gap == 0 else (status if status != "optimal" else "feasible"),
+    if worst < need - 1e-9:
+        raise RuntimeError(f"failure-tolerant swarm keeps only {worst!r} < {need!r}")
+    r = ExactResult(indices=best, theta=bank.theta[best], n=n,
+                    coverage=float(bank.coverage([best])[0]), target=target, status=status,
                     bound=float(bound), gap=float(gap), solve_time=time.perf_counter() - t0,
-                    notes=[f"{rounds} rounds of failure scenarios, {len(scen)} scenarios"])
+                    notes=notes)
     r.worst_failure_coverage = worst
     r.worst_failure = failed
     return r
 
 
-def _master(red, scen, k, need, n_max, m, n_grid):
-    """Objective, constraints and integrality of the relaxation with scenarios ``scen``."""
+def _left(deadline):
+    return None if deadline is None else deadline - time.perf_counter()
+
+
+def _master(red, scen, k, need, card, m, n_grid, fold=False):
+    """Objective, constraints and integrality of the relaxation with scenarios ``scen``.
+
+    Variables ``[x (K), v^1 (G), ..., v^{k+1} (G)]``; ``v^t_g`` is 1 only if at least
+    ``t`` chosen candidates see group g (``t v^t_g <= sum_{c sees g} x_c``, with
+    ``v^t`` binary for ``t >= 2`` so that the bound is exact; ``v^1`` may stay
+    continuous as in the plain design). After the failure of ``F`` (all flying), g
+    stays seen iff ``count_S(g) >= |F seen-by g| + 1``, so the scenario row is
+    ``sum_g w_g v_g^{1 + |F sees g|} >= need (sum_{j in F} x_j - (k - 1))``.
+    ``fold=True`` asks instead ``sum_g w_g v_g^{k+1} >= need`` (sufficient only).
+    ``card`` = (lowest, highest) swarm size.
+    """
     nc, g = red.rep.size, red.n_groups
+    n_var = nc + (k + 1) * g
     cov_t = sparse.csr_matrix(red.cover.T.astype(np.float64))   # (G, K)
-    blocks_rows, rhs_hi, rhs_lo = [], [], []
-    extra = [np.flatnonzero(red.cover[list(f)].any(axis=0)) for f in scen]
-    n_var = nc + g + sum(e.size for e in extra)
-    # nominal cover rows y_g <= sum x
-    rows = [sparse.hstack([-cov_t, sparse.identity(g), sparse.csr_matrix((g, n_var - nc - g))])]
-    lo = [np.full(g, -np.inf)]
-    hi = [np.zeros(g)]
-    # nominal coverage
+    rows, lo, hi = [], [], []
+    for t in range(1, k + 2):
+        rows.append(sparse.hstack([-cov_t, sparse.csr_matrix((g, (t - 1) * g)),
+                                   t * sparse.identity(g),
+                                   sparse.csr_matrix((g, (k + 1 - t) * g))]).tocsr())
+        lo.append(np.full(g, -np.inf))
+        hi.append(np.zeros(g))
     w0 = np.zeros(n_var)
-    w0[nc:nc + g] = red.weight
+    w0[nc + (k * g if fold else 0):nc + (k * g if fold else 0) + g] = red.weight
     rows.append(sparse.csr_matrix(w0[None, :]))
     lo.append([need + FEAS_TOL])
     hi.append([np.inf])
-    off = nc + g
-    for f, gs in zip(scen, extra):
-        e = gs.size
-        sub = cov_t[gs].tolil()
-        sub[:, list(f)] = 0.0
-        rows.append(sparse.hstack([-sub.tocsr(), sparse.csr_matrix((e, off - nc)),
-                                   sparse.identity(e), sparse.csr_matrix((e, n_var - off - e))]))
-        lo.append(np.full(e, -np.inf))
-        hi.append(np.zeros(e))
+    cov_i = red.cover.astype(np.int64)
+    for f in scen:
+        hits = cov_i[list(f)].sum(axis=0)                        # |F sees g|, 0..k
         w = np.zeros(n_var)
-        w[nc:nc + g] = red.weight
-        w[nc + gs] = 0.0
-        w[off:off + e] = red.weight[gs]
-        w[list(f)] = -(need + FEAS_TOL)
+        w[nc + hits * g + np.arange(g)] = red.weight
+        w[list(f)] -= need + FEAS_TOL
         rows.append(sparse.csr_matrix(w[None, :]))
         lo.append([-(need + FEAS_TOL) * (k - 1)])
         hi.append([np.inf])
-        off += e
-    card = np.zeros(n_var)
-    card[:nc] = 1.0
-    rows.append(sparse.csr_matrix(card[None, :]))
-    lo.append([k + 1])
-    hi.append([n_max])
+    ones = np.zeros(n_var)
+    ones[:nc] = 1.0
+    rows.append(sparse.csr_matrix(ones[None, :]))
+    lo.append([card[0]])
+    hi.append([card[1]])
     cons = [LinearConstraint(sparse.vstack(rows, format="csr"), np.concatenate(lo),
                              np.concatenate(hi))]
     sep = _separation_rows(red, m, n_grid, n_var)
@@ -179,18 +198,6 @@ def _master(red, scen, k, need, n_max, m, n_grid):
         cons.append(sep)
     c = np.zeros(n_var)
     c[:nc] = 1.0
-    integ = np.zeros(n_var)
-    integ[:nc] = 1
+    integ = np.ones(n_var)
+    integ[nc:nc + g] = 0
     return c, cons, integ
-
-
-def _greedy_complete(bank, start, k, need, n_max):
-    """Add the candidate that most raises the worst-case coverage until it meets ``need``."""
-    s = [int(i) for i in start]
-    while len(s) < n_max:
-        if len(s) > k and worst_failure(bank, s, k)[0] >= need - 1e-12:
-            break
-        scores = [worst_failure(bank, s + [j], k)[0] if j not in s else -1.0
-                  for j in range(bank.n_candidates)]
-        s.append(int(np.argmax(scores)))
-    return np.sort(np.array(s, dtype=np.int64))
