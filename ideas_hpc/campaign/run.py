@@ -29,6 +29,7 @@ from ..errors import InputError
 from ..flyby import candidate_masks, fly, setup_from_campaign
 from ..swarm_eval import MaskBank, fov_keys, nadir_keys, snap_angle
 from . import datasets
+from .design_exact import design_exact, ga_gap
 from .schema import Campaign, load
 
 
@@ -165,10 +166,13 @@ def design_nadir(c: Campaign, setup, client):
                        parents=d["parents"], elitism=d["elitism"],
                        mutation_probability=d["mutation_probability"],
                        stall_generations=d["stall_generations"],
+                       min_separation=c.cfg["swarm"]["min_separation_km"] / setup.d_sep,
                        progress=_progress_printer(d["generations"], "NP GA"))
     res.notes.extend(notes)
     n = res.best_swarm_size
     best = [snap_angle(t, step)[0] for t in res.best_genome[1:1 + n]]
+    res.gap_data, gap_notes = ga_gap(c, setup, bank, n, target)
+    res.notes.extend(gap_notes)
     return res, np.sort(np.asarray(best)), None
 
 
@@ -222,6 +226,8 @@ def run_design(c: Campaign, out: Path, *, workers=None, scheduler=None, cluster=
     setup = setup_from_campaign(c)
     _log(f"body: {setup.body.note}")
     t = time.perf_counter()
+    if c.kind == "design-nadir" and c.cfg["design"]["method"] == "exact":
+        return _run_exact(c, setup, workers, scheduler, cluster, slurm_config)
     design = design_nadir if c.kind == "design-nadir" else design_fov
     if workers == 0 and scheduler is None and cluster == "local":
         res, theta, periods = design(c, setup, None)  # in this process, no dask
@@ -247,12 +253,37 @@ def run_design(c: Campaign, out: Path, *, workers=None, scheduler=None, cluster=
         "best_coverage": ((), flight.coverage.coverage),
     }, coords={"generation": np.arange(1, res.best_fitness.size + 1)})
     ds = xr.merge([ds, datasets.with_attrs(g)], combine_attrs="override")
+    if getattr(res, "gap_data", None) is not None:
+        ds = xr.merge([ds, res.gap_data], combine_attrs="override")
     ds["best_fitness"].attrs["long_name"] = ("fitness (-N if feasible)" if c.kind == "design-nadir"
                                             else "coverage, %")
     ds.attrs.update(_base_attrs(c, setup))
     ds.attrs.update({"ga_evaluations": int(res.evaluations), "ga_wall_s": float(wall),
                      "target_coverage": float(res.target_coverage),
                      "notes": json.dumps(res.notes)})
+    return ds
+
+
+def _run_exact(c: Campaign, setup, workers, scheduler, cluster, slurm_config) -> xr.Dataset:
+    """Kind ``design-nadir``, method ``exact``: certified design, then a flyby of it."""
+    from ..engine.cluster import connect
+
+    if workers == 0 and scheduler is None and cluster == "local":
+        res = design_exact(c, setup, None)
+    else:
+        with connect(cluster=cluster, workers=workers, scheduler=scheduler,
+                     slurm_config=slurm_config) as client:
+            res = design_exact(c, setup, client)
+    _log(res.summary)
+    for note in res.notes:
+        _log(f"note: {note}")
+    flight = fly(setup, res.theta)
+    ds = datasets.flyby_dataset(setup, flight)
+    ds = xr.merge([ds, res.data], combine_attrs="override")
+    ds["best_coverage"] = ((), flight.coverage.coverage)
+    ds.attrs.update(_base_attrs(c, setup))
+    ds.attrs.update(res.attrs)
+    ds.attrs["notes"] = json.dumps(res.notes)
     return ds
 
 

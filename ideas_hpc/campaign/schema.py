@@ -17,7 +17,8 @@ bodies), ``data_path``.
 turn of swarm angle), ``d_sep_km`` (default from the sizing), ``tolerance_m``,
 ``max_iterations``, ``dt_s`` (attitude step and trajectory sampling).
 
-``[swarm]`` ``angles_rad`` and ``sweep_periods_min`` (flyby and Monte Carlo).
+``[swarm]`` ``angles_rad`` and ``sweep_periods_min`` (flyby and Monte Carlo),
+``min_separation_km`` (designs: no two spacecraft closer along the ring).
 
 ``[attitude]`` ``mode`` (``ideal`` or ``simulated``), ``maneuver`` (``nadir``
 or ``fov``), ``decimate`` (keep every k-th attitude step in the store),
@@ -26,7 +27,9 @@ or ``fov``), ``decimate`` (keep every k-th attitude step in the store),
 ``[dynamics]``, ``[spacecraft]``, ``[controller]``, ``[coverage]``: passed to
 the owning modules' ``*_from_config`` (see their docstrings).
 
-``[design]`` (GA) ``population``, ``generations``, ``n_max``, ``eps_tol_pct``,
+``[design]`` ``method`` (``exact``, the default, or ``ga`` for design-nadir),
+``angle_step_deg``, ``time_limit_s``, ``failures_tolerated`` (exact designer);
+(GA) ``population``, ``generations``, ``n_max``, ``eps_tol_pct``,
 ``angle_step_rad``, ``p_min_min``, ``p_max_min``, ``period_step_min``,
 ``parents``, ``elitism``, ``mutation_probability``, ``stall_generations``.
 
@@ -82,6 +85,8 @@ FLYBY = {
 SWARM = {
     "angles_rad": Field("floats", None, nullable=True, lo=-10.0, hi=10.0),
     "sweep_periods_min": Field("floats", None, nullable=True, to_si=60.0, lo=0, lo_open=True),
+    "min_separation_km": Field("float", 1.0, to_si=1e3, lo=0,
+                               doc="no two spacecraft closer than this along the ring"),
 }
 
 ATTITUDE = {
@@ -92,6 +97,13 @@ ATTITUDE = {
 }
 
 DESIGN = {
+    "method": Field("str", "exact", choices=("exact", "ga"),
+                    doc="design-nadir: exact integer programme or the paper's GA"),
+    "angle_step_deg": Field("float", 0.5, to_si=DEG, lo=0, lo_open=True, hi=90,
+                            doc="exact designer's grid of candidate swarm angles"),
+    "time_limit_s": Field("float", 60.0, lo=0, lo_open=True,
+                          doc="exact designer: return the best design so far with its gap"),
+    "failures_tolerated": Field("int", 0, lo=0, doc="k: coverage must survive any k failures"),
     "population": Field("int", 100, lo=2, doc="GA population size"),
     "generations": Field("int", 115, lo=1),
     "n_max": Field("int", 20, lo=1, hi=200),
@@ -187,6 +199,9 @@ def _cross_checks(cfg: dict) -> None:
     if mc["reflectivity_min"] > mc["reflectivity_max"]:
         raise InputError("must be >= monte_carlo.reflectivity_min",
                          field="monte_carlo.reflectivity_max")
+    if d["failures_tolerated"] >= d["n_max"]:
+        raise InputError(f"must be < design.n_max ({d['n_max']}): {d['failures_tolerated']} "
+                         "failures would leave no spacecraft", field="design.failures_tolerated")
     sw = cfg["swarm"]
     if cfg["kind"] in ("flyby", "monte-carlo", "design-fov"):
         if not sw["angles_rad"] and not (cfg["kind"] == "design-fov"

@@ -81,17 +81,19 @@ def grid_size(step: float, field: str = "design.angle_step_deg") -> int:
 
 
 def build_bank(setup, step: float, *, client=None, chunk_size: int = 32,
-               mask_bank=None) -> CandidateBank:
+               mask_bank=None, snap: bool = True) -> CandidateBank:
     """Masks of every grid angle (rad step) for a flyby setup, ring or helix.
 
-    ``mask_bank`` (a :class:`~ideas_hpc.swarm_eval.MaskBank`) is reused when
-    given, so a GA run and its exact reference share the computed masks.
+    ``snap`` makes the step divide the circle (``2 pi / round(2 pi / step)``);
+    without it the GA's own keys ``(k step, 0, k)`` are used. ``mask_bank`` (a
+    :class:`~ideas_hpc.swarm_eval.MaskBank`) is reused when given, so a GA run
+    and its exact reference share the computed masks.
     """
     from ..flyby import candidate_masks
     from ..swarm_eval import MaskBank
 
     n = grid_size(step)
-    step = TWO_PI / n
+    step = TWO_PI / n if snap else float(step)
     if mask_bank is None:
         mask_bank = MaskBank(functools.partial(candidate_masks, setup),
                              setup.body.shape.n_vertices, chunk_size=chunk_size, client=client)
