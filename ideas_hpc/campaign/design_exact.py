@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import xarray as xr
 
+from ..design.bank import grid_size, separation_steps
 from ..design import build_bank, coverage_curve, failure_tolerant, min_swarm, worst_failure
 from ..errors import InputError
 
@@ -63,6 +64,11 @@ def design_exact(c, setup, client) -> ExactDesign:
     sw = c.cfg["swarm"]
     eps = d["eps_tol_pct"] / 100.0
     k = d["failures_tolerated"]
+    n_grid = grid_size(d["angle_step_deg"])
+    try:  # a separation no two grid points satisfy fails before any mask is computed
+        separation_steps(2 * math.pi / n_grid, setup.d_sep, sw["min_separation_km"], n_grid)
+    except InputError as exc:
+        raise c.error(exc.message, exc.field) from None
     t0 = time.perf_counter()
     bank = build_bank(setup, d["angle_step_deg"], client=client, chunk_size=d["chunk_size"])
     t_masks = time.perf_counter() - t0

@@ -149,7 +149,8 @@ def min_swarm(bank: CandidateBank, *, target: float, eps_tol: float, n_max: int 
     free = min_swarm(bank, target=target, eps_tol=eps_tol, n_max=n_max, time_limit=time_limit)
     sep_km = min_separation / 1e3
     if res.x is None and res.status == 2:
-        raise InputError(f"no swarm of at most {n_max} spacecraft at least {sep_km:g} km apart "
+        raise InputError(f"no swarm{'' if n_max is None else f' of at most {n_max}'} with "
+                         f"spacecraft at least {sep_km:g} km apart "
                          f"reaches {100 * need:.3f} %; without the separation {free.n} "
                          "spacecraft do, with some closer than that", field="swarm.min_separation_km")
     out = _min_result(bank, red, res, dt, target, need, n_max, m)

@@ -88,27 +88,27 @@ def failure_tolerant(bank: CandidateBank, k: int, *, target: float, eps_tol: flo
     c, cons, integ = _master(red, [], k, need, (k + 1, n_max), m, bank.n_candidates,
                              fold=True)
     res, _ = solve(c, cons, integ, _left(deadline))
-    if res.x is None:
-        if res.status == 2:
-            raise InputError(f"no swarm of at most {n_max} spacecraft keeps "
-                             f"{100 * need:.3f} % after any {k} failures",
-                             field="design.failures_tolerated")
-        raise RuntimeError(f"HiGHS found no {k}-fold cover in time: {res.message}")
-    best = np.sort(red.rep[np.flatnonzero(res.x[:nc] > 0.5)])
+    best = None
+    if res.x is not None:
+        best = np.sort(red.rep[np.flatnonzero(res.x[:nc] > 0.5)])
     notes = [f"lower bound {bound} = plain optimum {plain.n} + {k} failures; the "
-             f"{k + 1}-fold cover gives {best.size}"]
+             f"{k + 1}-fold cover gives " + (f"{best.size}" if best is not None else "nothing")]
     scen: list[tuple] = []
     seen_f: set = set()
     rounds = 0
-    while best.size > bound:
+    while best is None or best.size > bound:
         left = _left(deadline)
         if left is not None and left <= 0:
             break
         rounds += 1
-        c, cons, integ = _master(red, scen, k, need, (bound, best.size - 1), m,
-                                 bank.n_candidates)
+        top = n_max if best is None else best.size - 1
+        c, cons, integ = _master(red, scen, k, need, (bound, top), m, bank.n_candidates)
         res, _ = solve(c, cons, integ, left)
-        if res.status == 2:          # no swarm below best.size survives: best is optimal
+        if res.status == 2:          # no swarm of bound..top survives: best is optimal
+            if best is None:
+                raise InputError(f"no swarm of at most {n_max} spacecraft keeps "
+                                 f"{100 * need:.3f} % after any {k} failures",
+                                 field="design.failures_tolerated")
             bound = best.size
             break
         if res.x is None:
@@ -127,6 +127,9 @@ def failure_tolerant(bank: CandidateBank, k: int, *, target: float, eps_tol: flo
                 if key not in seen_f and len(set(key)) == k:
                     seen_f.add(key)
                     scen.append(key)
+    if best is None:
+        raise RuntimeError(f"no {k}-failure-tolerant swarm found within design.time_limit_s "
+                           f"(lower bound {bound} spacecraft)")
     if rounds:
         notes.append(f"{rounds} rounds of lazy failure scenarios ({len(scen)} scenarios)")
     n = best.size
