@@ -93,6 +93,15 @@ def failure_tolerant(bank: CandidateBank, k: int, *, target: float, eps_tol: flo
         best = np.sort(red.rep[np.flatnonzero(res.x[:nc] > 0.5)])
     notes = [f"lower bound {bound} = plain optimum {plain.n} + {k} failures; the "
              f"{k + 1}-fold cover gives " + (f"{best.size}" if best is not None else "nothing")]
+    if bound - k == 2 and (best is None or best.size > bound):
+        found, done = pair_clique(bank, bound, need, m)
+        if found is not None:
+            best = found
+        elif done:
+            bound += 1
+        notes.append(f"clique search over the pairs reaching the target: "
+                     + ("found a swarm of the lower bound" if found is not None else
+                        "none of the lower bound" if done else "stopped at its budget"))
     scen: list[tuple] = []
     seen_f: set = set()
     rounds = 0
@@ -147,6 +156,47 @@ def failure_tolerant(bank: CandidateBank, k: int, *, target: float, eps_tol: flo
     r.worst_failure_coverage = worst
     r.worst_failure = failed
     return r
+
+
+def pair_clique(bank: CandidateBank, size: int, need: float, m: int, budget: int = 200000):
+    """A swarm of ``size`` whose every pair covers ``need``, by exhaustive clique search.
+
+    When the plain optimum is 2 and ``size = 2 + k``, a swarm survives any k
+    failures iff every pair of it reaches the target (the survivors' union
+    contains a pair), so a tolerant swarm of the lower bound is a clique of
+    ``size`` in the graph of target-reaching pairs (minus pairs closer than
+    the separation). Returns ``(grid indices or None, search complete)``.
+    """
+    u = (~bank.masks).astype(np.float64)
+    w = bank.areas / bank.areas.sum()
+    adj = 1.0 - (u * w) @ u.T >= need - 1e-12
+    n = adj.shape[0]
+    np.fill_diagonal(adj, False)
+    if m:
+        d = np.abs(np.arange(n)[:, None] - np.arange(n)[None, :])
+        adj &= np.minimum(d, n - d) > m
+    count = [0]
+
+    def extend(chosen, cand):
+        if len(chosen) == size:
+            return list(chosen)
+        for v in np.flatnonzero(cand):
+            count[0] += 1
+            if count[0] > budget:
+                return None
+            nxt = cand & adj[v]
+            nxt[:v + 1] = False
+            if np.count_nonzero(nxt) >= size - len(chosen) - 1:
+                got = extend(chosen + [int(v)], nxt)
+                if got is not None:
+                    return got
+        return None
+
+    got = extend([], adj.any(axis=1))
+    if got is None:
+        return None, count[0] <= budget
+    s = np.array(sorted(got), dtype=np.int64)
+    return (s, True) if worst_failure(bank, s, size - 2)[0] >= need - 1e-12 else (None, False)
 
 
 def _left(deadline):
