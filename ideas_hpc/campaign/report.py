@@ -44,6 +44,8 @@ def _summary(ds, figs) -> str:
                      f" (target {100 * a.get('target_coverage', 1.0):.3f} %)")
         for note in json.loads(a.get("notes", "[]")):
             lines.append(f"note: {note}")
+    if "design_method" in ds:
+        lines.extend(_design_lines(ds))
     if "coverage" in ds:
         cov = np.atleast_1d(ds["coverage"].values) * 100
         cnt = np.atleast_1d(ds["coverage_count"].values) * 100
@@ -67,6 +69,32 @@ def _summary(ds, figs) -> str:
                          f"{np.nanmax(v[..., -1, :]):.3g} {unit}")
     lines.append("figures: " + ", ".join(p.name for p in figs))
     return "\n".join(lines) + "\n"
+
+
+def _design_lines(ds) -> list[str]:
+    """The certified design's status, trade curve and worst failure (issue 13)."""
+    a = ds.attrs
+    method = str(ds["design_method"].values)
+    out = []
+    if "optimality_gap" in ds:
+        out.append(f"design: method {method}, status {str(ds['solver_status'].values)}, "
+                   f"N = {int(ds['best_swarm_size'])}, proven lower bound "
+                   f"{float(ds['proven_bound']):g}, optimality gap "
+                   f"{100 * float(ds['optimality_gap']):.1f} %")
+    if "coverage_vs_n" in ds:
+        n, c = ds["n_spacecraft"].values, ds["coverage_vs_n"].values
+        stop = int(np.argmax(c >= c[-1])) + 1       # the curve is flat after its maximum
+        pts = ", ".join(f"{int(k)}: {100 * v:.3f} %" for k, v in zip(n[:stop], c[:stop]))
+        if stop < n.size:
+            pts += f" (the same up to N = {int(n[-1])})"
+        out.append(f"best coverage for N spacecraft (proven): {pts}")
+    if "worst_failure_coverage" in ds:
+        out.append(f"worst case after {a.get('failures_evaluated', 1)} failure(s): "
+                   f"{100 * float(ds['worst_failure_coverage']):.3f} % (failed spacecraft "
+                   f"{ds['worst_failure'].values.tolist()})")
+    if method == "exact":
+        out.extend(f"note: {n}" for n in json.loads(a.get("notes", "[]")))
+    return out
 
 
 def write_report(store, out=None) -> Path:
