@@ -197,3 +197,30 @@ def test_exact_campaign_store_same_on_1_and_2_workers(tmp_path):
         run_file(CAMPAIGN, out=tmp_path / "c.zarr", overrides=sets + [
             "swarm.min_separation_km=1e5", "run.workers=0"])
     assert ei.value.field == "swarm.min_separation_km"
+
+
+def test_exact_helix_k1_campaign(tmp_path):
+    """Helix candidates, one failure tolerated, through the campaign runner."""
+    from ideas_hpc.campaign.run import run_file
+
+    sets = ['body.name="ellipsoid"', "flyby.tf_s=60", "flyby.z_start_km=-3",
+            "flyby.z_stop_km=3", 'flyby.configuration="helix"', "flyby.helix_rise_km=2.0",
+            "design.angle_step_deg=10", "design.n_max=8", "design.failures_tolerated=1",
+            "run.workers=0"]
+    ds = xr.open_zarr(run_file(CAMPAIGN, out=tmp_path / "h.zarr", overrides=sets))
+    assert ds.attrs["configuration"] == "helix" and ds.attrs["failures_tolerated"] == 1
+    need = ds.attrs["target_coverage"] - 1e-3
+    assert float(ds["worst_failure_coverage"]) >= need - 1e-12
+    assert float(ds["best_coverage"]) >= need - 1e-12
+    assert ds["worst_failure"].size == 1
+    assert float(ds["proven_bound"]) <= ds.sizes["spacecraft"]
+
+
+@pytest.mark.slow
+def test_time_limit_returns_best_so_far_with_gap(eros1708):
+    bank = eros_bank(True, 0.5)
+    res = failure_tolerant(bank, 1, target=min(1.0, bank.reach), eps_tol=EPS, n_max=20,
+                           time_limit=5.0)
+    assert res.worst_failure_coverage >= _need(bank) - 1e-12
+    assert res.bound <= res.n
+    assert (res.status == "optimal") == (res.gap == 0.0)

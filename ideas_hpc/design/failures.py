@@ -136,9 +136,12 @@ def failure_tolerant(bank: CandidateBank, k: int, *, target: float, eps_tol: flo
                 if key not in seen_f and len(set(key)) == k:
                     seen_f.add(key)
                     scen.append(key)
-    if best is None:
-        raise RuntimeError(f"no {k}-failure-tolerant swarm found within design.time_limit_s "
-                           f"(lower bound {bound} spacecraft)")
+    if best is None:  # out of time before any tolerant swarm: greedy completion of the plain one
+        best = _greedy_complete(bank, plain.indices, k, need, n_max)
+        notes.append("out of time: greedy completion of the plain optimum")
+        if best is None:
+            raise RuntimeError(f"no {k}-failure-tolerant swarm found within "
+                               f"design.time_limit_s (lower bound {bound} spacecraft)")
     if rounds:
         notes.append(f"{rounds} rounds of lazy failure scenarios ({len(scen)} scenarios)")
     n = best.size
@@ -254,3 +257,16 @@ def _master(red, scen, k, need, card, m, n_grid, fold=False):
     integ = np.ones(n_var)
     integ[nc:nc + g] = 0
     return c, cons, integ
+
+
+def _greedy_complete(bank, start, k, need, n_max):
+    """Add the candidate that most raises the worst-case coverage until it reaches ``need``."""
+    s = [int(i) for i in start]
+    while len(s) < n_max:
+        if len(s) > k and worst_failure(bank, s, k)[0] >= need - 1e-12:
+            return np.sort(np.array(s, dtype=np.int64))
+        scores = [worst_failure(bank, s + [j], k)[0] if j not in s else -1.0
+                  for j in range(bank.n_candidates)]
+        s.append(int(np.argmax(scores)))
+    ok = len(s) > k and worst_failure(bank, s, k)[0] >= need - 1e-12
+    return np.sort(np.array(s, dtype=np.int64)) if ok else None
