@@ -169,8 +169,10 @@ def _min_result(bank, red, res, dt, target, need, n_max, m) -> ExactResult:
         if res.status == 2:
             what = (f"with spacecraft at least {m + 1} grid steps apart "
                     if m else "")
+            top = max_coverage(bank, n_max, prepared=(red, m))
             raise InputError(f"no swarm of at most {n_max} spacecraft {what}reaches "
-                             f"{100 * need:.3f} %", field="design.n_max")
+                             f"{100 * need:.3f} %; the highest coverage {n_max} reach is "
+                             f"{100 * top.coverage:.3f} % ({top.status})", field="design.n_max")
         raise RuntimeError(f"HiGHS found no swarm: {res.message}")
     idx = _chosen(red, res.x)
     n = idx.size
