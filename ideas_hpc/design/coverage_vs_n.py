@@ -7,10 +7,9 @@ Two shortcuts keep the curve cheap, both exact:
 
 * ``N = 1`` is an enumeration of the single candidates;
 * ``C*(N) <= C_all`` (the union of every candidate) and ``C*`` is
-  non-decreasing without separation; once ``C*(N) = C_all`` the curve stays
-  there, proven by that upper bound, and later N reuse that swarm.
-  With a separation constraint only the bound argument is used (``C*(N)``
-  equal to ``C_all`` is still the maximum).
+  non-decreasing (the programme allows ``sum x <= N``, separation or not);
+  once ``C*(N) = C_all`` the curve stays there, proven by that upper bound,
+  and later N reuse that swarm.
 """
 
 from __future__ import annotations

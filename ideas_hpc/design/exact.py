@@ -178,8 +178,7 @@ def _min_result(bank, red, res, dt, target, need, n_max, m) -> ExactResult:
     n = idx.size
     bound = min(max(bound, 1), n)
     gap = (n - bound) / n
-    status = "optimal" if gap == 0 and res.status == 0 else (
-        "time_limit" if res.status == 1 else ("optimal" if gap == 0 else "feasible"))
+    status = "optimal" if gap == 0 else ("time_limit" if res.status == 1 else "feasible")
     cov = float(bank.coverage([idx])[0])
     if cov < need - 1e-9:  # the solver's tolerances never hide a shortfall
         raise RuntimeError(f"exact design covers {cov!r} < {need!r}")
