@@ -14,7 +14,8 @@ Exact formulation, one *scenario* per candidate k-set ``F`` (grid indices)::
 When all of ``F`` fly, the right side is the target and the left side
 undercounts the union of ``S \\ F``; otherwise the right side is <= 0 and the
 row is void. With every k-set of candidates this is exactly the problem, but
-there are ``C(K, k)`` of them, so they are generated lazily: solve with the
+there are ``C(K, k)`` of them. For ``k = 1`` all ``K`` rows go in at once;
+for ``k >= 2`` they are generated lazily: solve with the
 scenarios known so far (a relaxation, hence a proven lower bound on N),
 enumerate every failure of the optimum, add the violated ones (and their
 shifts by a few grid steps, which the next optimum tends to try), repeat. The
@@ -102,8 +103,10 @@ def failure_tolerant(bank: CandidateBank, k: int, *, target: float, eps_tol: flo
         notes.append(f"clique search over the pairs reaching the target: "
                      + ("found a swarm of the lower bound" if found is not None else
                         "none of the lower bound" if done else "stopped at its budget"))
-    scen: list[tuple] = []
-    seen_f: set = set()
+    # k = 1: all K single failures at once are K dense rows, which HiGHS handles in one
+    # solve (exact, no rounds); for k >= 2 the C(K, k) scenarios are generated lazily.
+    scen: list[tuple] = [(j,) for j in range(bank.n_candidates)] if k == 1 else []
+    seen_f: set = set(scen)
     rounds = 0
     while best is None or best.size > bound:
         left = _left(deadline)
@@ -142,7 +145,9 @@ def failure_tolerant(bank: CandidateBank, k: int, *, target: float, eps_tol: flo
         if best is None:
             raise RuntimeError(f"no {k}-failure-tolerant swarm found within "
                                f"design.time_limit_s (lower bound {bound} spacecraft)")
-    if rounds:
+    if rounds and k == 1:
+        notes.append(f"all {len(scen)} single failures in one integer programme")
+    elif rounds:
         notes.append(f"{rounds} rounds of lazy failure scenarios ({len(scen)} scenarios)")
     n = best.size
     bound = min(bound, n)
