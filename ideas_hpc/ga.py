@@ -108,6 +108,38 @@ def reduce_swarms(genomes: np.ndarray, evaluate, target: float, eps_tol: float) 
     return g
 
 
+def separate_angles(genomes: np.ndarray, min_sep: float, step: float) -> np.ndarray:
+    """Repair NP genomes so that no two used angles are closer than ``min_sep`` (rad).
+
+    Walking the used angles in increasing order, an angle too close to the
+    last kept one moves forward to the first grid angle (``step``; 0 for
+    continuous) at least ``min_sep`` beyond it; an angle that would then come
+    too close to the first one (around the ring) is dropped (N decreases).
+    Genomes that already respect the separation are returned unchanged.
+    """
+    if min_sep <= 0:
+        return genomes
+    g = np.array(genomes, dtype=float, copy=True)
+    tol = 1e-9
+    for i in range(g.shape[0]):
+        k = int(round(g[i, 0]))
+        ang = np.sort(np.mod(g[i, 1:1 + k], TWO_PI))
+        d = np.diff(np.r_[ang, ang[0] + TWO_PI]) if k > 1 else np.array([TWO_PI])
+        if np.all(d >= min_sep - tol):
+            continue
+        kept = [ang[0]]
+        for a in ang[1:]:
+            if a - kept[-1] < min_sep - tol:
+                a = kept[-1] + min_sep
+                if step > 0:
+                    a = math.ceil(a / step - tol) * step
+            if a + min_sep - tol <= kept[0] + TWO_PI and a < TWO_PI:
+                kept.append(a)
+        g[i, 0] = len(kept)  # the unused genes behind N keep their old values
+        g[i, 1:1 + len(kept)] = kept
+    return g
+
+
 def _run_pygad(*, num_genes, gene_type, gene_space, population, generations, seed,
                batch_fitness, parents, elitism, mutation_probability, stall, progress,
                repair=None):
@@ -166,7 +198,7 @@ def run_nadir_ga(evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
                  eps_tol: float, angle_step: float, target: float = 1.0,
                  parents: int | None = None, elitism: int = 2,
                  mutation_probability: float = 0.1, stall_generations: int = 0,
-                 progress=None) -> GAResult:
+                 min_separation: float = 0.0, progress=None) -> GAResult:
     """NP swarm-size design.
 
     Parameters
@@ -180,6 +212,10 @@ def run_nadir_ga(evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
         Coverage fraction to reach (1.0, or the reachable maximum).
     eps_tol : float
         Allowed shortfall, fraction (0.001 = 0.1 %).
+    min_separation : float
+        Smallest angle between two spacecraft, rad
+        (:func:`~ideas_hpc.swarm_geometry.min_separation_angle`); genomes are repaired by :func:`separate_angles` before they are
+        scored, and the repaired genome replaces the original (Lamarckian).
     """
     _check_ga(population, generations)
     if int(n_max) < 1:
@@ -190,6 +226,10 @@ def run_nadir_ga(evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
     gene_space = [{"low": 1, "high": int(n_max) + 1, "step": 1}] + [ang] * int(n_max)
     gene_type = [int] + [float] * int(n_max)
     count = {"n": 0}
+    raw_evaluate = evaluate
+
+    def evaluate(genomes):  # noqa: F811  (every genome is scored as its separated version)
+        return raw_evaluate(separate_angles(genomes, min_separation, angle_step))
 
     def batch(genomes):
         cov, n = evaluate(genomes)
@@ -197,14 +237,15 @@ def run_nadir_ga(evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
         return nadir_fitness(cov, n, n_max, target, eps_tol)
 
     def repair(genomes):
-        return reduce_swarms(genomes, evaluate, target, eps_tol)
+        return reduce_swarms(separate_angles(genomes, min_separation, angle_step), evaluate,
+                             target, eps_tol)
 
     ga, hb, hm = _run_pygad(num_genes=1 + int(n_max), gene_type=gene_type, gene_space=gene_space,
                             population=population, generations=generations, seed=seed,
                             batch_fitness=batch, parents=parents, elitism=elitism,
                             mutation_probability=mutation_probability, stall=stall_generations,
                             progress=progress, repair=repair)
-    pop = np.asarray(ga.population, dtype=float)
+    pop = separate_angles(np.asarray(ga.population, dtype=float), min_separation, angle_step)
     cov, n = evaluate(pop)
     fit = nadir_fitness(cov, n, n_max, target, eps_tol)
     b = int(np.argmax(fit))

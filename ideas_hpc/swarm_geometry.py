@@ -70,3 +70,16 @@ def check_separation(theta, d_sep: float, min_separation: float,
     raise InputError(f"spacecraft {i} and {j} (angles {th[i]:.6g} and {th[j]:.6g} rad) {what} on "
                      f"the ring of radius {d_sep / 1e3:.4g} km; the minimum is "
                      f"swarm.min_separation_km = {min_separation / 1e3:g}", field=field)
+
+
+def min_separation_angle(min_separation: float, d_sep: float) -> float:
+    """Smallest angle between two swarm angles whose chord is at least ``min_separation``.
+
+    ``2 asin(s / (2 d_sep))`` (rad), from the chord formula above; ``inf`` when
+    ``s > 2 d_sep`` (no two points of the ring are that far apart). Design code
+    uses it so that what it proposes passes :func:`check_separation`.
+    """
+    if min_separation <= 0.0:
+        return 0.0
+    r = min_separation / (2.0 * d_sep)
+    return 2.0 * math.asin(r) if r <= 1.0 else math.inf

@@ -100,6 +100,9 @@ def test_nadir_ga_finds_the_smallest_swarm(eros1708, tmp_path, strict):
     n_ga = int(ds["best_swarm_size"])
     n_true = _smallest_n_by_brute_force(masks, areas, target, 1e-3, 6)
     assert n_ga == n_true
+    # the GA states its gap to the certified optimum on its own grid
+    assert str(ds["design_method"].values) == "ga"
+    assert float(ds["proven_bound"]) == n_true and float(ds["optimality_gap"]) == 0.0
     assert float(ds["best_coverage"]) >= target - 1e-3 - 1e-12
     assert ds.sizes["generation"] == 40 and ds.sizes["individual"] == 40
     assert ds["population"].shape == (40, 7)

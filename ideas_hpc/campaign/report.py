@@ -44,6 +44,8 @@ def _summary(ds, figs) -> str:
                      f" (target {100 * a.get('target_coverage', 1.0):.3f} %)")
         for note in json.loads(a.get("notes", "[]")):
             lines.append(f"note: {note}")
+    if "design_method" in ds:
+        lines.extend(_design_lines(ds))
     if "coverage" in ds:
         cov = np.atleast_1d(ds["coverage"].values) * 100
         cnt = np.atleast_1d(ds["coverage_count"].values) * 100
@@ -69,6 +71,52 @@ def _summary(ds, figs) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _design_lines(ds) -> list[str]:
+    """The certified design's status, trade curve and worst failure (issue 13)."""
+    a = ds.attrs
+    method = str(ds["design_method"].values)
+    out = []
+    if "optimality_gap" in ds:
+        out.append(f"design: method {method}, status {str(ds['solver_status'].values)}, "
+                   f"N = {int(ds['best_swarm_size'])}, proven lower bound "
+                   f"{float(ds['proven_bound']):g}, optimality gap "
+                   f"{100 * float(ds['optimality_gap']):.1f} %")
+    if "coverage_vs_n" in ds:
+        n, c = ds["n_spacecraft"].values, ds["coverage_vs_n"].values
+        stop = int(np.argmax(c >= c[-1])) + 1       # the curve is flat after its maximum
+        pts = ", ".join(f"{int(k)}: {100 * v:.3f} %" for k, v in zip(n[:stop], c[:stop]))
+        if stop < n.size:
+            pts += f" (the same up to N = {int(n[-1])})"
+        out.append(f"best coverage for N spacecraft (proven): {pts}")
+    if "worst_failure_coverage" in ds:
+        out.append(f"worst case after {a.get('failures_evaluated', 1)} failure(s): "
+                   f"{100 * float(ds['worst_failure_coverage']):.3f} % (failed spacecraft "
+                   f"{ds['worst_failure'].values.tolist()})")
+    if "verify_coverage" in ds:
+        c = 100 * ds["verify_coverage"].values
+        out.append(f"Monte Carlo verification: P(coverage >= {100 * a['verify_threshold']:.2f} %)"
+                   f" = {100 * a['verify_probability']:.1f} % over {c.size} dispersed samples "
+                   f"(min {c.min():.2f} %, 5th percentile {np.percentile(c, 5):.2f} %, median "
+                   f"{np.median(c):.2f} %; {int((ds['verify_n_failed'].values > 0).sum())} "
+                   "samples with a failed spacecraft)")
+    if method == "exact":
+        out.extend(f"note: {n}" for n in json.loads(a.get("notes", "[]")))
+    return out
+
+
+def _design_figures(ds, out: Path) -> list[Path]:
+    from ..plots import design
+
+    figs = []
+    if "design_method" in ds and "swarm_angle" in ds and "d_sep_m" in ds.attrs:
+        figs.append(design.ring_view(ds, out / "design_ring.png"))
+    if "coverage_vs_n" in ds:
+        figs.append(design.coverage_vs_n(ds, out / "design_coverage_vs_n.png"))
+    if "verify_coverage" in ds:
+        figs.append(design.verification(ds, out / "design_verification.png"))
+    return figs
+
+
 def write_report(store, out=None) -> Path:
     """Write PNGs and ``summary.txt`` for a store; returns the summary path."""
     store = Path(store)
@@ -90,6 +138,7 @@ def write_report(store, out=None) -> Path:
         n = "20" if design == "nadir" else "31"
         figs.append(figures.population_histogram(ds, out / f"fig{n}_final_population.png",
                                                  design=design))
+    figs.extend(_design_figures(ds, out))
     shape = _shape(ds) if "vertex_position" in ds else None
     if "position" in ds:
         figs.append(figures.trajectories(ds, out / "fig22_trajectories.png",

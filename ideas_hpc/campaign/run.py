@@ -27,8 +27,10 @@ from ..engine.lock import StoreLock
 from ..engine.store import config_diff, config_hash
 from ..errors import InputError
 from ..flyby import candidate_masks, fly, setup_from_campaign, target
+from ..swarm_geometry import min_separation_angle
 from ..swarm_eval import MaskBank, fov_keys, nadir_keys, snap_angle
 from . import datasets
+from .design_exact import ga_gap, run_exact
 from .schema import SCHEMA, Campaign, load, resolved_config
 
 
@@ -150,10 +152,14 @@ def design_nadir(c: Campaign, setup, client):
                        parents=d["parents"], elitism=d["elitism"],
                        mutation_probability=d["mutation_probability"],
                        stall_generations=d["stall_generations"],
+                       min_separation=min_separation_angle(c.cfg["swarm"]["min_separation_km"],
+                                                          setup.d_sep),
                        progress=_progress_printer(d["generations"], "NP GA"))
     res.notes.extend(notes)
     n = res.best_swarm_size
     best = [snap_angle(t, step)[0] for t in res.best_genome[1:1 + n]]
+    res.gap_data, gap_notes = ga_gap(c, setup, bank, n, target)
+    res.notes.extend(gap_notes)
     return res, np.sort(np.asarray(best)), None
 
 
@@ -211,6 +217,9 @@ def run_design(c: Campaign, out: Path, *, workers=None, scheduler=None, cluster=
     target(setup, np.linspace(0.0, 2 * np.pi, 16, endpoint=False)
            if c.kind == "design-nadir" else _fov_swarm(c))
     t = time.perf_counter()
+    if c.kind == "design-nadir" and c.cfg["design"]["method"] == "exact":
+        return run_exact(c, setup, workers=workers, scheduler=scheduler, cluster=cluster,
+                         slurm_config=slurm_config)
     design = design_nadir if c.kind == "design-nadir" else design_fov
     if workers == 0 and scheduler is None and cluster == "local":
         res, theta, periods = design(c, setup, None)  # in this process, no dask
@@ -236,6 +245,8 @@ def run_design(c: Campaign, out: Path, *, workers=None, scheduler=None, cluster=
         "best_coverage": ((), flight.coverage.coverage),
     }, coords={"generation": np.arange(1, res.best_fitness.size + 1)})
     ds = xr.merge([ds, datasets.with_attrs(g)], combine_attrs="override")
+    if getattr(res, "gap_data", None) is not None:
+        ds = xr.merge([ds, res.gap_data], combine_attrs="override")
     ds["best_fitness"].attrs["long_name"] = ("fitness (-N if feasible)" if c.kind == "design-nadir"
                                             else "coverage, %")
     ds.attrs.update(datasets.base_attrs(c, setup))

@@ -29,7 +29,11 @@ or ``fov``), ``decimate`` (keep every k-th attitude step in the store),
 ``[dynamics]``, ``[spacecraft]``, ``[controller]``, ``[coverage]``: passed to
 the owning modules' ``*_from_config`` (see their docstrings).
 
-``[design]`` (GA) ``population``, ``generations``, ``n_max``, ``eps_tol_pct``,
+``[design]`` ``method`` (``exact``, the default, or ``ga`` for design-nadir),
+``angle_step_deg``, ``time_limit_s``, ``failures_tolerated``, ``verify_samples``
+(Monte Carlo verification of the design with the ``[monte_carlo]`` dispersions)
+(exact designer);
+(GA) ``population``, ``generations``, ``n_max``, ``eps_tol_pct``,
 ``angle_step_rad``, ``p_min_min``, ``p_max_min``, ``period_step_min``,
 ``parents``, ``elitism``, ``mutation_probability``, ``stall_generations``.
 
@@ -98,6 +102,15 @@ ATTITUDE = {
 }
 
 DESIGN = {
+    "method": Field("str", "exact", choices=("exact", "ga"),
+                    doc="design-nadir: exact integer programme or the paper's GA"),
+    "angle_step_deg": Field("float", 0.5, to_si=DEG, lo=0, lo_open=True, hi=90,
+                            doc="exact designer's grid of candidate swarm angles"),
+    "time_limit_s": Field("float", 60.0, lo=0, lo_open=True,
+                          doc="exact designer: return the best design so far with its gap"),
+    "failures_tolerated": Field("int", 0, lo=0, doc="k: coverage must survive any k failures"),
+    "verify_samples": Field("int", 64, lo=0, hi=100000,
+                            doc="Monte Carlo samples that verify the exact design (0: off)"),
     "population": Field("int", 100, lo=2, doc="GA population size"),
     "generations": Field("int", 115, lo=1),
     "n_max": Field("int", 20, lo=1, hi=200),
@@ -196,6 +209,9 @@ def _cross_checks(cfg: dict) -> None:
     if mc["reflectivity_min"] > mc["reflectivity_max"]:
         raise InputError("must be >= monte_carlo.reflectivity_min",
                          field="monte_carlo.reflectivity_max")
+    if d["failures_tolerated"] >= d["n_max"]:
+        raise InputError(f"must be < design.n_max ({d['n_max']}): {d['failures_tolerated']} "
+                         "failures would leave no spacecraft", field="design.failures_tolerated")
     sw = cfg["swarm"]
     if cfg["kind"] in ("flyby", "monte-carlo", "design-fov"):
         if not sw["angles_rad"] and not (cfg["kind"] == "design-fov"

@@ -7,6 +7,7 @@ one PNG and returns its path (km, deg, %).
 from __future__ import annotations
 
 import numpy as np
+from matplotlib.ticker import MaxNLocator
 
 from .figures import plt, save_png
 
@@ -32,7 +33,7 @@ def ring_view(ds, path) -> "Path":  # noqa: F821
                label=f"chosen swarm, N = {th.size}")
     for t in th:
         ax.annotate(f"{np.degrees(t):.1f}°", (d * np.cos(t), d * np.sin(t)),
-                    textcoords="offset points", xytext=(8 * np.cos(t), 8 * np.sin(t)),
+                    textcoords="offset points", xytext=(18 * np.cos(t), 18 * np.sin(t)),
                     ha="center", va="center", fontsize=8)
     status = a.get("solver_status")
     gap = a.get("optimality_gap")
@@ -67,6 +68,7 @@ def coverage_vs_n(ds, path) -> "Path":  # noqa: F821
         ax.axvline(ds.sizes["spacecraft"], color="tab:red", ls="--", lw=1,
                    label=f"design: N = {ds.sizes['spacecraft']}")
     ax.set_xlabel("swarm size N")
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set_ylabel("area coverage, %")
     ax.set_title("what each extra spacecraft buys")
     ax.grid(alpha=0.3)

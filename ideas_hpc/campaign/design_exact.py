@@ -1,0 +1,203 @@
+"""Kind ``design-nadir`` with ``design.method = "exact"`` (issue 13), and the GA's gap.
+
+Orchestration only: the candidate bank (:mod:`ideas_hpc.design.bank`), the
+proven fewest spacecraft (:func:`~ideas_hpc.design.exact.min_swarm`) or the
+failure-tolerant design (:func:`~ideas_hpc.design.failures.failure_tolerant`),
+the coverage-versus-N curve, the enumeration of every failure of the chosen
+swarm, and the store variables ``design_method``, ``solver_status``,
+``optimality_gap``, ``coverage_vs_n`` (dim ``n_spacecraft``) and
+``worst_failure_coverage``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+import time
+from contextlib import nullcontext
+from dataclasses import dataclass, field
+
+import numpy as np
+import xarray as xr
+
+from ..design.bank import grid_size, separation_steps
+from ..design import build_bank, coverage_curve, failure_tolerant, min_swarm, worst_failure
+from ..errors import InputError
+from ..flyby import fly
+from ..montecarlo.verify import verify_swarm
+from . import datasets
+
+
+def _log(msg: str) -> None:
+    print(msg, file=sys.stderr, flush=True)
+
+
+@dataclass
+class ExactDesign:
+    """What run_design needs: the swarm, the variables to store, attrs and notes."""
+
+    theta: np.ndarray
+    data: xr.Dataset
+    attrs: dict
+    notes: list = field(default_factory=list)
+    summary: str = ""
+
+
+def _target(bank, eps_tol: float, mode: str, strict: bool, notes: list) -> float:
+    reach = bank.reach
+    if reach < 1.0 - eps_tol:
+        notes.append(f"100 % is not reachable from this ring in {mode} mode (strict options: "
+                     f"{strict}); the highest reachable coverage is {100 * reach:.3f} % (all "
+                     f"{bank.n_candidates} grid angles), and the design reaches that instead")
+        return reach
+    return 1.0
+
+
+def failure_vars(bank, swarm_idx, k: int) -> dict:
+    """``worst_failure_coverage`` and ``worst_failure`` (positions in the swarm) for k failures."""
+    worst, failed, covs, _ = worst_failure(bank, swarm_idx, k)
+    pos = np.searchsorted(np.sort(swarm_idx), failed).astype(np.int32)
+    return {"worst_failure_coverage": ((), worst),
+            "worst_failure": (("failed",), pos),
+            "failure_cases": ((), np.int64(covs.size))}
+
+
+def design_exact(c, setup, client) -> ExactDesign:
+    """The certified NP design of a campaign (module docstring)."""
+    d = c.cfg["design"]
+    sw = c.cfg["swarm"]
+    eps = d["eps_tol_pct"] / 100.0
+    k = d["failures_tolerated"]
+    n_grid = grid_size(d["angle_step_deg"])
+    try:  # a separation no two grid points satisfy fails before any mask is computed
+        separation_steps(2 * math.pi / n_grid, setup.d_sep, sw["min_separation_km"], n_grid)
+    except InputError as exc:
+        raise c.error(exc.message, exc.field) from None
+    t0 = time.perf_counter()
+    bank = build_bank(setup, d["angle_step_deg"], client=client, chunk_size=d["chunk_size"])
+    t_masks = time.perf_counter() - t0
+    _log(f"candidate masks: {bank.n_candidates} grid angles ({math.degrees(bank.step):g} deg) "
+         f"in {t_masks:.1f} s")
+    notes: list = []
+    target = _target(bank, eps, setup.coverage.mode, setup.coverage.strict, notes)
+    sep = sw["min_separation_km"]
+    try:
+        if k:
+            res = failure_tolerant(bank, k, target=target, eps_tol=eps, n_max=d["n_max"],
+                                   min_separation=sep, time_limit=d["time_limit_s"])
+        else:
+            res = min_swarm(bank, target=target, eps_tol=eps, n_max=d["n_max"],
+                            min_separation=sep, time_limit=d["time_limit_s"])
+    except InputError as exc:
+        raise c.error(exc.message, exc.field) from None
+    notes.extend(res.notes)
+    t_design = time.perf_counter() - t0
+    curve = coverage_curve(bank, d["n_max"], min_separation=sep, time_limit=d["time_limit_s"])
+    k_eval = k if k else 1
+    data = {
+        "design_method": ((), "exact"),
+        "solver_status": ((), res.status),
+        "optimality_gap": ((), res.gap),
+        "proven_bound": ((), res.bound),
+        "solve_time": ((), res.solve_time),
+        "best_swarm_size": ((), np.int64(res.n)),
+        "design_coverage": ((), res.coverage),
+        "coverage_vs_n": (("n_spacecraft",), curve.coverage),
+        "coverage_vs_n_gap": (("n_spacecraft",), curve.gap),
+        "coverage_vs_n_status": (("n_spacecraft",), np.array(curve.status, dtype="U16")),
+        "coverage_vs_n_swarm": (("n_spacecraft", "slot"), curve.angles(bank.theta)),
+        **(failure_vars(bank, res.indices, k_eval) if res.n > k_eval else {}),
+    }
+    ds = xr.Dataset(data, coords={"n_spacecraft": curve.n})
+    ds["coverage_vs_n"].attrs.update(units="1", long_name="best coverage of N spacecraft "
+                                     "(proven per N)")
+    ds["optimality_gap"].attrs.update(units="1", long_name="(N - proven lower bound) / N")
+    ds["solve_time"].attrs["units"] = "s"
+    if "worst_failure_coverage" in ds:
+        ds["worst_failure_coverage"].attrs.update(
+            units="1", long_name=f"lowest coverage after any {k_eval} failure(s)")
+        ds["worst_failure"].attrs["long_name"] = "spacecraft whose failure gives the worst case"
+    attrs = {"design_method": "exact", "solver_status": res.status,
+             "optimality_gap": float(res.gap), "target_coverage": float(target),
+             "design_masks_s": float(t_masks), "design_solve_s": float(t_design - t_masks),
+             "coverage_curve_s": float(curve.solve_time), "failures_tolerated": int(k),
+             "failures_evaluated": int(k_eval), "angle_step_rad": float(bank.step)}
+    summary = (f"exact design: N = {res.n} ({res.status}, gap {100 * res.gap:.1f} %, bound "
+               f"{res.bound:g}), coverage {100 * res.coverage:.3f} %, "
+               f"{'k = %d tolerant, ' % k if k else ''}masks {t_masks:.1f} s + solve "
+               f"{t_design - t_masks:.1f} s; coverage-vs-N curve in {curve.solve_time:.1f} s")
+    return ExactDesign(theta=res.theta, data=ds, attrs=attrs, notes=notes, summary=summary)
+
+
+def ga_gap(c, setup, mask_bank, n_ga: int, target: float) -> tuple[xr.Dataset, list]:
+    """The GA's gap to the certified optimum on the GA's own angle grid (masks reused)."""
+    d = c.cfg["design"]
+    step = d["angle_step_rad"]
+    if step <= 0:
+        return xr.Dataset({"design_method": ((), "ga")}), [
+            "continuous GA angles: no exact optimum to compare with"]
+    bank = build_bank(setup, step, mask_bank=mask_bank, snap=False)
+    try:
+        ex = min_swarm(bank, target=target, eps_tol=d["eps_tol_pct"] / 100.0, n_max=d["n_max"],
+                       min_separation=c.cfg["swarm"]["min_separation_km"],
+                       time_limit=d["time_limit_s"])
+    except InputError as exc:
+        return xr.Dataset({"design_method": ((), "ga")}), [f"no exact reference: {exc.message}"]
+    if not ex.optimal:
+        return xr.Dataset({"design_method": ((), "ga")}), [
+            f"exact reference not proven in time (N = {ex.n}, gap {ex.gap:.2f})"]
+    gap = (n_ga - ex.n) / n_ga
+    ds = xr.Dataset({"design_method": ((), "ga"), "solver_status": ((), "ga"),
+                     "optimality_gap": ((), gap), "proven_bound": ((), float(ex.n))})
+    note = (f"the GA's N = {n_ga}; the certified optimum on the same {bank.n_candidates}-angle "
+            f"grid is N = {ex.n} (gap {100 * gap:.1f} %)")
+    return ds, [note]
+
+
+def verification_vars(c, setup, theta, threshold: float, client) -> tuple[dict, dict, str]:
+    """Monte Carlo verification of the chosen swarm (``design.verify_samples``).
+
+    Flies the swarm through the campaign's ``[monte_carlo]`` dispersions with
+    the campaign seed; returns store variables, attrs and a summary line.
+    """
+    m = c.cfg["design"]["verify_samples"]
+    if m == 0:
+        return {}, {}, "Monte Carlo verification: off (design.verify_samples = 0)"
+    v = verify_swarm(setup, theta, None, mc=c.cfg["monte_carlo"], seed=c.cfg["seed"],
+                     n_samples=m, threshold=threshold, client=client)
+    data = {"verify_coverage": (("verify_sample",), v.coverage,
+                                {"units": "1", "long_name": "coverage of each dispersed sample"}),
+            "verify_n_failed": (("verify_sample",), v.n_failed,
+                                {"long_name": "failed spacecraft in each sample"})}
+    attrs = {"verify_samples": int(m), "verify_threshold": float(threshold),
+             "verify_probability": v.probability, "verify_wall_s": float(v.wall_s)}
+    return data, attrs, v.summary()
+
+
+def run_exact(c, setup, *, workers=None, scheduler=None, cluster="local",
+              slurm_config=None) -> xr.Dataset:
+    """Kind ``design-nadir``, method ``exact``: certified design, its Monte Carlo
+    verification, then a flyby of it (the store)."""
+    from ..engine.cluster import connect
+
+    local = workers == 0 and scheduler is None and cluster == "local"
+    with (nullcontext(None) if local else
+          connect(cluster=cluster, workers=workers, scheduler=scheduler,
+                  slurm_config=slurm_config)) as client:
+        res = design_exact(c, setup, client)
+        _log(res.summary)
+        for note in res.notes:
+            _log(f"note: {note}")
+        threshold = res.attrs["target_coverage"] - c.cfg["design"]["eps_tol_pct"] / 100.0
+        vdata, vattrs, vline = verification_vars(c, setup, res.theta, threshold, client)
+    _log(vline)
+    flight = fly(setup, res.theta)
+    ds = datasets.flyby_dataset(setup, flight)
+    ds = xr.merge([ds, res.data, xr.Dataset(vdata)], combine_attrs="override")
+    ds["best_coverage"] = ((), flight.coverage.coverage)
+    ds.attrs.update(datasets.base_attrs(c, setup))
+    ds.attrs.update(res.attrs)
+    ds.attrs.update(vattrs)
+    ds.attrs["notes"] = json.dumps(res.notes)
+    return ds

@@ -1,0 +1,215 @@
+"""Exact NP swarm design: the proven fewest spacecraft (weighted set cover, HiGHS).
+
+With ``x_c`` in {0, 1} (candidate c flies) and ``y_g`` in [0, 1] (vertex
+group g counted as covered), the NP design of paper eqs. 15-16 on the
+candidate grid is the integer programme::
+
+    minimise    sum_c x_c                                          (N)
+    subject to  y_g <= sum_{c sees g} x_c           for every group g
+                sum_g w_g y_g >= A_target - eps_tol               (area fractions)
+                sum_{c in W} x_c <= 1               for every separation window W
+
+``y`` need not be integer: ``y_g <= 1`` and ``y_g <= 0`` when no chosen
+candidate sees ``g``, so any feasible ``y`` undercounts the true union and the
+optimum over ``x`` is the optimum of the true problem. The max-coverage variant
+(:func:`max_coverage`) maximises ``sum w y`` with ``sum x <= N``.
+
+Solved by :func:`scipy.optimize.milp` (HiGHS branch and cut). The objective
+of :func:`min_swarm` is an integer, so the proven lower bound is
+``ceil(dual bound)`` and the gap ``(N - bound) / N`` is exact; ``status`` is
+``"optimal"`` only when that gap is 0. A time limit returns the best swarm
+found so far with its gap (status ``"time_limit"``).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import sparse
+from scipy.optimize import Bounds, LinearConstraint, milp
+
+from ..errors import InputError
+from .bank import CandidateBank, Reduced, conflict_windows, reduce_problem, separation_steps
+
+#: Coverage tolerance of the solver's constraints (fractions); the true union
+#: coverage of every returned swarm is recomputed from the masks.
+FEAS_TOL = 1e-9
+#: Relative gaps below this are float noise of the solver's bound (max coverage).
+GAP_ZERO = 1e-9
+
+
+@dataclass
+class ExactResult:
+    """Outcome of one exact design (store variables of issue 13).
+
+    ``indices`` are grid indices of the chosen candidates, ``theta`` their
+    angles (rad); ``bound`` the proven bound (lower bound on N for
+    :func:`min_swarm`, upper bound on coverage for :func:`max_coverage`).
+    """
+
+    indices: np.ndarray
+    theta: np.ndarray
+    n: int
+    coverage: float
+    target: float
+    status: str
+    bound: float
+    gap: float
+    solve_time: float
+    notes: list = field(default_factory=list)
+
+    @property
+    def optimal(self) -> bool:
+        return self.status == "optimal"
+
+
+def check_time_limit(time_limit) -> float | None:
+    if time_limit is None:
+        return None
+    t = float(time_limit)
+    if not (t > 0 and math.isfinite(t)):
+        raise InputError(f"must be > 0 s, got {time_limit!r}", field="design.time_limit_s")
+    return t
+
+
+def _cover_rows(red: Reduced, n_x: int, extra_cols: int = 0):
+    """Rows ``y_g - sum_{c sees g} x_c <= 0`` as a sparse block over (x, y, extra)."""
+    g = red.n_groups
+    cov = sparse.csr_matrix(red.cover.T.astype(np.float64))
+    return sparse.hstack([-cov, sparse.identity(g, format="csr"),
+                          sparse.csr_matrix((g, extra_cols))], format="csr")
+
+
+def _separation_rows(red: Reduced, m: int, n_grid: int, n_cols: int):
+    win = conflict_windows(n_grid, m)
+    if win.size == 0 or win.shape[1] < 2:
+        return None
+    rows = np.repeat(np.arange(win.shape[0]), win.shape[1])
+    a = sparse.csr_matrix((np.ones(win.size), (rows, win.ravel())), shape=(win.shape[0], n_cols))
+    return LinearConstraint(a, -np.inf, 1.0)
+
+
+def prepare(bank: CandidateBank, min_separation: float, *, redundancy: bool = False):
+    """Reduced data and the separation width ``m`` (grid steps) for a bank."""
+    m = separation_steps(bank.step, bank.d_sep, min_separation, bank.n_candidates)
+    red = reduce_problem(bank.masks, bank.areas, merge_candidates=(m == 0 and not redundancy))
+    return red, m
+
+
+def solve(c, constraints, integrality, time_limit):
+    """HiGHS through scipy; returns (result, seconds)."""
+    opts = {"mip_rel_gap": 0.0}
+    if time_limit is not None:
+        opts["time_limit"] = float(time_limit)
+    t = time.perf_counter()
+    res = milp(c, constraints=constraints, integrality=integrality,
+               bounds=Bounds(0.0, 1.0), options=opts)
+    return res, time.perf_counter() - t
+
+
+def _chosen(red: Reduced, x: np.ndarray) -> np.ndarray:
+    return np.sort(red.rep[np.flatnonzero(x[:red.rep.size] > 0.5)])
+
+
+def min_swarm(bank: CandidateBank, *, target: float, eps_tol: float, n_max: int | None = None,
+              min_separation: float = 0.0, time_limit: float | None = None) -> ExactResult:
+    """The fewest grid candidates whose union covers ``target - eps_tol`` (fractions).
+
+    Raises
+    ------
+    InputError
+        ``design.eps_tol_pct`` when the target cannot be reached by any swarm
+        (the message gives the highest reachable coverage), and
+        ``design.n_max`` when it needs more than ``n_max`` spacecraft.
+    """
+    time_limit = check_time_limit(time_limit)
+    red, m = prepare(bank, min_separation)
+    need = target - eps_tol
+    reach = bank.reach
+    if need > reach + FEAS_TOL:
+        raise InputError(f"target {100 * target:.3f} % (minus eps_tol) is not reachable: the "
+                         f"highest coverage any swarm on this grid reaches is {100 * reach:.4f} %",
+                         field="design.eps_tol_pct")
+    nc, g = red.rep.size, red.n_groups
+    cons = [LinearConstraint(_cover_rows(red, nc), -np.inf, 0.0),
+            LinearConstraint(np.r_[np.zeros(nc), red.weight][None, :], need + FEAS_TOL, np.inf)]
+    sep = _separation_rows(red, m, bank.n_candidates, nc + g)
+    if sep is not None:
+        cons.append(sep)
+    if n_max is not None:
+        cons.append(LinearConstraint(np.r_[np.ones(nc), np.zeros(g)][None, :], 0, int(n_max)))
+    c = np.r_[np.ones(nc), np.zeros(g)]
+    res, dt = solve(c, cons, np.r_[np.ones(nc), np.zeros(g)], time_limit)
+    if m == 0:
+        return _min_result(bank, red, res, dt, target, need, n_max, m)
+    # Does the separation cost spacecraft? Solve without it (merged columns: fast).
+    free = min_swarm(bank, target=target, eps_tol=eps_tol, n_max=n_max, time_limit=time_limit)
+    sep_km = min_separation / 1e3
+    if res.x is None and res.status == 2:
+        raise InputError(f"no swarm{'' if n_max is None else f' of at most {n_max}'} with "
+                         f"spacecraft at least {sep_km:g} km apart "
+                         f"reaches {100 * need:.3f} %; without the separation {free.n} "
+                         "spacecraft do, with some closer than that", field="swarm.min_separation_km")
+    out = _min_result(bank, red, res, dt, target, need, n_max, m)
+    out.solve_time += free.solve_time
+    if free.n < out.n:
+        out.notes.append(f"the separation of {sep_km:g} km costs spacecraft: {free.n} would do "
+                         f"with some closer than {sep_km:g} km, {out.n} are needed with it")
+    return out
+
+
+def _min_result(bank, red, res, dt, target, need, n_max, m) -> ExactResult:
+    notes = []
+    bound = getattr(res, "mip_dual_bound", None)
+    bound = math.ceil(bound - 1e-6) if bound is not None and np.isfinite(bound) else 1
+    if res.x is None:
+        if res.status == 2:
+            what = (f"with spacecraft at least {m + 1} grid steps apart "
+                    if m else "")
+            top = max_coverage(bank, n_max, prepared=(red, m))
+            raise InputError(f"no swarm of at most {n_max} spacecraft {what}reaches "
+                             f"{100 * need:.3f} %; the highest coverage {n_max} reach is "
+                             f"{100 * top.coverage:.3f} % ({top.status})", field="design.n_max")
+        raise RuntimeError(f"HiGHS found no swarm: {res.message}")
+    idx = _chosen(red, res.x)
+    n = idx.size
+    bound = min(max(bound, 1), n)
+    gap = (n - bound) / n
+    status = "optimal" if gap == 0 else ("time_limit" if res.status == 1 else "feasible")
+    cov = float(bank.coverage([idx])[0])
+    if cov < need - 1e-9:  # the solver's tolerances never hide a shortfall
+        raise RuntimeError(f"exact design covers {cov!r} < {need!r}")
+    return ExactResult(indices=idx, theta=bank.theta[idx], n=n, coverage=cov, target=target,
+                       status=status, bound=float(bound), gap=float(gap), solve_time=dt,
+                       notes=notes)
+
+
+def max_coverage(bank: CandidateBank, n: int, *, min_separation: float = 0.0,
+                 time_limit: float | None = None, prepared=None) -> ExactResult:
+    """The highest union coverage any ``n`` grid candidates reach, with one swarm reaching it."""
+    time_limit = check_time_limit(time_limit)
+    red, m = prepared if prepared is not None else prepare(bank, min_separation)
+    nc, g = red.rep.size, red.n_groups
+    cons = [LinearConstraint(_cover_rows(red, nc), -np.inf, 0.0),
+            LinearConstraint(np.r_[np.ones(nc), np.zeros(g)][None, :], 0, int(n))]
+    sep = _separation_rows(red, m, bank.n_candidates, nc + g)
+    if sep is not None:
+        cons.append(sep)
+    res, dt = solve(np.r_[np.zeros(nc), -red.weight], cons,
+                    np.r_[np.ones(nc), np.zeros(g)], time_limit)
+    if res.x is None:
+        raise RuntimeError(f"HiGHS found no swarm of {n}: {res.message}")
+    idx = _chosen(red, res.x)
+    cov = float(bank.coverage([idx])[0])
+    bound = getattr(res, "mip_dual_bound", None)
+    bound = cov if bound is None or not np.isfinite(bound) else max(cov, -float(bound))
+    gap = (bound - cov) / bound if bound > 0 else 0.0
+    if gap < GAP_ZERO:
+        gap, bound = 0.0, cov
+    status = "optimal" if gap == 0.0 else ("time_limit" if res.status == 1 else "feasible")
+    return ExactResult(indices=idx, theta=bank.theta[idx], n=idx.size, coverage=cov,
+                       target=cov, status=status, bound=float(bound), gap=float(gap),
+                       solve_time=dt)

@@ -1,0 +1,229 @@
+"""Certified swarm design (issue 13): exact designer, trade curve, failures, separation.
+
+Every result is checked against the brute-force oracles of ``tests/design_oracle.py``
+on the real eros001708 (paper and strict mode) and on random toy instances.
+"""
+
+from __future__ import annotations
+
+import itertools
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from design_oracle import (best_triple, min_tolerant_size, pair_coverage, subset_coverage)
+from ideas_hpc.campaign.schema import load
+from ideas_hpc.design import (CandidateBank, build_bank, coverage_curve, failure_tolerant,
+                              max_coverage, min_swarm, worst_failure)
+from ideas_hpc.errors import InputError
+from ideas_hpc.flyby import setup_from_campaign
+from ideas_hpc.ga import separate_angles
+
+ROOT = Path(__file__).resolve().parent.parent
+CAMPAIGN = ROOT / "campaigns" / "eros-nadir.toml"
+STRICT = ['coverage.mode="exact"', "coverage.occlusion=true", "coverage.min_elevation_deg=5.0"]
+EPS = 1e-3
+_BANKS: dict = {}
+
+
+def eros_bank(strict: bool, step_deg: float) -> CandidateBank:
+    key = (strict, step_deg)
+    if key not in _BANKS:
+        setup = setup_from_campaign(load(CAMPAIGN, STRICT if strict else []))
+        _BANKS[key] = build_bank(setup, np.deg2rad(step_deg))
+    return _BANKS[key]
+
+
+def _need(bank):
+    return min(1.0, bank.reach) - EPS
+
+
+@pytest.mark.parametrize("strict", [False, True], ids=["paper", "strict"])
+def test_exact_design_is_minimal_against_all_pairs(eros1708, strict):
+    """At 0.5 deg: no single (and, when N = 3, no pair) reaches the target; N reached."""
+    bank = eros_bank(strict, 0.5)
+    need = _need(bank)
+    res = min_swarm(bank, target=need + EPS, eps_tol=EPS, n_max=20, min_separation=1e3)
+    assert res.status == "optimal" and res.gap == 0.0 and res.bound == res.n
+    assert subset_coverage(bank.masks, bank.areas, res.indices[None, :])[0] >= need - 1e-12
+    pairs = pair_coverage(bank.masks, bank.areas)
+    best_pair = pairs[np.triu_indices_from(pairs, 1)].max()
+    assert np.diag(pairs).max() < need
+    assert res.n == (2 if best_pair >= need - 1e-12 else 3)
+    assert res.n == (3 if strict else 2)   # the paper's GA reported 3 in paper mode
+    curve = coverage_curve(bank, 4)
+    assert curve.coverage[0] == pytest.approx(np.diag(pairs).max(), abs=1e-12)
+    assert curve.coverage[1] == pytest.approx(best_pair, abs=1e-12)
+    assert all(s == "optimal" for s in curve.status) and np.all(np.diff(curve.coverage) >= 0)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("strict", [False, True], ids=["paper", "strict"])
+def test_best_triple_on_1deg_grid(eros1708, strict):
+    """Max-coverage N = 3 equals the exhaustive search over every triple of a 1 deg grid."""
+    bank = eros_bank(strict, 1.0)
+    best, arg = best_triple(bank.masks, bank.areas)
+    r = max_coverage(bank, 3)
+    assert r.status == "optimal" and r.gap == 0.0
+    assert r.coverage == pytest.approx(best, abs=1e-12)
+    res = min_swarm(bank, target=min(1.0, bank.reach), eps_tol=EPS)
+    assert (res.n <= 3) == (best >= _need(bank) - 1e-12)
+
+
+def test_failure_tolerance_against_enumeration(eros1708):
+    """k = 1 on a 15 deg grid: the designer's N equals brute force over all swarms and failures."""
+    bank = eros_bank(False, 15.0)
+    need = _need(bank)
+    n_true, swarm = min_tolerant_size(bank.masks, bank.areas, need, 1, 6)
+    res = failure_tolerant(bank, 1, target=need + EPS, eps_tol=EPS, n_max=8, time_limit=60)
+    assert res.bound <= n_true <= res.n
+    if res.status == "optimal":
+        assert res.n == n_true
+    worst, failed, covs, subsets = worst_failure(bank, res.indices, 1)
+    expect = subset_coverage(bank.masks, bank.areas,
+                             np.array([[j for j in res.indices if j != f[0]] for f in subsets]))
+    assert np.allclose(covs, expect, atol=1e-12) and worst == pytest.approx(expect.min())
+    assert worst >= need - 1e-12 and res.worst_failure_coverage == worst
+    assert failed[0] == subsets[np.argmin(expect)][0]
+
+
+def _toy(seed=1, k=14, v=80, p=0.3):
+    rng = np.random.default_rng(seed)
+    masks = rng.uniform(size=(k, v)) < p
+    step = 2 * np.pi / k
+    return CandidateBank(theta=step * np.arange(k), masks=masks, areas=rng.uniform(1, 3, v),
+                         step=step, d_sep=1e4)
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_toy_min_swarm_separation_and_curve(seed):
+    bank = _toy(seed)
+    target = bank.reach
+    all_sets = [np.array(c) for n in range(1, 8)
+                for c in itertools.combinations(range(bank.n_candidates), n)]
+    covs = bank.coverage(all_sets)
+    for sep in (0.0, 1e4 * bank.step * 1.5):    # 1.5 steps: neighbours conflict
+        gap_ok = [s for s, c in zip(all_sets, covs) if c >= target - 0.02 - 1e-12
+                  and (sep == 0 or _separated(s, bank.n_candidates, 1))]
+        if not gap_ok:
+            with pytest.raises(InputError, match="without the separation") as ei:
+                min_swarm(bank, target=target, eps_tol=0.02, min_separation=sep)
+            assert ei.value.field == "swarm.min_separation_km"
+            continue
+        res = min_swarm(bank, target=target, eps_tol=0.02, min_separation=sep)
+        assert res.n == min(len(s) for s in gap_ok) and res.status == "optimal"
+        if sep:
+            assert _separated(res.indices, bank.n_candidates, 1)
+    curve = coverage_curve(bank, 5)
+    for n in range(1, 6):
+        assert curve.coverage[n - 1] == pytest.approx(
+            max(c for s, c in zip(all_sets, covs) if len(s) <= n), abs=1e-12)
+
+
+def _separated(s, n, m):
+    s = np.sort(np.asarray(s))
+    if s.size < 2:
+        return True
+    d = np.diff(np.r_[s, s[0] + n])
+    return bool(np.all(d > m))
+
+
+def test_toy_failure_tolerance_k2():
+    bank = _toy(4, k=10, v=60, p=0.45)
+    need = bank.reach - 0.05
+    n_true, _ = min_tolerant_size(bank.masks, bank.areas, need, 2, 8)
+    res = failure_tolerant(bank, 2, target=need + 0.05, eps_tol=0.05, n_max=9, time_limit=30)
+    assert res.bound <= n_true <= res.n
+    assert res.worst_failure_coverage >= need - 1e-12
+
+
+def test_bad_design_input_names_the_field():
+    cases = [(["design.angle_step_deg=0"], "design.angle_step_deg"),
+             (["design.angle_step_deg=91"], "design.angle_step_deg"),
+             (["design.failures_tolerated=20"], "design.failures_tolerated"),
+             (["design.time_limit_s=0"], "design.time_limit_s"),
+             (['design.method="annealing"'], "design.method"),
+             (["swarm.min_separation_km=-1"], "swarm.min_separation_km")]
+    for sets, field in cases:
+        with pytest.raises(InputError) as ei:
+            load(CAMPAIGN, sets)
+        assert ei.value.field == field, sets
+    bank = _toy(1)
+    with pytest.raises(InputError, match="highest coverage") as ei:
+        min_swarm(bank, target=1.0, eps_tol=0.0) if bank.reach < 1 else \
+            min_swarm(bank, target=1.5, eps_tol=0.0)
+    with pytest.raises(InputError, match="the highest coverage 1 reach is") as ei:
+        min_swarm(bank, target=bank.reach, eps_tol=0.0, n_max=1)
+    assert ei.value.field == "design.n_max"
+    with pytest.raises(InputError) as ei:
+        min_swarm(bank, target=bank.reach, eps_tol=0.0, min_separation=1e9)
+    assert ei.value.field == "swarm.min_separation_km"
+    with pytest.raises(InputError) as ei:
+        min_swarm(bank, target=bank.reach, eps_tol=0.0, time_limit=0)
+    assert ei.value.field == "design.time_limit_s"
+    with pytest.raises(InputError) as ei:
+        failure_tolerant(bank, 3, target=bank.reach, eps_tol=0.0, n_max=3)
+    assert ei.value.field == "design.failures_tolerated"
+
+
+def test_ga_separation_repair():
+    step = 0.01
+    g = np.array([[3, 1.0, 1.0, 1.02, 5.0], [2, 0.5, 3.0, 9.0, 9.0], [4, 0.0, 1.0, 2.0, 6.28]])
+    out = separate_angles(g, 0.05, step)
+    assert np.array_equal(out[1], g[1])                       # already separated
+    for row in out:
+        n = int(row[0])
+        a = np.sort(row[1:1 + n])
+        d = np.diff(np.r_[a, a[0] + 2 * np.pi])
+        assert n == 1 or np.all(d >= 0.05 - 1e-9)
+    assert out[0, 0] == 3 and np.allclose(np.sort(out[0, 1:4]), [1.0, 1.05, 1.1])
+    assert out[2, 0] == 3                                     # 6.28 is too close to 0.0
+
+
+def test_exact_campaign_store_same_on_1_and_2_workers(tmp_path):
+    from ideas_hpc.campaign.run import run_file
+
+    sets = ['body.name="ellipsoid"', "flyby.tf_s=60", "flyby.z_start_km=-3",
+            "flyby.z_stop_km=3", "design.angle_step_deg=5", "design.n_max=6"]
+    a = xr.open_zarr(run_file(CAMPAIGN, out=tmp_path / "a.zarr", overrides=sets, workers=1))
+    b = xr.open_zarr(run_file(CAMPAIGN, out=tmp_path / "b.zarr", overrides=sets, workers=2))
+    for v in ("swarm_angle", "coverage_vs_n", "optimality_gap", "worst_failure_coverage",
+              "observed"):
+        assert np.array_equal(a[v].values, b[v].values), v
+    assert str(a["design_method"].values) == "exact"
+    assert str(a["solver_status"].values) == "optimal"
+    assert a["coverage_vs_n"].dims == ("n_spacecraft",) and a.sizes["n_spacecraft"] == 6
+    assert float(a["best_coverage"]) >= a.attrs["target_coverage"] - 1e-3 - 1e-12
+    with pytest.raises(InputError) as ei:
+        run_file(CAMPAIGN, out=tmp_path / "c.zarr", overrides=sets + [
+            "swarm.min_separation_km=1e5", "run.workers=0"])
+    assert ei.value.field == "swarm.min_separation_km"
+
+
+def test_exact_helix_k1_campaign(tmp_path):
+    """Helix candidates, one failure tolerated, through the campaign runner."""
+    from ideas_hpc.campaign.run import run_file
+
+    sets = ['body.name="ellipsoid"', "flyby.tf_s=60", "flyby.z_start_km=-3",
+            "flyby.z_stop_km=3", 'flyby.configuration="helix"', "flyby.helix_rise_km=2.0",
+            "design.angle_step_deg=10", "design.n_max=8", "design.failures_tolerated=1",
+            "run.workers=0"]
+    ds = xr.open_zarr(run_file(CAMPAIGN, out=tmp_path / "h.zarr", overrides=sets))
+    assert ds.attrs["configuration"] == "helix" and ds.attrs["failures_tolerated"] == 1
+    need = ds.attrs["target_coverage"] - 1e-3
+    assert float(ds["worst_failure_coverage"]) >= need - 1e-12
+    assert float(ds["best_coverage"]) >= need - 1e-12
+    assert ds["worst_failure"].size == 1
+    assert float(ds["proven_bound"]) <= ds.sizes["spacecraft"]
+
+
+@pytest.mark.slow
+def test_time_limit_returns_best_so_far_with_gap(eros1708):
+    bank = eros_bank(True, 0.5)
+    res = failure_tolerant(bank, 1, target=min(1.0, bank.reach), eps_tol=EPS, n_max=20,
+                           time_limit=5.0)
+    assert res.worst_failure_coverage >= _need(bank) - 1e-12
+    assert res.bound <= res.n
+    assert (res.status == "optimal") == (res.gap == 0.0)
