@@ -180,7 +180,7 @@ def write_report(store, out=None) -> Path:
         if var in ds:
             figs.append(figures.attitude_series(ds, var, out / f"fig{base + i}_{var}.png",
                                                 ylabel=label, scale=scale))
-    if "sample" in ds.dims and "coverage" in ds:
+    if "coverage" in ds and "sample" in ds["coverage"].dims:
         figs.append(figures.mc_coverage(ds, out / "mc_coverage.png"))
     summary = out / "summary.txt"
     summary.write_text(_summary(ds, figs))

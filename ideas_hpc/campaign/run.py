@@ -1,262 +1,27 @@
 """Run a campaign file of any kind and write its zarr store (SPEC sections 7-9).
 
-``flyby`` and the GA designs (``design-nadir``, ``design-fov``) write their
-store in one piece at the end, into a hidden sibling directory that is renamed
-into place, so a killed run leaves nothing half-written; rerun it (with
-``--resume`` a finished store with the same config is kept as is).
-``monte-carlo`` goes through the chunked, resumable engine
-(:mod:`ideas_hpc.campaign.montecarlo`).
+The kind comes from the registry (:mod:`ideas_hpc.campaign.kinds`). Every kind
+writes through the engine: ``monte-carlo`` runs its chunks there; ``flyby`` and
+the designs compute their result in one piece, which the engine writes as a
+one-chunk store (:mod:`ideas_hpc.engine.single`): atomically, with the same
+provenance attrs, and resumable (``--resume`` keeps a finished store with the
+same resolved config).
 """
 
 from __future__ import annotations
 
-import functools
-import json
-import shutil
 import sys
-import time
-import uuid
-import warnings
 from pathlib import Path
 
-import numpy as np
-import xarray as xr
-
-from .._version import warn_code_version
 from ..engine.lock import StoreLock
-from ..engine.store import config_diff, config_hash
+from ..engine.single import check_existing, write_complete
 from ..errors import InputError
-from ..flyby import candidate_masks, fly, setup_from_campaign, target
-from ..swarm_geometry import min_separation_angle
-from ..swarm_eval import MaskBank, fov_keys, nadir_keys, snap_angle
-from . import datasets
-from .design_exact import ga_gap, run_exact
+from .kinds import KINDS
 from .schema import SCHEMA, Campaign, load, resolved_config
 
 
 def _log(msg: str) -> None:
     print(msg, file=sys.stderr, flush=True)
-
-
-def _prepare_out(out: Path, c: Campaign, resume: bool) -> bool:
-    """Check the output path. Returns False when a finished compatible store exists."""
-    if not out.exists():
-        return True
-    if not resume:
-        raise InputError(f"store {out} already exists; use --resume to continue or keep it, "
-                         "or choose another --out", field="--out")
-    try:
-        attrs = xr.open_zarr(out).attrs
-    except Exception as exc:  # not a readable store
-        raise InputError(f"{out} exists but is not a readable store ({exc})", field="--out") \
-            from None
-    now = resolved_config(c)
-    if attrs.get("config_hash") != config_hash(now):
-        old = json.loads(attrs.get("config", "{}"))
-        diff = "; ".join(config_diff(old, now)) or "unknown differences"
-        raise InputError(f"store {out} was written by an incompatible config ({diff})",
-                         field="--resume")
-    warn_code_version(out, attrs)
-    return False
-
-
-def _write_atomic(ds: xr.Dataset, out: Path) -> None:
-    tmp = out.parent / f".{out.name}.partial-{uuid.uuid4().hex[:8]}"
-    try:
-        with warnings.catch_warnings():
-            # zarr 3 warns about fixed-width string coordinates (axis names) and
-            # consolidated metadata; xarray reads both back fine.
-            warnings.simplefilter("ignore")
-            ds.to_zarr(tmp, mode="w", consolidated=True)
-        if out.exists():
-            shutil.rmtree(out)
-        tmp.rename(out)
-    finally:
-        if tmp.exists():
-            shutil.rmtree(tmp, ignore_errors=True)
-
-
-def run_flyby(c: Campaign, out: Path, **_) -> xr.Dataset:
-    """Kind ``flyby``: one flyby of ``swarm.angles_rad``."""
-    setup = setup_from_campaign(c)
-    _log(f"body: {setup.body.note}")
-    sw = c.cfg["swarm"]
-    periods = np.asarray(sw["sweep_periods_min"]) if setup.maneuver == "fov" else None
-    t = time.perf_counter()
-    res = fly(setup, sw["angles_rad"], periods)
-    _log(f"flyby: {len(sw['angles_rad'])} spacecraft, coverage {100 * res.coverage.coverage:.3f} % "
-         f"(area), {100 * res.coverage.coverage_count:.3f} % (vertices) in "
-         f"{time.perf_counter() - t:.1f} s")
-    ds = datasets.flyby_dataset(setup, res)
-    ds.attrs.update(datasets.base_attrs(c, setup))
-    return ds
-
-
-def _progress_printer(total: int, label: str):
-    from tqdm.auto import tqdm
-
-    bar = tqdm(total=total, desc=label, unit="gen", file=sys.stderr, leave=True)
-
-    def cb(gen, best, mean):
-        bar.update(1)
-        bar.set_postfix(best=f"{best:.3f}", mean=f"{mean:.3f}")
-        if gen >= total:
-            bar.close()
-    return cb
-
-
-def _bank(setup, client, design) -> MaskBank:
-    return MaskBank(functools.partial(candidate_masks, setup), setup.body.shape.n_vertices,
-                    chunk_size=design["chunk_size"], client=client)
-
-
-def _fill_grid(bank: MaskBank, setup, step: float) -> float:
-    """Masks of every grid angle; returns the reachable coverage (union of all)."""
-    n = max(1, int(round(2 * np.pi / step)))
-    keys = [(k * step, 0.0, k) for k in range(n)]
-    t = time.perf_counter()
-    bank.ensure(keys)
-    cov, _ = bank.union_coverage([keys], setup.body.shape.vertex_areas)
-    _log(f"candidate masks: {n} grid angles in {time.perf_counter() - t:.1f} s; a ring of all "
-         f"of them reaches {100 * cov[0]:.3f} % (area)")
-    return float(cov[0])
-
-
-def design_nadir(c: Campaign, setup, client):
-    """NP swarm-size GA (SPEC section 7). Returns (GAResult, bank)."""
-    from ..ga import run_nadir_ga
-
-    d = c.cfg["design"]
-    bank = _bank(setup, client, d)
-    step = d["angle_step_rad"]
-    target = 1.0
-    notes = []
-    if step > 0:
-        reach = _fill_grid(bank, setup, step)
-        if reach < 1.0 - d["eps_tol_pct"] / 100.0:
-            target = reach
-            notes.append(f"100 % is not reachable from this ring in {setup.coverage.mode} mode "
-                         f"(strict options: {setup.coverage.strict}); the highest reachable "
-                         f"coverage is {100 * reach:.3f} % (all {int(round(2 * np.pi / step))} "
-                         "grid angles), and the GA minimises N to reach that instead")
-    areas = setup.body.shape.vertex_areas
-
-    def evaluate(genomes):
-        keys = [nadir_keys(g, step) for g in genomes]
-        cov, _ = bank.union_coverage(keys, areas)
-        return cov, np.rint(genomes[:, 0]).astype(int)
-
-    res = run_nadir_ga(evaluate, n_max=d["n_max"], population=d["population"],
-                       generations=d["generations"], seed=c.cfg["seed"],
-                       eps_tol=d["eps_tol_pct"] / 100.0, angle_step=step, target=target,
-                       parents=d["parents"], elitism=d["elitism"],
-                       mutation_probability=d["mutation_probability"],
-                       stall_generations=d["stall_generations"],
-                       min_separation=min_separation_angle(c.cfg["swarm"]["min_separation_km"],
-                                                          setup.d_sep),
-                       progress=_progress_printer(d["generations"], "NP GA"))
-    res.notes.extend(notes)
-    n = res.best_swarm_size
-    best = [snap_angle(t, step)[0] for t in res.best_genome[1:1 + n]]
-    res.gap_data, gap_notes = ga_gap(c, setup, bank, n, target)
-    res.notes.extend(gap_notes)
-    return res, np.sort(np.asarray(best)), None
-
-
-def _fov_swarm(c: Campaign) -> np.ndarray:
-    """The swarm to sweep: ``design.nadir_store`` (an NP design's best swarm) or ``swarm.angles_rad``."""
-    src = c.cfg["design"]["nadir_store"]
-    if src:
-        try:
-            ds = xr.open_zarr(src)
-            theta = np.asarray(ds["swarm_angle"].values, dtype=float)
-        except Exception as exc:
-            raise c.error(f"cannot read the NP design store {src!r}: {exc}",
-                          "design.nadir_store") from None
-        if ds.attrs.get("kind") != "design-nadir":
-            raise c.error(f"{src!r} is a {ds.attrs.get('kind')!r} store, not design-nadir",
-                          "design.nadir_store")
-        return theta
-    return np.asarray(c.cfg["swarm"]["angles_rad"], dtype=float)
-
-
-def design_fov(c: Campaign, setup, client):
-    """FoV sweep-period GA (SPEC section 7). Returns (GAResult, angles, periods)."""
-    from ..ga import run_fov_ga
-
-    d = c.cfg["design"]
-    theta = _fov_swarm(c)
-    bank = _bank(setup, client, d)
-    areas = setup.body.shape.vertex_areas
-    step = d["period_step_min"]
-
-    def evaluate(genomes):
-        keys = [fov_keys(g, theta, d["p_min_min"], step) for g in genomes]
-        cov, _ = bank.union_coverage(keys, areas)
-        return cov
-
-    res = run_fov_ga(evaluate, n_spacecraft=theta.size, p_min=d["p_min_min"],
-                     p_max=d["p_max_min"], period_step=step, population=d["population"],
-                     generations=d["generations"], seed=c.cfg["seed"], parents=d["parents"],
-                     elitism=d["elitism"], mutation_probability=d["mutation_probability"],
-                     stall_generations=d["stall_generations"],
-                     progress=_progress_printer(d["generations"], "FoV GA"))
-    periods = np.array([k[1] for k in fov_keys(res.best_genome, theta, d["p_min_min"], step)])
-    return res, theta, periods
-
-
-def run_design(c: Campaign, out: Path, *, workers=None, scheduler=None, cluster="local",
-               slurm_config=None, **_) -> xr.Dataset:
-    """Kinds ``design-nadir`` and ``design-fov``: GA, then a full flyby of the best swarm."""
-    from ..engine.cluster import connect
-
-    setup = setup_from_campaign(c)
-    _log(f"body: {setup.body.note}")
-    # A targeting failure is the user's to fix: find it here, in one line, rather
-    # than as a failed task on every worker (the GA targets these same rings).
-    target(setup, np.linspace(0.0, 2 * np.pi, 16, endpoint=False)
-           if c.kind == "design-nadir" else _fov_swarm(c))
-    t = time.perf_counter()
-    if c.kind == "design-nadir" and c.cfg["design"]["method"] == "exact":
-        return run_exact(c, setup, workers=workers, scheduler=scheduler, cluster=cluster,
-                         slurm_config=slurm_config)
-    design = design_nadir if c.kind == "design-nadir" else design_fov
-    if workers == 0 and scheduler is None and cluster == "local":
-        res, theta, periods = design(c, setup, None)  # in this process, no dask
-    else:
-        with connect(cluster=cluster, workers=workers, scheduler=scheduler,
-                     slurm_config=slurm_config) as client:
-            res, theta, periods = design(c, setup, client)
-    wall = time.perf_counter() - t
-    _log(f"GA: {res.evaluations} designs evaluated in {wall:.1f} s; best: N = "
-         f"{res.best_swarm_size}, coverage {100 * res.best_coverage:.3f} %")
-    for note in res.notes:
-        _log(f"note: {note}")
-    flight = fly(setup, theta, periods)
-    ds = datasets.flyby_dataset(setup, flight)
-    g = xr.Dataset({
-        "best_fitness": (("generation",), res.best_fitness),
-        "mean_fitness": (("generation",), res.mean_fitness),
-        "population": (("individual", "gene"), res.population),
-        "fitness": (("individual",), res.fitness),
-        "population_coverage": (("individual",), res.coverage),
-        "best_genome": (("gene",), res.best_genome),
-        "best_swarm_size": ((), res.best_swarm_size),
-        "best_coverage": ((), flight.coverage.coverage),
-    }, coords={"generation": np.arange(1, res.best_fitness.size + 1)})
-    ds = xr.merge([ds, datasets.with_attrs(g)], combine_attrs="override")
-    if getattr(res, "gap_data", None) is not None:
-        ds = xr.merge([ds, res.gap_data], combine_attrs="override")
-    ds["best_fitness"].attrs["long_name"] = ("fitness (-N if feasible)" if c.kind == "design-nadir"
-                                            else "coverage, %")
-    ds.attrs.update(datasets.base_attrs(c, setup))
-    ds.attrs.update({"ga_evaluations": int(res.evaluations), "ga_wall_s": float(wall),
-                     "target_coverage": float(res.target_coverage),
-                     "notes": json.dumps(res.notes)})
-    return ds
-
-
-RUNNERS = {"flyby": run_flyby, "design-nadir": run_design, "design-fov": run_design}
 
 
 def run_file(path, *, out=None, overrides=None, workers=None, scheduler=None, resume=False,
@@ -279,20 +44,22 @@ def run_file(path, *, out=None, overrides=None, workers=None, scheduler=None, re
 def _run(c: Campaign, *, out, workers, scheduler, resume, cluster, slurm_config,
          progress) -> Path:
     out = Path(out) if out else Path(Path(c.source.path).stem + ".zarr")
-    run_cfg = c.cfg["run"]
-    workers = workers if workers is not None else run_cfg["workers"]
-    if c.kind == "monte-carlo":
-        from .montecarlo import run_monte_carlo
-        run_monte_carlo(c, out, workers=workers, scheduler=scheduler, resume=resume,
-                        cluster=cluster, slurm_config=slurm_config, progress=progress)
+    workers = workers if workers is not None else c.cfg["run"]["workers"]
+    kind = KINDS[c.kind]
+    run = kind.runner()
+    exec_kw = dict(workers=workers, scheduler=scheduler, cluster=cluster,
+                   slurm_config=slurm_config)
+    if kind.chunked:
+        run(c, out, resume=resume, progress=progress, **exec_kw)
         return out
     out.absolute().parent.mkdir(parents=True, exist_ok=True)
+    config, seed = resolved_config(c), c.cfg["seed"]
     with StoreLock(out):
-        if not _prepare_out(out, c, resume):
+        if check_existing(out, config=config, campaign_seed=seed, resume=resume):
             _log(f"{out}: already complete for this config; nothing to do")
             return out
-        ds = RUNNERS[c.kind](c, out, workers=workers, scheduler=scheduler, cluster=cluster,
-                             slurm_config=slurm_config)
-        _write_atomic(ds, out)
+        ds = run(c, out, **exec_kw)
+        # the engine writes the provenance (config, hash, seeds, code version)
+        write_complete(out, ds, config=config, campaign_seed=seed)
     _log(f"wrote {out}")
     return out

@@ -53,8 +53,9 @@ from ..config import CampaignSource, load_campaign
 from ..errors import InputError
 from ..schema import Field, validate, with_defaults
 from ..units import DEG
+from .kinds import KINDS as REGISTRY
 
-KINDS = ("flyby", "design-nadir", "design-fov", "monte-carlo")
+KINDS = tuple(REGISTRY)
 
 BODY = {
     "name": Field("str", "eros", doc="body name or shape file"),

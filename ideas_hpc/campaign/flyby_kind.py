@@ -1,0 +1,34 @@
+"""Kind ``flyby``: one flyby of ``swarm.angles_rad`` (SPEC sections 2-6, store section 9)."""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from ..flyby import fly, setup_from_campaign
+from . import datasets
+from .schema import Campaign
+
+
+def _log(msg: str) -> None:
+    print(msg, file=sys.stderr, flush=True)
+
+
+def run_flyby(c: Campaign, out: Path, **_) -> xr.Dataset:
+    """Kind ``flyby``: one flyby of ``swarm.angles_rad``."""
+    setup = setup_from_campaign(c)
+    _log(f"body: {setup.body.note}")
+    sw = c.cfg["swarm"]
+    periods = np.asarray(sw["sweep_periods_min"]) if setup.maneuver == "fov" else None
+    t = time.perf_counter()
+    res = fly(setup, sw["angles_rad"], periods)
+    _log(f"flyby: {len(sw['angles_rad'])} spacecraft, coverage {100 * res.coverage.coverage:.3f} % "
+         f"(area), {100 * res.coverage.coverage_count:.3f} % (vertices) in "
+         f"{time.perf_counter() - t:.1f} s")
+    ds = datasets.flyby_dataset(setup, res)
+    ds.attrs.update(datasets.base_attrs(c, setup))
+    return ds
