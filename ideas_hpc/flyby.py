@@ -223,7 +223,7 @@ def fly(setup: FlybySetup, theta, periods=None, *, sample: int = 0, ics=None,
         dcm = np.ascontiguousarray(np.matmul(misalignment[:, None], dcm))
     img_t = setup.image_times
     sun = None
-    if setup.coverage.illumination:
+    if setup.coverage.needs_sun:
         sun = sun_direction_T(setup.body.params, img_t)
     cov = compute_coverage(setup.body.shape, r_img, dcm, img_t, setup.eta, setup.near,
                            setup.far, options=setup.coverage, sun_T=sun, active=active,
@@ -261,7 +261,7 @@ def candidate_masks(setup: FlybySetup, keys) -> np.ndarray:
     else:
         dcm, _ = camera_dcms(setup, th, periods)
     sun = None
-    if setup.coverage.illumination:
+    if setup.coverage.needs_sun:
         sun = sun_direction_T(setup.body.params, setup.image_times)
     return observed_per_spacecraft(setup.body.shape, r_img, dcm, setup.eta, setup.near,
                                    setup.far, options=setup.coverage, sun_T=sun)
