@@ -122,7 +122,7 @@ class CoverageOptions:
         if not 0.0 < lo < hi <= math.pi:
             raise InputError(f"need 0 < stereo_min < stereo_max <= 180 deg, got "
                              f"{math.degrees(lo):g}, {math.degrees(hi):g} deg",
-                             field="stereo_min" if not 0.0 < lo < math.pi else "stereo_max")
+                             field="stereo_max" if hi > math.pi else "stereo_min")
 
     @property
     def strict(self) -> bool:

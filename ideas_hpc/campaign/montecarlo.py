@@ -163,6 +163,7 @@ def fly_sample(setup: FlybySetup, nom: Nominal, d: Draws):
                            setup.near, setup.far, options=setup.coverage, sun_T=sun,
                            active=d.active)
     out = {"coverage": cov.coverage, "coverage_count": cov.coverage_count,
+           "coverage_seen": cov.coverage_seen, **datasets.quality_arrays(cov),
            "observed": cov.observed, "first_seen": cov.first_seen,
            "times_seen": cov.times_seen, "arrival_error": np.linalg.norm(
                pos[:, -1] - nom.position_T[:, -1], axis=1)}
@@ -210,6 +211,7 @@ def mc_template(setup: FlybySetup, nom: Nominal, n_samples: int) -> xr.Dataset:
     v = {
         "coverage": (s, _lazy((ns,), np.float64)),
         "coverage_count": (s, _lazy((ns,), np.float64)),
+        "coverage_seen": (s, _lazy((ns,), np.float64)),
         "observed": (s + ("vertex",), _lazy((ns, nv), bool)),
         "first_seen": (s + ("vertex",), _lazy((ns, nv), np.float64)),
         "times_seen": (s + ("vertex",), _lazy((ns, nv), np.int32)),
@@ -240,6 +242,9 @@ def mc_template(setup: FlybySetup, nom: Nominal, n_samples: int) -> xr.Dataset:
         "targeting_miss": (("spacecraft", "iteration"), nom.miss),
         **datasets.mesh_vars(setup.body.shape),
     }
+    if setup.coverage.wants_quality:
+        for name, dt in datasets.QUALITY_VARS.items():
+            v[name] = (s + ("vertex",), _lazy((ns, nv), dt))
     if nom.periods is not None:
         v["sweep_period"] = (("spacecraft",), nom.periods)
     if simulated:

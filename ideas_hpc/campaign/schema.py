@@ -10,7 +10,9 @@ bodies), ``data_path``.
 
 ``[instrument]`` ``ground_resolution_m``, ``aperture_cm``, ``wavelength_um``,
 ``min_elevation_deg``, ``near_field_mm``, ``image_rate_hz``, ``half_angle_deg``
-(default: the sizing's eta_N for nadir pointing, eta_N/2 for FoV sweeping).
+(default: the sizing's eta_N for nadir pointing, eta_N/2 for FoV sweeping),
+``pixel_pitch_um`` and ``focal_length_mm`` (optional detector, for the quality
+pass's ground sample).
 
 ``[flyby]`` ``configuration`` (``ring`` or ``helix``), ``t0_s``, ``tf_s``,
 ``z_start_km``, ``z_stop_km``, ``helix_rise_km`` (helix: extra z_start per full
@@ -63,6 +65,10 @@ INSTRUMENT = {
     "image_rate_hz": Field("float", 5.0, lo=0, lo_open=True),
     "half_angle_deg": Field("float", None, nullable=True, to_si=DEG, lo=0, hi=90,
                             lo_open=True, hi_open=True),
+    "pixel_pitch_um": Field("float", None, nullable=True, to_si=1e-6, lo=0, lo_open=True,
+                            doc="detector pixel pitch (with focal_length_mm: the quality "
+                                "pass uses pitch/focal length instead of lambda/D)"),
+    "focal_length_mm": Field("float", None, nullable=True, to_si=1e-3, lo=0, lo_open=True),
 }
 
 FLYBY = {
@@ -240,6 +246,10 @@ def build_models(cfg: dict) -> dict:
     inst = cfg["instrument"]
     cov.setdefault("wavelength_um", inst["wavelength_um"] * 1e6)
     cov.setdefault("aperture_cm", inst["aperture_cm"] * 1e2)
+    if inst["pixel_pitch_um"] is not None:
+        cov.setdefault("pixel_pitch_um", inst["pixel_pitch_um"] * 1e6)
+    if inst["focal_length_mm"] is not None:
+        cov.setdefault("focal_length_mm", inst["focal_length_mm"] * 1e3)
     ctrl = _sub_table(cfg, "controller")
     if not ctrl:
         ctrl = {"preset": "fov" if cfg["attitude"]["maneuver"] == "fov" else "np"}

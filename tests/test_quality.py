@@ -1,0 +1,393 @@
+"""Observation-quality pass (issue 14): sphere closed forms, a NumPy per-image,
+per-pair brute force on eros001708, shadows against trimesh, and the exact
+stereo test against all pairs."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from ideas_hpc.analytic import sphere_mesh
+from ideas_hpc.core import bvh as cbvh
+from ideas_hpc.core import quality as cq
+from ideas_hpc.coverage_options import coverage_options_from_config
+from ideas_hpc.errors import InputError
+from ideas_hpc.mapping import CoverageOptions, compute_coverage
+from test_coverage import _trimesh_blocked, eros_rays, look_at  # noqa: F401 (fixture)
+
+DEG = math.pi / 180.0
+LAM, APER = 0.55e-6, 0.08
+
+
+# ---------------------------------------------------------------- sphere, closed forms
+
+@pytest.fixture(scope="module")
+def pole_sphere():
+    """Sphere R = 1000 m with a vertex exactly at +z, vertices exactly on the sphere
+    (to rounding) and exact radial normals."""
+    R = 1000.0
+    s = sphere_mesh(R, 4)
+    v = s.vertices_T / np.linalg.norm(s.vertices_T, axis=1)[:, None]
+    j0 = int(np.argmax(v[:, 2]))
+    # rotation taking v[j0] to +z (Rodrigues)
+    a = v[j0]
+    axis = np.cross(a, [0.0, 0.0, 1.0])
+    sa = np.linalg.norm(axis)
+    if sa > 0.0:
+        k = axis / sa
+        K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+        rot = np.eye(3) + sa * K + (1 - a[2]) * K @ K
+        v = v @ rot.T
+    v /= np.linalg.norm(v, axis=1)[:, None]
+    v[j0] = [0.0, 0.0, 1.0]
+    shape = dataclasses.replace(s, vertices_T=R * v, vertex_normals_T=v.copy())
+    return shape, R, j0
+
+
+def test_sphere_closed_forms(pole_sphere):
+    shape, R, j0 = pole_sphere
+    d = 5.0 * R
+    r = np.array([[[0.0, 0.0, d]]])
+    C = look_at(r[0, 0])[None, None]
+    eta = math.asin(R / d) + 0.05
+    sun = np.array([[1.0, 0.0, 0.0]])
+    opts = CoverageOptions(mode="exact", occlusion=True, quality=True)
+    res = compute_coverage(shape, r, C, np.zeros(1), eta, 1e-4, 1e7, options=opts, sun_T=sun)
+    q = res.quality
+    u = shape.vertices_T / R
+    x, y, z = u.T
+    cosg = z
+    sing = np.hypot(x, y)
+    vis = d * cosg - R > 0.0
+    firm = np.abs(cosg - R / d) > 1e-9
+    np.testing.assert_array_equal(res.observed[firm], vis[firm])
+    o = res.observed
+    assert o.sum() > 100
+    rng2 = d * d + R * R - 2 * d * R * cosg
+    emi = np.arctan2(d * sing, d * cosg - R)                 # law of sines / cosines
+    inc = np.arctan2(np.hypot(y, z), x)                      # Sun along +x
+    pha = np.arctan2(np.hypot(R * y, d - R * z), -R * x)     # l = (-R x, -R y, d - R z)
+    res_cf = LAM / APER * rng2 / (d * cosg - R)              # rho |l| / cos(e)
+    np.testing.assert_allclose(q.emission_at_best[o], emi[o], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(q.incidence_at_best[o], inc[o], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(q.phase_at_best[o], pha[o], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(q.best_resolution[o], res_cf[o], rtol=1e-12)
+    # sub-spacecraft point: lambda (d - R) / D
+    assert abs(q.best_resolution[j0] / (LAM * (d - R) / APER) - 1.0) < 1e-12
+    assert q.emission_at_best[j0] < 1e-12
+    # lit hemisphere x > 0 (convex: no cast shadows; the polyhedron's faces tilt
+    # by about half an edge, 0.04 rad, so the terminator band is left out)
+    band = np.abs(x) > 0.06
+    np.testing.assert_array_equal(q.lit[o & band], (x > 0)[o & band])
+    assert np.all(np.isnan(q.best_resolution[~o])) and not q.lit[~o].any()
+    np.testing.assert_array_equal(q.n_spacecraft_seen, o.astype(np.int32))
+    assert not q.stereo.any()                                # a single observation
+    assert res.coverage == res.coverage_seen
+
+
+def test_sphere_stereo_two_spacecraft(pole_sphere):
+    """Two distant spacecraft 25 deg apart about the sub-point: stereo only where the
+    convergence angle at the vertex is in [10, 40] deg (checked pairwise)."""
+    shape, R, j0 = pole_sphere
+    d = 1e3 * R
+    dirs = [np.array([math.sin(a), 0.0, math.cos(a)]) for a in (-12.5 * DEG, 12.5 * DEG)]
+    r = np.array([[d * u] for u in dirs])
+    C = np.array([[look_at(ri[0])] for ri in r])
+    eta = math.asin(R / d) + 1e-3
+    opts = CoverageOptions(mode="exact", quality=True)
+    res = compute_coverage(shape, r, C, np.zeros(1), eta, 1.0, 1e9, options=opts,
+                           sun_T=np.array([[0.0, 0.0, 1.0]]))
+    p = shape.vertices_T
+    l1 = r[0, 0] - p
+    l2 = r[1, 0] - p
+    ang = np.arctan2(np.linalg.norm(np.cross(l1, l2), axis=1), (l1 * l2).sum(1))
+    both = res.quality.n_spacecraft_seen == 2
+    assert both.sum() > 100
+    np.testing.assert_array_equal(res.quality.stereo, both & (ang >= 10 * DEG) & (ang <= 40 * DEG))
+    assert res.quality.stereo[j0]
+
+
+# ---------------------------------------------------------------- exact stereo vs all pairs
+
+def _pairwise(U, smin, smax):
+    G = U[:, 0][:, None] * U[:, 0][None] + U[:, 1][:, None] * U[:, 1][None] \
+        + U[:, 2][:, None] * U[:, 2][None]
+    iu = np.triu_indices(len(U), 1)
+    g = G[iu]
+    return bool(np.any((math.cos(smax) <= g) & (g <= math.cos(smin))))
+
+
+def _stereo(U, smin, smax):
+    m = len(U)
+    mm = max(m, 1)
+    return cq._stereo(np.ascontiguousarray(U), m, smin, smax, np.empty(mm, np.int64),
+                      np.empty((mm, 3)), np.empty(mm), np.empty(mm, np.int64),
+                      np.empty(mm + 1, np.int64), np.empty(mm, np.int64),
+                      np.empty(mm, np.int64))
+
+
+@pytest.mark.parametrize("seed", range(60))
+def test_stereo_caps_equal_pairwise(seed):
+    rng = np.random.default_rng(seed)
+    smin, smax = sorted(rng.uniform(0.5, 60.0, 2) * DEG)
+    kind = seed % 4
+    if kind == 0:      # scattered directions in a cone
+        U = rng.normal(size=(rng.integers(1, 300), 3)) * [0.3, 0.3, 1.0] + [0, 0, 1]
+    elif kind == 1:    # tracks (dense arcs) from a few spacecraft
+        parts = []
+        for _ in range(rng.integers(1, 5)):
+            a0 = rng.uniform(-1, 1, 2)
+            t = np.linspace(0, rng.uniform(0, 0.3), rng.integers(2, 200))[:, None]
+            v = rng.normal(size=2) * 0.3
+            parts.append(np.c_[a0 + t * v, np.ones_like(t)])
+        U = np.concatenate(parts)
+    elif kind == 2:    # pairs placed just inside / outside the bounds
+        base = np.array([0.0, 0.0, 1.0])
+        ang = rng.choice([smin, smax]) + rng.choice([-1, 1]) * 10.0 ** rng.uniform(-9, -4)
+        U = np.array([base, [math.sin(ang), 0.0, math.cos(ang)]])
+        U = np.concatenate([U, base + rng.normal(size=(rng.integers(0, 50), 3)) * 1e-3])
+    else:              # a narrow cluster of diameter close to smin
+        U = rng.normal(size=(rng.integers(2, 400), 3)) * [smin / 4, smin / 4, 0] + [0, 0, 1]
+    U = U / np.linalg.norm(U, axis=1)[:, None]
+    assert _stereo(U, smin, smax) == _pairwise(U, smin, smax)
+
+
+# ---------------------------------------------------------------- brute force on eros001708
+
+def quality_oracle(shape, r, C, t, eta, near, far, opts, sun, active=None):
+    """NumPy per image (all vertices at once) and per pair (stereo), the issue 14
+    definitions as written. Rays are the BVH primitive (checked against trimesh in
+    test_coverage.py and below)."""
+    p = shape.vertices_T
+    n = shape.vertex_normals_T
+    V = len(p)
+    N, I = r.shape[:2]
+    tree = cbvh.build_bvh(p, shape.faces)
+    tan = math.tan(eta)
+    sin_e = -2.0 if opts.min_elevation is None else math.sin(opts.min_elevation)
+    act = np.ones(N, bool) if active is None else active
+    lim = opts.limits
+    obs = np.zeros((N, I, V), bool)
+    for k in range(N):
+        if not act[k]:
+            continue
+        for i in range(I):
+            dx, dy, dz = (p[:, a] - r[k, i, a] for a in range(3))
+            los_n = (-dx) * n[:, 0] + (-dy) * n[:, 1] + (-dz) * n[:, 2]
+            if opts.mode == "exact":
+                ok = los_n > 0.0
+            else:
+                ok = r[k, i, 0] * n[:, 0] + r[k, i, 1] * n[:, 1] + r[k, i, 2] * n[:, 2] >= 0.0
+            q = [C[k, i, a, 0] * dx + C[k, i, a, 1] * dy + C[k, i, a, 2] * dz for a in range(3)]
+            ok &= (q[2] > 0) & (q[2] >= near) & (q[2] <= far)
+            ok &= (np.abs(q[0]) <= tan * q[2]) & (np.abs(q[1]) <= tan * q[2])
+            if sin_e > -1.0:
+                rng = np.sqrt(dx * dx + dy * dy + dz * dz)
+                ok &= los_n >= rng * sin_e
+            if opts.occlusion:
+                for j in np.flatnonzero(ok):
+                    if cbvh.segment_blocked(*tree, p[j, 0], p[j, 1], p[j, 2], -dx[j], -dy[j],
+                                            -dz[j], 1.0, j):
+                        ok[j] = False
+            obs[k, i] = ok
+    lit_ij = {}
+
+    def lit_at(i, j):
+        if (i, j) not in lit_ij:
+            s = sun[i]
+            lit_ij[i, j] = bool(s[0] * n[j, 0] + s[1] * n[j, 1] + s[2] * n[j, 2] > 0.0) and \
+                not cbvh.segment_blocked(*tree, p[j, 0], p[j, 1], p[j, 2], s[0], s[1], s[2],
+                                         np.inf, j)
+        return lit_ij[i, j]
+
+    def angle(a, b):
+        c = np.stack([a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1], a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
+                      a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]], 1)
+        return np.arctan2(np.sqrt(c[:, 0] * c[:, 0] + c[:, 1] * c[:, 1] + c[:, 2] * c[:, 2]),
+                          a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1] + a[:, 2] * b[:, 2])
+
+    out = {name: np.zeros(V, bool) for name in ("lit", "stereo", "mapped")}
+    out.update({name: np.full(V, np.nan) for name in
+                ("best_resolution", "emission_at_best", "incidence_at_best", "phase_at_best",
+                 "first_seen")})
+    out["times_seen"] = np.zeros(V, np.int32)
+    out["n_spacecraft_seen"] = np.zeros(V, np.int32)
+    for j in range(V):
+        ks, iis = np.nonzero(obs[:, :, j])             # (k, i) order
+        lits = np.array([lit_at(i, j) for i in iis], bool)
+        if opts.illumination:
+            ks, iis, lits = ks[lits], iis[lits], lits[lits]
+        if len(ks) == 0:
+            continue
+        out["times_seen"][j] = len(ks)
+        out["first_seen"][j] = t[iis].min()
+        out["n_spacecraft_seen"][j] = len(set(ks))
+        out["lit"][j] = lits.any()
+        L = r[ks, iis] - p[j]
+        nn = np.broadcast_to(n[j], L.shape)
+        S = sun[iis]
+        ln = L[:, 0] * n[j, 0] + L[:, 1] * n[j, 1] + L[:, 2] * n[j, 2]
+        rng2 = L[:, 0] * L[:, 0] + L[:, 1] * L[:, 1] + L[:, 2] * L[:, 2]
+        with np.errstate(divide="ignore"):
+            res = np.where(ln > 0, opts.rho * rng2 / np.where(ln > 0, ln, 1.0), np.inf)
+        e, inc, g = angle(nn, L), angle(nn, S), angle(S, L)
+        b = int(np.argmin(res))
+        out["best_resolution"][j] = res[b]
+        out["emission_at_best"][j] = e[b]
+        out["incidence_at_best"][j] = inc[b]
+        out["phase_at_best"][j] = g[b]
+        use = (res <= lim[0]) & (e <= lim[1]) & (inc <= lim[2]) & (g <= lim[3])
+        if opts.require_lit:
+            use &= lits
+        U = L[use] / np.sqrt(rng2[use])[:, None]
+        out["stereo"][j] = len(U) > 1 and _pairwise(U, lim[4], lim[5])
+        out["mapped"][j] = use.any() and (out["stereo"][j] or not opts.require_stereo)
+    return out
+
+
+def eros_views(N=5, I=30, seed=3):
+    rng = np.random.default_rng(seed)
+    r = np.empty((N, I, 3))
+    C = np.empty((N, I, 3, 3))
+    for k in range(N):
+        u0 = rng.normal(size=3)
+        u0 /= np.linalg.norm(u0)
+        w = np.cross(u0, rng.normal(size=3))
+        w /= np.linalg.norm(w)
+        sweep = rng.uniform(5, 50) * DEG     # some tracks give stereo on their own
+        dist = rng.uniform(40e3, 80e3)
+        for i in range(I):
+            a = sweep * (i / (I - 1) - 0.5)
+            r[k, i] = dist * (math.cos(a) * u0 + math.sin(a) * w)
+            C[k, i] = look_at(r[k, i])
+    t = np.arange(I) * 2.0
+    ph = np.linspace(0, 8 * DEG, I)
+    sun = np.c_[np.cos(ph), np.sin(ph), 0.3 * np.ones(I)]
+    sun /= np.linalg.norm(sun, axis=1)[:, None]
+    return r, C, t, sun
+
+
+CASES = {
+    "exact-occl-all-limits": dict(mode="exact", occlusion=True, require_lit=True,
+                                  max_resolution=0.6, max_emission=60 * DEG,
+                                  max_incidence=75 * DEG, max_phase=110 * DEG,
+                                  require_stereo=True),
+    "paper-quality-only": dict(quality=True),
+    "illum-elev-stereo-detector": dict(mode="exact", occlusion=True, illumination=True,
+                                       min_elevation=10 * DEG, require_stereo=True,
+                                       stereo_min=5 * DEG, stereo_max=25 * DEG,
+                                       pixel_pitch=7e-6, focal_length=0.5),
+}
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_quality_matches_brute_force_on_eros(eros1708, case):
+    shape = eros1708.shape
+    r, C, t, sun = eros_views()
+    opts = CoverageOptions(**CASES[case])
+    active = np.array([True, True, False, True, True]) if "illum" in case else None
+    eta = 20 * DEG
+    res = compute_coverage(shape, r, C, t, eta, 1e-3, 1e6, options=opts, sun_T=sun,
+                           active=active)
+    ref = quality_oracle(shape, r, C, t, eta, 1e-3, 1e6, opts, sun, active)
+    q = res.quality
+    for name in ("lit", "stereo", "mapped", "n_spacecraft_seen"):
+        np.testing.assert_array_equal(getattr(q, name), ref[name], err_msg=name)
+    np.testing.assert_array_equal(res.times_seen, ref["times_seen"])
+    np.testing.assert_array_equal(res.first_seen, ref["first_seen"])
+    np.testing.assert_array_equal(res.observed, ref["times_seen"] > 0)
+    np.testing.assert_allclose(q.best_resolution, ref["best_resolution"], rtol=1e-12)
+    for name in ("emission_at_best", "incidence_at_best", "phase_at_best"):
+        np.testing.assert_allclose(getattr(q, name), ref[name], rtol=0, atol=1e-12,
+                                   err_msg=name)
+    # the test exercises every output
+    assert 0 < q.stereo.sum() < res.observed.sum(), (q.stereo.sum(), res.observed.sum())
+    assert 0 < q.lit.sum() <= res.observed.sum()
+    assert q.n_spacecraft_seen.max() >= 2
+    if opts.requirement:
+        assert 0 < q.mapped.sum() < res.observed.sum()
+        assert res.coverage < res.coverage_seen
+    # observed, first_seen and counts are those of the coverage kernels
+    plain = dataclasses.replace(opts, quality=False, require_lit=False, max_resolution=None,
+                                max_emission=None, max_incidence=None, max_phase=None,
+                                require_stereo=False)
+    base = compute_coverage(shape, r, C, t, eta, 1e-3, 1e6, options=plain, sun_T=sun,
+                            active=active)
+    np.testing.assert_array_equal(base.times_seen, res.times_seen)
+    np.testing.assert_array_equal(base.first_seen, res.first_seen)
+    assert base.coverage == res.coverage_seen
+
+
+# ---------------------------------------------------------------- shadows vs trimesh
+
+def test_lit_matches_trimesh_on_24_viewpoints(eros1708, eros_rays):
+    shape = eros1708.shape
+    mesh, adjacency = eros_rays
+    rng = np.random.default_rng(11)
+    p, n = shape.vertices_T, shape.vertex_normals_T
+    opts = CoverageOptions(mode="exact", quality=True)
+    n_shadow = n_lit = 0
+    for _ in range(24):
+        u = rng.normal(size=3)
+        u /= np.linalg.norm(u)
+        r = (u * rng.uniform(25e3, 160e3))[None, None]
+        C = look_at(r[0, 0])[None, None]
+        s = rng.normal(size=3)
+        s /= np.linalg.norm(s)
+        res = compute_coverage(shape, r, C, np.zeros(1), 60 * DEG, 1e-4, 1e6, options=opts,
+                               sun_T=s[None])
+        facing = res.observed & (n @ s > 0)
+        idx = np.flatnonzero(facing)
+        blocked = _trimesh_blocked(mesh, shape, idx, p[idx] + 1e6 * s, adjacency)
+        truth = np.zeros(shape.n_vertices, bool)
+        truth[idx[~blocked]] = True
+        np.testing.assert_array_equal(res.quality.lit, truth)
+        n_shadow += int(blocked.sum())
+        n_lit += int(truth.sum())
+    assert n_shadow > 50 and n_lit > 1000
+
+
+# ---------------------------------------------------------------- boundary
+
+def test_paper_mode_takes_the_old_path(eros1708):
+    """No quality option: no quality pass, coverage_seen == coverage."""
+    from test_coverage import paper_case
+
+    r, C, t = paper_case(301)
+    res = compute_coverage(eros1708.shape, r, C, t, math.radians(3.827), 1e-4, 166.347e3)
+    assert res.quality is None and res.coverage_seen == res.coverage
+
+
+def test_requirement_config_keys():
+    o = coverage_options_from_config({"require_lit": True, "max_resolution_m": 2.0,
+                                      "max_emission_deg": 60, "max_incidence_deg": 70,
+                                      "max_phase_deg": 120, "require_stereo": True,
+                                      "stereo_min_deg": 12, "stereo_max_deg": 35,
+                                      "pixel_pitch_um": 7, "focal_length_mm": 500})
+    assert o.requirement and o.wants_quality and o.needs_sun
+    np.testing.assert_allclose(o.limits, [2.0, 60 * DEG, 70 * DEG, 120 * DEG, 12 * DEG,
+                                          35 * DEG])
+    assert o.rho == pytest.approx(7e-6 / 0.5)
+    assert not coverage_options_from_config({}).wants_quality
+    assert coverage_options_from_config({}).rho == LAM / APER
+    for table, field in [({"require_lit": 1}, "coverage.require_lit"),
+                         ({"max_emission_deg": 0}, "coverage.max_emission_deg"),
+                         ({"max_resolution_m": -1}, "coverage.max_resolution_m"),
+                         ({"stereo_min_deg": 50}, "coverage.stereo_min_deg"),
+                         ({"pixel_pitch_um": 7}, "coverage.focal_length_mm")]:
+        with pytest.raises(InputError) as ei:
+            coverage_options_from_config(table)
+        assert ei.value.field == field, (table, ei.value.field)
+
+
+def test_quality_needs_sun(eros1708):
+    from test_coverage import paper_case
+
+    r, C, t = paper_case(11)
+    with pytest.raises(InputError) as ei:
+        compute_coverage(eros1708.shape, r, C, t, 0.07, 1e-4, 1e6,
+                         options=CoverageOptions(quality=True))
+    assert ei.value.field == "sun_T"
