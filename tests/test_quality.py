@@ -129,7 +129,7 @@ def _stereo(U, smin, smax):
                       np.empty(mm, np.int64))
 
 
-@pytest.mark.parametrize("seed", range(60))
+@pytest.mark.parametrize("seed", range(80))
 def test_stereo_caps_equal_pairwise(seed):
     rng = np.random.default_rng(seed)
     smin, smax = sorted(rng.uniform(0.5, 60.0, 2) * DEG)
@@ -144,11 +144,17 @@ def test_stereo_caps_equal_pairwise(seed):
             v = rng.normal(size=2) * 0.3
             parts.append(np.c_[a0 + t * v, np.ones_like(t)])
         U = np.concatenate(parts)
-    elif kind == 2:    # pairs placed just inside / outside the bounds
-        base = np.array([0.0, 0.0, 1.0])
-        ang = rng.choice([smin, smax]) + rng.choice([-1, 1]) * 10.0 ** rng.uniform(-9, -4)
-        U = np.array([base, [math.sin(ang), 0.0, math.cos(ang)]])
-        U = np.concatenate([U, base + rng.normal(size=(rng.integers(0, 50), 3)) * 1e-3])
+    elif kind == 2:    # a pair just inside / outside a bound, plus a cluster on its arc
+        eps = 10.0 ** rng.uniform(-9, -4)
+        at_min = bool(rng.integers(2))
+        inside = bool(rng.integers(2))
+        bound = smin if at_min else smax
+        ang = bound + (eps if inside == at_min else -eps)
+        # cluster members (on the same great circle) move the pair further outside
+        push = 1.0 if at_min else -1.0
+        d = push * np.abs(rng.normal(size=rng.integers(0, 30))) * 1e-3
+        a = np.r_[0.0, ang, d if not inside else d * 0.0]
+        U = np.c_[np.sin(a), np.zeros_like(a), np.cos(a)]
     else:              # a narrow cluster of diameter close to smin
         U = rng.normal(size=(rng.integers(2, 400), 3)) * [smin / 4, smin / 4, 0] + [0, 0, 1]
     U = U / np.linalg.norm(U, axis=1)[:, None]
