@@ -245,10 +245,15 @@ def quality_oracle(shape, r, C, t, eta, near, far, opts, sun, active=None):
         out["emission_at_best"][j] = e[b]
         out["incidence_at_best"][j] = inc[b]
         out["phase_at_best"][j] = g[b]
-        use = (res <= lim[0]) & (e <= lim[1]) & (inc <= lim[2]) & (g <= lim[3])
+        rng = np.sqrt(rng2)
+        nabs = math.sqrt(n[j, 0] * n[j, 0] + n[j, 1] * n[j, 1] + n[j, 2] * n[j, 2])
+        ce, ci, cg = (math.cos(x) if np.isfinite(x) else -2.0 for x in lim[1:4])
+        ns = S[:, 0] * n[j, 0] + S[:, 1] * n[j, 1] + S[:, 2] * n[j, 2]
+        sl = S[:, 0] * L[:, 0] + S[:, 1] * L[:, 1] + S[:, 2] * L[:, 2]
+        use = (res <= lim[0]) & (ln >= ce * rng * nabs) & (ns >= ci * nabs) & (sl >= cg * rng)
         if opts.require_lit:
             use &= lits
-        U = L[use] / np.sqrt(rng2[use])[:, None]
+        U = L[use] / rng[use][:, None]
         out["stereo"][j] = len(U) > 1 and _pairwise(U, lim[4], lim[5])
         out["mapped"][j] = use.any() and (out["stereo"][j] or not opts.require_stereo)
     return out

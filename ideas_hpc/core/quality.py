@@ -28,7 +28,10 @@ order) and ``emission/incidence/phase_at_best`` at that observation (NaN when
 never observed), ``n_spacecraft_seen``, and
 
 * ``usable`` observation: meets every per-image limit that is set (lit,
-  ``X <= X_max``, ``e <= e_max``, ``i <= i_max``, ``g <= g_max``);
+  ``X <= X_max``, ``e <= e_max``, ``i <= i_max``, ``g <= g_max``; the angle
+  limits are tested on cosines, ``n . l >= |n| |l| cos e_max``,
+  ``n . s >= |n| cos i_max``, ``s . l >= |l| cos g_max``, which needs no
+  inverse trigonometry per image);
 * ``stereo``: two different usable observations (one spacecraft's track or
   two spacecraft) whose unit lines of sight ``u1, u2`` satisfy
   ``cos(s_max) <= u1 . u2 <= cos(s_min)`` (convergence angle in
@@ -217,6 +220,10 @@ def quality_vertices(vertices, normals, r_T, dcm_BT, image_times, tan_eta, near,
     NF, NI = time_tree(r_T, dcm_BT, LEAF)
     sec_eta = np.sqrt(1.0 + tan_eta * tan_eta) * (1.0 + 1e-12)
     check_ang = limits[L_EMI] < np.inf or limits[L_INC] < np.inf or limits[L_PHA] < np.inf
+    # cosines of the angle limits (-2: no limit, the test always holds)
+    c_emi = np.cos(limits[L_EMI]) if limits[L_EMI] < np.inf else -2.0
+    c_inc = np.cos(limits[L_INC]) if limits[L_INC] < np.inf else -2.0
+    c_pha = np.cos(limits[L_PHA]) if limits[L_PHA] < np.inf else -2.0
     times_seen = np.zeros(nv, dtype=np.int32)
     first_seen = np.full(nv, np.nan)
     lit = np.zeros(nv, dtype=np.bool_)
@@ -283,9 +290,8 @@ def quality_vertices(vertices, normals, r_T, dcm_BT, image_times, tan_eta, near,
                                      far, exact, sin_min_elev, max_range, occlusion, False,
                                      sun_T, node_bounds, node_info, tri, tri_vid):
                             continue
-                        need_lit = illumination or not vlit or require_lit
                         li = False
-                        if need_lit:
+                        if illumination or not vlit:
                             li = _lit(j, i, lc, px, py, pz, nx, ny, nz, sun_T, node_bounds,
                                       node_info, tri, tri_vid)
                             if illumination and not li:
@@ -304,17 +310,21 @@ def quality_vertices(vertices, normals, r_T, dcm_BT, image_times, tan_eta, near,
                             bres = res
                             bk = k
                             bi = i
-                        ok = res <= limits[L_RES] and (li or not require_lit)
+                        # limits first, the (cached) shadow ray last
+                        ok = res <= limits[L_RES]
+                        rng = np.sqrt(rng2)
                         if ok and check_ang:
                             sx = sun_T[i, 0]
                             sy = sun_T[i, 1]
                             sz = sun_T[i, 2]
-                            ok = (_angle(nx, ny, nz, lx, ly, lz) <= limits[L_EMI]
-                                  and _angle(nx, ny, nz, sx, sy, sz) <= limits[L_INC]
-                                  and _angle(sx, sy, sz, lx, ly, lz) <= limits[L_PHA])
+                            ok = (ln >= c_emi * rng * nabs
+                                  and sx * nx + sy * ny + sz * nz >= c_inc * nabs
+                                  and sx * lx + sy * ly + sz * lz >= c_pha * rng)
+                        if ok and require_lit:
+                            ok = _lit(j, i, lc, px, py, pz, nx, ny, nz, sun_T, node_bounds,
+                                      node_info, tri, tri_vid)
                         if ok:
                             vusable = True
-                            rng = np.sqrt(rng2)
                             U[m, 0] = lx / rng
                             U[m, 1] = ly / rng
                             U[m, 2] = lz / rng
