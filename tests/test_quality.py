@@ -402,3 +402,48 @@ def test_quality_needs_sun(eros1708):
         compute_coverage(eros1708.shape, r, C, t, 0.07, 1e-4, 1e6,
                          options=CoverageOptions(quality=True))
     assert ei.value.field == "sun_T"
+
+
+# ---------------------------------------------------------------- stores
+
+REQ = ["coverage.mode=\"exact\"", "coverage.occlusion=true", "coverage.require_lit=true",
+       "coverage.max_emission_deg=70.0", "coverage.require_stereo=true",
+       "coverage.stereo_min_deg=0.5"]
+
+
+@pytest.mark.slow
+def test_quality_in_flyby_and_mc_stores(tmp_path):
+    """Monte Carlo (6 samples) and flyby stores on the ellipsoid carry the quality
+    variables with units (~1-2 min: slow)."""
+    import xarray as xr
+
+    from ideas_hpc.campaign.datasets import QUALITY_VARS
+    from ideas_hpc.campaign.run import run_file
+    from test_campaign_mc import MC, SHORT
+
+    out = run_file(MC, out=tmp_path / "mc.zarr", overrides=SHORT + REQ, workers=1,
+                   progress=False)
+    ds = xr.open_zarr(out)
+    a = ds["vertex_area"].values
+    for name in QUALITY_VARS:
+        assert ds[name].dims == ("sample", "vertex"), name
+        assert "units" in ds[name].attrs, name
+    assert ds["best_resolution"].attrs["units"] == "m"
+    assert ds["emission_at_best"].attrs["units"] == "rad"
+    mapped = ds["mapped"].values
+    np.testing.assert_allclose(ds["coverage"].values, (mapped * a).sum(1) / a.sum(), rtol=1e-12)
+    np.testing.assert_allclose(ds["coverage_seen"].values,
+                               (ds["observed"].values * a).sum(1) / a.sum(), rtol=1e-12)
+    assert np.all(ds["coverage"].values <= ds["coverage_seen"].values)
+    assert not np.any(mapped & ~ds["stereo"].values)
+    fb = ROOT_CAMPAIGNS / "eros-flyby.toml"
+    short = [s for s in SHORT if not s.startswith(("monte_carlo", "run."))]
+    out = run_file(fb, out=tmp_path / "fb.zarr", overrides=short + REQ, workers=1,
+                   progress=False)
+    ds = xr.open_zarr(out)
+    for name in QUALITY_VARS:
+        assert ds[name].dims == ("vertex",), name
+    assert float(ds["coverage"]) <= float(ds["coverage_seen"])
+
+
+ROOT_CAMPAIGNS = __import__("pathlib").Path(__file__).resolve().parent.parent / "campaigns"
