@@ -447,3 +447,35 @@ def test_quality_in_flyby_and_mc_stores(tmp_path):
 
 
 ROOT_CAMPAIGNS = __import__("pathlib").Path(__file__).resolve().parent.parent / "campaigns"
+
+
+def test_cone_clear_is_conservative_on_eros(eros1708):
+    """A cleared cone holds no blocked ray (dense samples inside it); blocked axes are
+    never cleared; and most well-placed cones do clear."""
+    shape = eros1708.shape
+    tree = cbvh.build_bvh(shape.vertices_T, shape.faces)
+    p, n = shape.vertices_T, shape.vertex_normals_T
+    rng = np.random.default_rng(5)
+    n_clear = n_tested = 0
+    for _ in range(400):
+        j = int(rng.integers(len(p)))
+        a = n[j] + rng.normal(size=3) * 0.8
+        a /= np.linalg.norm(a)
+        alpha = 10.0 ** rng.uniform(-4, -1)
+        clear = cbvh.cone_clear(*tree, *p[j], *a, alpha, j)
+        # rays on the cone's rim and inside it
+        e1 = np.cross(a, [0.3, 0.5, 0.8])
+        e1 /= np.linalg.norm(e1)
+        e2 = np.cross(a, e1)
+        phi = rng.uniform(0, 2 * np.pi, 64)
+        rad = np.r_[np.full(32, alpha), rng.uniform(0, alpha, 32)]
+        dirs = (np.cos(rad)[:, None] * a + np.sin(rad)[:, None]
+                * (np.cos(phi)[:, None] * e1 + np.sin(phi)[:, None] * e2))
+        blocked = [cbvh.segment_blocked(*tree, *p[j], *d, np.inf, j) for d in dirs]
+        if clear:
+            assert not any(blocked)
+            n_clear += 1
+        if cbvh.segment_blocked(*tree, *p[j], *a, np.inf, j):
+            assert not clear
+        n_tested += 1
+    assert n_clear > n_tested // 4

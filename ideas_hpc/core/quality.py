@@ -47,7 +47,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from .bvh import segment_blocked
+from .bvh import cone_clear, segment_blocked
 from .time_tree import LEAF, _classify, time_tree
 from .visibility import _seen
 
@@ -165,6 +165,31 @@ def _stereo(U, m, smin, smax, cap, capc, caprad, capn, capstart, order, fill):
     return False
 
 
+#: Largest cone half-angle (rad) tried above the leaves of the time tree; wider
+#: cones rarely clear and cost a BVH walk each.
+_CONE_MAX = 0.01
+
+
+@njit(cache=True, inline="always")
+def _run_clear(NF, k, node, px, py, pz, j, node_bounds, node_info, tri, tri_vid, leaf):
+    """No image of the time-tree node can be occluded: the segments ``p -> r_i`` lie
+    in the cone around ``r_m - p`` of half-angle ``asin(e_r / |r_m - p|)``
+    (``|r_i - r_m| <= e_r``) and no face meets it (:func:`~ideas_hpc.core.bvh.cone_clear`).
+    False means unknown (the images are then ray-tested one by one)."""
+    vx = NF[k, node, 9] - px
+    vy = NF[k, node, 10] - py
+    vz = NF[k, node, 11] - pz
+    dist = np.sqrt(vx * vx + vy * vy + vz * vz)
+    er = NF[k, node, 14]
+    if not er < 0.5 * dist:
+        return False
+    alpha = np.arcsin(er / dist)
+    if alpha > _CONE_MAX and not leaf:
+        return False
+    return cone_clear(node_bounds, node_info, tri, tri_vid, px, py, pz, vx / dist, vy / dist,
+                      vz / dist, alpha, j)
+
+
 @njit(cache=True, inline="always")
 def _lit(j, i, lc, px, py, pz, nx, ny, nz, sun_T, node_bounds, node_info, tri, tri_vid):
     """Vertex ``j`` lit at image ``i`` (cached in ``lc``: 0 unknown, 1 lit, 2 dark)."""
@@ -278,7 +303,13 @@ def quality_vertices(vertices, normals, r_T, dcm_BT, image_times, tan_eta, near,
                                     sec_eta, near, far, exact)
                     if cls == 0:
                         continue
-                    if cls == 1 and NI[node, 2] >= 0:
+                    # occlusion: one cone query can clear a whole run of images
+                    occl = occlusion
+                    leaf = NI[node, 2] < 0
+                    if occl and (cls == 2 or leaf):
+                        occl = not _run_clear(NF, k, node, px, py, pz, j, node_bounds,
+                                              node_info, tri, tri_vid, leaf)
+                    if (cls == 1 or occl) and not leaf:
                         if NI[node, 3] >= 0:
                             stack[sp] = NI[node, 3]
                             sp += 1
@@ -287,7 +318,7 @@ def quality_vertices(vertices, normals, r_T, dcm_BT, image_times, tan_eta, near,
                         continue
                     for i in range(NI[node, 0], NI[node, 1]):
                         if not _seen(j, k, i, vertices, normals, r_T, dcm_BT, tan_eta, near,
-                                     far, exact, sin_min_elev, max_range, occlusion, False,
+                                     far, exact, sin_min_elev, max_range, occl, False,
                                      sun_T, node_bounds, node_info, tri, tri_vid):
                             continue
                         li = False
