@@ -479,3 +479,13 @@ def test_cone_clear_is_conservative_on_eros(eros1708):
             assert not clear
         n_tested += 1
     assert n_clear > n_tested // 4
+
+
+def test_design_campaigns_refuse_a_requirement():
+    from ideas_hpc.campaign.schema import load
+
+    path = ROOT_CAMPAIGNS / "eros-nadir-ga.toml"
+    with pytest.raises(InputError) as ei:
+        load(path, ["body.name=\"ellipsoid\"", "coverage.require_lit=true"])
+    assert ei.value.field == "coverage"
+    load(path, ["body.name=\"ellipsoid\"", "coverage.quality=true"])  # variables only: fine

@@ -54,6 +54,10 @@ def _summary(ds, figs) -> str:
             lines.append(f"coverage over {ok.sum()} samples: mean {cov[ok].mean():.3f} %, min "
                          f"{cov[ok].min():.3f} %, 5th percentile {np.percentile(cov[ok], 5):.3f} %,"
                          f" max {cov[ok].max():.3f} %")
+        if "mapped" in ds and "coverage_seen" in ds:
+            seen = np.atleast_1d(ds["coverage_seen"].values) * 100
+            lines.append(f"coverage counts vertices meeting the [coverage] requirement; "
+                         f"seen (no requirement): mean {np.nanmean(seen):.3f} % of the area")
     if "targeting_miss" in ds:
         m = ds["targeting_miss"].values
         last = np.nanmin(np.where(np.isfinite(m), m, np.inf), axis=-1)

@@ -253,11 +253,17 @@ def build_models(cfg: dict) -> dict:
     ctrl = _sub_table(cfg, "controller")
     if not ctrl:
         ctrl = {"preset": "fov" if cfg["attitude"]["maneuver"] == "fov" else "np"}
+    coverage = coverage_options_from_config(cov, prefix="coverage.")
+    if coverage.requirement and cfg["kind"] in ("design-nadir", "design-fov"):
+        # the designers still maximise the seen fraction (issue 14 item 4 is open):
+        # refuse rather than report a design that ignores the requirement
+        raise InputError(f"a coverage requirement is not honoured by {cfg['kind']!r} yet; "
+                         "use it in flyby and monte-carlo campaigns", field="coverage")
     return {
         "force_model": force_model_from_config(_sub_table(cfg, "dynamics"), prefix="dynamics."),
         "spacecraft": spacecraft_from_config(_sub_table(cfg, "spacecraft"), prefix="spacecraft."),
         "gains": gains_from_config(ctrl, prefix="controller."),
-        "coverage": coverage_options_from_config(cov, prefix="coverage."),
+        "coverage": coverage,
     }
 
 
