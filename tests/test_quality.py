@@ -489,3 +489,29 @@ def test_design_campaigns_refuse_a_requirement():
         load(path, ["body.name=\"ellipsoid\"", "coverage.require_lit=true"])
     assert ei.value.field == "coverage"
     load(path, ["body.name=\"ellipsoid\"", "coverage.quality=true"])  # variables only: fine
+
+
+# ---------------------------------------------------------------- arrival epoch scan
+
+def test_arrival_scan_matches_flybys_at_each_epoch():
+    from ideas_hpc.campaign.scan import arrival_scan
+    from ideas_hpc.campaign.schema import load
+    from ideas_hpc.flyby import fly, setup_from_campaign
+
+    sets = ["body.name=\"ellipsoid\"", "flyby.tf_s=60", "flyby.z_start_km=-3",
+            "flyby.z_stop_km=3", "coverage.mode=\"exact\"", "coverage.require_lit=true",
+            "swarm.angles_rad=[0.2, 1.7]", "flyby.epoch_s=1000.0"]
+    c = load(ROOT_CAMPAIGNS / "eros-flyby.toml", sets)
+    setup = setup_from_campaign(c)
+    assert setup.epoch == 1000.0
+    period = 2 * math.pi / setup.body.params.spin_rate
+    epochs = setup.epoch + period * np.array([0.0, 0.25, 0.5, 0.75, 1.0])
+    ds = arrival_scan(setup, [0.2, 1.7], None, epochs)
+    for m in (0, 2):
+        direct = fly(setup.with_(epoch=float(epochs[m])), [0.2, 1.7])
+        assert ds["coverage"].values[m] == direct.coverage.coverage
+        assert ds["coverage_seen"].values[m] == direct.coverage.coverage_seen
+    cov = ds["coverage"].values
+    assert cov.max() - cov.min() > 0.05          # the arrival epoch matters here
+    assert abs(cov[4] - cov[0]) < 0.02            # one rotation later: about the same
+    assert ds["epoch"].attrs["units"] == "s" and ds["sun_longitude"].attrs["units"] == "rad"

@@ -41,7 +41,7 @@ from ..engine.runner import run_campaign
 from ..flyby import FlybySetup, camera_dcms, endpoints, misalignment_dcms, setup_from_campaign
 from ..mapping import compute_coverage
 from ..seeds import sample_rng
-from ..trajectory import propagate_swarm, sun_direction_T, target_swarm
+from ..trajectory import propagate_swarm, target_swarm
 from . import datasets
 from .schema import Campaign
 
@@ -158,7 +158,7 @@ def fly_sample(setup: FlybySetup, nom: Nominal, d: Draws):
                            wheel0=d.wheel0)
     mis = misalignment_dcms(d.misalignment_prv)
     dcm = np.ascontiguousarray(np.matmul(mis[:, None], dcm))  # [CB][BT] per image
-    sun = sun_direction_T(p, setup.image_times) if setup.coverage.needs_sun else None
+    sun = setup.sun_T() if setup.coverage.needs_sun else None
     cov = compute_coverage(setup.body.shape, r_img, dcm, setup.image_times, setup.eta,
                            setup.near, setup.far, options=setup.coverage, sun_T=sun,
                            active=d.active)

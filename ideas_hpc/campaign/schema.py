@@ -17,7 +17,9 @@ pass's ground sample).
 ``[flyby]`` ``configuration`` (``ring`` or ``helix``), ``t0_s``, ``tf_s``,
 ``z_start_km``, ``z_stop_km``, ``helix_rise_km`` (helix: extra z_start per full
 turn of swarm angle), ``d_sep_km`` (default from the sizing), ``tolerance_m``,
-``max_iterations``, ``dt_s`` (attitude step and trajectory sampling).
+``max_iterations``, ``dt_s`` (attitude step and trajectory sampling),
+``epoch_s`` (arrival epoch after the body's element epoch: the Sun direction at
+flyby time ``t`` is the ephemeris at ``epoch_s + t``).
 
 ``[swarm]`` ``angles_rad`` and ``sweep_periods_min`` (flyby and Monte Carlo).
 
@@ -82,6 +84,9 @@ FLYBY = {
     "tolerance_m": Field("float", 0.01, lo=0, lo_open=True),
     "max_iterations": Field("int", 25, lo=0),
     "dt_s": Field("float", 0.1, lo=0, lo_open=True),
+    "epoch_s": Field("float", 0.0, doc="arrival epoch: flyby time 0 is this many seconds "
+                                       "after the body's element epoch (sets the Sun "
+                                       "direction and the body's rotation phase)"),
 }
 
 SWARM = {
