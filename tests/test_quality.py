@@ -444,6 +444,14 @@ def test_quality_in_flyby_and_mc_stores(tmp_path):
     for name in QUALITY_VARS:
         assert ds[name].dims == ("vertex",), name
     assert float(ds["coverage"]) <= float(ds["coverage_seen"])
+    from ideas_hpc.campaign.report import write_report
+
+    for store in (tmp_path / "mc.zarr", tmp_path / "fb.zarr"):
+        rep = write_report(store, tmp_path / (store.stem + "-report"))
+        names = {f.name for f in rep.parent.iterdir()}
+        for name in ("best_resolution", "emission_at_best", "incidence_at_best",
+                     "n_spacecraft_seen", "stereo", "histograms"):
+            assert f"quality_{name}.png" in names, (store, name)
 
 
 ROOT_CAMPAIGNS = __import__("pathlib").Path(__file__).resolve().parent.parent / "campaigns"
@@ -515,3 +523,13 @@ def test_arrival_scan_matches_flybys_at_each_epoch():
     assert cov.max() - cov.min() > 0.05          # the arrival epoch matters here
     assert abs(cov[4] - cov[0]) < 0.02            # one rotation later: about the same
     assert ds["epoch"].attrs["units"] == "s" and ds["sun_longitude"].attrs["units"] == "rad"
+
+
+def test_value_map_renders(tmp_path):
+    from ideas_hpc.plots.coverage_map import render_coverage_map
+
+    s = sphere_mesh(1000.0, 2)
+    x = s.vertices_T[:, 2].copy()
+    x[:10] = np.nan
+    out = render_coverage_map(s, x, tmp_path / "v.png", kind="value", label="z, m")
+    assert out.stat().st_size > 10_000

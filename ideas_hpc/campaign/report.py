@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -73,6 +74,40 @@ def _summary(ds, figs) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _quality_maps(ds, shape, out):
+    """Maps of the quality variables (issue 14) and area histograms. Monte Carlo:
+    the per-vertex probability of the booleans and the median of the others."""
+    from ..plots import figures
+    from ..plots.coverage_map import render_coverage_map
+
+    mc = ds["best_resolution"].ndim == 2
+    deg = 180.0 / np.pi
+    figs = []
+    for name, label, scale in (("best_resolution", "best resolution, m", 1.0),
+                               ("emission_at_best", "emission at best, deg", deg),
+                               ("incidence_at_best", "incidence at best, deg", deg),
+                               ("n_spacecraft_seen", "spacecraft that saw the vertex", 1.0)):
+        x = ds[name].values.astype(float) * scale
+        if mc:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)   # never-seen vertices
+                x = np.nanmedian(np.where(np.isfinite(x), x, np.nan), axis=0)
+            label = "median " + label
+        figs.append(render_coverage_map(shape, x, out / f"quality_{name}.png", kind="value",
+                                        label=label, title=name))
+    for name in ("stereo", "mapped", "lit"):
+        x = ds[name].values
+        if mc:
+            figs.append(render_coverage_map(shape, x.mean(axis=0), out / f"quality_{name}.png",
+                                            kind="fraction",
+                                            title=f"probability of {name} per vertex"))
+        else:
+            figs.append(render_coverage_map(shape, x, out / f"quality_{name}.png",
+                                            kind="observed", title=name))
+    figs.append(figures.quality_histograms(ds, out / "quality_histograms.png"))
+    return figs
+
+
 def write_report(store, out=None) -> Path:
     """Write PNGs and ``summary.txt`` for a store; returns the summary path."""
     store = Path(store)
@@ -126,6 +161,8 @@ def write_report(store, out=None) -> Path:
                                             kind="observed"))
             figs.append(render_coverage_map(shape, fs, out / "fig25b_first_seen.png",
                                             kind="first_seen"))
+    if "best_resolution" in ds and shape is not None:
+        figs += _quality_maps(ds, shape, out)
     fov = ds.attrs.get("maneuver") == "fov"
     base = 34 if fov else 26
     for i, (var, label, scale) in enumerate((("sigma_error", "MRP error", 1.0),
