@@ -13,14 +13,15 @@ convergence angle in ``[stereo_min_deg, stereo_max_deg]`` (see
 :mod:`ideas_hpc.core.quality`). With a requirement set, ``coverage`` is the
 mapped area fraction and ``coverage_seen`` the plain observed fraction.
 
-Stereo defaults, 10-40 deg: stereophotogrammetry needs enough parallax for a
-height signal and little enough perspective change for image matching. The
-USGS/ISIS stereo-pair criteria (Becker et al. 2015, "Criteria for automated
-identification of stereo image pairs", LPSC 46, #2703) rate a stereo strength
-(parallax/height ratio) of 0.4-1.0 as good, i.e. convergence angles of about
-20-45 deg, and accept pairs down to about 10 deg (ratio ~0.2) for
-stereophotoclinometry (Gaskell et al. 2008, MAPS 43, 1049), which uses pairs
-of small convergence. Users can change both.
+Stereo defaults, 10-40 deg: the convergence angle between two lines of sight
+must be large enough to give a height signal above the matching noise and
+small enough that the two images still match (perspective and, for
+stereophotoclinometry, illumination change). 10-40 deg is the range commonly
+used in planetary stereo practice; for stereo-pair selection criteria in this
+spirit (stated there as a parallax/height ratio, plus resolution and
+illumination limits) see Becker et al. (2015), "Criteria for automated
+identification of stereo image pairs", LPSC 46, and for SPC Gaskell et al.
+(2008), Meteoritics & Planetary Science 43, 1049. Both bounds are settable.
 """
 
 from __future__ import annotations
