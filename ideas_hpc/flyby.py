@@ -69,6 +69,7 @@ class FlybySetup:
     gains: Gains | None = None
     coverage: CoverageOptions = field(default_factory=CoverageOptions)
     p_min: float = 18.0
+    epoch: float = 0.0
 
     @property
     def att_mode(self) -> str:
@@ -82,6 +83,13 @@ class FlybySetup:
     def image_times(self) -> np.ndarray:
         n = int(round((self.tf - self.t0) / self.image_dt))
         return self.t0 + self.image_dt * np.arange(n + 1)
+
+    def sun_T(self, times=None, epoch=None) -> np.ndarray:
+        """Unit body -> Sun directions (n, 3) in T at flyby ``times`` (default: the
+        image times), from the ephemeris at ``epoch + times`` (arrival epoch, s)."""
+        t = self.image_times if times is None else np.asarray(times, dtype=np.float64)
+        e = self.epoch if epoch is None else float(epoch)
+        return sun_direction_T(self.body.params, e + t)
 
     def with_(self, **kw) -> "FlybySetup":
         return replace(self, **kw)
@@ -139,7 +147,8 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
         maneuver=man, attitude_mode=att["mode"], decimate=att["decimate"],
         tol=fb["tolerance_m"], max_iter=fb["max_iterations"], seed=cfg["seed"],
         force_model=ex["force_model"], spacecraft=ex["spacecraft"],
-        gains=ex["gains"], coverage=ex["coverage"], p_min=cfg["design"]["p_min_min"])
+        gains=ex["gains"], coverage=ex["coverage"], p_min=cfg["design"]["p_min_min"],
+        epoch=fb["epoch_s"])
 
 
 def endpoints(setup: FlybySetup, theta) -> tuple[np.ndarray, np.ndarray]:
@@ -332,7 +341,9 @@ def _image(setup: FlybySetup, th, periods, r_img, ics, misalignment, active, cou
     if misalignment is not None:
         dcm = np.ascontiguousarray(np.matmul(misalignment[:, None], dcm))  # [CB][BT]
     img_t = setup.image_times
-    sun = sun_direction_T(setup.body.params, img_t) if setup.coverage.illumination else None
+    sun = None
+    if setup.coverage.needs_sun:
+        sun = setup.sun_T(img_t)
     cov = compute_coverage(setup.body.shape, r_img, dcm, img_t, setup.eta, setup.near,
                            setup.far, options=setup.coverage, sun_T=sun, active=active,
                            counts=counts)
@@ -364,7 +375,7 @@ def candidate_masks(setup: FlybySetup, keys) -> np.ndarray:
     else:
         dcm, _ = camera_dcms(setup, th, periods)
     sun = None
-    if setup.coverage.illumination:
-        sun = sun_direction_T(setup.body.params, setup.image_times)
+    if setup.coverage.needs_sun:
+        sun = setup.sun_T()
     return observed_per_spacecraft(setup.body.shape, r_img, dcm, setup.eta, setup.near,
                                    setup.far, options=setup.coverage, sun_T=sun)

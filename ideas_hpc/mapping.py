@@ -13,8 +13,15 @@ option needs it, and chooses the kernel:
   (same time tree for pruning, ray queries per image, early-out when counts
   are not wanted).
 
+* the quality pass (issue 14: options ``quality`` or any requirement):
+  :func:`~ideas_hpc.core.quality.quality_vertices` (same visibility tests,
+  every observation visited, plus light, resolution, angles and stereo). It
+  runs only when asked for; paper and strict runs without it go through the
+  kernels above unchanged.
+
 Results map onto the store variables of SPEC section 9: ``observed``,
-``first_seen`` (s, NaN never), ``times_seen``, ``coverage`` and ``coverage_count``.
+``first_seen`` (s, NaN never), ``times_seen``, ``coverage``, ``coverage_count``,
+``coverage_seen`` and, with the quality pass, the :class:`QualityResult` fields.
 """
 
 from __future__ import annotations
@@ -26,132 +33,12 @@ import numpy as np
 
 from .core import bvh as _bvh
 from .core import coverage as _cov
+from .core import quality as _qual
+from .coverage_options import (CoverageOptions, _finite,  # noqa: F401 (re-exported)
+                               coverage_options_from_config)
 from .errors import InputError
-
-_MODES = ("paper", "exact")
 #: Tolerance on ``C C^T = I`` for camera DCMs.
 DCM_ORTHO_TOL = 1e-6
-
-
-@dataclass(frozen=True)
-class CoverageOptions:
-    """How vertices are judged observed (SPEC section 6). All SI.
-
-    Attributes
-    ----------
-    mode : {'paper', 'exact'}
-        Culling test: paper ``r . n >= 0`` or exact ``(r - p) . n > 0``.
-    occlusion : bool
-        Self-occlusion: the segment vertex -> spacecraft crosses no face.
-    illumination : bool
-        Vertex lit by the Sun (``n . s > 0``) and not shadowed; needs ``sun_T``.
-    min_elevation : float or None
-        Minimum elevation of the spacecraft above the local horizontal, rad.
-    max_ground_resolution : float or None
-        Largest ground sample ``lambda * range / D`` accepted, m.
-    wavelength, aperture : float
-        lambda (m) and D (m) for the ground resolution.
-    """
-
-    mode: str = "paper"
-    occlusion: bool = False
-    illumination: bool = False
-    min_elevation: float | None = None
-    max_ground_resolution: float | None = None
-    wavelength: float = 0.55e-6
-    aperture: float = 0.08
-
-    def __post_init__(self):
-        if self.mode not in _MODES:
-            raise InputError(f"must be one of {_MODES}, got {self.mode!r}", field="mode")
-        for name in ("occlusion", "illumination"):
-            if not isinstance(getattr(self, name), (bool, np.bool_)):
-                raise InputError(f"must be true or false, got {getattr(self, name)!r}",
-                                 field=name)
-        if self.min_elevation is not None:
-            e = _finite(self.min_elevation, "min_elevation")
-            if not 0.0 <= e < math.pi / 2:
-                raise InputError(f"must be in [0, 90) deg, got {math.degrees(e):g} deg",
-                                 field="min_elevation")
-        if self.max_ground_resolution is not None:
-            if _finite(self.max_ground_resolution, "max_ground_resolution") <= 0.0:
-                raise InputError("must be > 0", field="max_ground_resolution")
-        for name in ("wavelength", "aperture"):
-            if _finite(getattr(self, name), name) <= 0.0:
-                raise InputError(f"must be > 0, got {getattr(self, name)!r}", field=name)
-
-    @property
-    def strict(self) -> bool:
-        """True when any option beyond the paper's culling + clipping is on."""
-        return (self.occlusion or self.illumination or self.min_elevation is not None
-                or self.max_ground_resolution is not None)
-
-    @property
-    def max_range(self) -> float:
-        """Largest range allowed by the ground resolution, ``X D / lambda`` (m)."""
-        if self.max_ground_resolution is None:
-            return math.inf
-        return self.max_ground_resolution * self.aperture / self.wavelength
-
-
-def _finite(value, field: str) -> float:
-    if isinstance(value, bool):
-        raise InputError(f"must be a number, got {value!r}", field=field)
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"must be a number, got {value!r}", field=field) from None
-    if not math.isfinite(x):
-        raise InputError(f"must be finite, got {value!r}", field=field)
-    return x
-
-
-# config key -> (option name, factor to SI); None factor means a non-numeric value
-_CONFIG_KEYS = {
-    "mode": ("mode", None),
-    "occlusion": ("occlusion", None),
-    "illumination": ("illumination", None),
-    "min_elevation_deg": ("min_elevation", math.pi / 180.0),
-    "max_ground_resolution_m": ("max_ground_resolution", 1.0),
-    "wavelength_um": ("wavelength", 1e-6),
-    "aperture_cm": ("aperture", 1e-2),
-}
-
-
-def coverage_options_from_config(table: dict, prefix: str = "coverage.") -> CoverageOptions:
-    """Build :class:`CoverageOptions` from a config table in user units.
-
-    Keys: ``mode`` ('paper' | 'exact'), ``occlusion``, ``illumination`` (bool),
-    ``min_elevation_deg``, ``max_ground_resolution_m``, ``wavelength_um``,
-    ``aperture_cm``. Unknown keys and bad values raise :class:`InputError`
-    naming ``prefix + key``.
-    """
-    if table is None:
-        table = {}
-    if not isinstance(table, dict):
-        raise InputError(f"must be a table, got {type(table).__name__}",
-                         field=prefix.rstrip(".") or "coverage")
-    kw = {}
-    for key, value in table.items():
-        if key not in _CONFIG_KEYS:
-            raise InputError(f"unknown key; known keys: {', '.join(sorted(_CONFIG_KEYS))}",
-                             field=prefix + key)
-        name, factor = _CONFIG_KEYS[key]
-        if factor is None:
-            if name in ("occlusion", "illumination") and not isinstance(value, bool):
-                raise InputError(f"must be true or false, got {value!r}", field=prefix + key)
-            if name == "mode" and value not in _MODES:
-                raise InputError(f"must be one of {_MODES}, got {value!r}", field=prefix + key)
-            kw[name] = value
-        elif value is None:
-            kw[name] = None
-        else:
-            kw[name] = _finite(value, prefix + key) * factor
-    try:
-        return CoverageOptions(**kw)
-    except InputError as exc:
-        inv = {v[0]: k for k, v in _CONFIG_KEYS.items()}
-        raise InputError(exc.message, field=prefix + inv.get(exc.field, exc.field)) from None
 
 
 @dataclass
@@ -170,6 +57,11 @@ class CoverageResult:
         Observed area / total area, 0..1.
     coverage_count : float
         Observed vertices / all vertices.
+    coverage_seen : float or None
+        Observed area / total area; ``coverage`` is the mapped fraction when a
+        requirement is set, else the same number. None means ``coverage``.
+    quality : QualityResult or None
+        The quality pass, when it ran.
     """
 
     observed: np.ndarray
@@ -177,6 +69,42 @@ class CoverageResult:
     times_seen: np.ndarray
     coverage: float
     coverage_count: float
+    coverage_seen: float | None = None
+    quality: "QualityResult | None" = None
+
+    def __post_init__(self):
+        if self.coverage_seen is None:
+            self.coverage_seen = self.coverage
+
+
+@dataclass
+class QualityResult:
+    """Per-vertex observation quality (issue 14; :mod:`ideas_hpc.core.quality`). SI.
+
+    Attributes
+    ----------
+    lit : (V,) bool
+        Sunlit and not shadowed at some observation.
+    best_resolution : (V,) float64
+        Smallest ``rho * range / cos(emission)`` over the observations, m
+        (NaN: never observed, inf: only seen from below the local horizon).
+    emission_at_best, incidence_at_best, phase_at_best : (V,) float64
+        rad, at the best-resolution observation (NaN: never observed).
+    n_spacecraft_seen : (V,) int32
+    stereo : (V,) bool
+        Two usable observations with a convergence angle in the stereo range.
+    mapped : (V,) bool
+        Meets the coverage requirement.
+    """
+
+    lit: np.ndarray
+    best_resolution: np.ndarray
+    emission_at_best: np.ndarray
+    incidence_at_best: np.ndarray
+    phase_at_best: np.ndarray
+    n_spacecraft_seen: np.ndarray
+    stereo: np.ndarray
+    mapped: np.ndarray
 
 
 def _check_geometry(shape, r_T, dcm_BT, eta, near, far, active=None):
@@ -254,9 +182,10 @@ _EMPTY_TREE = (np.zeros((1, 6)), np.full((1, 4), -1, dtype=np.int64),
 
 
 def _strict_args(shape, options: CoverageOptions, sun_T, n_img):
-    if options.illumination:
+    if options.needs_sun:
         if sun_T is None:
-            raise InputError("illumination needs the Sun direction per image", field="sun_T")
+            raise InputError("illumination and the quality pass need the Sun direction per "
+                         "image", field="sun_T")
         s = np.asarray(sun_T, dtype=np.float64)
         if s.ndim == 1 and s.shape == (3,):
             s = np.broadcast_to(s, (n_img, 3))
@@ -271,7 +200,7 @@ def _strict_args(shape, options: CoverageOptions, sun_T, n_img):
         s = np.ascontiguousarray(s / nrm[:, None])
     else:
         s = np.zeros((1, 3))
-    tree = occlusion_structure(shape) if (options.occlusion or options.illumination) \
+    tree = occlusion_structure(shape) if (options.occlusion or options.needs_sun) \
         else _EMPTY_TREE
     sin_e = -2.0 if options.min_elevation is None else math.sin(options.min_elevation)
     return sin_e, options.max_range, bool(options.occlusion), bool(options.illumination), s, tree
@@ -320,6 +249,9 @@ def compute_coverage(shape, r_T, dcm_BT, image_times, eta, near, far, *,
     t = np.ascontiguousarray(t)
     v, n, a = _mesh(shape)
     exact = options.mode == "exact"
+    if options.wants_quality:
+        return _quality(shape, options, sun_T, v, n, a, r, c, t, tan_eta, near, far, exact,
+                        act, counts)
     if not options.strict:
         out = _cov.coverage_counts(v, n, a, r, c, t, tan_eta, near, far, exact, act,
                                    bool(counts))
@@ -330,6 +262,27 @@ def compute_coverage(shape, r_T, dcm_BT, image_times, eta, near, far, *,
     obs, first, times, cov, cov_n = out
     return CoverageResult(observed=obs, first_seen=first, times_seen=times,
                           coverage=float(cov), coverage_count=float(cov_n))
+
+
+def _quality(shape, options, sun_T, v, n, a, r, c, t, tan_eta, near, far, exact, act,
+             counts) -> CoverageResult:
+    sin_e, max_r, occ, ill, s, tree = _strict_args(shape, options, sun_T, r.shape[1])
+    (times, first, lit, res, emi, inc, pha, nsc, stereo,
+     mapped) = _qual.quality_vertices(v, n, r, c, t, tan_eta, near, far, exact, act, sin_e,
+                                      max_r, occ, ill, s, *tree, float(options.rho),
+                                      options.limits, bool(options.require_lit),
+                                      bool(options.require_stereo))
+    obs = times > 0
+    seen, seen_n = _cov.coverage_fractions(obs, a)
+    cov, cov_n = _cov.coverage_fractions(mapped, a)
+    if not counts:
+        times = obs.astype(np.int32)
+    q = QualityResult(lit=lit, best_resolution=res, emission_at_best=emi,
+                      incidence_at_best=inc, phase_at_best=pha, n_spacecraft_seen=nsc,
+                      stereo=stereo, mapped=mapped)
+    return CoverageResult(observed=obs, first_seen=first, times_seen=times,
+                          coverage=float(cov), coverage_count=float(cov_n),
+                          coverage_seen=float(seen), quality=q)
 
 
 def observed_per_spacecraft(shape, r_T, dcm_BT, eta, near, far, *,
@@ -358,3 +311,17 @@ def coverage_from_mask(mask, vertex_areas) -> tuple[float, float]:
                          field="mask")
     cov, cov_n = _cov.coverage_fractions(np.ascontiguousarray(obs), np.ascontiguousarray(a))
     return float(cov), float(cov_n)
+
+
+#: Quality-pass variables (per vertex) and their dtypes, stored when the pass runs.
+QUALITY_VARS = {"lit": bool, "best_resolution": np.float64, "emission_at_best": np.float64,
+                "incidence_at_best": np.float64, "phase_at_best": np.float64,
+                "n_spacecraft_seen": np.int32, "stereo": bool, "mapped": bool}
+
+
+def quality_arrays(cov) -> dict:
+    """name -> (V,) array of a :class:`~ideas_hpc.mapping.CoverageResult`'s quality pass."""
+    q = cov.quality
+    if q is None:
+        return {}
+    return {name: np.asarray(getattr(q, name), dtype=dt) for name, dt in QUALITY_VARS.items()}

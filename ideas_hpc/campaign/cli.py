@@ -1,4 +1,4 @@
-"""``ideas-hpc run`` and ``ideas-hpc report`` (SPEC section 9)."""
+"""``ideas-hpc run``, ``ideas-hpc report`` (SPEC section 9) and ``ideas-hpc scan-arrival``."""
 
 from __future__ import annotations
 
@@ -17,6 +17,13 @@ def _cmd_report(args) -> int:
 
     out = write_report(args.store, args.out)
     print(out.read_text() if out.suffix == ".txt" else out)
+    return 0
+
+
+def _cmd_scan(args) -> int:
+    from .scan import scan_file
+
+    scan_file(args.campaign, args.set, n=args.n, span_h=args.span_h, out=args.out)
     return 0
 
 
@@ -47,3 +54,16 @@ def add_commands(sub) -> None:
     r.add_argument("store", help="zarr store written by 'ideas-hpc run'")
     r.add_argument("--out", default=None, help="output folder (default: STORE-report)")
     r.set_defaults(handler=_cmd_report)
+
+    s = sub.add_parser("scan-arrival", help="coverage with lighting versus arrival epoch",
+                       description="Fly a flyby or monte-carlo campaign's swarm once and run "
+                                   "the quality pass for N arrival epochs (Sun from the "
+                                   "ephemeris) over one rotation period.")
+    s.add_argument("campaign", help="campaign TOML file")
+    s.add_argument("--n", type=int, default=24, help="number of epochs (default 24)")
+    s.add_argument("--span-h", type=float, default=None,
+                   help="hours scanned from flyby.epoch_s (default: one rotation period)")
+    s.add_argument("--set", action="append", default=[], metavar="dotted.key=value",
+                   help="override a campaign field (TOML value), repeatable")
+    s.add_argument("--out", default=None, help="write the scan to this netCDF file")
+    s.set_defaults(handler=_cmd_scan)

@@ -11,6 +11,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from ..mapping import QUALITY_VARS, quality_arrays  # noqa: F401  (store layout)
+
 AXES = ["x", "y", "z"]
 WHEELS = ["1", "2", "3"]
 N_SNAPSHOTS = 11
@@ -30,7 +32,22 @@ VAR_ATTRS = {
     "observed": {"units": "1", "long_name": "vertex observed (paper eq. 26)"},
     "first_seen": {"units": "s", "long_name": "first time the vertex was imaged (NaN: never)"},
     "times_seen": {"units": "1", "long_name": "number of images that saw the vertex"},
-    "coverage": {"units": "1", "long_name": "area-weighted fraction observed"},
+    "coverage": {"units": "1", "long_name": "area-weighted fraction observed (mapped when "
+                 "a [coverage] requirement is set)"},
+    "coverage_seen": {"units": "1", "long_name": "area-weighted fraction observed"},
+    "lit": {"units": "1", "long_name": "sunlit and unshadowed at some observation"},
+    "best_resolution": {"units": "m", "long_name": "best effective ground sample "
+                        "rho*range/cos(emission) (NaN: never observed)"},
+    "emission_at_best": {"units": "rad", "long_name": "emission angle at the best-resolution "
+                         "observation"},
+    "incidence_at_best": {"units": "rad", "long_name": "incidence angle at the best-resolution "
+                          "observation"},
+    "phase_at_best": {"units": "rad", "long_name": "phase angle at the best-resolution "
+                      "observation"},
+    "n_spacecraft_seen": {"units": "1", "long_name": "spacecraft that observed the vertex"},
+    "stereo": {"units": "1", "long_name": "two usable observations with a convergence angle "
+               "in [stereo_min, stereo_max]"},
+    "mapped": {"units": "1", "long_name": "vertex meets the [coverage] requirement"},
     "coverage_count": {"units": "1", "long_name": "vertex-count fraction observed"},
     "vertex_position": {"units": "m", "long_name": "shape model vertex, frame T"},
     "vertex_area": {"units": "m^2", "long_name": "vertex area (1/3 of adjacent faces)"},
@@ -85,6 +102,8 @@ def flyby_dataset(setup, out) -> xr.Dataset:
         "times_seen": (("vertex",), out.coverage.times_seen.astype(np.int32)),
         "coverage": ((), out.coverage.coverage),
         "coverage_count": ((), out.coverage.coverage_count),
+        "coverage_seen": ((), out.coverage.coverage_seen),
+        **{name: (("vertex",), a) for name, a in quality_arrays(out.coverage).items()},
         **mesh_vars(setup.body.shape),
     }
     if out.periods is not None:

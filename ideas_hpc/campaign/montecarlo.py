@@ -61,6 +61,7 @@ def mc_template(setup: FlybySetup, nom: Nominal, n_samples: int) -> xr.Dataset:
     v = {
         "coverage": (s, _lazy((ns,), np.float64)),
         "coverage_count": (s, _lazy((ns,), np.float64)),
+        "coverage_seen": (s, _lazy((ns,), np.float64)),
         "observed": (s + ("vertex",), _lazy((ns, nv), bool)),
         "first_seen": (s + ("vertex",), _lazy((ns, nv), np.float64)),
         "times_seen": (s + ("vertex",), _lazy((ns, nv), np.int32)),
@@ -76,6 +77,9 @@ def mc_template(setup: FlybySetup, nom: Nominal, n_samples: int) -> xr.Dataset:
     for var in DISPERSION_VARS:
         v[var.name] = (s + var.dims, _lazy((ns, *(sizes[d] for d in var.dims)), var.dtype),
                        var.attrs())
+    if setup.coverage.wants_quality:
+        for name, dt in datasets.QUALITY_VARS.items():
+            v[name] = (s + ("vertex",), _lazy((ns, nv), dt))
     if nom.periods is not None:
         v["sweep_period"] = (("spacecraft",), nom.periods)
     if simulated:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -56,6 +57,10 @@ def _summary(ds, figs) -> str:
             lines.append(f"coverage over {ok.sum()} samples: mean {cov[ok].mean():.3f} %, min "
                          f"{cov[ok].min():.3f} %, 5th percentile {np.percentile(cov[ok], 5):.3f} %,"
                          f" max {cov[ok].max():.3f} %")
+        if "mapped" in ds and "coverage_seen" in ds:
+            seen = np.atleast_1d(ds["coverage_seen"].values) * 100
+            lines.append(f"coverage counts vertices meeting the [coverage] requirement; "
+                         f"seen (no requirement): mean {np.nanmean(seen):.3f} % of the area")
     if "targeting_miss" in ds:
         m = ds["targeting_miss"].values
         last = np.nanmin(np.where(np.isfinite(m), m, np.inf), axis=-1)
@@ -117,6 +122,40 @@ def _design_figures(ds, out: Path) -> list[Path]:
     return figs
 
 
+def _quality_maps(ds, shape, out):
+    """Maps of the quality variables (issue 14) and area histograms. Monte Carlo:
+    the per-vertex probability of the booleans and the median of the others."""
+    from ..plots import figures
+    from ..plots.coverage_map import render_coverage_map
+
+    mc = ds["best_resolution"].ndim == 2
+    deg = 180.0 / np.pi
+    figs = []
+    for name, label, scale in (("best_resolution", "best resolution, m", 1.0),
+                               ("emission_at_best", "emission at best, deg", deg),
+                               ("incidence_at_best", "incidence at best, deg", deg),
+                               ("n_spacecraft_seen", "spacecraft that saw the vertex", 1.0)):
+        x = ds[name].values.astype(float) * scale
+        if mc:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)   # never-seen vertices
+                x = np.nanmedian(np.where(np.isfinite(x), x, np.nan), axis=0)
+            label = "median " + label
+        figs.append(render_coverage_map(shape, x, out / f"quality_{name}.png", kind="value",
+                                        label=label, title=name))
+    for name in ("stereo", "mapped", "lit"):
+        x = ds[name].values
+        if mc:
+            figs.append(render_coverage_map(shape, x.mean(axis=0), out / f"quality_{name}.png",
+                                            kind="fraction",
+                                            title=f"probability of {name} per vertex"))
+        else:
+            figs.append(render_coverage_map(shape, x, out / f"quality_{name}.png",
+                                            kind="observed", title=name))
+    figs.append(figures.quality_histograms(ds, out / "quality_histograms.png"))
+    return figs
+
+
 def write_report(store, out=None) -> Path:
     """Write PNGs and ``summary.txt`` for a store; returns the summary path."""
     store = Path(store)
@@ -171,6 +210,8 @@ def write_report(store, out=None) -> Path:
                                             kind="observed"))
             figs.append(render_coverage_map(shape, fs, out / "fig25b_first_seen.png",
                                             kind="first_seen"))
+    if "best_resolution" in ds and shape is not None:
+        figs += _quality_maps(ds, shape, out)
     fov = ds.attrs.get("maneuver") == "fov"
     base = 34 if fov else 26
     for i, (var, label, scale) in enumerate((("sigma_error", "MRP error", 1.0),

@@ -262,3 +262,136 @@ def segments_blocked(node_bounds, node_info, tri, tri_vid, origins, targets, ski
                                  targets[k, 1] - origins[k, 1],
                                  targets[k, 2] - origins[k, 2], 1.0, skip[k])
     return out
+
+
+@njit(cache=True, inline="always")
+def _unit(x, y, z):
+    n = np.sqrt(x * x + y * y + z * z)
+    return x / n, y / n, z / n, n
+
+
+@njit(cache=True, inline="always")
+def _arc_distance(ux, uy, uz, vx, vy, vz, ax, ay, az):
+    """Angular distance from unit ``a`` to the great-circle arc between units u, v."""
+    nx = uy * vz - uz * vy
+    ny = uz * vx - ux * vz
+    nz = ux * vy - uy * vx
+    nn = np.sqrt(nx * nx + ny * ny + nz * nz)
+    # the foot of a on the circle lies in the arc iff (u x a).n >= 0 and (a x v).n >= 0
+    f0 = (uy * az - uz * ay) * nx + (uz * ax - ux * az) * ny + (ux * ay - uy * ax) * nz
+    f1 = (ay * vz - az * vy) * nx + (az * vx - ax * vz) * ny + (ax * vy - ay * vx) * nz
+    if nn > 0.0 and f0 >= 0.0 and f1 >= 0.0:
+        return np.arcsin(min(1.0, abs(nx * ax + ny * ay + nz * az) / nn))
+    cx = uy * az - uz * ay
+    cy = uz * ax - ux * az
+    cz = ux * ay - uy * ax
+    du = np.arctan2(np.sqrt(cx * cx + cy * cy + cz * cz), ux * ax + uy * ay + uz * az)
+    cx = vy * az - vz * ay
+    cy = vz * ax - vx * az
+    cz = vx * ay - vy * ax
+    dv = np.arctan2(np.sqrt(cx * cx + cy * cy + cz * cz), vx * ax + vy * ay + vz * az)
+    return min(du, dv)
+
+
+@njit(cache=True, inline="always")
+def _tri_outside_cone(px, py, pz, ax, ay, az, alpha, tri, i):
+    """True when face ``i`` lies wholly outside the cone (apex p, unit axis a, half-angle
+    alpha): the directions from p to the face form the spherical triangle of the
+    unit vectors ``w_k`` toward its corners, and the angular distance from ``a`` to
+    it (0 inside; else the nearest edge arc) must exceed alpha."""
+    x0 = tri[i, 0] - px
+    y0 = tri[i, 1] - py
+    z0 = tri[i, 2] - pz
+    ax0, ay0, az0, n0 = _unit(x0, y0, z0)
+    ax1, ay1, az1, n1 = _unit(x0 + tri[i, 3], y0 + tri[i, 4], z0 + tri[i, 5])
+    ax2, ay2, az2, n2 = _unit(x0 + tri[i, 6], y0 + tri[i, 7], z0 + tri[i, 8])
+    if n0 == 0.0 or n1 == 0.0 or n2 == 0.0:
+        return False
+    # orientation of the corner directions; near 0: p (nearly) in the face's plane
+    c01x = ay0 * az1 - az0 * ay1
+    c01y = az0 * ax1 - ax0 * az1
+    c01z = ax0 * ay1 - ay0 * ax1
+    det = c01x * ax2 + c01y * ay2 + c01z * az2
+    if abs(det) < 1e-12:
+        return False
+    s0 = (c01x * ax + c01y * ay + c01z * az) * det
+    s1 = ((ay1 * az2 - az1 * ay2) * ax + (az1 * ax2 - ax1 * az2) * ay
+          + (ax1 * ay2 - ay1 * ax2) * az) * det
+    s2 = ((ay2 * az0 - az2 * ay0) * ax + (az2 * ax0 - ax2 * az0) * ay
+          + (ax2 * ay0 - ay2 * ax0) * az) * det
+    if s0 >= 0.0 and s1 >= 0.0 and s2 >= 0.0:
+        return False                     # the axis itself meets the face
+    d = min(_arc_distance(ax0, ay0, az0, ax1, ay1, az1, ax, ay, az),
+            _arc_distance(ax1, ay1, az1, ax2, ay2, az2, ax, ay, az),
+            _arc_distance(ax2, ay2, az2, ax0, ay0, az0, ax, ay, az))
+    return d > alpha
+
+
+@njit(cache=True)
+def cone_clear(node_bounds, node_info, tri, tri_vid, px, py, pz, ax, ay, az, alpha,
+               skip_vertex):
+    """Conservative: True only when no face (except those containing ``skip_vertex``)
+    meets the infinite cone with apex ``p`` (m), unit axis ``a`` and half-angle
+    ``alpha`` (rad, small).
+
+    Then every ray or segment from ``p`` inside the cone is unblocked, which lets
+    the quality pass clear a run of images with one query: the segments
+    ``p -> r_k`` of a run lie in the cone around ``r_m - p`` of half-angle
+    ``asin(e_r / |r_m - p|)``. A box can hold a cone point only if the axis ray
+    meets the box grown by ``s sin(alpha)``, ``s`` the largest distance from p
+    to the box (slab test); faces are tested exactly through the angular
+    distance from the axis to their spherical triangle
+    (:func:`_tri_outside_cone`). ``alpha`` is inflated by ``1e-9`` rad
+    (relative and absolute), far above the rounding of either test, so a
+    cleared cone is never one the exact ray test would block. False means
+    "unknown": test the rays one by one.
+    """
+    alpha = alpha * (1.0 + 1e-9) + 1e-9
+    sa = np.sin(alpha)
+    ix = 1.0 / ax if ax != 0.0 else 1e300
+    iy = 1.0 / ay if ay != 0.0 else 1e300
+    iz = 1.0 / az if az != 0.0 else 1e300
+    stack = np.empty(64, dtype=np.int64)
+    sp = 1
+    stack[0] = 0
+    while sp > 0:
+        sp -= 1
+        node = stack[sp]
+        b = node_bounds
+        hx = 0.5 * (b[node, 3] - b[node, 0])
+        hy = 0.5 * (b[node, 4] - b[node, 1])
+        hz = 0.5 * (b[node, 5] - b[node, 2])
+        hd = np.sqrt(hx * hx + hy * hy + hz * hz)
+        cx = b[node, 0] + hx - px
+        cy = b[node, 1] + hy - py
+        cz = b[node, 2] + hz - pz
+        smax = np.sqrt(cx * cx + cy * cy + cz * cz) + hd
+        m = smax * sa * (1.0 + 1e-6) + 1e-6 * (smax + hd)
+        t0 = (b[node, 0] - m - px) * ix
+        t1 = (b[node, 3] + m - px) * ix
+        lo = min(t0, t1)
+        hi = max(t0, t1)
+        t0 = (b[node, 1] - m - py) * iy
+        t1 = (b[node, 4] + m - py) * iy
+        lo = max(lo, min(t0, t1))
+        hi = min(hi, max(t0, t1))
+        t0 = (b[node, 2] - m - pz) * iz
+        t1 = (b[node, 5] + m - pz) * iz
+        lo = max(lo, min(t0, t1))
+        hi = min(hi, max(t0, t1))
+        if not hi >= max(lo, 0.0):
+            continue
+        left = node_info[node, 0]
+        if left >= 0:
+            stack[sp] = left
+            stack[sp + 1] = node_info[node, 1]
+            sp += 2
+            continue
+        start = node_info[node, 2]
+        for i in range(start, start + node_info[node, 3]):
+            if (tri_vid[i, 0] == skip_vertex or tri_vid[i, 1] == skip_vertex
+                    or tri_vid[i, 2] == skip_vertex):
+                continue
+            if not _tri_outside_cone(px, py, pz, ax, ay, az, alpha, tri, i):
+                return False
+    return True

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..flyby import FlybySetup, Perturbation, endpoints, fly_open_loop, target
+from ..mapping import quality_arrays
 
 
 @dataclass(frozen=True)
@@ -43,6 +44,7 @@ def fly_sample(setup: FlybySetup, nom: Nominal, pert: Perturbation) -> dict:
     f = fly_open_loop(setup, nom.theta, nom.periods, nom.r0_T, nom.v0_T, pert)
     cov = f.coverage
     out = {"coverage": cov.coverage, "coverage_count": cov.coverage_count,
+           "coverage_seen": cov.coverage_seen, **quality_arrays(cov),
            "observed": cov.observed, "first_seen": cov.first_seen,
            "times_seen": cov.times_seen, "arrival_error": np.linalg.norm(
                f.position_T[:, -1] - nom.position_T[:, -1], axis=1)}

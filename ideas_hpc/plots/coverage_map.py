@@ -5,7 +5,9 @@ azimuth + 180 deg) with the Agg backend. A face takes the mean of its three
 vertex values: for ``kind='observed'`` the fraction of its vertices observed
 (blue = observed, grey = not), for ``kind='first_seen'`` the mean first-seen
 time in s (faces with a never-seen vertex are grey), for ``kind='fraction'`` a
-per-vertex fraction in 0..1 (e.g. of Monte Carlo samples that saw the vertex).
+per-vertex fraction in 0..1 (e.g. of Monte Carlo samples that saw the vertex),
+for ``kind='value'`` any per-vertex quantity (issue 14 quality maps: best
+resolution, angles, spacecraft counts; NaN grey), labelled by ``label``.
 """
 
 from __future__ import annotations
@@ -16,11 +18,11 @@ import numpy as np
 
 from ..errors import InputError
 
-_KINDS = ("observed", "first_seen", "fraction")
+_KINDS = ("observed", "first_seen", "fraction", "value")
 
 
 def render_coverage_map(shape, values, path, *, kind: str = "observed", title=None,
-                        view=(20.0, -60.0), dpi: int = 120) -> Path:
+                        view=(20.0, -60.0), dpi: int = 120, label: str | None = None) -> Path:
     """Write a PNG of ``shape`` coloured by per-vertex ``values``.
 
     Parameters
@@ -36,6 +38,8 @@ def render_coverage_map(shape, values, path, *, kind: str = "observed", title=No
     view : (elev, azim)
         Viewing angles of the left panel, deg; the right panel shows the far side.
     dpi : int
+    label : str, optional
+        Colour-bar label for ``kind='value'``.
 
     Returns
     -------
@@ -82,6 +86,23 @@ def render_coverage_map(shape, values, path, *, kind: str = "observed", title=No
         label = "observed fraction of face vertices"
         n_obs = int(vals.astype(bool).sum())
         stat = f"{n_obs}/{nv} vertices observed"
+    elif kind == "value":
+        x = vals.astype(np.float64)
+        fin = np.isfinite(x)
+        t = x[shape.faces]
+        never = ~np.isfinite(t).all(axis=1)
+        tm = np.where(never, 0.0, np.where(np.isfinite(t), t, 0.0).mean(axis=1))
+        lo, hi = (float(np.percentile(x[fin], 2)), float(np.percentile(x[fin], 98))) \
+            if fin.any() else (0.0, 1.0)
+        if hi <= lo:
+            hi = lo + 1.0
+        cmap = cm.viridis
+        norm = colors.Normalize(lo, hi)
+        fc = cmap(norm(tm))
+        fc[never] = grey
+        label = label or "value"
+        stat = (f"median {float(np.median(x[fin])):.3g} over {int(fin.sum())}/{nv} vertices"
+                if fin.any() else "no finite values")
     else:
         t = vals.astype(np.float64)[shape.faces]
         never = ~np.isfinite(t).all(axis=1)

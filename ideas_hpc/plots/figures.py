@@ -180,3 +180,29 @@ def mc_coverage(ds, path) -> Path:
     for ax in axes:
         ax.grid(alpha=0.3)
     return save_png(fig, path)
+
+
+def quality_histograms(ds, path):
+    """Area-weighted histograms of the quality variables (issue 14): best
+    resolution (m) and emission, incidence, phase at best (deg). Monte Carlo
+    stores pool every sample."""
+    import matplotlib.pyplot as plt
+
+    a = np.asarray(ds["vertex_area"].values, dtype=float)
+    panels = [("best_resolution", "best resolution, m", 1.0),
+              ("emission_at_best", "emission at best, deg", 180.0 / np.pi),
+              ("incidence_at_best", "incidence at best, deg", 180.0 / np.pi),
+              ("phase_at_best", "phase at best, deg", 180.0 / np.pi)]
+    fig, axes = plt.subplots(1, 4, figsize=(14, 3.4))
+    for ax, (name, label, scale) in zip(axes, panels):
+        x = np.asarray(ds[name].values, dtype=float) * scale
+        w = np.broadcast_to(a, x.shape)
+        ok = np.isfinite(x)
+        if ok.any():
+            ax.hist(x[ok], bins=40, weights=w[ok] / w.sum(), color="C0")
+        ax.set_xlabel(label)
+        ax.set_ylabel("area fraction")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
