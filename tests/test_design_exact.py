@@ -227,3 +227,30 @@ def test_time_limit_returns_best_so_far_with_gap(eros1708):
     assert res.worst_failure_coverage >= _need(bank) - 1e-12
     assert res.bound <= res.n
     assert (res.status == "optimal") == (res.gap == 0.0)
+
+
+def test_time_limit_without_incumbent_falls_back_to_a_greedy_design():
+    # HiGHS can stop at its time limit before it has any swarm (eros022540 in
+    # strict mode under load did): the design is then a greedy cover, stated as
+    # a time-limited design with its gap to the proven bound, not a traceback.
+    from types import SimpleNamespace
+
+    from ideas_hpc.design.exact import _min_result, greedy_cover, prepare
+
+    bank = _toy(2)
+    need = bank.reach - 0.02
+    red, m = prepare(bank, 0.0)
+    stopped = SimpleNamespace(x=None, status=1, message="Time limit reached",
+                              mip_dual_bound=1.0)
+    res = _min_result(bank, red, stopped, 1.0, bank.reach, need, 20, m)
+    assert res.status == "time_limit" and res.coverage >= need
+    assert res.bound == 1.0 and res.gap == (res.n - 1) / res.n
+    assert "greedy" in res.notes[0]
+    exact = min_swarm(bank, target=bank.reach, eps_tol=0.02)
+    assert res.n >= exact.n  # never better than the optimum
+    # separation respected by the greedy cover (2 grid steps)
+    idx = greedy_cover(bank, need, 2, None)
+    if idx is not None:
+        d = np.abs(idx[:, None] - idx[None, :])
+        d = np.minimum(d, bank.n_candidates - d)
+        assert (d[np.triu_indices(idx.size, 1)] > 2).all()

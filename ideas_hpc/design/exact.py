@@ -173,18 +173,53 @@ def _min_result(bank, red, res, dt, target, need, n_max, m) -> ExactResult:
             raise InputError(f"no swarm of at most {n_max} spacecraft {what}reaches "
                              f"{100 * need:.3f} %; the highest coverage {n_max} reach is "
                              f"{100 * top.coverage:.3f} % ({top.status})", field="design.n_max")
-        raise RuntimeError(f"HiGHS found no swarm: {res.message}")
-    idx = _chosen(red, res.x)
+        idx = greedy_cover(bank, need, m, n_max)
+        if idx is None:
+            raise InputError(f"no swarm found within the time limit ({res.message}); raise "
+                             "design.time_limit_s", field="design.time_limit_s")
+        notes.append(f"the integer programme found no swarm within design.time_limit_s; "
+                     f"greedy cover of {idx.size} spacecraft, proven lower bound {bound}")
+        res_status = 1
+    else:
+        idx = _chosen(red, res.x)
+        res_status = res.status
     n = idx.size
     bound = min(max(bound, 1), n)
     gap = (n - bound) / n
-    status = "optimal" if gap == 0 else ("time_limit" if res.status == 1 else "feasible")
+    status = "optimal" if gap == 0 else ("time_limit" if res_status == 1 else "feasible")
     cov = float(bank.coverage([idx])[0])
     if cov < need - 1e-9:  # the solver's tolerances never hide a shortfall
         raise RuntimeError(f"exact design covers {cov!r} < {need!r}")
     return ExactResult(indices=idx, theta=bank.theta[idx], n=n, coverage=cov, target=target,
                        status=status, bound=float(bound), gap=float(gap), solve_time=dt,
                        notes=notes)
+
+
+def greedy_cover(bank: CandidateBank, need: float, m: int, n_max: int | None):
+    """Greedy set cover: add the candidate that covers the most new area, keeping
+    every pair more than ``m`` grid steps apart, until ``need`` is reached.
+
+    The fallback when the integer programme has no incumbent at its time limit
+    (a feasible design; its gap to the proven bound is reported). Returns grid
+    indices, or None when it cannot reach ``need``.
+    """
+    w = bank.areas / bank.areas.sum()
+    left = np.ones(bank.masks.shape[1], dtype=bool)
+    allowed = np.ones(bank.n_candidates, dtype=bool)
+    chosen: list[int] = []
+    covered = 0.0
+    while covered < need - 1e-12 and (n_max is None or len(chosen) < n_max):
+        gain = (bank.masks & left) @ w
+        gain[~allowed] = -1.0
+        j = int(np.argmax(gain))
+        if gain[j] <= 0.0:
+            return None
+        chosen.append(j)
+        covered += gain[j]
+        left &= ~bank.masks[j]
+        d = np.abs(np.arange(bank.n_candidates) - j)
+        allowed &= np.minimum(d, bank.n_candidates - d) > m
+    return np.sort(np.array(chosen, dtype=np.int64)) if covered >= need - 1e-12 else None
 
 
 def max_coverage(bank: CandidateBank, n: int, *, min_separation: float = 0.0,
