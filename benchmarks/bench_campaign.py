@@ -52,14 +52,14 @@ def _warm(client, fn):
 def run(n_workers: int, c, setup, nom, out: Path):
     from distributed import Client
 
-    mc = c.cfg["monte_carlo"]
+    mc = c.config.monte_carlo
     fn = functools.partial(mc_chunk, setup=setup, nominal=nom.for_tasks(), mc=mc,
-                           seed=c.cfg["seed"])
+                           seed=c.config.seed)
     with local_cluster(n_workers) as cluster, Client(cluster) as client:
         _warm(client, fn)
-        s = run_campaign(out, mc_template(setup, nom, mc["samples"]), fn,
-                         config=resolved_config(c), campaign_seed=c.cfg["seed"],
-                         chunk_size=c.cfg["run"]["chunk_size"],
+        s = run_campaign(out, mc_template(setup, nom, mc.samples), fn,
+                         config=resolved_config(c), campaign_seed=c.config.seed,
+                         chunk_size=c.config.run.chunk_size,
                          client=client, progress=False)
     return s
 

@@ -97,9 +97,9 @@ class FlybySetup:
 
 def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
     """Resolve a validated :class:`~ideas_hpc.campaign.schema.Campaign` to a setup."""
-    cfg = c.cfg
-    b = cfg["body"]
-    params = b["params"]
+    cfg = c.config
+    b = cfg.body
+    params = b.params
     if isinstance(params, dict):
         from .params import params_from_mapping
         try:
@@ -107,7 +107,7 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
         except InputError as exc:
             raise c.source.locate(exc) from None
     try:
-        body = load_body(b["name"], data_path=b["data_path"], resolution=b["resolution"],
+        body = load_body(b.name, data_path=b.data_path, resolution=b.resolution,
                          params=params)
         body.require_params()
     except InputError as exc:
@@ -116,39 +116,39 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
             msg = f"{exc.message}: {exc.file}" if exc.file else exc.message
             raise c.error(msg, "body.name" if f == "body" else f) from None
         raise c.source.locate(exc) from None
-    inst = cfg["instrument"]
+    inst = cfg.instrument
     sizing = size_flyby(r_max=body.shape.r_max, r_min=body.shape.r_min,
-                        ground_resolution=inst["ground_resolution_m"],
-                        aperture=inst["aperture_cm"], wavelength=inst["wavelength_um"],
-                        min_elevation=inst["min_elevation_deg"], near=inst["near_field_mm"])
-    man = maneuver or cfg["attitude"]["maneuver"]
-    if cfg["kind"] == "design-fov":
+                        ground_resolution=inst.ground_resolution_m,
+                        aperture=inst.aperture_m, wavelength=inst.wavelength_m,
+                        min_elevation=inst.min_elevation_rad, near=inst.near_field_m)
+    man = maneuver or cfg.attitude.maneuver
+    if cfg.kind == "design-fov":
         man = "fov"
-    eta = inst["half_angle_deg"]
+    eta = inst.half_angle_rad
     if eta is None:
         eta = sizing.eta_fov if man == "fov" else sizing.eta_nadir
-    fb = cfg["flyby"]
-    att = cfg["attitude"]
+    fb = cfg.flyby
+    att = cfg.attitude
     ex = c.extras
-    d_sep = fb["d_sep_km"] if fb["d_sep_km"] is not None else sizing.d_sep
-    sw = cfg["swarm"]
-    if sw["angles_rad"] and fb["configuration"] == "ring":
+    d_sep = fb.d_sep_m if fb.d_sep_m is not None else sizing.d_sep
+    sw = cfg.swarm
+    if sw.angles_rad and fb.configuration == "ring":
         try:
-            check_separation(sw["angles_rad"], d_sep, sw["min_separation_km"])
+            check_separation(sw.angles_rad, d_sep, sw.min_separation_m)
         except InputError as exc:
             raise c.source.locate(exc) from None
     return FlybySetup(
-        body=body, sizing=sizing, t0=fb["t0_s"], tf=fb["tf_s"], dt=fb["dt_s"],
-        image_dt=1.0 / inst["image_rate_hz"],
+        body=body, sizing=sizing, t0=fb.t0_s, tf=fb.tf_s, dt=fb.dt_s,
+        image_dt=1.0 / inst.image_rate_hz,
         d_sep=d_sep,
-        z_start=fb["z_start_km"], z_stop=fb["z_stop_km"], configuration=fb["configuration"],
-        helix_rise=fb["helix_rise_km"], eta=eta, near=sizing.near, far=sizing.far,
-        theta_max=att["theta_max_deg"] if att["theta_max_deg"] is not None else sizing.theta_max,
-        maneuver=man, attitude_mode=att["mode"], decimate=att["decimate"],
-        tol=fb["tolerance_m"], max_iter=fb["max_iterations"], seed=cfg["seed"],
+        z_start=fb.z_start_m, z_stop=fb.z_stop_m, configuration=fb.configuration,
+        helix_rise=fb.helix_rise_m, eta=eta, near=sizing.near, far=sizing.far,
+        theta_max=att.theta_max_rad if att.theta_max_rad is not None else sizing.theta_max,
+        maneuver=man, attitude_mode=att.mode, decimate=att.decimate,
+        tol=fb.tolerance_m, max_iter=fb.max_iterations, seed=cfg.seed,
         force_model=ex["force_model"], spacecraft=ex["spacecraft"],
-        gains=ex["gains"], coverage=ex["coverage"], p_min=cfg["design"]["p_min_min"],
-        epoch=fb["epoch_s"])
+        gains=ex["gains"], coverage=ex["coverage"], p_min=cfg.design.p_min_s,
+        epoch=fb.epoch_s)
 
 
 def endpoints(setup: FlybySetup, theta) -> tuple[np.ndarray, np.ndarray]:

@@ -46,7 +46,8 @@ def test_store_holds_the_resolved_config(tiny_store):
 def test_resume_refused_after_a_default_changed(tiny_store, monkeypatch):
     # near_field_mm is not in the file: only its default changes
     monkeypatch.setitem(schema.INSTRUMENT, "near_field_mm",
-                        Field("float", 0.2, to_si=1e-3, lo=0, lo_open=True))
+                        Field("float", 0.2, si="near_field_m", to_si=1e-3, lo=0,
+                              lo_open=True))
     with pytest.raises(InputError) as ei:
         run_file(FLYBY, out=tiny_store, overrides=TINY, resume=True)
     assert "instrument.near_field_mm = 0.1 in the store, 0.2 now" in str(ei.value)

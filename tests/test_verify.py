@@ -18,8 +18,8 @@ def test_verification_samples_are_monte_carlo_samples():
     # same seed, swarm and [monte_carlo] table: a user can re-run any of them.
     c = load(MC, SHORT + ["monte_carlo.failure_probability=0.3"])
     setup = setup_from_campaign(c)
-    theta = np.asarray(c.cfg["swarm"]["angles_rad"])
-    v = verify_swarm(setup, theta, None, mc=c.cfg["monte_carlo"], seed=c.cfg["seed"],
+    theta = np.asarray(c.config.swarm.angles_rad)
+    v = verify_swarm(setup, theta, None, mc=c.config.monte_carlo, seed=c.config.seed,
                      n_samples=3, threshold=0.999)
     for k in range(3):
         r = run_sample(c, k)

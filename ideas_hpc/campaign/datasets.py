@@ -146,15 +146,15 @@ def base_attrs(c, setup) -> dict:
     import time
 
     from .._version import code_version
-    from ..config import get_path
     from ..engine.store import config_hash, config_json
     from .schema import EXECUTION_KNOBS, resolved_config
 
     cfg = resolved_config(c)
-    knobs = {k: get_path(c.cfg, k) for k in EXECUTION_KNOBS}
+    knobs = {k: getattr(getattr(c.config, k.split(".")[0]), k.split(".")[1])
+             for k in EXECUTION_KNOBS}
     attrs = {"kind": c.kind, "config": config_json(cfg), "config_hash": config_hash(cfg),
              "execution": config_json(knobs), "code_version": code_version(),
-             "campaign_seed": int(c.cfg["seed"]), "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+             "campaign_seed": int(c.config.seed), "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
              "campaign_file": str(c.source.path)}
     attrs.update(setup_attrs(setup))
     return attrs

@@ -65,35 +65,34 @@ def failure_vars(bank, swarm_idx, k: int) -> dict:
 
 def design_exact(c, setup, client) -> ExactDesign:
     """The certified NP design of a campaign (module docstring)."""
-    d = c.cfg["design"]
-    sw = c.cfg["swarm"]
-    eps = d["eps_tol_pct"] / 100.0
-    k = d["failures_tolerated"]
-    n_grid = grid_size(d["angle_step_deg"])
+    d = c.config.design
+    eps = d.eps_tol_pct / 100.0
+    k = d.failures_tolerated
+    sep = c.config.swarm.min_separation_m
+    n_grid = grid_size(d.grid_step_rad)
     try:  # a separation no two grid points satisfy fails before any mask is computed
-        separation_steps(2 * math.pi / n_grid, setup.d_sep, sw["min_separation_km"], n_grid)
+        separation_steps(2 * math.pi / n_grid, setup.d_sep, sep, n_grid)
     except InputError as exc:
         raise c.error(exc.message, exc.field) from None
     t0 = time.perf_counter()
-    bank = build_bank(setup, d["angle_step_deg"], client=client, chunk_size=d["chunk_size"])
+    bank = build_bank(setup, d.grid_step_rad, client=client, chunk_size=d.chunk_size)
     t_masks = time.perf_counter() - t0
     _log(f"candidate masks: {bank.n_candidates} grid angles ({math.degrees(bank.step):g} deg) "
          f"in {t_masks:.1f} s")
     notes: list = []
     target = _target(bank, eps, setup.coverage.mode, setup.coverage.strict, notes)
-    sep = sw["min_separation_km"]
     try:
         if k:
-            res = failure_tolerant(bank, k, target=target, eps_tol=eps, n_max=d["n_max"],
-                                   min_separation=sep, time_limit=d["time_limit_s"])
+            res = failure_tolerant(bank, k, target=target, eps_tol=eps, n_max=d.n_max,
+                                   min_separation=sep, time_limit=d.time_limit_s)
         else:
-            res = min_swarm(bank, target=target, eps_tol=eps, n_max=d["n_max"],
-                            min_separation=sep, time_limit=d["time_limit_s"])
+            res = min_swarm(bank, target=target, eps_tol=eps, n_max=d.n_max,
+                            min_separation=sep, time_limit=d.time_limit_s)
     except InputError as exc:
         raise c.error(exc.message, exc.field) from None
     notes.extend(res.notes)
     t_design = time.perf_counter() - t0
-    curve = coverage_curve(bank, d["n_max"], min_separation=sep, time_limit=d["time_limit_s"])
+    curve = coverage_curve(bank, d.n_max, min_separation=sep, time_limit=d.time_limit_s)
     k_eval = k if k else 1
     data = {
         "design_method": ((), "exact"),
@@ -132,16 +131,16 @@ def design_exact(c, setup, client) -> ExactDesign:
 
 def ga_gap(c, setup, mask_bank, n_ga: int, target: float) -> tuple[xr.Dataset, list]:
     """The GA's gap to the certified optimum on the GA's own angle grid (masks reused)."""
-    d = c.cfg["design"]
-    step = d["angle_step_rad"]
+    d = c.config.design
+    step = d.angle_step_rad
     if step <= 0:
         return xr.Dataset({"design_method": ((), "ga")}), [
             "continuous GA angles: no exact optimum to compare with"]
     bank = build_bank(setup, step, mask_bank=mask_bank, snap=False)
     try:
-        ex = min_swarm(bank, target=target, eps_tol=d["eps_tol_pct"] / 100.0, n_max=d["n_max"],
-                       min_separation=c.cfg["swarm"]["min_separation_km"],
-                       time_limit=d["time_limit_s"])
+        ex = min_swarm(bank, target=target, eps_tol=d.eps_tol_pct / 100.0, n_max=d.n_max,
+                       min_separation=c.config.swarm.min_separation_m,
+                       time_limit=d.time_limit_s)
     except InputError as exc:
         return xr.Dataset({"design_method": ((), "ga")}), [f"no exact reference: {exc.message}"]
     if not ex.optimal:
@@ -161,10 +160,10 @@ def verification_vars(c, setup, theta, threshold: float, client) -> tuple[dict, 
     Flies the swarm through the campaign's ``[monte_carlo]`` dispersions with
     the campaign seed; returns store variables, attrs and a summary line.
     """
-    m = c.cfg["design"]["verify_samples"]
+    m = c.config.design.verify_samples
     if m == 0:
         return {}, {}, "Monte Carlo verification: off (design.verify_samples = 0)"
-    v = verify_swarm(setup, theta, None, mc=c.cfg["monte_carlo"], seed=c.cfg["seed"],
+    v = verify_swarm(setup, theta, None, mc=c.config.monte_carlo, seed=c.config.seed,
                      n_samples=m, threshold=threshold, client=client)
     data = {"verify_coverage": (("verify_sample",), v.coverage,
                                 {"units": "1", "long_name": "coverage of each dispersed sample"}),
@@ -189,7 +188,7 @@ def run_exact(c, setup, *, workers=None, scheduler=None, cluster="local",
         _log(res.summary)
         for note in res.notes:
             _log(f"note: {note}")
-        threshold = res.attrs["target_coverage"] - c.cfg["design"]["eps_tol_pct"] / 100.0
+        threshold = res.attrs["target_coverage"] - c.config.design.eps_tol_pct / 100.0
         vdata, vattrs, vline = verification_vars(c, setup, res.theta, threshold, client)
     _log(vline)
     flight = fly(setup, res.theta)

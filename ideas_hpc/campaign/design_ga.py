@@ -44,7 +44,7 @@ def _progress_printer(total: int, label: str):
 
 def _bank(setup, client, design) -> MaskBank:
     return MaskBank(functools.partial(candidate_masks, setup), setup.body.shape.n_vertices,
-                    chunk_size=design["chunk_size"], client=client)
+                    chunk_size=design.chunk_size, client=client)
 
 
 def _fill_grid(bank: MaskBank, setup, step: float) -> float:
@@ -63,14 +63,14 @@ def design_nadir(c: Campaign, setup, client):
     """NP swarm-size GA (SPEC section 7). Returns (GAResult, bank)."""
     from ..ga import run_nadir_ga
 
-    d = c.cfg["design"]
+    d = c.config.design
     bank = _bank(setup, client, d)
-    step = d["angle_step_rad"]
+    step = d.angle_step_rad
     target = 1.0
     notes = []
     if step > 0:
         reach = _fill_grid(bank, setup, step)
-        if reach < 1.0 - d["eps_tol_pct"] / 100.0:
+        if reach < 1.0 - d.eps_tol_pct / 100.0:
             target = reach
             notes.append(f"100 % is not reachable from this ring in {setup.coverage.mode} mode "
                          f"(strict options: {setup.coverage.strict}); the highest reachable "
@@ -83,15 +83,15 @@ def design_nadir(c: Campaign, setup, client):
         cov, _ = bank.union_coverage(keys, areas)
         return cov, np.rint(genomes[:, 0]).astype(int)
 
-    res = run_nadir_ga(evaluate, n_max=d["n_max"], population=d["population"],
-                       generations=d["generations"], seed=c.cfg["seed"],
-                       eps_tol=d["eps_tol_pct"] / 100.0, angle_step=step, target=target,
-                       parents=d["parents"], elitism=d["elitism"],
-                       mutation_probability=d["mutation_probability"],
-                       stall_generations=d["stall_generations"],
-                       min_separation=min_separation_angle(c.cfg["swarm"]["min_separation_km"],
+    res = run_nadir_ga(evaluate, n_max=d.n_max, population=d.population,
+                       generations=d.generations, seed=c.config.seed,
+                       eps_tol=d.eps_tol_pct / 100.0, angle_step=step, target=target,
+                       parents=d.parents, elitism=d.elitism,
+                       mutation_probability=d.mutation_probability,
+                       stall_generations=d.stall_generations,
+                       min_separation=min_separation_angle(c.config.swarm.min_separation_m,
                                                           setup.d_sep),
-                       progress=_progress_printer(d["generations"], "NP GA"))
+                       progress=_progress_printer(d.generations, "NP GA"))
     res.notes.extend(notes)
     n = res.best_swarm_size
     best = [snap_angle(t, step)[0] for t in res.best_genome[1:1 + n]]
@@ -102,7 +102,7 @@ def design_nadir(c: Campaign, setup, client):
 
 def _fov_swarm(c: Campaign) -> np.ndarray:
     """The swarm to sweep: ``design.nadir_store`` (an NP design's best swarm) or ``swarm.angles_rad``."""
-    src = c.cfg["design"]["nadir_store"]
+    src = c.config.design.nadir_store
     if src:
         try:
             ds = xr.open_zarr(src)
@@ -114,31 +114,31 @@ def _fov_swarm(c: Campaign) -> np.ndarray:
             raise c.error(f"{src!r} is a {ds.attrs.get('kind')!r} store, not design-nadir",
                           "design.nadir_store")
         return theta
-    return np.asarray(c.cfg["swarm"]["angles_rad"], dtype=float)
+    return np.asarray(c.config.swarm.angles_rad, dtype=float)
 
 
 def design_fov(c: Campaign, setup, client):
     """FoV sweep-period GA (SPEC section 7). Returns (GAResult, angles, periods)."""
     from ..ga import run_fov_ga
 
-    d = c.cfg["design"]
+    d = c.config.design
     theta = _fov_swarm(c)
     bank = _bank(setup, client, d)
     areas = setup.body.shape.vertex_areas
-    step = d["period_step_min"]
+    step = d.period_step_s
 
     def evaluate(genomes):
-        keys = [fov_keys(g, theta, d["p_min_min"], step) for g in genomes]
+        keys = [fov_keys(g, theta, d.p_min_s, step) for g in genomes]
         cov, _ = bank.union_coverage(keys, areas)
         return cov
 
-    res = run_fov_ga(evaluate, n_spacecraft=theta.size, p_min=d["p_min_min"],
-                     p_max=d["p_max_min"], period_step=step, population=d["population"],
-                     generations=d["generations"], seed=c.cfg["seed"], parents=d["parents"],
-                     elitism=d["elitism"], mutation_probability=d["mutation_probability"],
-                     stall_generations=d["stall_generations"],
-                     progress=_progress_printer(d["generations"], "FoV GA"))
-    periods = np.array([k[1] for k in fov_keys(res.best_genome, theta, d["p_min_min"], step)])
+    res = run_fov_ga(evaluate, n_spacecraft=theta.size, p_min=d.p_min_s,
+                     p_max=d.p_max_s, period_step=step, population=d.population,
+                     generations=d.generations, seed=c.config.seed, parents=d.parents,
+                     elitism=d.elitism, mutation_probability=d.mutation_probability,
+                     stall_generations=d.stall_generations,
+                     progress=_progress_printer(d.generations, "FoV GA"))
+    periods = np.array([k[1] for k in fov_keys(res.best_genome, theta, d.p_min_s, step)])
     return res, theta, periods
 
 
@@ -154,7 +154,7 @@ def run_design(c: Campaign, out: Path, *, workers=None, scheduler=None, cluster=
     target(setup, np.linspace(0.0, 2 * np.pi, 16, endpoint=False)
            if c.kind == "design-nadir" else _fov_swarm(c))
     t = time.perf_counter()
-    if c.kind == "design-nadir" and c.cfg["design"]["method"] == "exact":
+    if c.kind == "design-nadir" and c.config.design.method == "exact":
         return run_exact(c, setup, workers=workers, scheduler=scheduler, cluster=cluster,
                          slurm_config=slurm_config)
     design = design_nadir if c.kind == "design-nadir" else design_fov

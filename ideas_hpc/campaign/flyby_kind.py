@@ -22,11 +22,11 @@ def run_flyby(c: Campaign, out: Path, **_) -> xr.Dataset:
     """Kind ``flyby``: one flyby of ``swarm.angles_rad``."""
     setup = setup_from_campaign(c)
     _log(f"body: {setup.body.note}")
-    sw = c.cfg["swarm"]
-    periods = np.asarray(sw["sweep_periods_min"]) if setup.maneuver == "fov" else None
+    sw = c.config.swarm
+    periods = np.asarray(sw.sweep_periods_s) if setup.maneuver == "fov" else None
     t = time.perf_counter()
-    res = fly(setup, sw["angles_rad"], periods)
-    _log(f"flyby: {len(sw['angles_rad'])} spacecraft, coverage {100 * res.coverage.coverage:.3f} % "
+    res = fly(setup, sw.angles_rad, periods)
+    _log(f"flyby: {len(sw.angles_rad)} spacecraft, coverage {100 * res.coverage.coverage:.3f} % "
          f"(area), {100 * res.coverage.coverage_count:.3f} % (vertices) in "
          f"{time.perf_counter() - t:.1f} s")
     ds = datasets.flyby_dataset(setup, res)

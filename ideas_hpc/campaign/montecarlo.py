@@ -32,7 +32,7 @@ from .schema import Campaign, resolved_config
 
 
 def mc_chunk(chunk_id: int, start: int, stop: int, *, setup: FlybySetup, nominal: Nominal,
-             mc: dict, seed: int) -> dict:
+             mc, seed: int) -> dict:
     """Chunk task: fly samples ``start..stop-1`` and return their arrays (sample first)."""
     rows = []
     for k in range(start, stop):
@@ -96,17 +96,17 @@ def mc_template(setup: FlybySetup, nom: Nominal, n_samples: int) -> xr.Dataset:
 
 def _prepare(c: Campaign):
     setup = setup_from_campaign(c)
-    sw = c.cfg["swarm"]
-    periods = np.asarray(sw["sweep_periods_min"]) if setup.maneuver == "fov" else None
-    nom = design_nominal(setup, sw["angles_rad"], periods)
+    sw = c.config.swarm
+    periods = np.asarray(sw.sweep_periods_s) if setup.maneuver == "fov" else None
+    nom = design_nominal(setup, sw.angles_rad, periods)
     return setup, nom
 
 
 def run_sample(c: Campaign, k: int) -> dict:
     """Re-run sample ``k`` of a campaign alone (same numbers as in the store)."""
     setup, nom = _prepare(c)
-    return mc_chunk(k, k, k + 1, setup=setup, nominal=nom, mc=c.cfg["monte_carlo"],
-                    seed=c.cfg["seed"])
+    return mc_chunk(k, k, k + 1, setup=setup, nominal=nom, mc=c.config.monte_carlo,
+                    seed=c.config.seed)
 
 
 def run_monte_carlo(c: Campaign, out, *, workers=None, scheduler=None, resume=False,
@@ -114,17 +114,17 @@ def run_monte_carlo(c: Campaign, out, *, workers=None, scheduler=None, resume=Fa
     """Kind ``monte-carlo``: chunked, resumable, on dask (SPEC section 8)."""
     setup, nom = _prepare(c)
     print(f"body: {setup.body.note}", file=sys.stderr, flush=True)
-    mc = c.cfg["monte_carlo"]
-    n = mc["samples"]
+    mc = c.config.monte_carlo
+    n = mc.samples
     template = mc_template(setup, nom, n)
     fn = functools.partial(mc_chunk, setup=setup, nominal=nom.for_tasks(), mc=mc,
-                           seed=c.cfg["seed"])
+                           seed=c.config.seed)
     attrs = datasets.base_attrs(c, setup)
     for key in ("config", "config_hash"):
         attrs.pop(key)
     attrs["dispersion_order"] = list(DISPERSION_ORDER)  # fixes the draw order
     summary = run_campaign(out, template, fn, config=resolved_config(c),
-                           campaign_seed=c.cfg["seed"], chunk_size=c.cfg["run"]["chunk_size"],
+                           campaign_seed=c.config.seed, chunk_size=c.config.run.chunk_size,
                            attrs=attrs, resume=resume,
                            workers=workers, scheduler=scheduler, cluster=cluster,
                            slurm_config=slurm_config, progress=progress)

@@ -44,7 +44,7 @@ def run_file(path, *, out=None, overrides=None, workers=None, scheduler=None, re
 def _run(c: Campaign, *, out, workers, scheduler, resume, cluster, slurm_config,
          progress) -> Path:
     out = Path(out) if out else Path(Path(c.source.path).stem + ".zarr")
-    workers = workers if workers is not None else c.cfg["run"]["workers"]
+    workers = workers if workers is not None else c.config.run.workers
     kind = KINDS[c.kind]
     run = kind.runner()
     exec_kw = dict(workers=workers, scheduler=scheduler, cluster=cluster,
@@ -53,7 +53,7 @@ def _run(c: Campaign, *, out, workers, scheduler, resume, cluster, slurm_config,
         run(c, out, resume=resume, progress=progress, **exec_kw)
         return out
     out.absolute().parent.mkdir(parents=True, exist_ok=True)
-    config, seed = resolved_config(c), c.cfg["seed"]
+    config, seed = resolved_config(c), c.config.seed
     with StoreLock(out):
         if check_existing(out, config=config, campaign_seed=seed, resume=resume):
             _log(f"{out}: already complete for this config; nothing to do")

@@ -1,6 +1,10 @@
 """The campaign file schema (SPEC sections 7-9), validated once at load.
 
-Tables and their keys, in the file's units (converted to SI here):
+One mechanism (:class:`ideas_hpc.schema.Field`) validates every table once
+into a frozen dataclass with SI values under SI names (:class:`CampaignConfig`:
+``c.config.instrument.aperture_m``, ``c.config.design.p_min_s``); the file
+keys keep their user units (``aperture_cm``) and errors name them with the
+file and line. Tables and their keys, in the file's units (converted to SI here):
 
 ``kind`` (``flyby``, ``design-nadir``, ``design-fov``, ``monte-carlo``), ``seed``.
 
@@ -55,8 +59,8 @@ from typing import Any
 
 from ..config import CampaignSource, load_campaign
 from ..errors import InputError
-from ..schema import Field, validate, with_defaults
-from ..units import DEG
+from ..schema import Field, to_typed, typed_table, validate, with_defaults
+from ..units import DEG, KM, MINUTE
 from .kinds import KINDS as REGISTRY
 
 KINDS = tuple(REGISTRY)
@@ -70,27 +74,31 @@ BODY = {
 
 INSTRUMENT = {
     "ground_resolution_m": Field("float", 1.0, lo=0, lo_open=True),
-    "aperture_cm": Field("float", 8.0, to_si=1e-2, lo=0, lo_open=True),
-    "wavelength_um": Field("float", 0.55, to_si=1e-6, lo=0, lo_open=True),
-    "min_elevation_deg": Field("float", 5.0, to_si=DEG, lo=0, hi=90, hi_open=True),
-    "near_field_mm": Field("float", 0.1, to_si=1e-3, lo=0, lo_open=True),
+    "aperture_cm": Field("float", 8.0, si="aperture_m", to_si=1e-2, lo=0, lo_open=True),
+    "wavelength_um": Field("float", 0.55, si="wavelength_m", to_si=1e-6, lo=0, lo_open=True),
+    "min_elevation_deg": Field("float", 5.0, si="min_elevation_rad",
+                               to_si=DEG, lo=0, hi=90, hi_open=True),
+    "near_field_mm": Field("float", 0.1, si="near_field_m", to_si=1e-3, lo=0, lo_open=True),
     "image_rate_hz": Field("float", 5.0, lo=0, lo_open=True),
-    "half_angle_deg": Field("float", None, nullable=True, to_si=DEG, lo=0, hi=90,
+    "half_angle_deg": Field("float", None, nullable=True, si="half_angle_rad",
+                            to_si=DEG, lo=0, hi=90,
                             lo_open=True, hi_open=True),
-    "pixel_pitch_um": Field("float", None, nullable=True, to_si=1e-6, lo=0, lo_open=True,
+    "pixel_pitch_um": Field("float", None, nullable=True, si="pixel_pitch_m",
+                            to_si=1e-6, lo=0, lo_open=True,
                             doc="detector pixel pitch (with focal_length_mm: the quality "
                                 "pass uses pitch/focal length instead of lambda/D)"),
-    "focal_length_mm": Field("float", None, nullable=True, to_si=1e-3, lo=0, lo_open=True),
+    "focal_length_mm": Field("float", None, nullable=True, si="focal_length_m",
+                             to_si=1e-3, lo=0, lo_open=True),
 }
 
 FLYBY = {
     "configuration": Field("str", "ring", choices=("ring", "helix")),
     "t0_s": Field("float", 0.0),
     "tf_s": Field("float", 600.0),
-    "z_start_km": Field("float", -30.0, to_si=1e3),
-    "z_stop_km": Field("float", 30.0, to_si=1e3),
-    "helix_rise_km": Field("float", 0.0, to_si=1e3),
-    "d_sep_km": Field("float", None, nullable=True, to_si=1e3, lo=0, lo_open=True),
+    "z_start_km": Field("float", -30.0, si="z_start_m", to_si=1e3),
+    "z_stop_km": Field("float", 30.0, si="z_stop_m", to_si=1e3),
+    "helix_rise_km": Field("float", 0.0, si="helix_rise_m", to_si=1e3),
+    "d_sep_km": Field("float", None, nullable=True, si="d_sep_m", to_si=1e3, lo=0, lo_open=True),
     "tolerance_m": Field("float", 0.01, lo=0, lo_open=True),
     "max_iterations": Field("int", 25, lo=1),
     "dt_s": Field("float", 0.1, lo=0, lo_open=True),
@@ -101,8 +109,9 @@ FLYBY = {
 
 SWARM = {
     "angles_rad": Field("floats", None, nullable=True, lo=-10.0, hi=10.0),
-    "sweep_periods_min": Field("floats", None, nullable=True, to_si=60.0, lo=0, lo_open=True),
-    "min_separation_km": Field("float", 1.0, to_si=1e3, lo=0, lo_open=True,
+    "sweep_periods_min": Field("floats", None, nullable=True, si="sweep_periods_s",
+                               to_si=60.0, lo=0, lo_open=True),
+    "min_separation_km": Field("float", 1.0, si="min_separation_m", to_si=1e3, lo=0, lo_open=True,
                                doc="closest allowed distance between two spacecraft"),
 }
 
@@ -110,13 +119,14 @@ ATTITUDE = {
     "mode": Field("str", "ideal", choices=("ideal", "simulated")),
     "maneuver": Field("str", "nadir", choices=("nadir", "fov")),
     "decimate": Field("int", 10, lo=1),
-    "theta_max_deg": Field("float", None, nullable=True, to_si=DEG, lo=0, lo_open=True, hi=90),
+    "theta_max_deg": Field("float", None, nullable=True, si="theta_max_rad",
+                           to_si=DEG, lo=0, lo_open=True, hi=90),
 }
 
 DESIGN = {
     "method": Field("str", "exact", choices=("exact", "ga"),
                     doc="design-nadir: exact integer programme or the paper's GA"),
-    "angle_step_deg": Field("float", 0.5, to_si=DEG, lo=0, lo_open=True, hi=90,
+    "angle_step_deg": Field("float", 0.5, si="grid_step_rad", to_si=DEG, lo=0, lo_open=True, hi=90,
                             doc="exact designer's grid of candidate swarm angles"),
     "time_limit_s": Field("float", 60.0, lo=0, lo_open=True,
                           doc="exact designer: return the best design so far with its gap"),
@@ -128,9 +138,9 @@ DESIGN = {
     "n_max": Field("int", 20, lo=1, hi=200),
     "eps_tol_pct": Field("float", 0.1, lo=0, hi=100),
     "angle_step_rad": Field("float", 0.01, lo=0, hi=1.0),
-    "p_min_min": Field("float", 0.3, to_si=60.0, lo=0, lo_open=True),
-    "p_max_min": Field("float", 10.0, to_si=60.0, lo=0, lo_open=True),
-    "period_step_min": Field("float", 0.1, to_si=60.0, lo=0),
+    "p_min_min": Field("float", 0.3, si="p_min_s", to_si=60.0, lo=0, lo_open=True),
+    "p_max_min": Field("float", 10.0, si="p_max_s", to_si=60.0, lo=0, lo_open=True),
+    "period_step_min": Field("float", 0.1, si="period_step_s", to_si=60.0, lo=0),
     "parents": Field("int", None, nullable=True, lo=2),
     "elitism": Field("int", 2, lo=0),
     "mutation_probability": Field("float", 0.1, lo=0, hi=1),
@@ -150,10 +160,11 @@ MC_SCHEMA = {
     "reflectivity_min": Field("float", 0.6, lo=0, hi=1),
     "reflectivity_max": Field("float", 0.6, lo=0, hi=1),
     "sigma_position_m": Field("float", 0.0, lo=0, doc="1-sigma initial position error per axis"),
-    "sigma_velocity_mm_s": Field("float", 0.0, to_si=1e-3, lo=0),
+    "sigma_velocity_mm_s": Field("float", 0.0, si="sigma_velocity_m_s", to_si=1e-3, lo=0),
     "failures_k": Field("int", 0, lo=0, doc="exactly k of N spacecraft lost"),
     "failure_probability": Field("float", 0.0, lo=0, hi=1, doc="per-spacecraft loss probability"),
-    "sigma_misalignment_deg": Field("float", 0.0, to_si=DEG, lo=0, hi=90),
+    "sigma_misalignment_deg": Field("float", 0.0, si="sigma_misalignment_rad",
+                                    to_si=DEG, lo=0, hi=90),
 }
 
 RUN = {
@@ -180,18 +191,57 @@ SCHEMA = {
 }
 
 
+Body = typed_table("Body", BODY, __name__)
+Instrument = typed_table("Instrument", INSTRUMENT, __name__)
+Flyby = typed_table("Flyby", FLYBY, __name__)
+Swarm = typed_table("Swarm", SWARM, __name__)
+Attitude = typed_table("Attitude", ATTITUDE, __name__)
+Design = typed_table("Design", DESIGN, __name__)
+MonteCarlo = typed_table("MonteCarlo", MC_SCHEMA, __name__)
+Run = typed_table("Run", RUN, __name__)
+TABLES = {"body": Body, "instrument": Instrument, "flyby": Flyby, "swarm": Swarm,
+          "attitude": Attitude, "design": Design, "monte_carlo": MonteCarlo, "run": Run}
+
+
+@dataclass(frozen=True)
+class CampaignConfig:
+    """The validated campaign: one frozen table per ``[table]``, SI values under SI names
+    (``config.instrument.aperture_m``, ``config.design.p_min_s``). The model tables
+    (``[dynamics]``, ``[spacecraft]``, ``[controller]``, ``[coverage]``) are built
+    by their modules into :attr:`Campaign.extras`."""
+
+    kind: str
+    seed: int
+    description: str
+    body: Any
+    instrument: Any
+    flyby: Any
+    swarm: Any
+    attitude: Any
+    design: Any
+    monte_carlo: Any
+    run: Any
+
+
+def typed_config(values: dict) -> CampaignConfig:
+    """:class:`CampaignConfig` from :func:`~ideas_hpc.schema.validate`'s output."""
+    tables = {k: to_typed(cls, values[k], SCHEMA[k]) for k, cls in TABLES.items()}
+    return CampaignConfig(kind=values["kind"], seed=values["seed"],
+                          description=values["description"], **tables)
+
+
 @dataclass
 class Campaign:
-    """A validated campaign: SI values (``cfg``), the raw data and its source."""
+    """A validated campaign: its typed config, the raw data and its source."""
 
-    cfg: dict
+    config: CampaignConfig
     raw: dict
     source: CampaignSource
     extras: dict = field(default_factory=dict)
 
     @property
     def kind(self) -> str:
-        return self.cfg["kind"]
+        return self.config.kind
 
     def error(self, message: str, dotted: str) -> InputError:
         return self.source.error(message, dotted)
@@ -206,46 +256,42 @@ def _sub_table(cfg: dict, key: str) -> dict:
     return v
 
 
-def _cross_checks(cfg: dict) -> None:
-    fb = cfg["flyby"]
-    if fb["tf_s"] <= fb["t0_s"]:
-        raise InputError(f"must be > flyby.t0_s ({fb['t0_s']:g} s)", field="flyby.tf_s")
-    if fb["z_start_km"] == fb["z_stop_km"]:
-        raise InputError(f"equals flyby.z_start_km ({fb['z_start_km'] / 1e3:g} km): the flyby "
+def _cross_checks(c: CampaignConfig) -> None:
+    fb, d, mc, sw = c.flyby, c.design, c.monte_carlo, c.swarm
+    if fb.tf_s <= fb.t0_s:
+        raise InputError(f"must be > flyby.t0_s ({fb.t0_s:g} s)", field="flyby.tf_s")
+    if fb.z_start_m == fb.z_stop_m:
+        raise InputError(f"equals flyby.z_start_km ({fb.z_start_m / KM:g} km): the flyby "
                          "would start and end at the same point", field="flyby.z_stop_km")
-    d = cfg["design"]
-    if d["p_min_min"] >= d["p_max_min"]:
-        raise InputError(f"must be > design.p_min_min ({d['p_min_min'] / 60:g} min)",
+    if d.p_min_s >= d.p_max_s:
+        raise InputError(f"must be > design.p_min_min ({d.p_min_s / MINUTE:g} min)",
                          field="design.p_max_min")
-    mc = cfg["monte_carlo"]
-    if mc["reflectivity_min"] > mc["reflectivity_max"]:
+    if mc.reflectivity_min > mc.reflectivity_max:
         raise InputError("must be >= monte_carlo.reflectivity_min",
                          field="monte_carlo.reflectivity_max")
-    if d["failures_tolerated"] >= d["n_max"]:
-        raise InputError(f"must be < design.n_max ({d['n_max']}): {d['failures_tolerated']} "
+    if d.failures_tolerated >= d.n_max:
+        raise InputError(f"must be < design.n_max ({d.n_max}): {d.failures_tolerated} "
                          "failures would leave no spacecraft", field="design.failures_tolerated")
-    sw = cfg["swarm"]
-    if cfg["kind"] in ("flyby", "monte-carlo", "design-fov"):
-        if not sw["angles_rad"] and not (cfg["kind"] == "design-fov"
-                                         and cfg["design"]["nadir_store"]):
-            raise InputError(f"is required for kind {cfg['kind']!r}", field="swarm.angles_rad")
-        if (sw["sweep_periods_min"] is not None and sw["angles_rad"] is not None
-                and len(sw["sweep_periods_min"]) != len(sw["angles_rad"])):
-            raise InputError(f"has {len(sw['sweep_periods_min'])} periods for "
-                             f"{len(sw['angles_rad'])} spacecraft", field="swarm.sweep_periods_min")
-    if cfg["attitude"]["maneuver"] == "fov" and cfg["kind"] in ("flyby", "monte-carlo"):
-        if sw["sweep_periods_min"] is None:
+    if c.kind in ("flyby", "monte-carlo", "design-fov"):
+        if not sw.angles_rad and not (c.kind == "design-fov" and d.nadir_store):
+            raise InputError(f"is required for kind {c.kind!r}", field="swarm.angles_rad")
+        if (sw.sweep_periods_s is not None and sw.angles_rad is not None
+                and len(sw.sweep_periods_s) != len(sw.angles_rad)):
+            raise InputError(f"has {len(sw.sweep_periods_s)} periods for "
+                             f"{len(sw.angles_rad)} spacecraft", field="swarm.sweep_periods_min")
+    if c.attitude.maneuver == "fov" and c.kind in ("flyby", "monte-carlo"):
+        if sw.sweep_periods_s is None:
             raise InputError("is required for attitude.maneuver = 'fov'",
                              field="swarm.sweep_periods_min")
-    if mc["failures_k"] and sw["angles_rad"] and mc["failures_k"] > len(sw["angles_rad"]):
-        raise InputError(f"cannot exceed the swarm size {len(sw['angles_rad'])}",
+    if mc.failures_k and sw.angles_rad and mc.failures_k > len(sw.angles_rad):
+        raise InputError(f"cannot exceed the swarm size {len(sw.angles_rad)}",
                          field="monte_carlo.failures_k")
-    step = fb["dt_s"]
-    img = 1.0 / cfg["instrument"]["image_rate_hz"]
+    step = fb.dt_s
+    img = 1.0 / c.instrument.image_rate_hz
     if abs(img / step - round(img / step)) > 1e-9:
         raise InputError(f"attitude step {step:g} s does not divide the image period {img:g} s",
                          field="flyby.dt_s")
-    span = (fb["tf_s"] - fb["t0_s"]) / step
+    span = (fb.tf_s - fb.t0_s) / step
     if abs(span - round(span)) > 1e-6:
         raise InputError(f"step {step:g} s does not divide the flyby duration", field="flyby.dt_s")
 
@@ -253,47 +299,45 @@ def _cross_checks(cfg: dict) -> None:
 def validate_campaign(source: CampaignSource) -> Campaign:
     """Validate a loaded source; every error carries the field, file and line."""
     try:
-        cfg = validate(source.data, SCHEMA)
-        _cross_checks(cfg)
-        extras = build_models(cfg)
+        values = validate(source.data, SCHEMA)
+        config = typed_config(values)
+        _cross_checks(config)
+        extras = build_models(source.data, config)
     except InputError as exc:
         raise source.locate(exc) from None
-    return Campaign(cfg=cfg, raw=source.data, source=source, extras=extras)
+    return Campaign(config=config, raw=source.data, source=source, extras=extras)
 
 
-def build_models(cfg: dict) -> dict:
+def build_models(raw: dict, config: CampaignConfig) -> dict:
     """Build the sub-models whose schemas live with their modules.
 
     The ``[dynamics]``, ``[spacecraft]``, ``[controller]`` and ``[coverage]``
     tables are validated by the modules that own them, so a field is checked
-    in one place only.
+    in one place only. They are read in the file's units, as written.
     """
     from ..attitude import gains_from_config, spacecraft_from_config
     from ..mapping import coverage_options_from_config
     from ..trajectory import force_model_from_config
 
-    cov = dict(_sub_table(cfg, "coverage"))
-    # The ground-resolution test uses the instrument's lambda and D unless the
-    # coverage table says otherwise (one source of truth for the camera).
-    inst = cfg["instrument"]
-    cov.setdefault("wavelength_um", inst["wavelength_um"] * 1e6)
-    cov.setdefault("aperture_cm", inst["aperture_cm"] * 1e2)
-    if inst["pixel_pitch_um"] is not None:
-        cov.setdefault("pixel_pitch_um", inst["pixel_pitch_um"] * 1e6)
-    if inst["focal_length_mm"] is not None:
-        cov.setdefault("focal_length_mm", inst["focal_length_mm"] * 1e3)
-    ctrl = _sub_table(cfg, "controller")
+    cov = dict(_sub_table(raw, "coverage"))
+    # The ground-resolution test and the quality pass use the instrument's camera
+    # unless the coverage table says otherwise (one source of truth for the camera).
+    inst = with_defaults(raw.get("instrument"), INSTRUMENT)
+    for key in ("wavelength_um", "aperture_cm", "pixel_pitch_um", "focal_length_mm"):
+        if inst.get(key) is not None:
+            cov.setdefault(key, inst[key])
+    ctrl = _sub_table(raw, "controller")
     if not ctrl:
-        ctrl = {"preset": "fov" if cfg["attitude"]["maneuver"] == "fov" else "np"}
+        ctrl = {"preset": "fov" if config.attitude.maneuver == "fov" else "np"}
     coverage = coverage_options_from_config(cov, prefix="coverage.")
-    if coverage.requirement and cfg["kind"] in ("design-nadir", "design-fov"):
+    if coverage.requirement and config.kind in ("design-nadir", "design-fov"):
         # the designers still maximise the seen fraction (issue 14 item 4 is open):
         # refuse rather than report a design that ignores the requirement
-        raise InputError(f"a coverage requirement is not honoured by {cfg['kind']!r} yet; "
+        raise InputError(f"a coverage requirement is not honoured by {config.kind!r} yet; "
                          "use it in flyby and monte-carlo campaigns", field="coverage")
     return {
-        "force_model": force_model_from_config(_sub_table(cfg, "dynamics"), prefix="dynamics."),
-        "spacecraft": spacecraft_from_config(_sub_table(cfg, "spacecraft"), prefix="spacecraft."),
+        "force_model": force_model_from_config(_sub_table(raw, "dynamics"), prefix="dynamics."),
+        "spacecraft": spacecraft_from_config(_sub_table(raw, "spacecraft"), prefix="spacecraft."),
         "gains": gains_from_config(ctrl, prefix="controller."),
         "coverage": coverage,
     }

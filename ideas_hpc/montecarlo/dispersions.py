@@ -53,7 +53,7 @@ class StoreVar:
 class Dispersion:
     """One declared dispersion.
 
-    ``draw(rng, n, mc, setup, theta)`` returns the sample's values of
+    ``draw(rng, n, mc, setup, theta)`` (``mc``: the typed ``[monte_carlo]`` table) returns the sample's values of
     ``variables`` (SI, per spacecraft where the dims say so) from generator
     ``rng``; ``perturb(values)`` returns the
     :class:`~ideas_hpc.flyby.Perturbation` fields it sets.
@@ -67,7 +67,7 @@ class Dispersion:
 
 
 def _attitude(rng, n, mc, setup, theta, *, seed, k):
-    if mc["attitude_dispersion"]:
+    if mc.attitude_dispersion:
         s0, w0, W0 = initial_conditions(seed, k, n)
     else:
         s0, w0, W0 = reference_start(setup.body.params.spin_rate, theta)
@@ -91,31 +91,31 @@ def reference_start(spin_rate: float, theta: np.ndarray):
 def _gravity(rng, n, mc, setup, theta):
     z = rng.standard_normal(3)
     p = setup.body.params
-    return {"c20": p.c20 * (1.0 + mc["sigma_c20_pct"] / 100.0 * z[0]),
-            "c22": p.c22 * (1.0 + mc["sigma_c22_pct"] / 100.0 * z[1]),
-            "mu": p.mu * (1.0 + mc["sigma_gm_pct"] / 100.0 * z[2])}
+    return {"c20": p.c20 * (1.0 + mc.sigma_c20_pct / 100.0 * z[0]),
+            "c22": p.c22 * (1.0 + mc.sigma_c22_pct / 100.0 * z[1]),
+            "mu": p.mu * (1.0 + mc.sigma_gm_pct / 100.0 * z[2])}
 
 
 def _reflectivity(rng, n, mc, setup, theta):
     u = rng.uniform(0.0, 1.0)
-    lo, hi = mc["reflectivity_min"], mc["reflectivity_max"]
+    lo, hi = mc.reflectivity_min, mc.reflectivity_max
     return {"reflectivity": lo + (hi - lo) * u}
 
 
 def _state(rng, n, mc, setup, theta):
     dr = rng.standard_normal((n, 3))
     dv = rng.standard_normal((n, 3))
-    return {"position_error": mc["sigma_position_m"] * dr,
-            "velocity_error": mc["sigma_velocity_mm_s"] * dv}
+    return {"position_error": mc.sigma_position_m * dr,
+            "velocity_error": mc.sigma_velocity_m_s * dv}
 
 
 def _failures(rng, n, mc, setup, theta):
     perm = rng.permutation(n)
     bern = rng.uniform(0.0, 1.0, n)
     active = np.ones(n, dtype=bool)
-    if mc["failures_k"]:
-        active[perm[:mc["failures_k"]]] = False
-    active &= bern >= mc["failure_probability"]
+    if mc.failures_k:
+        active[perm[:mc.failures_k]] = False
+    active &= bern >= mc.failure_probability
     return {"active": active, "n_failed": int((~active).sum())}
 
 
@@ -123,7 +123,7 @@ def _misalignment(rng, n, mc, setup, theta):
     axes = rng.standard_normal((n, 3))
     angles = rng.standard_normal(n)
     axes /= np.linalg.norm(axes, axis=1)[:, None]
-    return {"misalignment_prv": axes * (mc["sigma_misalignment_deg"] * angles)[:, None]}
+    return {"misalignment_prv": axes * (mc.sigma_misalignment_rad * angles)[:, None]}
 
 
 SC3 = ("spacecraft", "axis")
@@ -163,8 +163,11 @@ DISPERSION_ORDER = tuple(d.name for d in DISPERSIONS)
 DISPERSION_VARS: tuple[StoreVar, ...] = tuple(v for d in DISPERSIONS for v in d.variables)
 
 
-def draw_sample(mc: dict, seed: int, k: int, theta: np.ndarray, setup) -> tuple[dict, dict]:
+def draw_sample(mc, seed: int, k: int, theta: np.ndarray, setup) -> tuple[dict, dict]:
     """Every dispersion of sample ``k``, in declared order.
+
+    ``mc`` is the validated ``[monte_carlo]`` table
+    (:class:`~ideas_hpc.campaign.schema.MonteCarlo`: SI values under SI names).
 
     Returns
     -------

@@ -45,7 +45,7 @@ class Verification:
                 f"failure) in {self.wall_s:.1f} s")
 
 
-def _samples(ks, *, setup: FlybySetup, nominal: Nominal, mc: dict, seed: int):
+def _samples(ks, *, setup: FlybySetup, nominal: Nominal, mc, seed: int):
     out = []
     for k in ks:
         values, pert = draw_sample(mc, seed, k, nominal.theta, setup)
@@ -54,7 +54,7 @@ def _samples(ks, *, setup: FlybySetup, nominal: Nominal, mc: dict, seed: int):
     return out
 
 
-def verify_swarm(setup: FlybySetup, theta, periods, *, mc: dict, seed: int, n_samples: int,
+def verify_swarm(setup: FlybySetup, theta, periods, *, mc, seed: int, n_samples: int,
                  threshold: float, client=None, chunk_size: int = 8) -> Verification:
     """Fly ``n_samples`` dispersed copies of the swarm ``theta`` (rad).
 
@@ -64,8 +64,8 @@ def verify_swarm(setup: FlybySetup, theta, periods, *, mc: dict, seed: int, n_sa
     theta : (N,) rad
     periods : (N,) s or None
         Sweep periods (FoV sweeping).
-    mc : dict
-        The validated ``[monte_carlo]`` table (SI).
+    mc : MonteCarlo
+        The validated ``[monte_carlo]`` table (:class:`~ideas_hpc.campaign.schema.MonteCarlo`, SI).
     seed : int
         Campaign seed; sample ``k`` draws from ``SeedSequence(seed, spawn_key=(k,))``.
     n_samples : int
