@@ -32,6 +32,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import InputError
+from .schema import Field, number, validate
+from .units import CM, DEG, MM, UM
 
 _MODES = ("paper", "exact")
 _BOOLS = ("occlusion", "illumination", "quality", "require_lit", "require_stereo")
@@ -170,37 +172,34 @@ class CoverageOptions:
 
 
 def _finite(value, field: str) -> float:
-    if isinstance(value, bool):
-        raise InputError(f"must be a number, got {value!r}", field=field)
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"must be a number, got {value!r}", field=field) from None
-    if not math.isfinite(x):
-        raise InputError(f"must be finite, got {value!r}", field=field)
-    return x
+    return number(value, field)
 
 
-# config key -> (option name, factor to SI); None factor means a non-numeric value
-_CONFIG_KEYS = {
-    "mode": ("mode", None),
-    "occlusion": ("occlusion", None),
-    "illumination": ("illumination", None),
-    "min_elevation_deg": ("min_elevation", math.pi / 180.0),
-    "max_ground_resolution_m": ("max_ground_resolution", 1.0),
-    "wavelength_um": ("wavelength", 1e-6),
-    "aperture_cm": ("aperture", 1e-2),
-    "pixel_pitch_um": ("pixel_pitch", 1e-6),
-    "focal_length_mm": ("focal_length", 1e-3),
-    "quality": ("quality", None),
-    "require_lit": ("require_lit", None),
-    "max_resolution_m": ("max_resolution", 1.0),
-    "max_emission_deg": ("max_emission", math.pi / 180.0),
-    "max_incidence_deg": ("max_incidence", math.pi / 180.0),
-    "max_phase_deg": ("max_phase", math.pi / 180.0),
-    "require_stereo": ("require_stereo", None),
-    "stereo_min_deg": ("stereo_min", math.pi / 180.0),
-    "stereo_max_deg": ("stereo_max", math.pi / 180.0),
+def _opt(kind: str, si: str, to_si: float = 1.0, **kw) -> Field:
+    # None: not given, so CoverageOptions keeps its own default (defaults live there only)
+    return Field(kind, None, nullable=True, si=si, to_si=to_si, **kw)
+
+
+#: The ``[coverage]`` table: file keys in user units -> CoverageOptions fields (SI).
+COVERAGE_SCHEMA = {
+    "mode": _opt("str", "mode", choices=_MODES),
+    "occlusion": _opt("bool", "occlusion"),
+    "illumination": _opt("bool", "illumination"),
+    "min_elevation_deg": _opt("float", "min_elevation", DEG),
+    "max_ground_resolution_m": _opt("float", "max_ground_resolution"),
+    "wavelength_um": _opt("float", "wavelength", UM),
+    "aperture_cm": _opt("float", "aperture", CM),
+    "pixel_pitch_um": _opt("float", "pixel_pitch", UM),
+    "focal_length_mm": _opt("float", "focal_length", MM),
+    "quality": _opt("bool", "quality"),
+    "require_lit": _opt("bool", "require_lit"),
+    "max_resolution_m": _opt("float", "max_resolution"),
+    "max_emission_deg": _opt("float", "max_emission", DEG),
+    "max_incidence_deg": _opt("float", "max_incidence", DEG),
+    "max_phase_deg": _opt("float", "max_phase", DEG),
+    "require_stereo": _opt("bool", "require_stereo"),
+    "stereo_min_deg": _opt("float", "stereo_min", DEG),
+    "stereo_max_deg": _opt("float", "stereo_max", DEG),
 }
 
 
@@ -216,29 +215,11 @@ def coverage_options_from_config(table: dict, prefix: str = "coverage.") -> Cove
     ``stereo_max_deg``. Unknown keys and bad values raise :class:`InputError`
     naming ``prefix + key``.
     """
-    if table is None:
-        table = {}
-    if not isinstance(table, dict):
-        raise InputError(f"must be a table, got {type(table).__name__}",
-                         field=prefix.rstrip(".") or "coverage")
-    kw = {}
-    for key, value in table.items():
-        if key not in _CONFIG_KEYS:
-            raise InputError(f"unknown key; known keys: {', '.join(sorted(_CONFIG_KEYS))}",
-                             field=prefix + key)
-        name, factor = _CONFIG_KEYS[key]
-        if factor is None:
-            if name in _BOOLS and not isinstance(value, bool):
-                raise InputError(f"must be true or false, got {value!r}", field=prefix + key)
-            if name == "mode" and value not in _MODES:
-                raise InputError(f"must be one of {_MODES}, got {value!r}", field=prefix + key)
-            kw[name] = value
-        elif value is None:
-            kw[name] = None
-        else:
-            kw[name] = _finite(value, prefix + key) * factor
+    values = validate(table, COVERAGE_SCHEMA, prefix)   # one mechanism for every table
+    given = table or {}
+    kw = {COVERAGE_SCHEMA[k].si_name(k): values[k] for k in COVERAGE_SCHEMA if k in given}
     try:
         return CoverageOptions(**kw)
     except InputError as exc:
-        inv = {v[0]: k for k, v in _CONFIG_KEYS.items()}
+        inv = {f.si_name(k): k for k, f in COVERAGE_SCHEMA.items()}
         raise InputError(exc.message, field=prefix + inv.get(exc.field, exc.field)) from None

@@ -41,6 +41,7 @@ from .core import forces as _cf
 from .core.gravity import polyhedron_precompute
 from .core.harmonics import sh_derivative_tables, sh_unnormalise
 from .errors import InputError
+from .schema import number
 from .params import PhysicalParams
 
 #: 30 x 10 x 10 cm box (SPEC section 4): total surface area / 4, m^2.
@@ -48,10 +49,8 @@ BOX_AREA = (4 * 0.30 * 0.10 + 2 * 0.10 * 0.10) / 4.0
 
 
 def _number(v, field, lo=-math.inf, hi=math.inf, lo_open=False):
-    if isinstance(v, bool) or not isinstance(v, (int, float, np.floating, np.integer)) \
-            or not math.isfinite(v) or v < lo or (lo_open and v == lo) or v > hi:
-        rng = f"{'>' if lo_open else '>='} {lo:g}" + ("" if hi == math.inf else f" and <= {hi:g}")
-        raise InputError(f"must be a finite number {rng}, got {v!r}", field=field)
+    number(v, field, lo=None if lo == -math.inf else lo, hi=None if hi == math.inf else hi,
+           lo_open=lo_open)
 
 
 @contextlib.contextmanager

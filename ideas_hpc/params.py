@@ -12,6 +12,7 @@ from dataclasses import asdict, dataclass
 
 from .constants import AU, G
 from .errors import InputError
+from .schema import number
 from .units import DEG, HOUR, KM
 
 
@@ -89,12 +90,7 @@ _KEYS = {
 
 
 def _num(table, key, prefix):
-    v = table[key]
-    if isinstance(v, bool) or not isinstance(v, (int, float)):
-        raise InputError(f"must be a number, got {v!r}", field=f"{prefix}{key}")
-    if not math.isfinite(float(v)):
-        raise InputError(f"must be finite, got {v!r}", field=f"{prefix}{key}")
-    return float(v)
+    return number(table[key], f"{prefix}{key}")
 
 
 def params_from_mapping(table: dict, *, name: str = "custom", prefix: str = "") -> PhysicalParams:

@@ -12,6 +12,8 @@ import math
 from dataclasses import dataclass, make_dataclass
 from typing import Any
 
+import numpy as np
+
 from .errors import InputError
 
 REQUIRED = object()
@@ -66,13 +68,27 @@ def _range_msg(f: Field) -> str:
     return " and ".join(p for p in (lo, hi) if p)
 
 
-def _check_number(x: float, f: Field, name: str) -> None:
+def number(value: Any, field: str, *, lo: float | None = None, hi: float | None = None,
+           lo_open: bool = False, hi_open: bool = False) -> float:
+    """The one numeric check of every configuration value: a real, finite number in range.
+
+    Raises :class:`InputError` naming ``field``; returns ``float(value)``.
+    """
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise InputError(f"must be a number, got {value!r}", field=field)
+    x = float(value)
     if not math.isfinite(x):
-        raise InputError(f"must be finite, got {x!r}", field=name)
-    bad = ((f.lo is not None and (x <= f.lo if f.lo_open else x < f.lo))
-           or (f.hi is not None and (x >= f.hi if f.hi_open else x > f.hi)))
+        raise InputError(f"must be finite, got {value!r}", field=field)
+    bad = ((lo is not None and (x <= lo if lo_open else x < lo))
+           or (hi is not None and (x >= hi if hi_open else x > hi)))
     if bad:
-        raise InputError(f"must be {_range_msg(f)}, got {x:g}", field=name)
+        f = Field("float", lo=lo, hi=hi, lo_open=lo_open, hi_open=hi_open)
+        raise InputError(f"must be {_range_msg(f)}, got {x:g}", field=field)
+    return x
+
+
+def _check_number(x: float, f: Field, name: str) -> None:
+    number(x, name, lo=f.lo, hi=f.hi, lo_open=f.lo_open, hi_open=f.hi_open)
 
 
 def _coerce(value: Any, f: Field, name: str) -> Any:
