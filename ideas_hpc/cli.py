@@ -26,14 +26,16 @@ def _add_size(sub) -> None:
     g.add_argument("--r-av", type=float, metavar="KM", help="given mean radius, km")
     g.add_argument("--paper", action="store_true",
                    help="use the paper's R_max/R_min (17.670/3.222 km) to reproduce its tables")
-    p.add_argument("--resolution", type=float, default=1.0, metavar="M",
-                   help="ground resolution X, m (default 1)")
-    p.add_argument("--aperture", type=float, default=8.0, metavar="CM",
-                   help="aperture diameter D, cm (default 8)")
-    p.add_argument("--wavelength", type=float, default=0.55, metavar="UM",
-                   help="imaging wavelength, um (default 0.55)")
-    p.add_argument("--elevation", type=float, default=5.0, metavar="DEG",
-                   help="minimum elevation angle, deg (default 5)")
+    from .sizing import INSTRUMENT_DEFAULTS as cam
+
+    p.add_argument("--resolution", type=float, default=cam["ground_resolution_m"], metavar="M",
+                   help=f"ground resolution X, m (default {cam['ground_resolution_m']:g})")
+    p.add_argument("--aperture", type=float, default=cam["aperture_cm"], metavar="CM",
+                   help=f"aperture diameter D, cm (default {cam['aperture_cm']:g})")
+    p.add_argument("--wavelength", type=float, default=cam["wavelength_um"], metavar="UM",
+                   help=f"imaging wavelength, um (default {cam['wavelength_um']:g})")
+    p.add_argument("--elevation", type=float, default=cam["min_elevation_deg"], metavar="DEG",
+                   help=f"minimum elevation angle, deg (default {cam['min_elevation_deg']:g})")
     p.add_argument("--data-path", default=None, help="folder with shape models "
                    "(searched before $IDEAS_HPC_DATA)")
 

@@ -33,6 +33,7 @@ import numpy as np
 
 from .errors import InputError
 from .schema import Field, number, validate
+from .sizing import APERTURE, WAVELENGTH
 from .units import CM, DEG, MM, UM
 
 _MODES = ("paper", "exact")
@@ -78,8 +79,8 @@ class CoverageOptions:
     illumination: bool = False
     min_elevation: float | None = None
     max_ground_resolution: float | None = None
-    wavelength: float = 0.55e-6
-    aperture: float = 0.08
+    wavelength: float = WAVELENGTH
+    aperture: float = APERTURE
     pixel_pitch: float | None = None
     focal_length: float | None = None
     quality: bool = False

@@ -96,7 +96,11 @@ class FlybySetup:
 
 
 def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
-    """Resolve a validated :class:`~ideas_hpc.campaign.schema.Campaign` to a setup."""
+    """Resolve a validated :class:`~ideas_hpc.campaign.schema.Campaign` to a setup.
+
+    ``maneuver`` overrides ``attitude.maneuver`` (the FoV design kind sweeps
+    whatever the file says).
+    """
     cfg = c.config
     b = cfg.body
     params = b.params
@@ -122,8 +126,6 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
                         aperture=inst.aperture_m, wavelength=inst.wavelength_m,
                         min_elevation=inst.min_elevation_rad, near=inst.near_field_m)
     man = maneuver or cfg.attitude.maneuver
-    if cfg.kind == "design-fov":
-        man = "fov"
     eta = inst.half_angle_rad
     if eta is None:
         eta = sizing.eta_fov if man == "fov" else sizing.eta_nadir

@@ -23,15 +23,19 @@ import math
 from dataclasses import asdict, dataclass
 
 from .errors import InputError, positive_number
-from .units import DEG, KM
+from .units import CM, DEG, KM, MM, UM
 
 
-#: Paper Table 3 defaults, SI.
-GROUND_RESOLUTION = 1.0
-APERTURE = 0.08
-WAVELENGTH = 0.55e-6
-MIN_ELEVATION = 5.0 * DEG
-NEAR_FIELD = 1e-4
+#: Paper Table 3 camera, in the units campaign files and the CLI use: the one
+#: place these defaults are written (``[instrument]`` and ``ideas-hpc size`` read them).
+INSTRUMENT_DEFAULTS = {"ground_resolution_m": 1.0, "aperture_cm": 8.0, "wavelength_um": 0.55,
+                       "min_elevation_deg": 5.0, "near_field_mm": 0.1}
+#: The same, SI (converted as a campaign file's values are).
+GROUND_RESOLUTION = INSTRUMENT_DEFAULTS["ground_resolution_m"]
+APERTURE = INSTRUMENT_DEFAULTS["aperture_cm"] * CM
+WAVELENGTH = INSTRUMENT_DEFAULTS["wavelength_um"] * UM
+MIN_ELEVATION = INSTRUMENT_DEFAULTS["min_elevation_deg"] * DEG
+NEAR_FIELD = INSTRUMENT_DEFAULTS["near_field_mm"] * MM
 
 
 @dataclass(frozen=True)

@@ -147,7 +147,7 @@ def run_design(c: Campaign, out: Path, *, workers=None, scheduler=None, cluster=
     """Kinds ``design-nadir`` and ``design-fov``: GA, then a full flyby of the best swarm."""
     from ..engine.cluster import connect
 
-    setup = setup_from_campaign(c)
+    setup = setup_from_campaign(c, maneuver="fov" if c.kind == "design-fov" else None)
     _log(f"body: {setup.body.note}")
     # A targeting failure is the user's to fix: find it here, in one line, rather
     # than as a failed task on every worker (the GA targets these same rings).

@@ -60,7 +60,8 @@ from typing import Any
 from ..config import CampaignSource, load_campaign
 from ..errors import InputError
 from ..schema import Field, to_typed, typed_table, validate, with_defaults
-from ..units import DEG, KM, MINUTE
+from ..units import CM, DEG, KM, MINUTE, MM, UM
+from ..sizing import INSTRUMENT_DEFAULTS as _CAM
 from .kinds import KINDS as REGISTRY
 
 KINDS = tuple(REGISTRY)
@@ -73,32 +74,35 @@ BODY = {
 }
 
 INSTRUMENT = {
-    "ground_resolution_m": Field("float", 1.0, lo=0, lo_open=True),
-    "aperture_cm": Field("float", 8.0, si="aperture_m", to_si=1e-2, lo=0, lo_open=True),
-    "wavelength_um": Field("float", 0.55, si="wavelength_m", to_si=1e-6, lo=0, lo_open=True),
-    "min_elevation_deg": Field("float", 5.0, si="min_elevation_rad",
+    "ground_resolution_m": Field("float", _CAM["ground_resolution_m"], lo=0, lo_open=True),
+    "aperture_cm": Field("float", _CAM["aperture_cm"], si="aperture_m",
+                         to_si=CM, lo=0, lo_open=True),
+    "wavelength_um": Field("float", _CAM["wavelength_um"], si="wavelength_m",
+                           to_si=UM, lo=0, lo_open=True),
+    "min_elevation_deg": Field("float", _CAM["min_elevation_deg"], si="min_elevation_rad",
                                to_si=DEG, lo=0, hi=90, hi_open=True),
-    "near_field_mm": Field("float", 0.1, si="near_field_m", to_si=1e-3, lo=0, lo_open=True),
+    "near_field_mm": Field("float", _CAM["near_field_mm"], si="near_field_m",
+                           to_si=MM, lo=0, lo_open=True),
     "image_rate_hz": Field("float", 5.0, lo=0, lo_open=True),
     "half_angle_deg": Field("float", None, nullable=True, si="half_angle_rad",
                             to_si=DEG, lo=0, hi=90,
                             lo_open=True, hi_open=True),
     "pixel_pitch_um": Field("float", None, nullable=True, si="pixel_pitch_m",
-                            to_si=1e-6, lo=0, lo_open=True,
+                            to_si=UM, lo=0, lo_open=True,
                             doc="detector pixel pitch (with focal_length_mm: the quality "
                                 "pass uses pitch/focal length instead of lambda/D)"),
     "focal_length_mm": Field("float", None, nullable=True, si="focal_length_m",
-                             to_si=1e-3, lo=0, lo_open=True),
+                             to_si=MM, lo=0, lo_open=True),
 }
 
 FLYBY = {
     "configuration": Field("str", "ring", choices=("ring", "helix")),
     "t0_s": Field("float", 0.0),
     "tf_s": Field("float", 600.0),
-    "z_start_km": Field("float", -30.0, si="z_start_m", to_si=1e3),
-    "z_stop_km": Field("float", 30.0, si="z_stop_m", to_si=1e3),
-    "helix_rise_km": Field("float", 0.0, si="helix_rise_m", to_si=1e3),
-    "d_sep_km": Field("float", None, nullable=True, si="d_sep_m", to_si=1e3, lo=0, lo_open=True),
+    "z_start_km": Field("float", -30.0, si="z_start_m", to_si=KM),
+    "z_stop_km": Field("float", 30.0, si="z_stop_m", to_si=KM),
+    "helix_rise_km": Field("float", 0.0, si="helix_rise_m", to_si=KM),
+    "d_sep_km": Field("float", None, nullable=True, si="d_sep_m", to_si=KM, lo=0, lo_open=True),
     "tolerance_m": Field("float", 0.01, lo=0, lo_open=True),
     "max_iterations": Field("int", 25, lo=1),
     "dt_s": Field("float", 0.1, lo=0, lo_open=True),
@@ -110,8 +114,8 @@ FLYBY = {
 SWARM = {
     "angles_rad": Field("floats", None, nullable=True, lo=-10.0, hi=10.0),
     "sweep_periods_min": Field("floats", None, nullable=True, si="sweep_periods_s",
-                               to_si=60.0, lo=0, lo_open=True),
-    "min_separation_km": Field("float", 1.0, si="min_separation_m", to_si=1e3, lo=0, lo_open=True,
+                               to_si=MINUTE, lo=0, lo_open=True),
+    "min_separation_km": Field("float", 1.0, si="min_separation_m", to_si=KM, lo=0, lo_open=True,
                                doc="closest allowed distance between two spacecraft"),
 }
 
@@ -138,9 +142,9 @@ DESIGN = {
     "n_max": Field("int", 20, lo=1, hi=200),
     "eps_tol_pct": Field("float", 0.1, lo=0, hi=100),
     "angle_step_rad": Field("float", 0.01, lo=0, hi=1.0),
-    "p_min_min": Field("float", 0.3, si="p_min_s", to_si=60.0, lo=0, lo_open=True),
-    "p_max_min": Field("float", 10.0, si="p_max_s", to_si=60.0, lo=0, lo_open=True),
-    "period_step_min": Field("float", 0.1, si="period_step_s", to_si=60.0, lo=0),
+    "p_min_min": Field("float", 0.3, si="p_min_s", to_si=MINUTE, lo=0, lo_open=True),
+    "p_max_min": Field("float", 10.0, si="p_max_s", to_si=MINUTE, lo=0, lo_open=True),
+    "period_step_min": Field("float", 0.1, si="period_step_s", to_si=MINUTE, lo=0),
     "parents": Field("int", None, nullable=True, lo=2),
     "elitism": Field("int", 2, lo=0),
     "mutation_probability": Field("float", 0.1, lo=0, hi=1),
@@ -160,7 +164,7 @@ MC_SCHEMA = {
     "reflectivity_min": Field("float", 0.6, lo=0, hi=1),
     "reflectivity_max": Field("float", 0.6, lo=0, hi=1),
     "sigma_position_m": Field("float", 0.0, lo=0, doc="1-sigma initial position error per axis"),
-    "sigma_velocity_mm_s": Field("float", 0.0, si="sigma_velocity_m_s", to_si=1e-3, lo=0),
+    "sigma_velocity_mm_s": Field("float", 0.0, si="sigma_velocity_m_s", to_si=MM, lo=0),
     "failures_k": Field("int", 0, lo=0, doc="exactly k of N spacecraft lost"),
     "failure_probability": Field("float", 0.0, lo=0, hi=1, doc="per-spacecraft loss probability"),
     "sigma_misalignment_deg": Field("float", 0.0, si="sigma_misalignment_rad",
