@@ -37,6 +37,7 @@ from .core import quality as _qual
 from .coverage_options import (CoverageOptions, _finite,  # noqa: F401 (re-exported)
                                coverage_options_from_config)
 from .errors import InputError
+from .store_schema import QUALITY, VARS
 #: Tolerance on ``C C^T = I`` for camera DCMs.
 DCM_ORTHO_TOL = 1e-6
 
@@ -313,10 +314,8 @@ def coverage_from_mask(mask, vertex_areas) -> tuple[float, float]:
     return float(cov), float(cov_n)
 
 
-#: Quality-pass variables (per vertex) and their dtypes, stored when the pass runs.
-QUALITY_VARS = {"lit": bool, "best_resolution": np.float64, "emission_at_best": np.float64,
-                "incidence_at_best": np.float64, "phase_at_best": np.float64,
-                "n_spacecraft_seen": np.int32, "stereo": bool, "mapped": bool}
+#: Quality-pass variables (per vertex) and their dtypes (declared in :mod:`ideas_hpc.store_schema`).
+QUALITY_VARS = {name: VARS[name].dtype for name in QUALITY}
 
 
 def quality_arrays(cov) -> dict:

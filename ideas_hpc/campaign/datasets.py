@@ -1,10 +1,5 @@
-"""xarray datasets of campaign results, with the SPEC section 9 names and units.
-
-Dims: ``sample``, ``spacecraft``, ``time``, ``iteration``, ``vertex``,
-``axis`` (x, y, z), ``wheel``, ``generation``, ``individual``, ``gene``, plus
-``face``/``corner`` for the stored mesh and ``snapshot``/``row``/``col`` for
-camera DCMs at a few instants (FoV pyramid figures).
-"""
+"""xarray datasets of campaign results; names, dims and units come from
+:mod:`ideas_hpc.store_schema` (SPEC section 9)."""
 
 from __future__ import annotations
 
@@ -12,61 +7,11 @@ import numpy as np
 import xarray as xr
 
 from ..mapping import QUALITY_VARS, quality_arrays  # noqa: F401  (store layout)
+from ..store_schema import with_attrs  # noqa: F401  (used by the kinds)
 
 AXES = ["x", "y", "z"]
 WHEELS = ["1", "2", "3"]
 N_SNAPSHOTS = 11
-
-VAR_ATTRS = {
-    "swarm_angle": {"units": "rad", "long_name": "swarm angle theta_i"},
-    "sweep_period": {"units": "s", "long_name": "FoV sweep period P_i"},
-    "position": {"units": "m", "long_name": "spacecraft position, frame T"},
-    "velocity": {"units": "m/s", "long_name": "spacecraft velocity, frame T"},
-    "targeting_miss": {"units": "m", "long_name": "|dr_k| per Newton iteration (NaN: not run)"},
-    "targeting_v0": {"units": "m/s", "long_name": "targeted initial velocity, frame T"},
-    "sigma_error": {"units": "1", "long_name": "MRP attitude error sigma_B/R"},
-    "omega_error": {"units": "rad/s", "long_name": "rate error omega_B/R, frame B"},
-    "wheel_speed": {"units": "rad/s", "long_name": "reaction wheel speed Omega"},
-    "wheel_torque": {"units": "N m", "long_name": "reaction wheel torque u_s"},
-    "camera_dcm_BT": {"units": "1", "long_name": "camera DCM [BT] (B <- T) at snapshots"},
-    "observed": {"units": "1", "long_name": "vertex observed (paper eq. 26)"},
-    "first_seen": {"units": "s", "long_name": "first time the vertex was imaged (NaN: never)"},
-    "times_seen": {"units": "1", "long_name": "number of images that saw the vertex"},
-    "coverage": {"units": "1", "long_name": "area-weighted fraction observed (mapped when "
-                 "a [coverage] requirement is set)"},
-    "coverage_seen": {"units": "1", "long_name": "area-weighted fraction observed"},
-    "lit": {"units": "1", "long_name": "sunlit and unshadowed at some observation"},
-    "best_resolution": {"units": "m", "long_name": "best effective ground sample "
-                        "rho*range/cos(emission) (NaN: never observed)"},
-    "emission_at_best": {"units": "rad", "long_name": "emission angle at the best-resolution "
-                         "observation"},
-    "incidence_at_best": {"units": "rad", "long_name": "incidence angle at the best-resolution "
-                          "observation"},
-    "phase_at_best": {"units": "rad", "long_name": "phase angle at the best-resolution "
-                      "observation"},
-    "n_spacecraft_seen": {"units": "1", "long_name": "spacecraft that observed the vertex"},
-    "stereo": {"units": "1", "long_name": "two usable observations with a convergence angle "
-               "in [stereo_min, stereo_max]"},
-    "mapped": {"units": "1", "long_name": "vertex meets the [coverage] requirement"},
-    "coverage_count": {"units": "1", "long_name": "vertex-count fraction observed"},
-    "vertex_position": {"units": "m", "long_name": "shape model vertex, frame T"},
-    "vertex_area": {"units": "m^2", "long_name": "vertex area (1/3 of adjacent faces)"},
-    "face_vertices": {"units": "1", "long_name": "vertex indices of each face"},
-    "best_fitness": {"units": "1", "long_name": "best fitness"},
-    "mean_fitness": {"units": "1", "long_name": "population mean fitness"},
-    "population": {"units": "1", "long_name": "final population genomes"},
-    "fitness": {"units": "1", "long_name": "fitness of the final population"},
-    "population_coverage": {"units": "1", "long_name": "area coverage of the final population"},
-    "best_genome": {"units": "1", "long_name": "best genome"},
-}
-
-
-def with_attrs(ds: xr.Dataset) -> xr.Dataset:
-    for name, attrs in VAR_ATTRS.items():
-        if name in ds:
-            ds[name].attrs.update(attrs)
-    return ds
-
 
 def mesh_vars(shape) -> dict:
     """The shape model, so reports draw the body without the data path."""

@@ -27,6 +27,7 @@ from ..engine.runner import run_campaign
 from ..flyby import FlybySetup, Perturbation, setup_from_campaign
 from ..montecarlo.dispersions import DISPERSION_ORDER, DISPERSION_VARS, draw_sample
 from ..montecarlo.sample import Nominal, design_nominal, fly_sample
+from ..store_schema import ATTITUDE_SERIES, PER_SAMPLE, QUALITY, VARS
 from . import datasets
 from .schema import Campaign, resolved_config
 
@@ -58,34 +59,27 @@ def mc_template(setup: FlybySetup, nom: Nominal, n_samples: int) -> xr.Dataset:
     nt = times.size
     simulated = setup.attitude_mode == "simulated"
     s = ("sample",)
-    v = {
-        "coverage": (s, _lazy((ns,), np.float64)),
-        "coverage_count": (s, _lazy((ns,), np.float64)),
-        "coverage_seen": (s, _lazy((ns,), np.float64)),
-        "observed": (s + ("vertex",), _lazy((ns, nv), bool)),
-        "first_seen": (s + ("vertex",), _lazy((ns, nv), np.float64)),
-        "times_seen": (s + ("vertex",), _lazy((ns, nv), np.int32)),
-        "arrival_error": (s + ("spacecraft",), _lazy((ns, n), np.float64),
-                          {"units": "m", "long_name": "final position minus nominal"}),
+    sizes = {"spacecraft": n, "axis": 3, "wheel": 3, "vertex": nv, "time": nt}
+
+    def per_sample(var):
+        return (s + var.dims, _lazy((ns, *(sizes[d] for d in var.dims)), var.dtype),
+                var.attrs())
+
+    v = {name: per_sample(VARS[name]) for name in PER_SAMPLE}
+    v.update({
         "swarm_angle": (("spacecraft",), nom.theta),
         "position": (("spacecraft", "time", "axis"), nom.position_T[:, ::dec]),
         "velocity": (("spacecraft", "time", "axis"), nom.velocity_T[:, ::dec]),
         "targeting_miss": (("spacecraft", "iteration"), nom.miss),
         **datasets.mesh_vars(setup.body.shape),
-    }
-    sizes = {"spacecraft": n, "axis": 3, "wheel": 3}
-    for var in DISPERSION_VARS:
-        v[var.name] = (s + var.dims, _lazy((ns, *(sizes[d] for d in var.dims)), var.dtype),
-                       var.attrs())
+    })
+    v.update({var.name: per_sample(var) for var in DISPERSION_VARS})
     if setup.coverage.wants_quality:
-        for name, dt in datasets.QUALITY_VARS.items():
-            v[name] = (s + ("vertex",), _lazy((ns, nv), dt))
+        v.update({name: per_sample(VARS[name]) for name in QUALITY})
     if nom.periods is not None:
         v["sweep_period"] = (("spacecraft",), nom.periods)
     if simulated:
-        for name, last in (("sigma_error", "axis"), ("omega_error", "axis"),
-                           ("wheel_speed", "wheel"), ("wheel_torque", "wheel")):
-            v[name] = (s + ("spacecraft", "time", last), _lazy((ns, n, nt, 3), np.float64))
+        v.update({name: per_sample(VARS[name]) for name in ATTITUDE_SERIES})
     ds = xr.Dataset(v, coords={"sample": np.arange(ns), "spacecraft": np.arange(n),
                                "time": ("time", times, {"units": "s"}),
                                "iteration": np.arange(nom.miss.shape[1]),

@@ -31,22 +31,9 @@ from ..attitude import initial_conditions
 from ..core.frames import dcm_RT
 from ..core.mrp import mrp_from_dcm
 from ..seeds import sample_rng
+from ..store_schema import StoreVar
 
 DISPERSION_CHILD = 1  # spawn_key suffix of the child stream
-
-
-@dataclass(frozen=True)
-class StoreVar:
-    """One per-sample store variable: extra dims after ``sample``, dtype, attrs."""
-
-    name: str
-    dims: tuple[str, ...]
-    dtype: type
-    units: str | None = None
-    long_name: str | None = None
-
-    def attrs(self) -> dict:
-        return {k: v for k, v in (("units", self.units), ("long_name", self.long_name)) if v}
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,106 @@
+"""The store variables (SPEC section 9): names, dims, dtypes, units, descriptions.
+
+The one place a result variable is declared. Flyby and design stores use the
+dims as written; Monte Carlo stores put ``sample`` first on the per-sample
+ones (:data:`PER_SAMPLE`). The Monte Carlo dispersions declare their own
+variables with the same :class:`StoreVar` (:mod:`ideas_hpc.montecarlo.dispersions`),
+next to the draw that fills them.
+
+Dims: ``sample``, ``spacecraft``, ``time``, ``iteration``, ``vertex``,
+``axis`` (x, y, z), ``wheel``, ``generation``, ``individual``, ``gene``, plus
+``face``/``corner`` for the stored mesh and ``snapshot``/``row``/``col`` for
+camera DCMs at a few instants; design stores add ``n_spacecraft``,
+``verify_sample``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class StoreVar:
+    """One store variable: dims (without a leading ``sample``), dtype, units, description."""
+
+    name: str
+    dims: tuple[str, ...]
+    dtype: type = np.float64
+    units: str | None = "1"
+    long_name: str | None = None
+
+    def attrs(self) -> dict:
+        return {k: v for k, v in (("units", self.units), ("long_name", self.long_name)) if v}
+
+
+V, SC, T = ("vertex",), ("spacecraft",), ("spacecraft", "time")
+_VARS = (
+    StoreVar("swarm_angle", SC, units="rad", long_name="swarm angle theta_i"),
+    StoreVar("sweep_period", SC, units="s", long_name="FoV sweep period P_i"),
+    StoreVar("position", T + ("axis",), units="m", long_name="spacecraft position, frame T"),
+    StoreVar("velocity", T + ("axis",), units="m/s", long_name="spacecraft velocity, frame T"),
+    StoreVar("targeting_miss", ("spacecraft", "iteration"), units="m",
+             long_name="|dr_k| per Newton iteration (NaN: not run)"),
+    StoreVar("targeting_v0", SC + ("axis",), units="m/s",
+             long_name="targeted initial velocity, frame T"),
+    StoreVar("arrival_error", SC, units="m", long_name="final position minus nominal"),
+    StoreVar("sigma_error", T + ("axis",), long_name="MRP attitude error sigma_B/R"),
+    StoreVar("omega_error", T + ("axis",), units="rad/s",
+             long_name="rate error omega_B/R, frame B"),
+    StoreVar("wheel_speed", T + ("wheel",), units="rad/s", long_name="reaction wheel speed Omega"),
+    StoreVar("wheel_torque", T + ("wheel",), units="N m", long_name="reaction wheel torque u_s"),
+    StoreVar("camera_dcm_BT", SC + ("snapshot", "row", "col"),
+             long_name="camera DCM [BT] (B <- T) at snapshots"),
+    StoreVar("observed", V, bool, long_name="vertex observed (paper eq. 26)"),
+    StoreVar("first_seen", V, units="s", long_name="first time the vertex was imaged (NaN: never)"),
+    StoreVar("times_seen", V, np.int32, long_name="number of images that saw the vertex"),
+    StoreVar("coverage", (), long_name="area-weighted fraction observed (mapped when a "
+             "[coverage] requirement is set)"),
+    StoreVar("coverage_seen", (), long_name="area-weighted fraction observed"),
+    StoreVar("coverage_count", (), long_name="vertex-count fraction observed"),
+    StoreVar("lit", V, bool, long_name="sunlit and unshadowed at some observation"),
+    StoreVar("best_resolution", V, units="m", long_name="best effective ground sample "
+             "rho*range/cos(emission) (NaN: never observed)"),
+    StoreVar("emission_at_best", V, units="rad",
+             long_name="emission angle at the best-resolution observation"),
+    StoreVar("incidence_at_best", V, units="rad",
+             long_name="incidence angle at the best-resolution observation"),
+    StoreVar("phase_at_best", V, units="rad",
+             long_name="phase angle at the best-resolution observation"),
+    StoreVar("n_spacecraft_seen", V, np.int32, long_name="spacecraft that observed the vertex"),
+    StoreVar("stereo", V, bool, long_name="two usable observations with a convergence angle "
+             "in [stereo_min, stereo_max]"),
+    StoreVar("mapped", V, bool, long_name="vertex meets the [coverage] requirement"),
+    StoreVar("vertex_position", ("vertex", "axis"), units="m",
+             long_name="shape model vertex, frame T"),
+    StoreVar("vertex_area", V, units="m^2", long_name="vertex area (1/3 of adjacent faces)"),
+    StoreVar("face_vertices", ("face", "corner"), np.int32,
+             long_name="vertex indices of each face"),
+    StoreVar("best_fitness", ("generation",), long_name="best fitness"),
+    StoreVar("mean_fitness", ("generation",), long_name="population mean fitness"),
+    StoreVar("population", ("individual", "gene"), long_name="final population genomes"),
+    StoreVar("fitness", ("individual",), long_name="fitness of the final population"),
+    StoreVar("population_coverage", ("individual",),
+             long_name="area coverage of the final population"),
+    StoreVar("best_genome", ("gene",), long_name="best genome"),
+)
+VARS: dict[str, StoreVar] = {v.name: v for v in _VARS}
+
+#: Per-vertex results of the quality pass (issue 14), stored when it runs.
+QUALITY = ("lit", "best_resolution", "emission_at_best", "incidence_at_best", "phase_at_best",
+           "n_spacecraft_seen", "stereo", "mapped")
+#: Results of one flight: a Monte Carlo store gives each a leading ``sample`` dim.
+PER_SAMPLE = ("coverage", "coverage_count", "coverage_seen", "observed", "first_seen",
+              "times_seen", "arrival_error")
+#: Closed-loop attitude series (simulated attitude only).
+ATTITUDE_SERIES = ("sigma_error", "omega_error", "wheel_speed", "wheel_torque")
+
+
+def with_attrs(ds):
+    """Put every declared variable's units and description on ``ds`` (in place; returned)."""
+    for name in ds.variables:
+        v = VARS.get(name)
+        if v is not None:
+            ds[name].attrs.update(v.attrs())
+    return ds
