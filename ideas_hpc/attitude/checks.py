@@ -3,29 +3,14 @@
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from ..errors import InputError
+from ..schema import number
 
 
 def pos_float(value, name, *, allow_zero=False):
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"must be a number, got {value!r}", field=name) from None
-    if not math.isfinite(v) or v < 0.0 or (v == 0.0 and not allow_zero):
-        need = "non-negative" if allow_zero else "positive"
-        raise InputError(f"must be finite and {need}, got {value!r}", field=name)
-    return v
-
-
-def reject_unknown(table: dict, allowed, prefix: str) -> None:
-    unknown = sorted(set(table) - set(allowed))
-    if unknown:
-        raise InputError(f"unknown key {unknown[0]!r}; allowed: {', '.join(allowed)}",
-                         field=prefix + unknown[0])
+    return number(value, name, lo=0.0, lo_open=not allow_zero)
 
 
 def vec3(value, name):

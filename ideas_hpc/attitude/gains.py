@@ -12,10 +12,19 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import InputError
-from .checks import reject_unknown as _reject_unknown
+from ..schema import Field, validate
 from .checks import vec3 as _vec3
 
-_CONTROLLER_KEYS = ("preset", "gains", "k_p", "k_i", "eta", "phi", "int_limit", "phi_dt_max")
+#: The ``[controller]`` table: a preset and overrides; ranges are checked by
+#: :func:`validate_gains` (vectors: a number or 3 numbers).
+CONTROLLER_SCHEMA = {
+    "preset": Field("str", None, nullable=True, doc="gain preset: np or fov"),
+    "gains": Field("str", None, nullable=True, doc="alias of preset"),
+    **{k: Field("any", None, nullable=True, doc="a number or 3 numbers")
+       for k in ("k_p", "k_i", "eta", "phi")},
+    **{k: Field("any", None, nullable=True, doc="positive number or 'inf'")
+       for k in ("int_limit", "phi_dt_max")},
+}
 
 
 @dataclass(frozen=True)
@@ -98,7 +107,7 @@ def gains_from_config(table, prefix: str = "controller.") -> Gains:
                              field=prefix + "preset")
         return GAIN_PRESETS[table]
     table = dict(table)
-    _reject_unknown(table, _CONTROLLER_KEYS, prefix)
+    validate(table, CONTROLLER_SCHEMA, prefix)  # keys and types: the one field mechanism
     pkey = "preset" if "preset" in table else ("gains" if "gains" in table else None)
     if pkey is not None:
         name = table[pkey]

@@ -7,10 +7,24 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
+from ..schema import Field, validate
 from .checks import pos_float as _pos_float
-from .checks import reject_unknown as _reject_unknown
 
-_SPACECRAFT_KEYS = ("mass", "size", "wheel_mass", "wheel_radius", "u_max", "h_max", "inertia")
+def _opt(kind: str, doc: str, **kw) -> Field:
+    # None: not given, the SpacecraftModel default applies (defaults live there only)
+    return Field(kind, None, nullable=True, doc=doc, **kw)
+
+
+#: The ``[spacecraft]`` table (SI); ranges are checked by :func:`validate_spacecraft`.
+SPACECRAFT_SCHEMA = {
+    "mass": _opt("float", "kg"),
+    "size": _opt("floats", "3 lengths, m", length=3),
+    "wheel_mass": _opt("float", "kg"),
+    "wheel_radius": _opt("float", "m"),
+    "u_max": _opt("float", "N m"),
+    "h_max": _opt("float", "N m s"),
+    "inertia": _opt("any", "3 principal moments or a diagonal 3x3 matrix, kg m^2"),
+}
 
 
 @dataclass(frozen=True)
@@ -121,20 +135,9 @@ def spacecraft_from_config(table, prefix: str = "spacecraft.") -> SpacecraftMode
     live in ``[dynamics]``).
     """
     table = dict(table or {})
-    _reject_unknown(table, _SPACECRAFT_KEYS, prefix)
-    kw = {}
-    for key in ("mass", "wheel_mass", "wheel_radius", "u_max", "h_max"):
-        if key in table:
-            kw[key] = table[key]
-            if isinstance(kw[key], bool) or not isinstance(kw[key], (int, float)):
-                raise InputError(f"must be a number, got {kw[key]!r}", field=prefix + key)
-            kw[key] = float(kw[key])
-    if "size" in table:
-        try:
-            kw["size"] = tuple(float(v) for v in table["size"])
-        except (TypeError, ValueError):
-            raise InputError(f"must be three lengths in m, got {table['size']!r}",
-                             field=prefix + "size") from None
+    values = validate(table, SPACECRAFT_SCHEMA, prefix)  # the one field mechanism
+    kw = {k: (tuple(v) if k == "size" else v) for k, v in values.items()
+          if v is not None and k != "inertia"}
     if "inertia" in table:
         try:
             m = np.asarray(table["inertia"], dtype=float)
