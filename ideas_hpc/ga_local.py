@@ -56,6 +56,7 @@ class GridCover:
         self.w = a / a.sum()
         self.m = np.ascontiguousarray(np.asarray(masks, dtype=np.float64))
         self.k = self.m.shape[0]
+        self.mt = np.ascontiguousarray(self.m.T)  # (V, K): rows of the unseen vertices only
         self.step = float(step)
         self.need = float(target) - float(eps_tol) - _TOL  # feasible: A(S) >= need
         self.n_max = int(n_max)
@@ -93,6 +94,11 @@ class GridCover:
                 ok &= np.minimum(d, self.k - d) >= self.sep
         return ok
 
+    def _gain(self, cnt: np.ndarray) -> np.ndarray:
+        """Unseen area each candidate would add to a set with vertex counts ``cnt``."""
+        u = np.flatnonzero(cnt == 0)  # near-feasible sets miss few vertices
+        return self.w[u] @ self.mt[u]
+
     def coverage(self, s) -> float:
         return float(self.w @ (self._counts(s) > 0))
 
@@ -103,11 +109,9 @@ class GridCover:
         todo = [i for i, s in enumerate(sets)
                 if len(s) < self.n_max and self.coverage(s) < self.need]
         while todo:
-            unseen = np.array([self.w * (self._counts(sets[i]) == 0) for i in todo])
-            gain = unseen @ self.m.T  # (todo, K): unseen area each candidate adds
             nxt = []
-            for r, i in enumerate(todo):
-                g = np.where(self._allowed(sets[i]), gain[r], -1.0)
+            for i in todo:
+                g = np.where(self._allowed(sets[i]), self._gain(self._counts(sets[i])), -1.0)
                 c = int(np.argmax(g))
                 if g[c] <= 0:  # nothing left to see from an allowed angle
                     continue
@@ -138,14 +142,13 @@ class GridCover:
             return None
         pairs = [(i, j) for i in range(n) for j in range(i + 1, n)]
         rest = [[s[q] for q in range(n) if q not in p] for p in pairs]
-        cnts = np.array([self._counts(r) for r in rest])
-        seen = self.w @ (cnts > 0).T                      # (pairs,)
-        gain = (self.w * (cnts == 0)) @ self.m.T           # (pairs, K)
         best, best_cov = None, -1.0
-        for r, kept in enumerate(rest):
-            g = np.where(self._allowed(kept), gain[r], -1.0)
+        for kept in rest:
+            cnt = self._counts(kept)
+            seen = float(self.w @ (cnt > 0))
+            g = np.where(self._allowed(kept), self._gain(cnt), -1.0)
             c = int(np.argmax(g))
-            cov = seen[r] + g[c]
+            cov = seen + g[c]
             if cov >= self.need and cov > best_cov:
                 best, best_cov = kept + [c], cov
         return best
