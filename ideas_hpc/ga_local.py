@@ -56,7 +56,9 @@ class GridCover:
         self.w = a / a.sum()
         self.m = np.ascontiguousarray(np.asarray(masks, dtype=np.float64))
         self.k = self.m.shape[0]
-        self.mt = np.ascontiguousarray(self.m.T)  # (V, K): rows of the unseen vertices only
+        # (V, K) float32: a gain only ranks candidates; feasibility is rechecked in float64
+        self.mt = np.ascontiguousarray(self.m.T, dtype=np.float32)
+        self.w32 = self.w.astype(np.float32)
         self.step = float(step)
         self.need = float(target) - float(eps_tol) - _TOL  # feasible: A(S) >= need
         self.n_max = int(n_max)
@@ -97,7 +99,7 @@ class GridCover:
     def _gain(self, cnt: np.ndarray) -> np.ndarray:
         """Unseen area each candidate would add to a set with vertex counts ``cnt``."""
         u = np.flatnonzero(cnt == 0)  # near-feasible sets miss few vertices
-        return self.w[u] @ self.mt[u]
+        return (self.w32[u] @ self.mt[u]).astype(np.float64)
 
     def coverage(self, s) -> float:
         return float(self.w @ (self._counts(s) > 0))
@@ -148,7 +150,9 @@ class GridCover:
             seen = float(self.w @ (cnt > 0))
             g = np.where(self._allowed(kept), self._gain(cnt), -1.0)
             c = int(np.argmax(g))
-            cov = seen + g[c]
+            if seen + g[c] < self.need - 1e-5:  # float32 ranking: far short, skip
+                continue
+            cov = self.coverage(kept + [c])
             if cov >= self.need and cov > best_cov:
                 best, best_cov = kept + [c], cov
         return best
