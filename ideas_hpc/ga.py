@@ -17,7 +17,13 @@ Lamarckian) tries to drop spacecraft from every feasible swarm: all
 "one fewer" variants are scored in one batch call and the best feasible one
 replaces the genome (its dropped angle moves behind N). A plain GA rarely
 hits the narrow sets of angles that reach 100 % with the fewest spacecraft;
-the repair lets it find them from larger feasible swarms. ``A_target`` is 100 %, or the highest coverage
+the repair lets it find them from larger feasible swarms. On an angle grid
+the campaign also hands over the masks of every grid angle
+(:class:`~ideas_hpc.ga_local.GridCover`): then 20 % of the initial population
+are greedy swarms from random first angles, and the repair is a set-cover
+local search (greedy completion, removal, 2-for-1 swaps), which reaches the
+certified optimum on eros001708 for every seed tried
+(tests/test_ga_optimum.py). ``A_target`` is 100 %, or the highest coverage
 any swarm can reach when that is less (strict mode: some concavities are never
 visible from a ring); the result says which.
 

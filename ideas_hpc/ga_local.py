@@ -5,8 +5,10 @@ campaign already holds the mask of every grid angle (it needs their union for
 the reachable target), so the NP problem is a weighted set cover over those
 ``K`` candidates: the swarm ``S`` covers ``A(S) = sum_v a_v [v seen by some
 member]`` (paper eq. 26) and is feasible when ``A_target - A(S) <= eps_tol``
-(eq. 16). Three operators act on a whole population at once, each round a
-few dense matrix products (no Python loop over kernels):
+(eq. 16). Three operators act on every swarm of a population; each step is
+one product of the unseen vertices' areas with the (vertex, candidate) mask
+matrix, which scores all K candidates at once (the population's fitness
+itself stays one batch call of :mod:`ideas_hpc.swarm_eval`):
 
 * **completion** -- an infeasible swarm gets, one at a time, the grid angle
   that sees the most still-unseen area (greedy set cover) until it is feasible;

@@ -163,6 +163,10 @@ def design_nadir(c: Campaign, setup, client):
                        stall_generations=d["stall_generations"],
                        min_separation=min_sep, cover=cover,
                        progress=_progress_printer(d["generations"], "NP GA"))
+    if cover is not None:
+        notes.append(f"GA with set-cover local search on the {cover.k} grid-angle masks "
+                     "(greedy seeding of 20 % of the first population; completion, removal "
+                     "and 2-for-1 swaps after each generation)")
     res.notes.extend(notes)
     n = res.best_swarm_size
     best = [snap_angle(t, step)[0] for t in res.best_genome[1:1 + n]]
