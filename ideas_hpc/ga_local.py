@@ -58,8 +58,9 @@ class GridCover:
         self.w = a / a.sum()
         self.m = np.ascontiguousarray(np.asarray(masks, dtype=np.float64))
         self.k = self.m.shape[0]
-        # (V, K) float32: a gain only ranks candidates; feasibility is rechecked in float64
-        self.mt = np.ascontiguousarray(self.m.T, dtype=np.float32)
+        # float32 copy for the gains: a gain only ranks candidates; feasibility is
+        # rechecked in float64
+        self.m32 = np.ascontiguousarray(self.m, dtype=np.float32)
         self.w32 = self.w.astype(np.float32)
         self.step = float(step)
         self.need = float(target) - float(eps_tol) - _TOL  # feasible: A(S) >= need
@@ -99,9 +100,9 @@ class GridCover:
         return ok
 
     def _gain(self, cnt: np.ndarray) -> np.ndarray:
-        """Unseen area each candidate would add to a set with vertex counts ``cnt``."""
-        u = np.flatnonzero(cnt == 0)  # near-feasible sets miss few vertices
-        return (self.w32[u] @ self.mt[u]).astype(np.float64)
+        """Unseen area each candidate would add to sets with vertex counts ``cnt``
+        ((V,) or (sets, V)); one BLAS product for all K candidates."""
+        return ((self.w32 * (cnt == 0)) @ self.m32.T).astype(np.float64)
 
     def coverage(self, s) -> float:
         return float(self.w @ (self._counts(s) > 0))
@@ -146,11 +147,13 @@ class GridCover:
             return None
         pairs = [(i, j) for i in range(n) for j in range(i + 1, n)]
         rest = [[s[q] for q in range(n) if q not in p] for p in pairs]
+        pi, pj = np.array(pairs).T
+        cnts = self._counts(s)[None, :] - self.m[np.asarray(s)[pi]] - self.m[np.asarray(s)[pj]]
+        seens = (cnts > 0) @ self.w
+        gains = self._gain(cnts)  # (pairs, K)
         best, best_cov = None, -1.0
-        for kept in rest:
-            cnt = self._counts(kept)
-            seen = float(self.w @ (cnt > 0))
-            g = np.where(self._allowed(kept), self._gain(cnt), -1.0)
+        for kept, seen, gain in zip(rest, seens, gains):
+            g = np.where(self._allowed(kept), gain, -1.0) if self.sep > 0 else gain
             c = int(np.argmax(g))
             if seen + g[c] < self.need - 1e-5:  # float32 ranking: far short, skip
                 continue
