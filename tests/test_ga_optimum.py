@@ -132,3 +132,24 @@ def test_local_search_on_toy_covers(seed):
     assert gc.remove([0, 1, 2]) == [0, 1, 2]
     assert sorted(gc.to_sets(gc.improve(g))[0]) == [0, 3]
     assert _brute_min(m, np.full(8, 1 / 8), 1 - EPS, 4) == 2
+
+
+def test_campaign_ga_with_min_separation(eros1708, tmp_path):
+    """The campaign GA with the local search keeps ``swarm.min_separation_km`` and still
+    meets the certified optimum (which also respects it) on its grid."""
+    import xarray as xr
+
+    from ideas_hpc.campaign.run import run_file
+    from ideas_hpc.swarm_geometry import min_separation_angle
+
+    sets = [f"design.angle_step_rad={2 * np.pi / 40!r}", "design.population=20",
+            "design.generations=10", "design.n_max=6", "run.workers=0",
+            "swarm.min_separation_km=40"]
+    ds = xr.open_zarr(run_file(CAMPAIGN, out=tmp_path / "np.zarr", overrides=sets))
+    c = load(CAMPAIGN, sets)
+    sep = min_separation_angle(40.0, setup_from_campaign(c).d_sep)
+    a = np.sort(np.asarray(ds["swarm_angle"].values, dtype=float))
+    d = np.diff(np.r_[a, a[0] + 2 * np.pi])
+    assert a.size == 1 or np.all(d >= sep - 1e-9)
+    assert float(ds["optimality_gap"]) == 0.0
+    assert int(ds["best_swarm_size"]) == float(ds["proven_bound"])
