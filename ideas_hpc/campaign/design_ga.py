@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import functools
 import json
+import math
 import sys
 import time
 from pathlib import Path
@@ -18,6 +19,7 @@ import numpy as np
 import xarray as xr
 
 from ..flyby import candidate_masks, fly, setup_from_campaign, target
+from ..ga_local import GridCover
 from ..swarm_eval import MaskBank, fov_keys, nadir_keys, snap_angle
 from ..swarm_geometry import min_separation_angle
 from . import datasets
@@ -47,8 +49,9 @@ def _bank(setup, client, design) -> MaskBank:
                     chunk_size=design.chunk_size, client=client)
 
 
-def _fill_grid(bank: MaskBank, setup, step: float) -> float:
-    """Masks of every grid angle; returns the reachable coverage (union of all)."""
+def _fill_grid(bank: MaskBank, setup, step: float) -> tuple[float, np.ndarray]:
+    """Masks of every grid angle; returns the reachable coverage (union of all) and
+    the (grid angle, vertex) masks."""
     n = max(1, int(round(2 * np.pi / step)))
     keys = [(k * step, 0.0, k) for k in range(n)]
     t = time.perf_counter()
@@ -56,7 +59,7 @@ def _fill_grid(bank: MaskBank, setup, step: float) -> float:
     cov, _ = bank.union_coverage([keys], setup.body.shape.vertex_areas)
     _log(f"candidate masks: {n} grid angles in {time.perf_counter() - t:.1f} s; a ring of all "
          f"of them reaches {100 * cov[0]:.3f} % (area)")
-    return float(cov[0])
+    return float(cov[0]), bank.masks[bank.rows(keys)]
 
 
 def design_nadir(c: Campaign, setup, client):
@@ -68,8 +71,9 @@ def design_nadir(c: Campaign, setup, client):
     step = d.angle_step_rad
     target = 1.0
     notes = []
+    masks = None
     if step > 0:
-        reach = _fill_grid(bank, setup, step)
+        reach, masks = _fill_grid(bank, setup, step)
         if reach < 1.0 - d.eps_tol_pct / 100.0:
             target = reach
             notes.append(f"100 % is not reachable from this ring in {setup.coverage.mode} mode "
@@ -83,15 +87,23 @@ def design_nadir(c: Campaign, setup, client):
         cov, _ = bank.union_coverage(keys, areas)
         return cov, np.rint(genomes[:, 0]).astype(int)
 
+    eps = d.eps_tol_pct / 100.0
+    min_sep = min_separation_angle(c.config.swarm.min_separation_m, setup.d_sep)
+    cover = None if masks is None else GridCover(
+        masks, areas, step, target, eps, d.n_max,
+        min_sep_steps=math.ceil(min_sep / step - 1e-9) if min_sep > 0 else 0)
     res = run_nadir_ga(evaluate, n_max=d.n_max, population=d.population,
                        generations=d.generations, seed=c.config.seed,
-                       eps_tol=d.eps_tol_pct / 100.0, angle_step=step, target=target,
+                       eps_tol=eps, angle_step=step, target=target,
                        parents=d.parents, elitism=d.elitism,
                        mutation_probability=d.mutation_probability,
                        stall_generations=d.stall_generations,
-                       min_separation=min_separation_angle(c.config.swarm.min_separation_m,
-                                                          setup.d_sep),
+                       min_separation=min_sep, cover=cover,
                        progress=_progress_printer(d.generations, "NP GA"))
+    if cover is not None:
+        notes.append(f"GA with set-cover local search on the {cover.k} grid-angle masks "
+                     "(greedy seeding of 20 % of the first population; completion, removal "
+                     "and 2-for-1 swaps after each generation)")
     res.notes.extend(notes)
     n = res.best_swarm_size
     best = [snap_angle(t, step)[0] for t in res.best_genome[1:1 + n]]
