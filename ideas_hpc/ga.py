@@ -57,7 +57,7 @@ class GAResult:
     best_fitness_value: float
     best_coverage: float
     best_swarm_size: int
-    evaluations: int
+    evaluations: int                  # distinct designs scored (NP: repeats are memoised)
     target_coverage: float
     notes: list[str] = field(default_factory=list)
 
@@ -127,12 +127,18 @@ def separate_angles(genomes: np.ndarray, min_sep: float, step: float) -> np.ndar
         return genomes
     g = np.array(genomes, dtype=float, copy=True)
     tol = 1e-9
-    for i in range(g.shape[0]):
-        k = int(round(g[i, 0]))
-        ang = np.sort(np.mod(g[i, 1:1 + k], TWO_PI))
-        d = np.diff(np.r_[ang, ang[0] + TWO_PI]) if k > 1 else np.array([TWO_PI])
-        if np.all(d >= min_sep - tol):
-            continue
+    # which genomes break the separation, for the whole population at once
+    n = np.rint(g[:, 0]).astype(np.int64)
+    used = np.arange(g.shape[1] - 1)[None, :] < n[:, None]
+    srt = np.sort(np.where(used, np.mod(g[:, 1:], TWO_PI), np.inf), axis=1)
+    with np.errstate(invalid="ignore"):
+        gaps = np.diff(srt, axis=1)                     # inf - inf = nan: never "too close"
+    last = srt[np.arange(n.size), np.maximum(n - 1, 0)]
+    wrap = np.where(n > 1, srt[:, 0] + TWO_PI - last, TWO_PI)
+    bad = (gaps < min_sep - tol).any(axis=1) | (wrap < min_sep - tol)
+    for i in np.flatnonzero(bad):
+        k = int(n[i])
+        ang = srt[i, :k]
         kept = [ang[0]]
         for a in ang[1:]:
             if a - kept[-1] < min_sep - tol:
@@ -144,6 +150,21 @@ def separate_angles(genomes: np.ndarray, min_sep: float, step: float) -> np.ndar
         g[i, 0] = len(kept)  # the unused genes behind N keep their old values
         g[i, 1:1 + len(kept)] = kept
     return g
+
+
+def swarm_keys(genomes: np.ndarray, angle_step: float) -> list[bytes]:
+    """One hashable key per NP genome: its N and the sorted multiset of its used
+    angles (grid indices when ``angle_step > 0``, else the angles mod 2 pi)."""
+    g = np.asarray(genomes, dtype=float)
+    n = np.rint(g[:, 0]).astype(np.int64)
+    ang = np.mod(g[:, 1:], TWO_PI)
+    if angle_step > 0:
+        m = max(1, int(round(TWO_PI / angle_step)))
+        ang = np.mod(np.rint(ang / angle_step), m)
+    used = np.arange(ang.shape[1])[None, :] < n[:, None]
+    srt = np.sort(np.where(used, ang, np.inf), axis=1)
+    rows = np.concatenate([n[:, None].astype(float), srt], axis=1)
+    return [r.tobytes() for r in rows]
 
 
 def _run_pygad(*, num_genes, gene_type, gene_space, population, generations, seed,
@@ -249,12 +270,28 @@ def run_nadir_ga(evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
     count = {"n": 0}
     raw_evaluate = evaluate
 
+    memo: dict = {}
+
     def evaluate(genomes):  # noqa: F811  (every genome is scored as its separated version)
-        return raw_evaluate(separate_angles(genomes, min_separation, angle_step))
+        # A design is its multiset of grid angles: each distinct one is scored once
+        # per run (a converged population repeats its swarms generation after generation).
+        g = separate_angles(np.atleast_2d(genomes), min_separation, angle_step)
+        keys = swarm_keys(g, angle_step)
+        new = {}
+        for i, k in enumerate(keys):
+            if k not in memo and k not in new:
+                new[k] = i
+        if new:
+            cov_new, n_new = raw_evaluate(g[list(new.values())])
+            memo.update(zip(new, zip(np.asarray(cov_new, float).tolist(),
+                                     np.asarray(n_new).tolist())))
+            count["n"] += len(new)
+        got = [memo[k] for k in keys]
+        return (np.array([c for c, _ in got], dtype=float),
+                np.array([m for _, m in got], dtype=np.int64))
 
     def batch(genomes):
         cov, n = evaluate(genomes)
-        count["n"] += len(genomes)
         return nadir_fitness(cov, n, n_max, target, eps_tol)
 
     def repair(genomes):
