@@ -254,3 +254,20 @@ def test_time_limit_without_incumbent_falls_back_to_a_greedy_design():
         d = np.abs(idx[:, None] - idx[None, :])
         d = np.minimum(d, bank.n_candidates - d)
         assert (d[np.triu_indices(idx.size, 1)] > 2).all()
+
+
+def test_max_coverage_without_incumbent_gives_the_greedy_swarm_and_its_gap(monkeypatch):
+    # On eros022540 HiGHS can reach its time limit before any swarm of N: the
+    # curve then holds the greedy swarm, marked time_limit, with a valid bound.
+    from types import SimpleNamespace
+
+    import ideas_hpc.design.exact as ex
+
+    bank = _toy(3)
+    best = ex.max_coverage(bank, 2)
+    monkeypatch.setattr(ex, "solve", lambda *a, **k: (SimpleNamespace(
+        x=None, status=1, message="Time limit reached", mip_dual_bound=None), 1.0))
+    r = ex.max_coverage(bank, 2)
+    assert r.n <= 2 and r.coverage <= best.coverage + 1e-12
+    assert r.bound >= best.coverage - 1e-12     # still an upper bound on the optimum
+    assert r.status in ("time_limit", "optimal") and r.gap >= 0.0

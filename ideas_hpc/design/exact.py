@@ -183,6 +183,12 @@ def _min_result(bank, red, res, dt, target, need, n_max, m) -> ExactResult:
     else:
         idx = _chosen(red, res.x)
         res_status = res.status
+        if res_status == 1:  # stopped early: keep the greedy cover if it is smaller
+            g = greedy_cover(bank, need, m, n_max)
+            if g is not None and g.size < idx.size:
+                notes.append(f"the integer programme stopped at its time limit with "
+                             f"{idx.size} spacecraft; a greedy cover needs {g.size}")
+                idx = g
     n = idx.size
     bound = min(max(bound, 1), n)
     gap = (n - bound) / n
@@ -203,6 +209,15 @@ def greedy_cover(bank: CandidateBank, need: float, m: int, n_max: int | None):
     (a feasible design; its gap to the proven bound is reported). Returns grid
     indices, or None when it cannot reach ``need``.
     """
+    idx, covered = greedy_swarm(bank, m, n_max, need)
+    return idx if covered >= need - 1e-12 else None
+
+
+def greedy_swarm(bank: CandidateBank, m: int, n_max: int | None,
+                 need: float = math.inf) -> tuple[np.ndarray, float]:
+    """Up to ``n_max`` candidates picked by largest new area (pairs more than ``m``
+    grid steps apart), stopping early once ``need`` is covered.
+    Returns ``(sorted grid indices, covered area fraction)``."""
     w = bank.areas / bank.areas.sum()
     left = np.ones(bank.masks.shape[1], dtype=bool)
     allowed = np.ones(bank.n_candidates, dtype=bool)
@@ -213,13 +228,13 @@ def greedy_cover(bank: CandidateBank, need: float, m: int, n_max: int | None):
         gain[~allowed] = -1.0
         j = int(np.argmax(gain))
         if gain[j] <= 0.0:
-            return None
+            break
         chosen.append(j)
         covered += gain[j]
         left &= ~bank.masks[j]
         d = np.abs(np.arange(bank.n_candidates) - j)
         allowed &= np.minimum(d, bank.n_candidates - d) > m
-    return np.sort(np.array(chosen, dtype=np.int64)) if covered >= need - 1e-12 else None
+    return np.sort(np.array(chosen, dtype=np.int64)), covered
 
 
 def max_coverage(bank: CandidateBank, n: int, *, min_separation: float = 0.0,
@@ -235,12 +250,16 @@ def max_coverage(bank: CandidateBank, n: int, *, min_separation: float = 0.0,
         cons.append(sep)
     res, dt = solve(np.r_[np.zeros(nc), -red.weight], cons,
                     np.r_[np.ones(nc), np.zeros(g)], time_limit)
-    if res.x is None:
+    if res.x is None and res.status != 1:
         raise RuntimeError(f"HiGHS found no swarm of {n}: {res.message}")
-    idx = _chosen(red, res.x)
+    # no incumbent at the time limit (large shape models): the greedy swarm, with its gap
+    idx = _chosen(red, res.x) if res.x is not None else greedy_swarm(bank, m, n)[0]
     cov = float(bank.coverage([idx])[0])
     bound = getattr(res, "mip_dual_bound", None)
-    bound = cov if bound is None or not np.isfinite(bound) else max(cov, -float(bound))
+    if bound is None or not np.isfinite(bound):
+        bound = cov if res.x is not None else max(cov, bank.reach)
+    else:
+        bound = max(cov, -float(bound))
     gap = (bound - cov) / bound if bound > 0 else 0.0
     if gap < GAP_ZERO:
         gap, bound = 0.0, cov
