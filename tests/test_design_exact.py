@@ -271,3 +271,21 @@ def test_max_coverage_without_incumbent_gives_the_greedy_swarm_and_its_gap(monke
     assert r.n <= 2 and r.coverage <= best.coverage + 1e-12
     assert r.bound >= best.coverage - 1e-12     # still an upper bound on the optimum
     assert r.status in ("time_limit", "optimal") and r.gap >= 0.0
+
+
+def test_coverage_curve_spends_one_time_budget_and_finishes(monkeypatch):
+    # The time limit covers the whole curve: once it is spent, the remaining
+    # points are greedy swarms marked time_limit with the union bound, and the
+    # curve stays non-decreasing and below its bounds.
+    import ideas_hpc.design.coverage_vs_n as cvn
+
+    bank = _toy(4)
+    exact = coverage_curve(bank, 6)
+    clock = iter(np.arange(0.0, 1000.0, 10.0))   # every call to the clock: 10 s later
+    monkeypatch.setattr(cvn.time, "perf_counter", lambda: float(next(clock)))
+    r = cvn.coverage_curve(bank, 6, time_limit=5.0)
+    assert np.all(np.diff(r.coverage) >= -1e-12)
+    assert np.all(r.coverage <= exact.coverage + 1e-12)
+    assert np.all(r.bound >= exact.coverage - 1e-12)
+    assert set(r.status) <= {"optimal", "time_limit"}
+    assert all(s == "optimal" for s, c in zip(r.status, r.coverage) if c >= bank.reach - 1e-12)
