@@ -86,20 +86,15 @@ def setup_attrs(setup) -> dict:
 
 
 def base_attrs(c, setup) -> dict:
-    """Global attrs of every campaign store: kind, resolved config and its hash, code
-    version, seed, execution settings (not hashed) and the setup's sizing."""
-    import time
+    """Global attrs of every campaign store besides the engine's provenance (resolved
+    config and hash, code version, seed, creation time): kind, execution settings
+    (not hashed), the campaign file and the setup's sizing."""
+    from ..engine.store import config_json
+    from .schema import EXECUTION_KNOBS
 
-    from .._version import code_version
-    from ..engine.store import config_hash, config_json
-    from .schema import EXECUTION_KNOBS, resolved_config
-
-    cfg = resolved_config(c)
     knobs = {k: getattr(getattr(c.config, k.split(".")[0]), k.split(".")[1])
              for k in EXECUTION_KNOBS}
-    attrs = {"kind": c.kind, "config": config_json(cfg), "config_hash": config_hash(cfg),
-             "execution": config_json(knobs), "code_version": code_version(),
-             "campaign_seed": int(c.config.seed), "created": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+    attrs = {"kind": c.kind, "execution": config_json(knobs),
              "campaign_file": str(c.source.path)}
     attrs.update(setup_attrs(setup))
     return attrs

@@ -114,8 +114,6 @@ def run_monte_carlo(c: Campaign, out, *, workers=None, scheduler=None, resume=Fa
     fn = functools.partial(mc_chunk, setup=setup, nominal=nom.for_tasks(), mc=mc,
                            seed=c.config.seed)
     attrs = datasets.base_attrs(c, setup)
-    for key in ("config", "config_hash"):
-        attrs.pop(key)
     attrs["dispersion_order"] = list(DISPERSION_ORDER)  # fixes the draw order
     summary = run_campaign(out, template, fn, config=resolved_config(c),
                            campaign_seed=c.config.seed, chunk_size=c.config.run.chunk_size,

@@ -13,7 +13,6 @@ existing store early, skip a finished one), then :func:`write_complete`.
 
 from __future__ import annotations
 
-import json
 import os
 from pathlib import Path
 from typing import Mapping
@@ -22,8 +21,7 @@ import numpy as np
 
 from ..errors import InputError
 from .lock import StoreLock
-from .store import config_diff, config_hash, create_store, done_mask, store_attrs, \
-    write_chunk_region
+from .store import config_problems, create_store, done_mask, store_attrs, write_chunk_region
 from .store_meta import SAMPLE_DIM
 
 
@@ -48,14 +46,7 @@ def check_existing(path: str | os.PathLike, *, config: Mapping, campaign_seed: i
     except InputError as exc:
         raise InputError(f"{path} exists but is not a readable store ({exc.message})",
                          field="--out") from None
-    problems = []
-    if attrs.get("config_hash") != config_hash(config):
-        old = attrs.get("config", {})
-        old = json.loads(old) if isinstance(old, str) else old
-        problems += config_diff(old, config) or ["config hash differs"]
-    if int(attrs.get("campaign_seed", -1)) != int(campaign_seed):
-        problems.append(f"campaign seed {attrs.get('campaign_seed')} in the store, "
-                        f"{campaign_seed} now")
+    problems = config_problems(attrs, config, campaign_seed)
     if problems:
         raise InputError(f"store {path} was written by an incompatible config ("
                          + "; ".join(problems) + ")", field="--resume")

@@ -157,7 +157,7 @@ def create_store(path: str | os.PathLike, template, *, config: Mapping, campaign
         if not resume:
             raise InputError(f"store {path} already exists; pass --resume to continue it, "
                              "or choose another --out", field="out")
-        _check_compatible(path, chash, config, plan, layout, int(campaign_seed))
+        _check_compatible(path, config, plan, layout, int(campaign_seed))
         return False
 
     from .._version import code_version
@@ -246,17 +246,26 @@ def _encoding(ds, plan: ChunkPlan, compressors) -> dict:
     return enc
 
 
-def _check_compatible(path: Path, chash: str, config: Mapping, plan: ChunkPlan,
+def config_problems(attrs: Mapping, config: Mapping, campaign_seed: int) -> list[str]:
+    """How a store's attrs differ from a resolved config and seed (empty: compatible)."""
+    problems = []
+    if attrs.get("config_hash") != config_hash(config):
+        old = attrs.get("config", {})
+        old = json.loads(old) if isinstance(old, str) else old
+        problems += config_diff(old, config) or ["config hash differs"]
+    if int(attrs.get("campaign_seed", -1)) != int(campaign_seed):
+        problems.append(f"campaign seed {attrs.get('campaign_seed')} in the store, "
+                        f"{campaign_seed} now")
+    return problems
+
+
+def _check_compatible(path: Path, config: Mapping, plan: ChunkPlan,
                       layout: dict, campaign_seed: int) -> None:
     try:
         attrs = store_attrs(path)
     except InputError as exc:
         raise InputError(f"cannot resume {path}: {exc.message}", field="out") from exc
-    problems = []
-    if attrs.get("config_hash") != chash:
-        problems += config_diff(attrs["config"], config) or ["config hash differs"]
-    if int(attrs.get("campaign_seed", -1)) != campaign_seed:
-        problems.append(f"campaign seed {attrs.get('campaign_seed')} in the store, {campaign_seed} now")
+    problems = config_problems(attrs, config, campaign_seed)
     if int(attrs["n_samples"]) != plan.n_samples:
         problems.append(f"{attrs['n_samples']} samples in the store, {plan.n_samples} now")
     if int(attrs["chunk_size"]) != plan.chunk_size:
