@@ -11,6 +11,11 @@ Two shortcuts keep the curve cheap, both exact:
   once ``C*(N) = C_all`` the curve stays there, proven by that upper bound,
   and later N reuse that swarm.
 
+Before each integer programme, the ring-gap bound
+(:mod:`ideas_hpc.design.ring_bound`) gives a proven upper bound ``U(N)`` and
+a swap search a swarm; when the swarm reaches ``U(N)`` the point is proven
+without the programme, otherwise the programme's bound is capped by ``U(N)``.
+
 ``time_limit`` is the budget of the whole curve. Points the integer programme
 cannot prove within what is left (large shape models) hold the best swarm
 found, or the greedy swarm once the budget is spent, with ``status``
@@ -27,6 +32,7 @@ import numpy as np
 
 from .bank import CandidateBank
 from .exact import greedy_swarm, max_coverage, prepare
+from .ring_bound import ring_bound, swap_search
 
 REACH_TOL = 1e-12
 
@@ -57,6 +63,9 @@ def coverage_curve(bank: CandidateBank, n_max: int, *, min_separation: float = 0
     t0 = time.perf_counter()
     prepared = prepare(bank, min_separation)
     reach = bank.reach
+    full = prepared[0] if np.array_equal(prepared[0].rep, np.arange(bank.n_candidates)) \
+        else prepare(bank, min_separation, redundancy=True)[0]
+    rb = ring_bound(bank, full, prepared[1], int(n_max), reach - REACH_TOL)
     single = bank.coverage([[k] for k in range(bank.n_candidates)])
     best = int(np.argmax(single))
     cov, bnd, gap, status, swarms = [float(single[best])], [float(single[best])], [0.0], \
@@ -82,7 +91,22 @@ def coverage_curve(bank: CandidateBank, n_max: int, *, min_separation: float = 0
             status.append("optimal" if ok else "time_limit")
             swarms.append(idx)
             continue
+        upper = reach if rb is None or n >= rb.upper.size else float(rb.upper[n])
+        sw, c = _swap_point(bank, rb, prepared[1], n, swarms[-1])
+        if c >= upper - REACH_TOL:   # meets the ring bound: proven without a programme
+            cov.append(c)
+            bnd.append(upper)
+            gap.append(0.0)
+            status.append("optimal")
+            swarms.append(sw)
+            continue
         r = max_coverage(bank, n, time_limit=left, prepared=prepared)
+        if c > r.coverage:
+            r.coverage, r.indices = c, sw
+        r.bound = min(r.bound, upper)
+        r.gap = (r.bound - r.coverage) / r.bound if r.bound > 0 else 0.0
+        if r.gap < 1e-9:
+            r.status, r.gap, r.bound = "optimal", 0.0, r.coverage
         if r.coverage >= reach - REACH_TOL:  # the union bound proves it whatever HiGHS says
             r.status, r.gap, r.bound = "optimal", 0.0, reach
         elif r.coverage < cov[-1]:  # stopped early below the previous point, which also fits
@@ -96,3 +120,18 @@ def coverage_curve(bank: CandidateBank, n_max: int, *, min_separation: float = 0
     return CoverageCurve(n=np.arange(1, int(n_max) + 1), coverage=np.array(cov),
                          bound=np.array(bnd), gap=np.array(gap), status=status, swarms=swarms,
                          solve_time=time.perf_counter() - t0)
+
+
+def _swap_point(bank: CandidateBank, rb, m: int, n: int, prev: np.ndarray):
+    """Best swap-search swarm of n, started from the greedy swarm and the ring bound's swarm."""
+    starts = [greedy_swarm(bank, m, n)[0]]
+    if rb is not None and n < rb.upper.size:
+        starts.append(rb.swarm(n))
+    best, best_c = None, -1.0
+    for st in starts:
+        if st.size != n or np.any(st < 0):
+            continue
+        sw, c = swap_search(bank, st, m)
+        if c > best_c:
+            best, best_c = sw, c
+    return (prev, -1.0) if best is None else (best, best_c)

@@ -20,6 +20,13 @@ scenarios known so far (a relaxation, hence a proven lower bound on N),
 enumerate every failure of the optimum, add the violated ones (and their
 shifts by a few grid steps, which the next optimum tends to try), repeat. The
 first optimum that survives all its failures is the proven optimum.
+
+A group heavier than the slack (:func:`~ideas_hpc.design.exact.heavy_groups`)
+must be seen by at least ``k + 1`` members of a tolerant swarm: were it seen
+by ``k`` or fewer, their failure would lose more than the slack. Its
+``v^1 .. v^{k+1}`` are fixed to 1 (so ``sum_{c sees g} x_c >= k + 1``), which
+removes no tolerant swarm and makes the k = 1 strict design on eros001708
+about 4x faster to prove.
 """
 
 from __future__ import annotations
@@ -33,8 +40,8 @@ from scipy.optimize import LinearConstraint
 
 from ..errors import InputError
 from .bank import CandidateBank
-from .exact import (FEAS_TOL, ExactResult, _separation_rows, check_time_limit, min_swarm,
-                    prepare, solve)
+from .exact import (FEAS_TOL, ExactResult, _separation_rows, check_time_limit, heavy_groups,
+                    min_swarm, prepare, solve)
 
 #: Grid shifts of each violated failure set added with it (valid rows, fewer rounds).
 SHIFTS = (-2, -1, 1, 2)
@@ -67,10 +74,11 @@ def failure_tolerant(bank: CandidateBank, k: int, *, target: float, eps_tol: flo
     """Fewest spacecraft keeping ``target - eps_tol`` after any ``k`` failures (module docstring).
 
     Three steps: the proven lower bound ``N_0 + k`` (removing k spacecraft from a
-    tolerant swarm leaves a plain design); a feasible swarm from the sufficient
-    (k+1)-fold cover (:func:`_master` without scenarios, counting ``v^{k+1}``);
-    when the two differ, the lazy scenario search over the sizes in between,
-    within ``time_limit``. ``status`` is ``"optimal"`` only when the bounds meet.
+    tolerant swarm leaves a plain design); for ``k >= 2`` a feasible swarm from
+    the sufficient (k+1)-fold cover (:func:`_master` without scenarios,
+    counting ``v^{k+1}``); then the scenario search over the sizes in between
+    (for ``k = 1`` one programme with every single failure), within
+    ``time_limit``. ``status`` is ``"optimal"`` only when the bounds meet.
     """
     time_limit = check_time_limit(time_limit)
     if k < 0:
@@ -86,14 +94,19 @@ def failure_tolerant(bank: CandidateBank, k: int, *, target: float, eps_tol: flo
     red, m = prepare(bank, min_separation, redundancy=True)
     need = target - eps_tol
     nc = red.rep.size
-    c, cons, integ = _master(red, [], k, need, (k + 1, n_max), m, bank.n_candidates,
-                             fold=True)
-    res, _ = solve(c, cons, integ, _left(deadline))
+    lower = _heavy_lower(red, k, need, nc + (k + 1) * red.n_groups)
     best = None
-    if res.x is not None:
-        best = np.sort(red.rep[np.flatnonzero(res.x[:nc] > 0.5)])
-    notes = [f"lower bound {bound} = plain optimum {plain.n} + {k} failures; the "
-             f"{k + 1}-fold cover gives " + (f"{best.size}" if best is not None else "nothing")]
+    if k == 1:  # the one programme with every single failure below finds and proves it
+        notes = [f"lower bound {bound} = plain optimum {plain.n} + {k} failure"]
+    else:
+        c, cons, integ = _master(red, [], k, need, (k + 1, n_max), m, bank.n_candidates,
+                                 fold=True)
+        res, _ = solve(c, cons, integ, _left(deadline), lower)
+        if res.x is not None:
+            best = np.sort(red.rep[np.flatnonzero(res.x[:nc] > 0.5)])
+        notes = [f"lower bound {bound} = plain optimum {plain.n} + {k} failures; the "
+                 f"{k + 1}-fold cover gives " + (f"{best.size}" if best is not None
+                                                 else "nothing")]
     if bound - k == 2 and (best is None or best.size > bound):
         found, done = pair_clique(bank, bound, need, m)
         if found is not None:
@@ -115,7 +128,7 @@ def failure_tolerant(bank: CandidateBank, k: int, *, target: float, eps_tol: flo
         rounds += 1
         top = n_max if best is None else best.size - 1
         c, cons, integ = _master(red, scen, k, need, (bound, top), m, bank.n_candidates)
-        res, _ = solve(c, cons, integ, left)
+        res, _ = solve(c, cons, integ, left, lower)
         if res.status == 2:          # no swarm of bound..top survives: best is optimal
             if best is None:
                 raise InputError(f"no swarm of at most {n_max} spacecraft keeps "
@@ -205,6 +218,16 @@ def pair_clique(bank: CandidateBank, size: int, need: float, m: int, budget: int
         return None, count[0] <= budget
     s = np.array(sorted(got), dtype=np.int64)
     return (s, True) if worst_failure(bank, s, size - 2)[0] >= need - 1e-12 else (None, False)
+
+
+def _heavy_lower(red, k, need, n_var):
+    """Lower bounds of ``[x, v^1 .. v^{k+1}]``: 1 for every ``v^t`` of a heavy group."""
+    lower = np.zeros(n_var)
+    h = heavy_groups(red, need).astype(np.float64)
+    nc, g = red.rep.size, red.n_groups
+    for t in range(k + 1):
+        lower[nc + t * g:nc + (t + 1) * g] = h
+    return lower
 
 
 def _left(deadline):

@@ -1,0 +1,123 @@
+"""Ring-gap relaxation of the swarm design: a dynamic programme over sorted grid angles.
+
+A swarm is a set of grid indices ``p_1 < ... < p_N`` on a circle of ``K``
+candidates; consecutive members leave *gaps* ``(p_i, p_{i+1})`` (open, the
+last one wrapping to ``p_1 + K``). A vertex group is certainly missed when
+every candidate that sees it lies inside one gap. The kernels here minimise,
+over all N-swarms, the total weight of groups lying inside a gap:
+
+    miss(p) = sum_i M[p_i, p_{i+1} - p_i]
+
+with ``M[i, d]`` the weight of the groups whose candidate set lies in the
+open arc ``(i, i + d)``. That sum is additive over gaps, so the minimum is a
+shortest path, ``O(N K^3 / 6)`` for all first members at once. Because a
+group inside a gap is missed, ``miss(p)`` never exceeds the true missed
+weight, and ``reach - min_p miss(p)`` is a proven upper bound on the coverage
+any N grid candidates reach (:mod:`ideas_hpc.design.ring_bound` builds ``M``
+and uses the bound). Grid distances between consecutive members must exceed
+``m`` (the separation constraint of :func:`ideas_hpc.design.bank.conflict_windows`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+
+@njit(parallel=True, cache=True)
+def ring_gap_bound(M, n_max, m, stop_miss):
+    """Least gap-missed weight of every swarm size, per first member.
+
+    Parameters
+    ----------
+    M : (K, K + 1) float64
+        ``M[i, d]``: weight (area fraction) of the groups inside the open arc
+        ``(i, i + d)`` of grid indices (mod K); non-decreasing in ``d``.
+    n_max : int
+        Largest swarm size.
+    m : int
+        Consecutive members must be more than ``m`` grid steps apart.
+    stop_miss : float
+        Stop after the first size whose least missed weight is ``<= stop_miss``
+        (the bound can no longer exclude it); ``-1`` computes every size.
+
+    Returns
+    -------
+    tot : (n_max + 1, K) float64
+        ``tot[n, s]``: least missed weight of an n-swarm whose smallest index
+        is ``s`` (``inf`` when none fits, rows after the stop are ``inf``).
+    """
+    K = M.shape[0]
+    tot = np.full((n_max + 1, K), np.inf)
+    if n_max < 1:
+        return tot
+    # two layers of the shortest path, one row per first member s
+    prev = np.full((K, K), np.inf)
+    cur = np.full((K, K), np.inf)
+    low = np.inf
+    for s in range(K):
+        prev[s, s] = 0.0
+        tot[1, s] = M[s, K]
+        low = min(low, tot[1, s])
+    if low <= stop_miss:
+        return tot
+    for n in range(2, n_max + 1):
+        for s in prange(K):
+            cur[s, s] = np.inf
+            for j in range(s + 1, K):
+                best = np.inf
+                for i in range(s, j - m):
+                    v = prev[s, i] + M[i, j - i]
+                    if v < best:
+                        best = v
+                cur[s, j] = best
+                if s + K - j > m:
+                    v = best + M[j, s + K - j]
+                    if v < tot[n, s]:
+                        tot[n, s] = v
+        prev, cur = cur, prev
+        low = np.inf
+        for s in range(K):
+            low = min(low, tot[n, s])
+        if low <= stop_miss:
+            break
+    return tot
+
+
+@njit(cache=True)
+def ring_gap_swarm(M, n, m, s):
+    """The n-swarm with smallest index ``s`` reaching ``ring_gap_bound``'s ``tot[n, s]``.
+
+    Returns ``(indices (n,) int64 sorted, missed weight)``; indices are -1 when
+    no swarm fits.
+    """
+    K = M.shape[0]
+    D = np.full((n + 1, K), np.inf)
+    P = np.full((n + 1, K), -1, dtype=np.int64)
+    D[1, s] = 0.0
+    for k in range(2, n + 1):
+        for j in range(s + 1, K):
+            for i in range(s, j - m):
+                v = D[k - 1, i] + M[i, j - i]
+                if v < D[k, j]:
+                    D[k, j] = v
+                    P[k, j] = i
+    out = np.full(n, -1, dtype=np.int64)
+    if n == 1:
+        out[0] = s
+        return out, M[s, K]
+    best = np.inf
+    bj = -1
+    for j in range(s + 1, K):
+        if s + K - j > m:
+            v = D[n, j] + M[j, s + K - j]
+            if v < best:
+                best = v
+                bj = j
+    j = bj
+    for k in range(n, 0, -1):
+        if j < 0:
+            break
+        out[k - 1] = j
+        j = P[k, j]
+    return out, best
