@@ -74,21 +74,20 @@ def _worst_failure(bank, members):
     return np.where(n <= 1, 0.0, worst)
 
 
-def _optional(bank, name: str) -> np.ndarray:
+def _optional(bank, name: str, objective: str) -> np.ndarray:
     arr = getattr(bank, name, None)
     if arr is None:
-        raise InputError(f"the candidate bank has no {name!r} masks (the quality pass of this "
-                         f"setup does not give them), so the {name!r} objectives cannot be "
-                         "evaluated", field=FIELD)
+        raise InputError(f"objective {objective!r} needs the candidates' {name!r} arrays, which "
+                         "this candidate bank does not have", field=FIELD)
     return np.asarray(arr)
 
 
 def _stereo(bank, members):
-    return _union(_optional(bank, "stereo"), bank.areas, members)
+    return _union(_optional(bank, "stereo", "stereo_coverage"), bank.areas, members)
 
 
 def _mean_resolution(bank, members):
-    res = _optional(bank, "resolution").astype(np.float64)
+    res = _optional(bank, "resolution", "mean_resolution").astype(np.float64)
     best = np.full((members.shape[0], res.shape[1]), np.inf)
     seen = np.zeros(best.shape, dtype=bool)
     for j in range(members.shape[1]):
