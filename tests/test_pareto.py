@@ -231,3 +231,26 @@ def test_cli_end_to_end(eros1708, tmp_path):
     text = (tmp_path / "rep" / "summary.txt").read_text()
     assert "Pareto front (n, coverage)" in text
     assert (tmp_path / "rep" / "design_pareto_front.png").stat().st_size > 0
+
+
+def test_three_objectives_through_run_file_on_the_ellipsoid(tmp_path):
+    """The kind on the built-in ellipsoid (no data): a stored front of three objectives
+    whose rows are mutually non-dominated and whose values the stored swarms reproduce."""
+    from ideas_hpc.campaign.run import run_file
+
+    names = ["n", "coverage", "worst_failure_coverage"]
+    out = run_file(CAMPAIGN, out=tmp_path / "e.zarr", workers=0,
+                   overrides=['body.name="ellipsoid"', "design.angle_step_deg=5.0",
+                              f"design.objectives={names!r}".replace("'", '"')])
+    ds = xr.open_zarr(out)
+    assert "coverage_vs_n" not in ds and "pareto_gap_to_exact" not in ds
+    vals = np.c_[[ds[f"pareto_{x}"].values for x in names]].T
+    assert vals.shape[0] >= 2 and non_dominated(minimised(names, vals)).all()
+    setup = setup_from_campaign(load(CAMPAIGN, ['body.name="ellipsoid"']))
+    bank = build_bank(setup, np.deg2rad(5.0))
+    sw = ds["pareto_swarm"].values
+    members = np.full(sw.shape, -1)
+    for i, r in enumerate(sw):
+        idx = np.rint(r[np.isfinite(r)] / bank.step).astype(int)
+        members[i, :idx.size] = idx
+    np.testing.assert_allclose(evaluate(bank, names, members), vals, atol=1e-15)
