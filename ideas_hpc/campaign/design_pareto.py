@@ -15,6 +15,14 @@ curve (:func:`~ideas_hpc.design.coverage_curve`) is stored beside the front
 under the names the exact designer uses (``coverage_vs_n``, dim
 ``n_spacecraft``), with ``pareto_gap_to_exact`` = ``C*(N) - C(front point)``
 per front point (0 where the front reaches the proven optimum).
+
+Keys read: ``design.objectives``, ``angle_step_deg``, ``n_max``, ``population``,
+``generations``, ``parents``, ``mutation_probability``, ``time_limit_s`` (the
+exact curve), ``chunk_size`` and ``swarm.min_separation_km``. NSGA-II keeps
+the best half of each generation, so ``design.elitism`` and the NP GA's
+``eps_tol_pct`` / ``stall_generations`` do not apply. No flyby is stored: a
+front has no single swarm to fly (run a ``flyby`` of a chosen ``pareto_swarm``
+row).
 """
 
 from __future__ import annotations
@@ -57,14 +65,14 @@ def _progress(total: int):
     return cb
 
 
-def _stored_names(bank, names) -> tuple:
+def _stored_names(names) -> tuple:
     """The chosen objectives, plus ``n`` and ``coverage`` (always stored)."""
     return tuple(dict.fromkeys(("n", "coverage") + tuple(names)))
 
 
 def pareto_dataset(bank, res, n_max: int) -> xr.Dataset:
     """The front as store variables (module docstring)."""
-    stored = _stored_names(bank, res.objectives)
+    stored = _stored_names(res.objectives)
     members = np.full((len(res.swarms), max(1, n_max)), -1, dtype=np.int64)
     for i, s in enumerate(res.swarms):
         members[i, :s.size] = s
