@@ -43,6 +43,9 @@ KINDS: dict[str, Kind] = {k.name: k for k in (
          "fewest spacecraft for the coverage target (exact integer programme or GA)"),
     Kind("design-fov", "ideas_hpc.campaign.design_ga", "run_design", False,
          "sweep periods of a swarm with half the field of view (GA)"),
+    Kind("design-pareto", "ideas_hpc.campaign.design_pareto", "run_design_pareto", False,
+         "non-dominated swarms for two or more objectives (NSGA-II), with the exact "
+         "coverage-vs-N curve for (n, coverage)"),
     Kind("monte-carlo", "ideas_hpc.campaign.montecarlo", "run_monte_carlo", True,
          "dispersed flights of a designed swarm, chunked and resumable"),
 )}

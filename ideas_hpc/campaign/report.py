@@ -47,6 +47,8 @@ def _summary(ds, figs) -> str:
             lines.append(f"note: {note}")
     if "design_method" in ds:
         lines.extend(_design_lines(ds))
+    if "pareto_n" in ds:
+        lines.extend(_pareto_lines(ds))
     if "coverage" in ds:
         cov = np.atleast_1d(ds["coverage"].values) * 100
         cnt = np.atleast_1d(ds["coverage_count"].values) * 100
@@ -109,6 +111,30 @@ def _design_lines(ds) -> list[str]:
     return out
 
 
+def _pareto_lines(ds) -> list[str]:
+    """The non-dominated swarms of a design-pareto store, one line each."""
+    a = ds.attrs
+    names = json.loads(a.get("objectives", "[]"))
+    out = [f"Pareto front ({', '.join(names)}): {ds.sizes['pareto']} non-dominated swarms, "
+           f"{a.get('pareto_evaluations')} swarms scored in {a.get('pareto_wall_s', 0.0):.1f} s"]
+    for i in range(ds.sizes["pareto"]):
+        vals = []
+        for name in names:
+            v = float(ds[f"pareto_{name}"].values[i])
+            unit = ds[f"pareto_{name}"].attrs.get("units", "")
+            vals.append(f"{name} {int(v)}" if name == "n" else
+                        f"{name} {100 * v:.3f} %" if unit == "1" else f"{name} {v:.4g} {unit}")
+        ang = ds["pareto_swarm"].values[i]
+        ang = " ".join(f"{x:.3f}" for x in ang[np.isfinite(ang)])
+        out.append(f"  {', '.join(vals)}; angles (rad) {ang}")
+    if "pareto_gap_to_exact" in ds:
+        out.append(f"front against the proven coverage-vs-N curve: largest gap "
+                   f"{a.get('pareto_max_gap_to_exact', float('nan')):.3g}; every proven point "
+                   f"matched: {bool(a.get('pareto_matches_exact'))}")
+    out.extend(f"note: {n}" for n in json.loads(a.get("notes", "[]")))
+    return out
+
+
 def _design_figures(ds, out: Path) -> list[Path]:
     from ..plots import design
 
@@ -117,6 +143,8 @@ def _design_figures(ds, out: Path) -> list[Path]:
         figs.append(design.ring_view(ds, out / "design_ring.png"))
     if "coverage_vs_n" in ds:
         figs.append(design.coverage_vs_n(ds, out / "design_coverage_vs_n.png"))
+    if "pareto_n" in ds:
+        figs.append(design.pareto_front(ds, out / "design_pareto_front.png"))
     if "verify_coverage" in ds:
         figs.append(design.verification(ds, out / "design_verification.png"))
     return figs

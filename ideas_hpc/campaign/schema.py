@@ -6,7 +6,8 @@ into a frozen dataclass with SI values under SI names (:class:`CampaignConfig`:
 keys keep their user units (``aperture_cm``) and errors name them with the
 file and line. Tables and their keys, in the file's units (converted to SI here):
 
-``kind`` (``flyby``, ``design-nadir``, ``design-fov``, ``monte-carlo``), ``seed``.
+``kind`` (``flyby``, ``design-nadir``, ``design-fov``, ``design-pareto``,
+``monte-carlo``), ``seed``.
 
 ``[body]`` ``name`` (name or path), ``params`` (preset name or a table of
 :func:`ideas_hpc.params.params_from_mapping` keys), ``resolution`` (analytic
@@ -43,7 +44,11 @@ the owning modules' ``*_from_config`` (see their docstrings).
 (exact designer);
 (GA) ``population``, ``generations``, ``n_max``, ``eps_tol_pct``,
 ``angle_step_rad``, ``p_min_min``, ``p_max_min``, ``period_step_min``,
-``parents``, ``elitism``, ``mutation_probability``, ``stall_generations``.
+``parents``, ``elitism``, ``mutation_probability``, ``stall_generations``;
+(design-pareto) ``objectives`` (two or more names of
+:data:`ideas_hpc.design.objectives.OBJECTIVES`) with ``population``,
+``generations``, ``n_max``, ``angle_step_deg``, ``parents``,
+``mutation_probability`` and ``time_limit_s`` (the exact reference curve).
 
 ``[monte_carlo]`` ``samples`` and the dispersions (see :data:`MC_SCHEMA`).
 
@@ -58,6 +63,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ..config import CampaignSource, load_campaign
+from ..design.objectives import check_objectives
 from ..errors import InputError
 from ..schema import Field, to_typed, typed_table, validate, with_defaults
 from ..units import CM, DEG, KM, MINUTE, MM, UM
@@ -153,6 +159,9 @@ DESIGN = {
     "chunk_size": Field("int", 32, lo=1, doc="spacecraft per dask task"),
     "nadir_store": Field("str", None, nullable=True, doc="design-fov: take the swarm from "
                                                           "this design-nadir store"),
+    "objectives": Field("any", ("n", "coverage"),
+                        doc="design-pareto: two or more of n, coverage, "
+                            "worst_failure_coverage, stereo_coverage, mean_resolution"),
 }
 
 MC_SCHEMA = {
@@ -290,6 +299,7 @@ def _cross_checks(c: CampaignConfig) -> None:
     if mc.failures_k and sw.angles_rad and mc.failures_k > len(sw.angles_rad):
         raise InputError(f"cannot exceed the swarm size {len(sw.angles_rad)}",
                          field="monte_carlo.failures_k")
+    check_objectives(d.objectives)
     step = fb.dt_s
     img = 1.0 / c.instrument.image_rate_hz
     if abs(img / step - round(img / step)) > 1e-9:
@@ -334,7 +344,7 @@ def build_models(raw: dict, config: CampaignConfig) -> dict:
     if not ctrl:
         ctrl = {"preset": "fov" if config.attitude.maneuver == "fov" else "np"}
     coverage = coverage_options_from_config(cov, prefix="coverage.")
-    if coverage.requirement and config.kind in ("design-nadir", "design-fov"):
+    if coverage.requirement and config.kind in ("design-nadir", "design-fov", "design-pareto"):
         # the designers still maximise the seen fraction (issue 14 item 4 is open):
         # refuse rather than report a design that ignores the requirement
         raise InputError(f"a coverage requirement is not honoured by {config.kind!r} yet; "

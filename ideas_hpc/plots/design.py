@@ -90,3 +90,46 @@ def verification(ds, path) -> "Path":  # noqa: F821
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     return save_png(fig, path)
+
+
+def _axis(ds, name):
+    """Values and axis label of one stored objective, in display units."""
+    v = np.asarray(ds[f"pareto_{name}"].values, dtype=float)
+    units = ds[f"pareto_{name}"].attrs.get("units", "")
+    if name == "n":
+        return v, "swarm size N"
+    if units == "1":
+        return 100.0 * v, f"{name.replace('_', ' ')}, %"
+    return v, f"{name.replace('_', ' ')}, {units}"
+
+
+def pareto_front(ds, path) -> "Path":  # noqa: F821
+    """The non-dominated swarms, one panel per pair of objectives; with (n, coverage)
+    the proven coverage-versus-N curve is drawn under the front."""
+    import itertools
+    import json
+
+    names = json.loads(ds.attrs.get("objectives", '["n", "coverage"]'))
+    pairs = list(itertools.combinations(names, 2))
+    cols = min(3, len(pairs))
+    rows = -(-len(pairs) // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(5.2 * cols, 4.0 * rows), squeeze=False)
+    for ax, (a, b) in zip(axes.ravel(), pairs):
+        x, xl = _axis(ds, a)
+        y, yl = _axis(ds, b)
+        if {a, b} == {"n", "coverage"} and "coverage_vs_n" in ds:
+            n = ds["n_spacecraft"].values.astype(float)
+            c = 100.0 * ds["coverage_vs_n"].values
+            ax.plot(*((n, c) if a == "n" else (c, n)), "s--", color="0.55", mfc="none", ms=9,
+                    label="proven best coverage of N (exact)")
+        ax.plot(x, y, "o", color="tab:red", label=f"non-dominated swarms ({x.size})")
+        ax.set_xlabel(xl)
+        ax.set_ylabel(yl)
+        if a == "n":
+            ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+    for ax in axes.ravel()[len(pairs):]:
+        ax.set_visible(False)
+    fig.suptitle("design-pareto: non-dominated swarms (NSGA-II)")
+    return save_png(fig, path)

@@ -1,0 +1,174 @@
+"""Kind ``design-pareto`` (issue 14 item 5): the non-dominated swarms for several objectives.
+
+Orchestration only: the candidate bank (:func:`~ideas_hpc.design.build_bank`,
+the masks of every grid angle), NSGA-II over it
+(:func:`~ideas_hpc.design.pareto.run_pareto`, objectives from
+``design.objectives``), and the store variables with dim ``pareto`` (one row
+per non-dominated swarm, ordered by the objectives in the order given):
+
+* ``pareto_n`` (swarm size), ``pareto_coverage`` and ``pareto_<objective>``
+  for every chosen objective, natural sign and units;
+* ``pareto_swarm`` (pareto, slot): the swarm angles, rad, NaN-padded.
+
+For the two objectives (``n``, ``coverage``) the proven coverage-versus-N
+curve (:func:`~ideas_hpc.design.coverage_curve`) is stored beside the front
+under the names the exact designer uses (``coverage_vs_n``, dim
+``n_spacecraft``), with ``pareto_gap_to_exact`` = ``C*(N) - C(front point)``
+per front point (0 where the front reaches the proven optimum).
+
+Keys read: ``design.objectives``, ``angle_step_deg``, ``n_max``, ``population``,
+``generations``, ``parents``, ``mutation_probability``, ``time_limit_s`` (the
+exact curve), ``chunk_size`` and ``swarm.min_separation_km``. NSGA-II keeps
+the best half of each generation, so ``design.elitism`` and the NP GA's
+``eps_tol_pct`` / ``stall_generations`` do not apply. No flyby is stored: a
+front has no single swarm to fly (run a ``flyby`` of a chosen ``pareto_swarm``
+row).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+import time
+from contextlib import nullcontext
+
+import numpy as np
+import xarray as xr
+
+from ..design import build_bank, coverage_curve
+from ..design.bank import grid_size, separation_steps
+from ..design.objectives import OBJECTIVES, check_objectives, evaluate
+from ..design.pareto import run_pareto
+from ..errors import InputError
+from ..flyby import setup_from_campaign, target
+from . import datasets
+
+#: A front point matches the exact curve when their coverages differ by at most this.
+MATCH_TOL = 1e-12
+
+
+def _log(msg: str) -> None:
+    print(msg, file=sys.stderr, flush=True)
+
+
+def _progress(total: int):
+    from tqdm.auto import tqdm
+
+    bar = tqdm(total=total, desc="NSGA-II", unit="gen", file=sys.stderr, leave=True)
+
+    def cb(gen, front):
+        bar.update(1)
+        bar.set_postfix(front=front)
+        if gen >= total:
+            bar.close()
+    return cb
+
+
+def _stored_names(names) -> tuple:
+    """The chosen objectives, plus ``n`` and ``coverage`` (always stored)."""
+    return tuple(dict.fromkeys(("n", "coverage") + tuple(names)))
+
+
+def pareto_dataset(bank, res, n_max: int) -> xr.Dataset:
+    """The front as store variables (module docstring)."""
+    stored = _stored_names(res.objectives)
+    members = np.full((len(res.swarms), max(1, n_max)), -1, dtype=np.int64)
+    for i, s in enumerate(res.swarms):
+        members[i, :s.size] = s
+    vals = evaluate(bank, stored, members) if len(res.swarms) else np.zeros((0, len(stored)))
+    data = {}
+    for j, name in enumerate(stored):
+        o = OBJECTIVES[name]
+        v = vals[:, j].astype(np.int64) if name == "n" else vals[:, j]
+        data[f"pareto_{name}"] = (("pareto",), v, {"units": o.units, "long_name": o.long_name})
+    data["pareto_swarm"] = (("pareto", "slot"), res.angles(bank.theta, n_max),
+                            {"units": "rad", "long_name": "swarm angles of the front point "
+                             "(NaN beyond its N)"})
+    return xr.Dataset(data, coords={"pareto": np.arange(len(res.swarms)),
+                                    "slot": np.arange(max(1, n_max))})
+
+
+def exact_reference(bank, ds: xr.Dataset, n_max: int, sep: float, time_limit: float):
+    """Coverage-versus-N curve and the front's gap to it; returns (dataset, attrs, note)."""
+    curve = coverage_curve(bank, n_max, min_separation=sep, time_limit=time_limit)
+    n = ds["pareto_n"].values
+    exact = curve.coverage[n - 1]
+    gap = exact - ds["pareto_coverage"].values
+    proven = np.array([curve.status[k - 1] == "optimal" for k in n], dtype=bool)
+    ok = np.abs(gap[proven]) <= MATCH_TOL
+    ref = xr.Dataset({
+        "coverage_vs_n": (("n_spacecraft",), curve.coverage,
+                          {"units": "1", "long_name": "best coverage of N spacecraft (proven "
+                           "per N)"}),
+        "coverage_vs_n_gap": (("n_spacecraft",), curve.gap, {"units": "1"}),
+        "coverage_vs_n_status": (("n_spacecraft",), np.array(curve.status, dtype="U16")),
+        "coverage_vs_n_swarm": (("n_spacecraft", "slot"), curve.angles(bank.theta),
+                                {"units": "rad"}),
+        "pareto_gap_to_exact": (("pareto",), gap,
+                                {"units": "1", "long_name": "proven best coverage at the "
+                                 "point's N minus the point's coverage"}),
+    }, coords={"n_spacecraft": curve.n})
+    attrs = {"coverage_curve_s": float(curve.solve_time),
+             "pareto_matches_exact": int(ok.all()),
+             "pareto_max_gap_to_exact": float(np.max(np.abs(gap))) if gap.size else 0.0}
+    note = (f"front against the exact coverage-vs-N curve: {int(ok.sum())} of {int(proven.sum())}"
+            f" proven points matched within {MATCH_TOL:g} (largest gap "
+            f"{attrs['pareto_max_gap_to_exact']:.3g})")
+    return ref, attrs, note
+
+
+def run_design_pareto(c, out, *, workers=None, scheduler=None, cluster="local",
+                      slurm_config=None, **_) -> xr.Dataset:
+    """Kind ``design-pareto``: bank, NSGA-II, the non-dominated set (module docstring)."""
+    from ..engine.cluster import connect
+
+    d = c.config.design
+    sep = c.config.swarm.min_separation_m
+    try:
+        names = check_objectives(d.objectives)
+    except InputError as exc:
+        raise c.error(exc.message, exc.field) from None
+    setup = setup_from_campaign(c)
+    _log(f"body: {setup.body.note}")
+    target(setup, np.linspace(0.0, 2 * np.pi, 16, endpoint=False))
+    n_grid = grid_size(d.grid_step_rad)
+    try:  # a separation no two grid points satisfy fails before any mask is computed
+        separation_steps(2 * math.pi / n_grid, setup.d_sep, sep, n_grid)
+    except InputError as exc:
+        raise c.error(exc.message, exc.field) from None
+    local = workers == 0 and scheduler is None and cluster == "local"
+    t0 = time.perf_counter()
+    with (nullcontext(None) if local else
+          connect(cluster=cluster, workers=workers, scheduler=scheduler,
+                  slurm_config=slurm_config)) as client:
+        bank = build_bank(setup, d.grid_step_rad, client=client, chunk_size=d.chunk_size)
+    t_masks = time.perf_counter() - t0
+    _log(f"candidate masks: {bank.n_candidates} grid angles ({math.degrees(bank.step):g} deg) "
+         f"in {t_masks:.1f} s")
+    try:
+        res = run_pareto(bank, names, n_max=d.n_max, population=d.population,
+                         generations=d.generations, seed=c.config.seed, min_separation=sep,
+                         parents=d.parents, mutation_probability=d.mutation_probability,
+                         progress=_progress(d.generations))
+    except InputError as exc:
+        raise c.error(exc.message, exc.field) from None
+    ds = pareto_dataset(bank, res, d.n_max)
+    notes = list(res.notes)
+    attrs = {"objectives": json.dumps(list(names)), "angle_step_rad": float(bank.step),
+             "design_masks_s": float(t_masks), "pareto_wall_s": float(res.wall_s),
+             "pareto_evaluations": int(res.evaluations),
+             "pareto_generations": int(res.generations)}
+    if set(names) == {"n", "coverage"}:
+        ref, ref_attrs, note = exact_reference(bank, ds, d.n_max, sep, d.time_limit_s)
+        ds = xr.merge([ds, ref], combine_attrs="override")
+        attrs.update(ref_attrs)
+        notes.append(note)
+    _log(f"Pareto front: {ds.sizes['pareto']} non-dominated swarms of "
+         f"{', '.join(names)} in {res.wall_s:.1f} s ({res.evaluations} swarms scored)")
+    for note in notes:
+        _log(f"note: {note}")
+    ds.attrs.update(datasets.base_attrs(c, setup))
+    ds.attrs.update(attrs)
+    ds.attrs["notes"] = json.dumps(notes)
+    return ds
