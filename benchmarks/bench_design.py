@@ -27,7 +27,8 @@ import numpy as np  # noqa: E402
 from ideas_hpc.campaign.schema import load  # noqa: E402
 from ideas_hpc.design import (build_bank, coverage_curve, failure_tolerant,  # noqa: E402
                               min_swarm)
-from ideas_hpc.flyby import candidate_masks, setup_from_campaign  # noqa: E402
+from ideas_hpc.candidates import candidate_masks  # noqa: E402
+from ideas_hpc.flyby import setup_from_campaign  # noqa: E402
 from ideas_hpc.ga import run_nadir_ga  # noqa: E402
 from ideas_hpc.swarm_eval import nadir_keys  # noqa: E402
 

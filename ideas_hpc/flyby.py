@@ -30,7 +30,7 @@ from .attitude import Gains, SpacecraftModel, ideal_dcm_BT, initial_conditions, 
 from .bodies import Body, load_body
 from .core.mrp import dcm_from_mrp, mrp_from_prv
 from .errors import InputError
-from .mapping import CoverageOptions, CoverageResult, compute_coverage, observed_per_spacecraft
+from .mapping import CoverageOptions, CoverageResult, compute_coverage
 from .sizing import Sizing, size_flyby
 from .swarm_geometry import check_separation
 from .trajectory import (ForceModel, TargetingError, TargetingResult, propagate_swarm,
@@ -350,34 +350,3 @@ def _image(setup: FlybySetup, th, periods, r_img, ics, misalignment, active, cou
                            setup.far, options=setup.coverage, sun_T=sun, active=active,
                            counts=counts)
     return dcm, att, cov
-
-
-def candidate_masks(setup: FlybySetup, keys) -> np.ndarray:
-    """Per-candidate-spacecraft observed masks for the GA (:class:`~ideas_hpc.swarm_eval.MaskBank`).
-
-    ``keys``: list of ``(theta rad, period s (0 = nadir), ic key)``. All
-    candidates are targeted in one compiled call, flown (ideal, or simulated
-    from ``initial_conditions(seed, ic_key, 1)``), and imaged.
-
-    Returns
-    -------
-    (K, V) bool
-    """
-    th = np.array([k[0] for k in keys], dtype=np.float64)
-    per = np.array([k[1] for k in keys], dtype=np.float64)
-    tgt = target(setup, th)
-    r_img = np.ascontiguousarray(tgt.position_T[:, ::setup.image_every])
-    periods = per if setup.att_mode == "fov" else None
-    if setup.attitude_mode == "simulated":
-        draws = [initial_conditions(setup.seed, int(k[2]), 1) for k in keys]
-        s0, w0, W0 = (np.ascontiguousarray(np.concatenate([d[j] for d in draws])) for j in range(3))
-        dcm, _ = camera_dcms(setup.with_(decimate=max(1, int(round((setup.tf - setup.t0)
-                                                                    / setup.dt)))),
-                             th, periods, sigma0=s0, omega0=w0, wheel0=W0)
-    else:
-        dcm, _ = camera_dcms(setup, th, periods)
-    sun = None
-    if setup.coverage.needs_sun:
-        sun = setup.sun_T()
-    return observed_per_spacecraft(setup.body.shape, r_img, dcm, setup.eta, setup.near,
-                                   setup.far, options=setup.coverage, sun_T=sun)

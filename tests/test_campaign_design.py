@@ -15,7 +15,8 @@ from ideas_hpc.campaign.run import run_file
 from ideas_hpc.campaign.schema import load
 from ideas_hpc.core.union import population_coverage
 from ideas_hpc.errors import InputError
-from ideas_hpc.flyby import candidate_masks, fly, setup_from_campaign
+from ideas_hpc.candidates import candidate_masks
+from ideas_hpc.flyby import fly, setup_from_campaign
 
 ROOT = Path(__file__).resolve().parent.parent
 CAMPAIGNS = ROOT / "campaigns"

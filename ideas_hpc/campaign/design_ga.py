@@ -18,7 +18,8 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from ..flyby import candidate_masks, fly, setup_from_campaign, target
+from ..candidates import candidate_masks
+from ..flyby import fly, setup_from_campaign, target
 from ..ga_local import GridCover
 from ..swarm_eval import MaskBank, fov_keys, nadir_keys, snap_angle
 from ..swarm_geometry import min_separation_angle

@@ -344,11 +344,6 @@ def build_models(raw: dict, config: CampaignConfig) -> dict:
     if not ctrl:
         ctrl = {"preset": "fov" if config.attitude.maneuver == "fov" else "np"}
     coverage = coverage_options_from_config(cov, prefix="coverage.")
-    if coverage.requirement and config.kind in ("design-nadir", "design-fov", "design-pareto"):
-        # the designers still maximise the seen fraction (issue 14 item 4 is open):
-        # refuse rather than report a design that ignores the requirement
-        raise InputError(f"a coverage requirement is not honoured by {config.kind!r} yet; "
-                         "use it in flyby and monte-carlo campaigns", field="coverage")
     return {
         "force_model": force_model_from_config(_sub_table(raw, "dynamics"), prefix="dynamics."),
         "spacecraft": spacecraft_from_config(_sub_table(raw, "spacecraft"), prefix="spacecraft."),

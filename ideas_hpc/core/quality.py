@@ -47,9 +47,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from .bvh import cone_clear, segment_blocked
-from .time_tree import LEAF, _classify, time_tree
-from .visibility import _seen
+from .observations import L_EMI, L_INC, L_PHA, L_RES, L_SMAX, L_SMIN, _scan
+from .time_tree import LEAF, time_tree
 
 #: Radius of the direction caps of the stereo test, rad (an efficiency knob
 #: only; the result does not depend on it).
@@ -60,8 +59,6 @@ CAP_RADIUS = np.radians(0.5)
 _SLACK = 1e-6
 #: Vertices per parallel chunk (scratch arrays are allocated once per chunk).
 _CHUNK = 64
-#: Layout of ``limits``.
-L_RES, L_EMI, L_INC, L_PHA, L_SMIN, L_SMAX = 0, 1, 2, 3, 4, 5
 
 
 @njit(cache=True, inline="always")
@@ -165,46 +162,6 @@ def _stereo(U, m, smin, smax, cap, capc, caprad, capn, capstart, order, fill):
     return False
 
 
-#: Largest cone half-angle (rad) tried above the leaves of the time tree; wider
-#: cones rarely clear and cost a BVH walk each.
-_CONE_MAX = 0.01
-
-
-@njit(cache=True, inline="always")
-def _run_clear(NF, k, node, px, py, pz, j, node_bounds, node_info, tri, tri_vid, leaf):
-    """No image of the time-tree node can be occluded: the segments ``p -> r_i`` lie
-    in the cone around ``r_m - p`` of half-angle ``asin(e_r / |r_m - p|)``
-    (``|r_i - r_m| <= e_r``) and no face meets it (:func:`~ideas_hpc.core.bvh.cone_clear`).
-    False means unknown (the images are then ray-tested one by one)."""
-    vx = NF[k, node, 9] - px
-    vy = NF[k, node, 10] - py
-    vz = NF[k, node, 11] - pz
-    dist = np.sqrt(vx * vx + vy * vy + vz * vz)
-    er = NF[k, node, 14]
-    if not er < 0.5 * dist:
-        return False
-    alpha = np.arcsin(er / dist)
-    if alpha > _CONE_MAX and not leaf:
-        return False
-    return cone_clear(node_bounds, node_info, tri, tri_vid, px, py, pz, vx / dist, vy / dist,
-                      vz / dist, alpha, j)
-
-
-@njit(cache=True, inline="always")
-def _lit(j, i, lc, px, py, pz, nx, ny, nz, sun_T, node_bounds, node_info, tri, tri_vid):
-    """Vertex ``j`` lit at image ``i`` (cached in ``lc``: 0 unknown, 1 lit, 2 dark)."""
-    if lc[i] == 0:
-        sx = sun_T[i, 0]
-        sy = sun_T[i, 1]
-        sz = sun_T[i, 2]
-        ok = sx * nx + sy * ny + sz * nz > 0.0
-        if ok:
-            ok = not segment_blocked(node_bounds, node_info, tri, tri_vid, px, py, pz,
-                                     sx, sy, sz, np.inf, j)
-        lc[i] = 1 if ok else 2
-    return lc[i] == 1
-
-
 @njit(parallel=True, cache=True)
 def quality_vertices(vertices, normals, r_T, dcm_BT, image_times, tan_eta, near, far,
                      exact, active, sin_min_elev, max_range, occlusion, illumination,
@@ -293,73 +250,13 @@ def quality_vertices(vertices, normals, r_T, dcm_BT, image_times, tan_eta, near,
             for k in range(nsc):
                 if not active[k]:
                     continue
-                seen_k = False
-                sp = 1
-                stack[0] = NI.shape[0] - 1
-                while sp > 0:
-                    sp -= 1
-                    node = stack[sp]
-                    cls = _classify(NF, k, node, px, py, pz, nx, ny, nz, nabs, tan_eta,
-                                    sec_eta, near, far, exact)
-                    if cls == 0:
-                        continue
-                    # occlusion: one cone query can clear a whole run of images
-                    occl = occlusion
-                    leaf = NI[node, 2] < 0
-                    if occl and (cls == 2 or leaf):
-                        occl = not _run_clear(NF, k, node, px, py, pz, j, node_bounds,
-                                              node_info, tri, tri_vid, leaf)
-                    if (cls == 1 or occl) and not leaf:
-                        if NI[node, 3] >= 0:
-                            stack[sp] = NI[node, 3]
-                            sp += 1
-                        stack[sp] = NI[node, 2]
-                        sp += 1
-                        continue
-                    for i in range(NI[node, 0], NI[node, 1]):
-                        if not _seen(j, k, i, vertices, normals, r_T, dcm_BT, tan_eta, near,
-                                     far, exact, sin_min_elev, max_range, occl, False,
-                                     sun_T, node_bounds, node_info, tri, tri_vid):
-                            continue
-                        li = False
-                        if illumination or not vlit:
-                            li = _lit(j, i, lc, px, py, pz, nx, ny, nz, sun_T, node_bounds,
-                                      node_info, tri, tri_vid)
-                            if illumination and not li:
-                                continue
-                            vlit = vlit or li
-                        cnt += 1
-                        first = min(first, image_times[i])
-                        seen_k = True
-                        lx = r_T[k, i, 0] - px
-                        ly = r_T[k, i, 1] - py
-                        lz = r_T[k, i, 2] - pz
-                        ln = lx * nx + ly * ny + lz * nz
-                        rng2 = lx * lx + ly * ly + lz * lz
-                        res = rho * rng2 / ln if ln > 0.0 else np.inf
-                        if res < bres or bk < 0:
-                            bres = res
-                            bk = k
-                            bi = i
-                        # limits first, the (cached) shadow ray last
-                        ok = res <= limits[L_RES]
-                        rng = np.sqrt(rng2)
-                        if ok and check_ang:
-                            sx = sun_T[i, 0]
-                            sy = sun_T[i, 1]
-                            sz = sun_T[i, 2]
-                            ok = (ln >= c_emi * rng * nabs
-                                  and sx * nx + sy * ny + sz * nz >= c_inc * nabs
-                                  and sx * lx + sy * ly + sz * lz >= c_pha * rng)
-                        if ok and require_lit:
-                            ok = _lit(j, i, lc, px, py, pz, nx, ny, nz, sun_T, node_bounds,
-                                      node_info, tri, tri_vid)
-                        if ok:
-                            vusable = True
-                            U[m, 0] = lx / rng
-                            U[m, 1] = ly / rng
-                            U[m, 2] = lz / rng
-                            m += 1
+                m, vlit, cnt, first, bres, bk, bi, seen_k, usable_k = _scan(
+                    j, k, px, py, pz, nx, ny, nz, nabs, NF, NI, stack, lc, vertices,
+                    normals, r_T, dcm_BT, image_times, tan_eta, sec_eta, near, far, exact,
+                    sin_min_elev, max_range, occlusion, illumination, sun_T, node_bounds,
+                    node_info, tri, tri_vid, rho, limits, check_ang, c_emi, c_inc, c_pha,
+                    require_lit, U, m, vlit, cnt, first, bres, bk, bi)
+                vusable = vusable or usable_k
                 if seen_k:
                     nk += 1
             times_seen[j] = cnt

@@ -4,7 +4,7 @@ The ring (or helix) is discretised into ``K = round(360 / angle_step_deg)``
 swarm angles ``theta_k = k * step``. Spacecraft do not interact, so a swarm's
 observed set is the union of its members' masks (paper eq. 26) and the masks
 are computed once per candidate with the same code the GA uses
-(:func:`ideas_hpc.flyby.candidate_masks` through
+(:func:`ideas_hpc.candidates.candidate_masks` through
 :class:`ideas_hpc.swarm_eval.MaskBank`, keys ``(theta_k, 0, k)``).
 
 Before any integer programme, :func:`reduce_problem` drops vertices no
@@ -45,6 +45,13 @@ class CandidateBank:
         Grid step, rad.
     d_sep : float
         Ring radius, m (separations along the ring are ``d_sep * dtheta``).
+    usable, stereo : (K, V) bool, optional
+        With a ``[coverage]`` requirement and ``build_bank(quality=True)``: a
+        usable observation, a stereo pair from the candidate's own track
+        (:mod:`ideas_hpc.core.quality_masks`); ``masks`` is then what the
+        candidate maps alone.
+    resolution : (K, V) float64, optional
+        Best effective ground sample per candidate, m (inf: unobserved).
     """
 
     theta: np.ndarray
@@ -52,6 +59,9 @@ class CandidateBank:
     areas: np.ndarray
     step: float
     d_sep: float
+    usable: np.ndarray | None = None
+    stereo: np.ndarray | None = None
+    resolution: np.ndarray | None = None
 
     @property
     def n_candidates(self) -> int:
@@ -82,28 +92,39 @@ def grid_size(step: float, field: str = "design.angle_step_deg") -> int:
 
 
 def build_bank(setup, step: float, *, client=None, chunk_size: int = 32,
-               mask_bank=None, snap: bool = True) -> CandidateBank:
+               mask_bank=None, snap: bool = True, quality: bool = False) -> CandidateBank:
     """Masks of every grid angle (rad step) for a flyby setup, ring or helix.
 
     ``snap`` makes the step divide the circle (``2 pi / round(2 pi / step)``);
     without it the GA's own keys ``(k step, 0, k)`` are used. ``mask_bank`` (a
     :class:`~ideas_hpc.swarm_eval.MaskBank`) is reused when given, so a GA run
-    and its exact reference share the computed masks.
+    and its exact reference share the computed masks. ``quality`` also fills
+    ``usable``, ``stereo`` and ``resolution`` (one quality pass per candidate
+    chunk, :func:`ideas_hpc.candidates.candidate_quality`).
     """
-    from ..flyby import candidate_masks
+    from ..candidates import candidate_masks, candidate_quality
     from ..swarm_eval import MaskBank
 
     n = grid_size(step)
     step = TWO_PI / n if snap else float(step)
+    keys = [(k * step, 0.0, k) for k in range(n)]
+    common = dict(theta=step * np.arange(n), step=step, d_sep=float(setup.d_sep),
+                  areas=np.asarray(setup.body.shape.vertex_areas, dtype=np.float64))
+    if quality and mask_bank is None:
+        chunks = [keys[i:i + chunk_size] for i in range(0, n, chunk_size)]
+        part = functools.partial(candidate_quality, setup)
+        rows = client.gather(client.map(part, chunks, pure=False, retries=2)) if client \
+            else [part(c) for c in chunks]
+        q = {name: np.ascontiguousarray(np.concatenate([r[name] for r in rows]))
+             for name in ("mapped", "usable", "stereo", "resolution")}
+        return CandidateBank(masks=q["mapped"], usable=q["usable"], stereo=q["stereo"],
+                             resolution=q["resolution"], **common)
     if mask_bank is None:
         mask_bank = MaskBank(functools.partial(candidate_masks, setup),
                              setup.body.shape.n_vertices, chunk_size=chunk_size, client=client)
-    keys = [(k * step, 0.0, k) for k in range(n)]
     mask_bank.ensure(keys)
     masks = np.ascontiguousarray(mask_bank.masks[mask_bank.rows(keys)])
-    return CandidateBank(theta=step * np.arange(n), masks=masks,
-                         areas=np.asarray(setup.body.shape.vertex_areas, dtype=np.float64),
-                         step=step, d_sep=float(setup.d_sep))
+    return CandidateBank(masks=masks, **common)
 
 
 def separation_steps(step: float, d_sep: float, min_separation: float, n: int) -> int:
