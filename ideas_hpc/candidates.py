@@ -20,7 +20,7 @@ import numpy as np
 
 from .attitude import initial_conditions
 from .flyby import FlybySetup, camera_dcms, target
-from .mapping import observed_per_spacecraft, quality_per_spacecraft
+from .mapping import observed_per_spacecraft, quality_per_spacecraft, stereo_pair_table
 
 
 def _views(setup: FlybySetup, keys):
@@ -57,3 +57,10 @@ def candidate_quality(setup: FlybySetup, keys) -> dict:
     r_img, dcm, sun = _views(setup, keys)
     return quality_per_spacecraft(setup.body.shape, r_img, dcm, setup.image_times, setup.eta,
                                   setup.near, setup.far, options=setup.coverage, sun_T=sun)
+
+
+def candidate_stereo_pairs(setup: FlybySetup, keys) -> np.ndarray:
+    """(K (K - 1) / 2, V) bool: candidate pair ``a < b`` maps the vertex in stereo."""
+    r_img, dcm, sun = _views(setup, keys)
+    return stereo_pair_table(setup.body.shape, r_img, dcm, setup.image_times, setup.eta,
+                             setup.near, setup.far, options=setup.coverage, sun_T=sun)

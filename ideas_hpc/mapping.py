@@ -35,6 +35,7 @@ from .core import bvh as _bvh
 from .core import coverage as _cov
 from .core import quality as _qual
 from .core import quality_masks as _qmask
+from .core import stereo_pairs as _pairs
 from .coverage_options import (CoverageOptions, _finite,  # noqa: F401 (re-exported)
                                coverage_options_from_config)
 from .errors import InputError
@@ -303,6 +304,18 @@ def observed_per_spacecraft(shape, r_T, dcm_BT, eta, near, far, *,
                                        *tree)
 
 
+def _per_spacecraft_args(shape, r_T, dcm_BT, image_times, eta, near, far, options, sun_T):
+    r, c, tan_eta, near, far, _ = _check_geometry(shape, r_T, dcm_BT, eta, near, far)
+    t = np.ascontiguousarray(np.asarray(image_times, dtype=np.float64))
+    if t.shape != (r.shape[1],):
+        raise InputError(f"must have shape ({r.shape[1]},) to match r_T, got {t.shape}",
+                         field="image_times")
+    v, n, _ = _mesh(shape)
+    sin_e, max_r, occ, ill, s, tree = _strict_args(shape, options, sun_T, r.shape[1])
+    return (v, n, r, c, t, tan_eta, near, far, options.mode == "exact", sin_e, max_r, occ, ill,
+            s, *tree, float(options.rho), options.limits, bool(options.require_lit))
+
+
 def quality_per_spacecraft(shape, r_T, dcm_BT, image_times, eta, near, far, *,
                            options: CoverageOptions, sun_T=None) -> dict:
     """What each spacecraft alone maps, for the designers' unions (issue 14 item 4).
@@ -313,18 +326,22 @@ def quality_per_spacecraft(shape, r_T, dcm_BT, image_times, eta, near, far, *,
     :mod:`ideas_hpc.core.quality_masks`. ``mapped`` is ``usable`` and, with
     ``require_stereo``, ``stereo``: the per-spacecraft requirement mask.
     """
-    r, c, tan_eta, near, far, _ = _check_geometry(shape, r_T, dcm_BT, eta, near, far)
-    t = np.ascontiguousarray(np.asarray(image_times, dtype=np.float64))
-    if t.shape != (r.shape[1],):
-        raise InputError(f"must have shape ({r.shape[1]},) to match r_T, got {t.shape}",
-                         field="image_times")
-    v, n, _ = _mesh(shape)
-    sin_e, max_r, occ, ill, s, tree = _strict_args(shape, options, sun_T, r.shape[1])
-    usable, stereo, res = _qmask.quality_by_spacecraft(
-        v, n, r, c, t, tan_eta, near, far, options.mode == "exact", sin_e, max_r, occ, ill, s,
-        *tree, float(options.rho), options.limits, bool(options.require_lit))
+    usable, stereo, res = _qmask.quality_by_spacecraft(*_per_spacecraft_args(
+        shape, r_T, dcm_BT, image_times, eta, near, far, options, sun_T))
     mapped = usable & stereo if options.require_stereo else usable
     return {"usable": usable, "stereo": stereo, "resolution": res, "mapped": mapped}
+
+
+def stereo_pair_table(shape, r_T, dcm_BT, image_times, eta, near, far, *,
+                      options: CoverageOptions, sun_T=None) -> np.ndarray:
+    """(N (N - 1) / 2, V) bool: spacecraft pair ``a < b`` maps the vertex in stereo.
+
+    Rows in :func:`ideas_hpc.core.stereo_pairs.pair_index` order; see that
+    module. A swarm's stereo set is the union of its members' own-track
+    ``stereo`` rows (:func:`quality_per_spacecraft`) and of its pairs' rows.
+    """
+    return _pairs.stereo_pairs(*_per_spacecraft_args(
+        shape, r_T, dcm_BT, image_times, eta, near, far, options, sun_T))
 
 
 def coverage_from_mask(mask, vertex_areas) -> tuple[float, float]:

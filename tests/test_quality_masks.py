@@ -34,3 +34,36 @@ def test_rows_match_brute_force_per_spacecraft(eros1708, case):
             ref_u = quality_oracle(shape, r, C, t, eta, 1e-3, 1e6, nost, sun, one)
             np.testing.assert_array_equal(rows["usable"][k], ref_u["mapped"])
     assert stereo_any > 0 and rows["usable"].any(axis=1).sum() >= 2
+
+
+@pytest.mark.parametrize("case", ["exact-occl-all-limits", "illum-elev-stereo-detector"])
+def test_swarm_stereo_is_own_tracks_plus_pairs_on_every_subset(eros1708, case):
+    """The designers' stereo model: a subset maps a vertex iff one member's own track
+    or one pair of members does. Checked against the quality pass of every subset."""
+    import itertools
+
+    from ideas_hpc.core.stereo_pairs import pair_index
+    from ideas_hpc.mapping import compute_coverage, stereo_pair_table
+
+    shape = eros1708.shape
+    r, C, t, sun = eros_views()
+    opts = CoverageOptions(**CASES[case])
+    eta = 20 * DEG
+    rows = quality_per_spacecraft(shape, r, C, t, eta, 1e-3, 1e6, options=opts, sun_T=sun)
+    pairs = stereo_pair_table(shape, r, C, t, eta, 1e-3, 1e6, options=opts, sun_T=sun)
+    n = r.shape[0]
+    assert pairs.shape == (n * (n - 1) // 2, shape.n_vertices) and pairs.any()
+    from_pairs_only = 0
+    for size in range(1, n + 1):
+        for sub in itertools.combinations(range(n), size):
+            active = np.zeros(n, bool)
+            active[list(sub)] = True
+            q = compute_coverage(shape, r, C, t, eta, 1e-3, 1e6, options=opts, sun_T=sun,
+                                 active=active).quality
+            own = rows["mapped"][list(sub)].any(axis=0)
+            model = own.copy()
+            for a, b in itertools.combinations(sub, 2):
+                model |= pairs[pair_index(a, b, n)]
+            np.testing.assert_array_equal(model, q.mapped, err_msg=str(sub))
+            from_pairs_only += int((model & ~own).sum())
+    assert from_pairs_only > 0      # the test sees stereo that needs two spacecraft

@@ -22,7 +22,9 @@ import numpy as np
 import xarray as xr
 
 from ..design.bank import grid_size, separation_steps
+from ..candidates import candidate_stereo_pairs
 from ..design import build_bank, coverage_curve, failure_tolerant, min_swarm, worst_failure
+from ..design.stereo import StereoBank, check_grid, min_swarm_stereo, stereo_curve
 from ..errors import InputError
 from ..flyby import fly
 from ..montecarlo.verify import verify_swarm
@@ -44,12 +46,19 @@ class ExactDesign:
     summary: str = ""
 
 
-def _target(bank, eps_tol: float, mode: str, strict: bool, notes: list) -> float:
+def _target(bank, eps_tol: float, coverage, notes: list) -> float:
+    """1, or the highest coverage any swarm of grid candidates reaches when 1 is out of reach."""
     reach = bank.reach
+    if reach <= 0.0:
+        raise InputError("no grid candidate maps any vertex under the [coverage] options and "
+                         "requirement: loosen them (or check flyby.epoch_s for the lighting)",
+                         field="coverage")
     if reach < 1.0 - eps_tol:
-        notes.append(f"100 % is not reachable from this ring in {mode} mode (strict options: "
-                     f"{strict}); the highest reachable coverage is {100 * reach:.3f} % (all "
-                     f"{bank.n_candidates} grid angles), and the design reaches that instead")
+        what = "the [coverage] requirement" if coverage.requirement else \
+            f"{coverage.mode} mode (strict options: {coverage.strict})"
+        notes.append(f"100 % is not reachable from this ring with {what}; the highest "
+                     f"reachable coverage is {100 * reach:.3f} % (all {bank.n_candidates} grid "
+                     f"angles), and the design reaches that instead")
         return reach
     return 1.0
 
@@ -74,15 +83,30 @@ def design_exact(c, setup, client) -> ExactDesign:
         separation_steps(2 * math.pi / n_grid, setup.d_sep, sep, n_grid)
     except InputError as exc:
         raise c.error(exc.message, exc.field) from None
+    stereo = setup.coverage.require_stereo
+    if stereo:
+        try:
+            check_grid(n_grid)
+        except InputError as exc:
+            raise c.error(exc.message, exc.field) from None
     t0 = time.perf_counter()
-    bank = build_bank(setup, d.grid_step_rad, client=client, chunk_size=d.chunk_size)
+    bank = build_bank(setup, d.grid_step_rad, client=client, chunk_size=d.chunk_size,
+                      quality=stereo)
+    scorer = bank
+    if stereo:
+        keys = [(float(t), 0.0, i) for i, t in enumerate(bank.theta)]
+        scorer = StereoBank(bank, candidate_stereo_pairs(setup, keys))
     t_masks = time.perf_counter() - t0
-    _log(f"candidate masks: {bank.n_candidates} grid angles ({math.degrees(bank.step):g} deg) "
-         f"in {t_masks:.1f} s")
+    _log(f"candidate {'rows' if setup.coverage.requirement else 'masks'}: {bank.n_candidates} "
+         f"grid angles ({math.degrees(bank.step):g} deg)"
+         f"{' and their stereo pairs' if stereo else ''} in {t_masks:.1f} s")
     notes: list = []
-    target = _target(bank, eps, setup.coverage.mode, setup.coverage.strict, notes)
+    target = _target(scorer, eps, setup.coverage, notes)
     try:
-        if k:
+        if stereo:
+            res = min_swarm_stereo(scorer, target=target, eps_tol=eps, n_max=d.n_max,
+                                   min_separation=sep, time_limit=d.time_limit_s)
+        elif k:
             res = failure_tolerant(bank, k, target=target, eps_tol=eps, n_max=d.n_max,
                                    min_separation=sep, time_limit=d.time_limit_s)
         else:
@@ -92,7 +116,9 @@ def design_exact(c, setup, client) -> ExactDesign:
         raise c.error(exc.message, exc.field) from None
     notes.extend(res.notes)
     t_design = time.perf_counter() - t0
-    curve = coverage_curve(bank, d.n_max, min_separation=sep, time_limit=d.time_limit_s)
+    curve = (stereo_curve(scorer, d.n_max, min_separation=sep, time_limit=d.time_limit_s)
+             if stereo else
+             coverage_curve(bank, d.n_max, min_separation=sep, time_limit=d.time_limit_s))
     k_eval = k if k else 1
     data = {
         "design_method": ((), "exact"),
@@ -106,7 +132,7 @@ def design_exact(c, setup, client) -> ExactDesign:
         "coverage_vs_n_gap": (("n_spacecraft",), curve.gap),
         "coverage_vs_n_status": (("n_spacecraft",), np.array(curve.status, dtype="U16")),
         "coverage_vs_n_swarm": (("n_spacecraft", "slot"), curve.angles(bank.theta)),
-        **(failure_vars(bank, res.indices, k_eval) if res.n > k_eval else {}),
+        **(failure_vars(scorer, res.indices, k_eval) if res.n > k_eval else {}),
     }
     ds = xr.Dataset(data, coords={"n_spacecraft": curve.n})
     ds["coverage_vs_n"].attrs.update(units="1", long_name="best coverage of N spacecraft "

@@ -1,0 +1,136 @@
+"""Stereo from two spacecraft: which candidate pairs map each vertex (issue 14 item 4).
+
+With nadir pointing one spacecraft sees a vertex from a narrow cone of
+directions (on eros001708 no single track gives a 10-40 deg pair), so stereo
+comes from two spacecraft. A swarm ``S`` maps vertex ``j`` in stereo when
+some candidate of ``S`` has a stereo pair on its own track or some pair
+``a < b`` of ``S`` has a usable observation each whose unit lines of sight
+``u, w`` satisfy ``cos(s_max) <= u . w <= cos(s_min)``. This kernel tabulates
+the second condition for every pair of candidates; the designer then
+solves a set cover over pairs (:mod:`ideas_hpc.design.stereo`).
+
+Per vertex, each candidate's usable directions are collected with the scan
+of :mod:`ideas_hpc.core.observations` and bounded by a cap (centre: the first
+direction, radius: the largest angle to it). For caps with centre angle ``t``
+and radii ``ra, rb`` every cross pair lies in ``[t - ra - rb, t + ra + rb]``
+(triangle inequality on the sphere): a cap interval inside ``[s_min, s_max]``
+decides True, one outside decides False, and only the rest are tested pair by
+pair. The result is that of the pairwise test (:data:`SLACK` guards the
+rounding of ``acos``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+from .observations import L_EMI, L_INC, L_PHA, L_SMAX, L_SMIN, _scan
+from .quality import _CHUNK
+from .time_tree import LEAF, time_tree
+
+#: Angular slack of the cap decisions, rad (see module docstring).
+SLACK = 1e-6
+
+
+@njit(cache=True)
+def pair_index(a, b, k):
+    """Row of the pair ``a < b`` of ``k`` candidates in the upper-triangle order."""
+    return a * (2 * k - a - 1) // 2 + (b - a - 1)
+
+
+@njit(parallel=True, cache=True)
+def stereo_pairs(vertices, normals, r_T, dcm_BT, image_times, tan_eta, near, far, exact,
+                 sin_min_elev, max_range, occlusion, illumination, sun_T, node_bounds,
+                 node_info, tri, tri_vid, rho, limits, require_lit):
+    """(K (K - 1) / 2, V) bool: candidate pair ``(a, b)`` maps vertex ``j`` in stereo.
+
+    Arguments as in :func:`ideas_hpc.core.quality_masks.quality_by_spacecraft`
+    (``r_T`` holds the K candidates). Rows are in :func:`pair_index` order.
+    """
+    nv = vertices.shape[0]
+    nsc = r_T.shape[0]
+    nimg = r_T.shape[1]
+    NF, NI = time_tree(r_T, dcm_BT, LEAF)
+    sec_eta = np.sqrt(1.0 + tan_eta * tan_eta) * (1.0 + 1e-12)
+    check_ang = limits[L_EMI] < np.inf or limits[L_INC] < np.inf or limits[L_PHA] < np.inf
+    c_emi = np.cos(limits[L_EMI]) if limits[L_EMI] < np.inf else -2.0
+    c_inc = np.cos(limits[L_INC]) if limits[L_INC] < np.inf else -2.0
+    c_pha = np.cos(limits[L_PHA]) if limits[L_PHA] < np.inf else -2.0
+    smin = limits[L_SMIN]
+    smax = limits[L_SMAX]
+    cmin = np.cos(smax)
+    cmax = np.cos(smin)
+    out = np.zeros((nsc * (nsc - 1) // 2, nv), dtype=np.bool_)
+    nchunk = (nv + _CHUNK - 1) // _CHUNK
+    for ch in prange(nchunk):
+        stack = np.empty(128, dtype=np.int64)
+        lc = np.zeros(nimg, dtype=np.int8)
+        U = np.empty((nsc * nimg, 3))
+        start = np.zeros(nsc + 1, dtype=np.int64)
+        rad = np.zeros(nsc)
+        for j in range(ch * _CHUNK, min(nv, (ch + 1) * _CHUNK)):
+            _pairs_of_vertex(j, out, stack, lc, U, start, rad, vertices, normals, r_T, dcm_BT,
+                             image_times, tan_eta, sec_eta, near, far, exact, sin_min_elev,
+                             max_range, occlusion, illumination, sun_T, node_bounds,
+                             node_info, tri, tri_vid, rho, limits, check_ang, c_emi, c_inc,
+                             c_pha, require_lit, NF, NI, smin, smax, cmin, cmax)
+    return out
+
+
+@njit(cache=True)
+def _pairs_of_vertex(j, out, stack, lc, U, start, rad, vertices, normals, r_T, dcm_BT,
+                     image_times, tan_eta, sec_eta, near, far, exact, sin_min_elev, max_range,
+                     occlusion, illumination, sun_T, node_bounds, node_info, tri, tri_vid, rho,
+                     limits, check_ang, c_emi, c_inc, c_pha, require_lit, NF, NI, smin, smax,
+                     cmin, cmax):
+    """Fill column ``j`` of :func:`stereo_pairs` (scratch arrays given by the caller)."""
+    nsc = r_T.shape[0]
+    lc[:] = 0
+    px = vertices[j, 0]
+    py = vertices[j, 1]
+    pz = vertices[j, 2]
+    nx = normals[j, 0]
+    ny = normals[j, 1]
+    nz = normals[j, 2]
+    nabs = np.sqrt(nx * nx + ny * ny + nz * nz)
+    m = 0
+    for k in range(nsc):
+        start[k] = m
+        m, _, _, _, _, _, _, _, _ = _scan(
+            j, k, px, py, pz, nx, ny, nz, nabs, NF, NI, stack, lc, vertices, normals, r_T,
+            dcm_BT, image_times, tan_eta, sec_eta, near, far, exact, sin_min_elev,
+            max_range, occlusion, illumination, sun_T, node_bounds, node_info, tri,
+            tri_vid, rho, limits, check_ang, c_emi, c_inc, c_pha, require_lit, U, m, True,
+            0, np.inf, np.inf, -1, -1)
+        r = 0.0
+        for x in range(start[k] + 1, m):
+            d = U[x, 0] * U[start[k], 0] + U[x, 1] * U[start[k], 1] \
+                + U[x, 2] * U[start[k], 2]
+            r = max(r, np.arccos(min(1.0, max(-1.0, d))))
+        rad[k] = r
+    start[nsc] = m
+    for a in range(nsc):
+        if start[a + 1] == start[a]:
+            continue
+        for b in range(a + 1, nsc):
+            if start[b + 1] == start[b]:
+                continue
+            ca = start[a]
+            cb = start[b]
+            d = U[ca, 0] * U[cb, 0] + U[ca, 1] * U[cb, 1] + U[ca, 2] * U[cb, 2]
+            t = np.arccos(min(1.0, max(-1.0, d)))
+            lo = t - rad[a] - rad[b]
+            hi = t + rad[a] + rad[b]
+            if lo - SLACK > smax or hi + SLACK < smin:
+                continue
+            hit = lo - SLACK >= smin and hi + SLACK <= smax
+            x = start[a]
+            while not hit and x < start[a + 1]:
+                for y in range(start[b], start[b + 1]):
+                    c = U[x, 0] * U[y, 0] + U[x, 1] * U[y, 1] + U[x, 2] * U[y, 2]
+                    if cmin <= c and c <= cmax:
+                        hit = True
+                        break
+                x += 1
+            if hit:
+                out[pair_index(a, b, nsc), j] = True

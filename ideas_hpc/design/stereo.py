@@ -1,0 +1,228 @@
+"""Exact swarm design with stereo from two spacecraft (issue 14 item 4).
+
+A swarm maps vertex ``v`` in stereo when one member's own track gives a
+stereo pair (``own[a, v]``, :mod:`ideas_hpc.core.quality_masks`) or one pair
+of members does (``pairs[ab, v]``, :mod:`ideas_hpc.core.stereo_pairs`); the
+test suite checks this model against the quality pass of every subset. That
+is not a union of per-spacecraft rows, so the set cover gets a variable per
+pair. With ``x_a`` in {0, 1} (candidate a flies), ``z_ab`` in [0, 1] (both
+fly) and ``y_g`` in [0, 1] (group g counted as mapped)::
+
+    minimise    sum_a x_a
+    subject to  z_ab <= x_a,  z_ab <= x_b                      for every useful pair
+                y_g <= sum_{a: own sees g} x_a + sum_{ab sees g} z_ab
+                sum_g w_g y_g >= A_target - eps_tol
+                separation windows and swarm size as in :mod:`ideas_hpc.design.exact`
+
+For integer ``x`` the largest feasible ``z_ab`` is ``x_a x_b``, so this is
+exactly the stereo problem on the candidate grid (not a relaxation): its
+optimum is the proven fewest spacecraft, with HiGHS's bound and gap as for
+the plain design. Vertex groups merge identical (own, pair) columns and pairs
+that map nothing are dropped. There are ``K (K - 1) / 2`` pairs, so the grid
+is limited to :data:`MAX_CANDIDATES` candidates (2 deg or coarser).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import sparse
+from scipy.optimize import LinearConstraint
+
+from ..core.stereo_pairs import pair_index
+from ..core.union import population_coverage
+from ..errors import InputError
+from .bank import CandidateBank, conflict_windows, reduce_problem, separation_steps
+from .exact import FEAS_TOL, GAP_ZERO, ExactResult, check_time_limit, heavy_groups, solve
+
+#: Largest candidate grid of the pair formulation (K (K - 1) / 2 pair rows).
+MAX_CANDIDATES = 180
+
+
+def check_grid(n_candidates: int) -> None:
+    if n_candidates > MAX_CANDIDATES:
+        step = 360.0 / MAX_CANDIDATES
+        raise InputError(f"stereo from two spacecraft needs a pair variable per candidate pair; "
+                         f"{n_candidates} grid angles are too many (at most {MAX_CANDIDATES}): "
+                         f"use design.angle_step_deg >= {step:g} with coverage.require_stereo",
+                         field="design.angle_step_deg")
+
+
+@dataclass
+class StereoBank:
+    """Own-track rows ``bank.masks`` (K, V) and pair rows ``pairs`` (K (K-1)/2, V)."""
+
+    bank: CandidateBank
+    pairs: np.ndarray
+
+    def swarm_rows(self, swarm) -> np.ndarray:
+        """Row indices (own rows 0..K-1, pair rows K + pair_index) a swarm maps with."""
+        s = sorted(int(i) for i in swarm)
+        k = self.bank.n_candidates
+        return np.array(s + [k + pair_index(a, b, k) for a, b in itertools.combinations(s, 2)],
+                        dtype=np.int64)
+
+    def coverage(self, swarms) -> np.ndarray:
+        """Stereo-mapped area fraction of each swarm (grid indices)."""
+        rows = np.vstack([self.bank.masks, self.pairs])
+        members = [self.swarm_rows(s) for s in swarms]
+        width = max(1, max(m.size for m in members))
+        mem = np.full((len(members), width), -1, dtype=np.int64)
+        for i, m in enumerate(members):
+            mem[i, :m.size] = m
+        a = np.ascontiguousarray(self.bank.areas, dtype=np.float64)
+        return population_coverage(np.ascontiguousarray(rows), mem, a, float(a.sum()))[0]
+
+    @property
+    def n_candidates(self) -> int:
+        return self.bank.n_candidates
+
+    @property
+    def reach(self) -> float:
+        return float(self.coverage([np.arange(self.bank.n_candidates)])[0])
+
+
+def _model(sb: StereoBank, m: int):
+    """Reduced cover data: (cover (R, G) over own + useful pair rows, weight, pair ends, R_own)."""
+    k = sb.bank.n_candidates
+    rows = np.vstack([sb.bank.masks, sb.pairs])
+    red = reduce_problem(rows, sb.bank.areas, merge_candidates=False)
+    useful = red.cover[k:].any(axis=1)
+    ends = np.array(list(itertools.combinations(range(k), 2)), dtype=np.int64).reshape(-1, 2)
+    if m:   # pairs closer than the separation never fly together
+        d = np.abs(ends[:, 0] - ends[:, 1])
+        useful &= np.minimum(d, k - d) > m
+    cover = np.vstack([red.cover[:k], red.cover[k:][useful]])
+    return cover, red, ends[useful]
+
+
+def _constraints(sb: StereoBank, cover, red, ends, m: int, card):
+    k = sb.bank.n_candidates
+    p = ends.shape[0]
+    g = red.n_groups
+    n_var = k + p + g
+    cov_t = sparse.csr_matrix(cover.T.astype(np.float64))                 # (G, k + p)
+    rows = [sparse.hstack([-cov_t, sparse.identity(g)], format="csr")]
+    lo, hi = [np.full(g, -np.inf)], [np.zeros(g)]
+    if p:
+        r = np.repeat(np.arange(2 * p), 2)
+        c = np.c_[ends.ravel(), k + np.repeat(np.arange(p), 2)].ravel()
+        v = np.tile([-1.0, 1.0], 2 * p)
+        rows.append(sparse.csr_matrix((v, (r, c)), shape=(2 * p, n_var)))
+        lo.append(np.full(2 * p, -np.inf))
+        hi.append(np.zeros(2 * p))
+    ones = np.zeros(n_var)
+    ones[:k] = 1.0
+    rows.append(sparse.csr_matrix(ones[None, :]))
+    lo.append([card[0]])
+    hi.append([card[1]])
+    cons = [LinearConstraint(sparse.vstack(rows, format="csr"), np.concatenate(lo),
+                             np.concatenate(hi))]
+    win = conflict_windows(k, m)
+    if win.size and win.shape[1] > 1:
+        r = np.repeat(np.arange(win.shape[0]), win.shape[1])
+        cons.append(LinearConstraint(sparse.csr_matrix((np.ones(win.size), (r, win.ravel())),
+                                                       shape=(win.shape[0], n_var)), -np.inf, 1))
+    integ = np.r_[np.ones(k), np.zeros(p + g)]
+    return cons, integ, n_var
+
+
+def min_swarm_stereo(sb: StereoBank, *, target: float, eps_tol: float, n_max: int,
+                     min_separation: float = 0.0, time_limit=None) -> ExactResult:
+    """The fewest grid candidates whose stereo-mapped area reaches ``target - eps_tol``."""
+    time_limit = check_time_limit(time_limit)
+    bank = sb.bank
+    check_grid(bank.n_candidates)
+    m = separation_steps(bank.step, bank.d_sep, min_separation, bank.n_candidates)
+    need = target - eps_tol
+    cover, red, ends = _model(sb, m)
+    k, p, g = bank.n_candidates, ends.shape[0], red.n_groups
+    cons, integ, n_var = _constraints(sb, cover, red, ends, m, (1, int(n_max)))
+    w = np.zeros(n_var)
+    w[k + p:] = red.weight
+    cons.append(LinearConstraint(w[None, :], need + FEAS_TOL, np.inf))
+    c = np.zeros(n_var)
+    c[:k] = 1.0
+    lower = np.zeros(n_var)
+    lower[k + p:] = heavy_groups(red, need)
+    res, dt = solve(c, cons, integ, time_limit, lower)
+    if res.x is None:
+        if res.status == 2:
+            top = max_coverage_stereo(sb, int(n_max), min_separation=min_separation,
+                                      time_limit=time_limit)
+            raise InputError(f"no swarm of at most {n_max} spacecraft maps "
+                             f"{100 * need:.3f} % in stereo; the highest coverage {n_max} "
+                             f"reach is {100 * top.coverage:.3f} % ({top.status})",
+                             field="design.n_max")
+        raise InputError(f"no stereo design found within the time limit ({res.message}); "
+                         "raise design.time_limit_s", field="design.time_limit_s")
+    idx = np.sort(np.flatnonzero(res.x[:k] > 0.5))
+    bound = getattr(res, "mip_dual_bound", None)
+    bound = math.ceil(bound - 1e-6) if bound is not None and np.isfinite(bound) else 1
+    bound = min(max(bound, 1), idx.size)
+    gap = (idx.size - bound) / idx.size
+    cov = float(sb.coverage([idx])[0])
+    if cov < need - 1e-9:
+        raise RuntimeError(f"stereo design maps {cov!r} < {need!r}")
+    status = "optimal" if gap == 0 else ("time_limit" if res.status == 1 else "feasible")
+    return ExactResult(indices=idx, theta=bank.theta[idx], n=idx.size, coverage=cov,
+                       target=target, status=status, bound=float(bound), gap=float(gap),
+                       solve_time=dt, notes=[
+                           f"stereo from own tracks and from {p} candidate pairs "
+                           f"({red.n_groups} vertex groups), one variable per pair: exact"])
+
+
+def max_coverage_stereo(sb: StereoBank, n: int, *, min_separation: float = 0.0,
+                        time_limit=None) -> ExactResult:
+    """The highest stereo-mapped area any ``n`` grid candidates reach, with a swarm reaching it."""
+    time_limit = check_time_limit(time_limit)
+    bank = sb.bank
+    check_grid(bank.n_candidates)
+    m = separation_steps(bank.step, bank.d_sep, min_separation, bank.n_candidates)
+    cover, red, ends = _model(sb, m)
+    k, p = bank.n_candidates, ends.shape[0]
+    cons, integ, n_var = _constraints(sb, cover, red, ends, m, (0, int(n)))
+    c = np.zeros(n_var)
+    c[k + p:] = -red.weight
+    res, dt = solve(c, cons, integ, time_limit)
+    if res.x is None:
+        raise RuntimeError(f"HiGHS found no stereo swarm of {n}: {res.message}")
+    idx = np.sort(np.flatnonzero(res.x[:k] > 0.5))
+    cov = float(sb.coverage([idx])[0])
+    bound = getattr(res, "mip_dual_bound", None)
+    bound = cov if bound is None or not np.isfinite(bound) else max(cov, -float(bound))
+    gap = (bound - cov) / bound if bound > 0 else 0.0
+    if gap < GAP_ZERO:
+        gap, bound = 0.0, cov
+    status = "optimal" if gap == 0.0 else ("time_limit" if res.status == 1 else "feasible")
+    return ExactResult(indices=idx, theta=bank.theta[idx], n=idx.size, coverage=cov,
+                       target=cov, status=status, bound=float(bound), gap=float(gap),
+                       solve_time=dt)
+
+
+def stereo_curve(sb: StereoBank, n_max: int, *, min_separation: float = 0.0,
+                 time_limit=None):
+    """Coverage-versus-N with stereo: a :class:`~ideas_hpc.design.coverage_vs_n.CoverageCurve`."""
+    import time
+
+    from .coverage_vs_n import CoverageCurve
+
+    t0 = time.perf_counter()
+    out = []
+    for n in range(1, int(n_max) + 1):
+        left = None if time_limit is None else max(1e-3, time_limit - (time.perf_counter() - t0))
+        r = max_coverage_stereo(sb, n, min_separation=min_separation, time_limit=left)
+        if out and r.coverage < out[-1].coverage:      # non-decreasing: the last one fits
+            r.coverage, r.indices = out[-1].coverage, out[-1].indices
+        out.append(r)
+        if r.optimal and r.coverage >= sb.reach - 1e-12:
+            for _ in range(n + 1, int(n_max) + 1):
+                out.append(r)
+            break
+    return CoverageCurve(n=np.arange(1, int(n_max) + 1), coverage=np.array([r.coverage for r in out]),
+                         bound=np.array([r.bound for r in out]),
+                         gap=np.array([r.gap for r in out]), status=[r.status for r in out],
+                         swarms=[r.indices for r in out], solve_time=time.perf_counter() - t0)
