@@ -242,7 +242,7 @@ def exceedance_figure(probs: xr.Dataset, path) -> Path:
         lv, f = area_exceedance(probs[n].values, a)
         # exact step: constant on (lv[j-1], lv[j]], equal to f[j] there
         ax.step(lv, 100.0 * f, where="pre", color=plt.get_cmap("tab10")(i % 10), lw=1.6,
-                label=_label(probs, n))
+                ls=("-", "--", ":", "-.")[i % 4], label=_label(probs, n))
     ax.set_xlabel("probability over samples, p")
     ax.set_ylabel("surface area with P(vertex) ≥ p, %")
     ax.set_xlim(0.0, 1.0)
@@ -291,7 +291,8 @@ def probability_maps(ds, probs: xr.Dataset, out, names=None) -> dict:
     made = {}
     for n in names or probability_names(probs):
         made[n] = render_coverage_map(shape, probs[n].values, out / f"mc_quality_{n}.png",
-                                      kind="fraction", title=f"P({_label(probs, n)}) per vertex")
+                                      kind="fraction", title=f"P({_label(probs, n)}) per vertex",
+                                      label="probability over samples")
     return made
 
 
