@@ -80,7 +80,7 @@ def why_no_quality(ds) -> str:
 
 
 def store_limits(ds) -> dict:
-    """The store's own ``[coverage]`` requirement limits, user units (m, deg); unset keys left out."""
+    """The store's own ``[coverage]`` requirement limits in user units (m, deg); unset: absent."""
     cfg = store_config(ds)
     table = cfg.get("coverage") or {}
     models = (cfg.get("models") or {}).get("coverage") or {}
