@@ -71,6 +71,12 @@ def test_notebook_writes_every_figure(mc_store, tmp_path, monkeypatch):
     shown = sum(1 for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])
                 if "image/png" in o.get("data", {}))
     assert shown == len(plotting.FIGURES)
+    # a paper-mode store has no quality variables: those cells say so and draw nothing
+    text = "".join(o.get("text", "") for c in nb.cells if c.cell_type == "code"
+                   for o in c.get("outputs", []))
+    assert "skipped the quality probabilities: quality variable 'lit' is missing" in text
+    assert "coverage.quality=true" in text
+    assert not list(figs.glob("mc_quality_*.png"))
 
 
 def test_committed_notebook_is_clean():

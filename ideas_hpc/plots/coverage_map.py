@@ -39,7 +39,7 @@ def render_coverage_map(shape, values, path, *, kind: str = "observed", title=No
         Viewing angles of the left panel, deg; the right panel shows the far side.
     dpi : int
     label : str, optional
-        Colour-bar label for ``kind='value'``.
+        Colour-bar label for ``kind='value'`` or ``kind='fraction'``.
 
     Returns
     -------
@@ -76,7 +76,7 @@ def render_coverage_map(shape, values, path, *, kind: str = "observed", title=No
         cmap = colors.LinearSegmentedColormap.from_list("frac", [grey[:3], (0.12, 0.35, 0.85)])
         norm = colors.Normalize(0.0, 1.0)
         fc = cmap(norm(frac))
-        label = "fraction"
+        label = label or "fraction"
         stat = f"mean {float(v01.mean()):.3f}"
     elif kind == "observed":
         frac = vals.astype(bool)[shape.faces].mean(axis=1)
