@@ -256,14 +256,20 @@ def test_quality_in_flyby_and_mc_stores(tmp_path):
 ROOT_CAMPAIGNS = __import__("pathlib").Path(__file__).resolve().parent.parent / "campaigns"
 
 
-def test_design_campaigns_refuse_a_requirement():
+def test_design_campaigns_take_a_requirement_and_refuse_stereo_they_cannot_score():
     from ideas_hpc.campaign.schema import load
 
     path = ROOT_CAMPAIGNS / "eros-nadir-ga.toml"
+    load(path, ["body.name=\"ellipsoid\"", "coverage.require_lit=true"])   # unions: fine
     with pytest.raises(InputError) as ei:
-        load(path, ["body.name=\"ellipsoid\"", "coverage.require_lit=true"])
-    assert ei.value.field == "coverage"
-    load(path, ["body.name=\"ellipsoid\"", "coverage.quality=true"])  # variables only: fine
+        load(path, ["body.name=\"ellipsoid\"", "coverage.require_stereo=true"])
+    assert ei.value.field == "coverage.require_stereo"
+    exact = ROOT_CAMPAIGNS / "eros-design.toml"
+    load(exact, ["body.name=\"ellipsoid\"", "coverage.require_stereo=true",
+                 "design.angle_step_deg=4"])
+    with pytest.raises(InputError) as ei:
+        load(exact, ["body.name=\"ellipsoid\"", "coverage.require_stereo=true"])
+    assert ei.value.field == "design.angle_step_deg"
 
 
 # ---------------------------------------------------------------- arrival epoch scan

@@ -24,7 +24,7 @@ import xarray as xr
 from ..design.bank import grid_size, separation_steps
 from ..candidates import candidate_stereo_pairs
 from ..design import build_bank, coverage_curve, failure_tolerant, min_swarm, worst_failure
-from ..design.stereo import StereoBank, check_grid, min_swarm_stereo, stereo_curve
+from ..design.stereo import StereoBank, min_swarm_stereo, stereo_curve
 from ..errors import InputError
 from ..flyby import fly
 from ..montecarlo.verify import verify_swarm
@@ -83,12 +83,7 @@ def design_exact(c, setup, client) -> ExactDesign:
         separation_steps(2 * math.pi / n_grid, setup.d_sep, sep, n_grid)
     except InputError as exc:
         raise c.error(exc.message, exc.field) from None
-    stereo = setup.coverage.require_stereo
-    if stereo:
-        try:
-            check_grid(n_grid)
-        except InputError as exc:
-            raise c.error(exc.message, exc.field) from None
+    stereo = setup.coverage.require_stereo      # grid size checked with the config
     t0 = time.perf_counter()
     bank = build_bank(setup, d.grid_step_rad, client=client, chunk_size=d.chunk_size,
                       quality=stereo)

@@ -363,6 +363,10 @@ def _check_stereo_design(config) -> None:
         raise InputError(f"stereo from two spacecraft is a condition on pairs, which {what} "
                          "cannot score; use kind design-nadir with design.method = \"exact\"",
                          field="coverage.require_stereo")
+    from ..design.bank import grid_size
+    from ..design.stereo import check_grid
+
+    check_grid(grid_size(config.design.grid_step_rad))
     if config.design.failures_tolerated:
         raise InputError("failure tolerance with stereo from two spacecraft is not solved yet; "
                          "set design.failures_tolerated = 0 (the Monte Carlo verification "

@@ -30,6 +30,8 @@ from .time_tree import LEAF, time_tree
 
 #: Angular slack of the cap decisions, rad (see module docstring).
 SLACK = 1e-6
+#: Radius of the caps of consecutive directions, rad (efficiency only).
+CAP_RADIUS = np.radians(0.5)
 
 
 @njit(cache=True)
@@ -68,8 +70,10 @@ def stereo_pairs(vertices, normals, r_T, dcm_BT, image_times, tan_eta, near, far
         U = np.empty((nsc * nimg, 3))
         start = np.zeros(nsc + 1, dtype=np.int64)
         rad = np.zeros(nsc)
+        cap = np.zeros((nsc * nimg + 1, 5))        # centre xyz, radius, first member
+        cstart = np.zeros(nsc + 1, dtype=np.int64)
         for j in range(ch * _CHUNK, min(nv, (ch + 1) * _CHUNK)):
-            _pairs_of_vertex(j, out, stack, lc, U, start, rad, vertices, normals, r_T, dcm_BT,
+            _pairs_of_vertex(j, out, stack, lc, U, start, rad, cap, cstart, vertices, normals, r_T, dcm_BT,
                              image_times, tan_eta, sec_eta, near, far, exact, sin_min_elev,
                              max_range, occlusion, illumination, sun_T, node_bounds,
                              node_info, tri, tri_vid, rho, limits, check_ang, c_emi, c_inc,
@@ -78,7 +82,7 @@ def stereo_pairs(vertices, normals, r_T, dcm_BT, image_times, tan_eta, near, far
 
 
 @njit(cache=True)
-def _pairs_of_vertex(j, out, stack, lc, U, start, rad, vertices, normals, r_T, dcm_BT,
+def _pairs_of_vertex(j, out, stack, lc, U, start, rad, cap, cstart, vertices, normals, r_T, dcm_BT,
                      image_times, tan_eta, sec_eta, near, far, exact, sin_min_elev, max_range,
                      occlusion, illumination, sun_T, node_bounds, node_info, tri, tri_vid, rho,
                      limits, check_ang, c_emi, c_inc, c_pha, require_lit, NF, NI, smin, smax,
@@ -94,43 +98,82 @@ def _pairs_of_vertex(j, out, stack, lc, U, start, rad, vertices, normals, r_T, d
     nz = normals[j, 2]
     nabs = np.sqrt(nx * nx + ny * ny + nz * nz)
     m = 0
+    nc = 0
+    cos_cap = np.cos(CAP_RADIUS)
     for k in range(nsc):
         start[k] = m
+        cstart[k] = nc
         m, _, _, _, _, _, _, _, _ = _scan(
             j, k, px, py, pz, nx, ny, nz, nabs, NF, NI, stack, lc, vertices, normals, r_T,
             dcm_BT, image_times, tan_eta, sec_eta, near, far, exact, sin_min_elev,
             max_range, occlusion, illumination, sun_T, node_bounds, node_info, tri,
             tri_vid, rho, limits, check_ang, c_emi, c_inc, c_pha, require_lit, U, m, True,
             0, np.inf, np.inf, -1, -1)
+        # whole-track cap (centre: first direction) and caps of consecutive directions
         r = 0.0
-        for x in range(start[k] + 1, m):
-            d = U[x, 0] * U[start[k], 0] + U[x, 1] * U[start[k], 1] \
-                + U[x, 2] * U[start[k], 2]
+        for x in range(start[k], m):
+            d = U[x, 0] * U[start[k], 0] + U[x, 1] * U[start[k], 1] + U[x, 2] * U[start[k], 2]
             r = max(r, np.arccos(min(1.0, max(-1.0, d))))
+            if nc > cstart[k]:
+                c = nc - 1
+                d = U[x, 0] * cap[c, 0] + U[x, 1] * cap[c, 1] + U[x, 2] * cap[c, 2]
+                if d >= cos_cap:
+                    cap[c, 3] = max(cap[c, 3], np.arccos(min(1.0, max(-1.0, d))))
+                    continue
+            cap[nc, 0] = U[x, 0]
+            cap[nc, 1] = U[x, 1]
+            cap[nc, 2] = U[x, 2]
+            cap[nc, 3] = 0.0
+            cap[nc, 4] = x
+            nc += 1
         rad[k] = r
     start[nsc] = m
+    cstart[nsc] = nc
+    cap[nc, 4] = m
     for a in range(nsc):
         if start[a + 1] == start[a]:
             continue
         for b in range(a + 1, nsc):
             if start[b + 1] == start[b]:
                 continue
-            ca = start[a]
-            cb = start[b]
-            d = U[ca, 0] * U[cb, 0] + U[ca, 1] * U[cb, 1] + U[ca, 2] * U[cb, 2]
-            t = np.arccos(min(1.0, max(-1.0, d)))
-            lo = t - rad[a] - rad[b]
-            hi = t + rad[a] + rad[b]
-            if lo - SLACK > smax or hi + SLACK < smin:
+            state = _decide(U[start[a]], U[start[b]], rad[a], rad[b], smin, smax)
+            if state == 0:
                 continue
-            hit = lo - SLACK >= smin and hi + SLACK <= smax
-            x = start[a]
-            while not hit and x < start[a + 1]:
-                for y in range(start[b], start[b + 1]):
-                    c = U[x, 0] * U[y, 0] + U[x, 1] * U[y, 1] + U[x, 2] * U[y, 2]
-                    if cmin <= c and c <= cmax:
+            hit = state == 1
+            P = cstart[a]
+            while not hit and P < cstart[a + 1]:
+                for Q in range(cstart[b], cstart[b + 1]):
+                    st = _decide(cap[P, :3], cap[Q, :3], cap[P, 3], cap[Q, 3], smin, smax)
+                    if st == 1 or (st == 2 and _members(U, int(cap[P, 4]), int(cap[P + 1, 4]),
+                                                        int(cap[Q, 4]), int(cap[Q + 1, 4]),
+                                                        cmin, cmax)):
                         hit = True
                         break
-                x += 1
+                P += 1
             if hit:
                 out[pair_index(a, b, nsc), j] = True
+
+
+@njit(cache=True, inline="always")
+def _decide(u, w, ru, rw, smin, smax):
+    """Cap test: 0 no member pair in [smin, smax], 1 every pair, 2 undecided."""
+    d = u[0] * w[0] + u[1] * w[1] + u[2] * w[2]
+    t = np.arccos(min(1.0, max(-1.0, d)))
+    lo = t - ru - rw
+    hi = t + ru + rw
+    if lo - SLACK > smax or hi + SLACK < smin:
+        return 0
+    if lo - SLACK >= smin and hi + SLACK <= smax:
+        return 1
+    return 2
+
+
+@njit(cache=True)
+def _members(U, a0, a1, b0, b1, cmin, cmax):
+    """Some member pair of the two caps has cmin <= u . w <= cmax."""
+    for x in range(a0, a1):
+        for y in range(b0, b1):
+            c = U[x, 0] * U[y, 0] + U[x, 1] * U[y, 1] + U[x, 2] * U[y, 2]
+            if cmin <= c and c <= cmax:
+                return True
+    return False

@@ -37,6 +37,7 @@ from ..core.union import population_coverage
 from ..errors import InputError
 from .bank import CandidateBank, conflict_windows, reduce_problem, separation_steps
 from .exact import FEAS_TOL, GAP_ZERO, ExactResult, check_time_limit, heavy_groups, solve
+from .ring_bound import swap_search
 
 #: Largest candidate grid of the pair formulation (K (K - 1) / 2 pair rows).
 MAX_CANDIDATES = 180
@@ -114,6 +115,18 @@ def _constraints(sb: StereoBank, cover, red, ends, m: int, card):
         rows.append(sparse.csr_matrix((v, (r, c)), shape=(2 * p, n_var)))
         lo.append(np.full(2 * p, -np.inf))
         hi.append(np.zeros(2 * p))
+    # a group mapped through pairs needs two chosen endpoints of its pairs (or an own
+    # track): 2 y_g <= 2 sum_own x + sum_endpoints x, implied for integer x, tighter in LP
+    ends_of = np.zeros((g, k))
+    for j, (a, b) in enumerate(ends):
+        hit = cover[k + j]
+        ends_of[hit, a] = 1.0
+        ends_of[hit, b] = 1.0
+    rows.append(sparse.hstack([sparse.csr_matrix(-(ends_of + 2.0 * cover[:k].T)),
+                               sparse.csr_matrix((g, p)), 2.0 * sparse.identity(g)],
+                              format="csr"))
+    lo.append(np.full(g, -np.inf))
+    hi.append(np.zeros(g))
     ones = np.zeros(n_var)
     ones[:k] = 1.0
     rows.append(sparse.csr_matrix(ones[None, :]))
@@ -130,6 +143,53 @@ def _constraints(sb: StereoBank, cover, red, ends, m: int, card):
     return cons, integ, n_var
 
 
+def greedy_stereo(sb: StereoBank, m: int, n_max: int, need: float = math.inf):
+    """Greedy swarm on stereo coverage (pairs count), members more than ``m`` steps apart.
+
+    Returns the swarms of 2, 3, ... members (grid indices) and their coverages.
+    """
+    k = sb.bank.n_candidates
+    ring = np.arange(k)
+    # start from the best pair: one spacecraft alone rarely maps anything in stereo
+    ends = np.array(list(itertools.combinations(range(k), 2)), dtype=np.int64).reshape(-1, 2)
+    d = np.abs(ends[:, 0] - ends[:, 1])
+    ends = ends[np.minimum(d, k - d) > m]
+    if n_max < 2 or ends.size == 0:
+        single = sb.coverage([[i] for i in range(k)])
+        return [np.array([int(np.argmax(single))])], [float(single.max())]
+    cov = sb.coverage(list(ends))
+    chosen: list[int] = [int(i) for i in ends[int(np.argmax(cov))]]
+    out, covs = [np.sort(np.array(chosen, dtype=np.int64))], [float(cov.max())]
+    while len(chosen) < n_max and covs[-1] < need:
+        ok = np.ones(k, dtype=bool)
+        for c in chosen:
+            d = np.abs(ring - c)
+            ok &= np.minimum(d, k - d) > m
+        cand = np.flatnonzero(ok)
+        if cand.size == 0:
+            break
+        cov = sb.coverage([chosen + [int(c)] for c in cand])
+        chosen.append(int(cand[int(np.argmax(cov))]))
+        out.append(np.sort(np.array(chosen, dtype=np.int64)))
+        covs.append(float(cov.max()))
+    return out, covs
+
+
+def _heuristic(sb: StereoBank, need: float, m: int, n_max: int):
+    """Smallest swarm found by greedy additions then swap searches at smaller sizes."""
+    swarms, covs = greedy_stereo(sb, m, n_max, need)
+    if not covs or covs[-1] < need:
+        return None
+    best = swarms[-1]
+    sizes = {sw.size: sw for sw in swarms}
+    for n in range(best.size - 1, 1, -1):
+        sw, c = swap_search(sb, sizes.get(n, best[:n]), m, need=need)
+        if c < need:
+            break
+        best = sw
+    return best
+
+
 def min_swarm_stereo(sb: StereoBank, *, target: float, eps_tol: float, n_max: int,
                      min_separation: float = 0.0, time_limit=None) -> ExactResult:
     """The fewest grid candidates whose stereo-mapped area reaches ``target - eps_tol``."""
@@ -140,7 +200,14 @@ def min_swarm_stereo(sb: StereoBank, *, target: float, eps_tol: float, n_max: in
     need = target - eps_tol
     cover, red, ends = _model(sb, m)
     k, p, g = bank.n_candidates, ends.shape[0], red.n_groups
-    cons, integ, n_var = _constraints(sb, cover, red, ends, m, (1, int(n_max)))
+    heur = _heuristic(sb, need, m, int(n_max))
+    top = int(n_max) if heur is None else heur.size - 1
+    note = (f"stereo from own tracks and from {p} candidate pairs ({g} vertex groups), one "
+            "variable per pair (exact); " + ("no heuristic swarm" if heur is None else
+                                             f"greedy + swap search: {heur.size}"))
+    if top < 1:   # one spacecraft: nothing smaller to look for
+        return _stereo_result(sb, heur, target, need, heur.size, 0.0, "optimal", [note])
+    cons, integ, n_var = _constraints(sb, cover, red, ends, m, (1, top))
     w = np.zeros(n_var)
     w[k + p:] = red.weight
     cons.append(LinearConstraint(w[None, :], need + FEAS_TOL, np.inf))
@@ -149,30 +216,40 @@ def min_swarm_stereo(sb: StereoBank, *, target: float, eps_tol: float, n_max: in
     lower = np.zeros(n_var)
     lower[k + p:] = heavy_groups(red, need)
     res, dt = solve(c, cons, integ, time_limit, lower)
-    if res.x is None:
-        if res.status == 2:
-            top = max_coverage_stereo(sb, int(n_max), min_separation=min_separation,
-                                      time_limit=time_limit)
+    if res.x is not None:       # smaller than the heuristic swarm
+        idx = np.sort(np.flatnonzero(res.x[:k] > 0.5))
+        bound = getattr(res, "mip_dual_bound", None)
+        bound = math.ceil(bound - 1e-6) if bound is not None and np.isfinite(bound) else 1
+        status = "optimal" if bound >= idx.size else "time_limit"
+        return _stereo_result(sb, idx, target, need, min(bound, idx.size), dt, status, [note])
+    if res.status == 2:         # no swarm below the heuristic's: it is optimal
+        if heur is None:
+            best = max_coverage_stereo(sb, int(n_max), min_separation=min_separation,
+                                       time_limit=time_limit)
             raise InputError(f"no swarm of at most {n_max} spacecraft maps "
                              f"{100 * need:.3f} % in stereo; the highest coverage {n_max} "
-                             f"reach is {100 * top.coverage:.3f} % ({top.status})",
+                             f"reach is {100 * best.coverage:.3f} % ({best.status})",
                              field="design.n_max")
+        return _stereo_result(sb, heur, target, need, heur.size, dt, "optimal",
+                              [note + "; the integer programme proves nothing smaller works"])
+    if heur is None:
         raise InputError(f"no stereo design found within the time limit ({res.message}); "
                          "raise design.time_limit_s", field="design.time_limit_s")
-    idx = np.sort(np.flatnonzero(res.x[:k] > 0.5))
     bound = getattr(res, "mip_dual_bound", None)
     bound = math.ceil(bound - 1e-6) if bound is not None and np.isfinite(bound) else 1
-    bound = min(max(bound, 1), idx.size)
-    gap = (idx.size - bound) / idx.size
+    return _stereo_result(sb, heur, target, need, min(max(bound, 1), heur.size), dt,
+                          "time_limit", [note + f"; the integer programme reached its time "
+                                         f"limit with proven lower bound {bound}"])
+
+
+def _stereo_result(sb, idx, target, need, bound, dt, status, notes) -> ExactResult:
     cov = float(sb.coverage([idx])[0])
     if cov < need - 1e-9:
         raise RuntimeError(f"stereo design maps {cov!r} < {need!r}")
-    status = "optimal" if gap == 0 else ("time_limit" if res.status == 1 else "feasible")
-    return ExactResult(indices=idx, theta=bank.theta[idx], n=idx.size, coverage=cov,
-                       target=target, status=status, bound=float(bound), gap=float(gap),
-                       solve_time=dt, notes=[
-                           f"stereo from own tracks and from {p} candidate pairs "
-                           f"({red.n_groups} vertex groups), one variable per pair: exact"])
+    gap = (idx.size - bound) / idx.size
+    return ExactResult(indices=idx, theta=sb.bank.theta[idx], n=idx.size, coverage=cov,
+                       target=target, status="optimal" if gap == 0 else status,
+                       bound=float(bound), gap=float(gap), solve_time=dt, notes=notes)
 
 
 def max_coverage_stereo(sb: StereoBank, n: int, *, min_separation: float = 0.0,
@@ -188,12 +265,15 @@ def max_coverage_stereo(sb: StereoBank, n: int, *, min_separation: float = 0.0,
     c = np.zeros(n_var)
     c[k + p:] = -red.weight
     res, dt = solve(c, cons, integ, time_limit)
-    if res.x is None:
-        raise RuntimeError(f"HiGHS found no stereo swarm of {n}: {res.message}")
-    idx = np.sort(np.flatnonzero(res.x[:k] > 0.5))
-    cov = float(sb.coverage([idx])[0])
+    swarms, _ = greedy_stereo(sb, m, int(n))
+    idx, cov = swap_search(sb, swarms[-1], m) if swarms else (np.zeros(0, np.int64), 0.0)
+    if res.x is not None:
+        i2 = np.sort(np.flatnonzero(res.x[:k] > 0.5))
+        c2 = float(sb.coverage([i2])[0])
+        if c2 > cov:
+            idx, cov = i2, c2
     bound = getattr(res, "mip_dual_bound", None)
-    bound = cov if bound is None or not np.isfinite(bound) else max(cov, -float(bound))
+    bound = sb.reach if bound is None or not np.isfinite(bound) else max(cov, -float(bound))
     gap = (bound - cov) / bound if bound > 0 else 0.0
     if gap < GAP_ZERO:
         gap, bound = 0.0, cov

@@ -1,0 +1,96 @@
+"""Exact stereo design (ideas_hpc.design.stereo) against enumeration of every swarm.
+
+Synthetic banks: own-track rows and pair rows drawn so that most stereo needs two
+spacecraft, as on Eros with nadir pointing. The pair model itself is checked
+against the quality pass in tests/test_quality_masks.py.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+from ideas_hpc.core.stereo_pairs import pair_index
+from ideas_hpc.design import CandidateBank
+from ideas_hpc.design.stereo import (StereoBank, greedy_stereo, max_coverage_stereo,
+                                     min_swarm_stereo, stereo_curve)
+
+
+def _bank(seed: int, k: int = 14, v: int = 70) -> StereoBank:
+    rng = np.random.default_rng(seed)
+    own = rng.random((k, v)) < 0.03
+    pairs = np.zeros((k * (k - 1) // 2, v), dtype=bool)
+    for a, b in itertools.combinations(range(k), 2):
+        d = min(b - a, k - (b - a))
+        if 2 <= d <= 5:      # stereo needs a spread of angles, as on the ring
+            pairs[pair_index(a, b, k)] = rng.random(v) < 0.25
+    areas = rng.uniform(0.5, 2.0, v)
+    bank = CandidateBank(theta=np.arange(k) * 2 * np.pi / k, masks=own, areas=areas,
+                         step=2 * np.pi / k, d_sep=1e5)
+    return StereoBank(bank, pairs)
+
+
+def _truth(sb: StereoBank, swarm) -> float:
+    k = sb.bank.n_candidates
+    mapped = sb.bank.masks[list(swarm)].any(axis=0)
+    for a, b in itertools.combinations(sorted(swarm), 2):
+        mapped |= sb.pairs[pair_index(a, b, k)]
+    return float(sb.bank.areas[mapped].sum() / sb.bank.areas.sum())
+
+
+def _best(sb: StereoBank, n: int) -> float:
+    return max(_truth(sb, s) for s in itertools.combinations(range(sb.bank.n_candidates), n))
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_coverage_model_matches_direct_count(seed):
+    sb = _bank(seed)
+    rng = np.random.default_rng(seed + 10)
+    swarms = [rng.choice(14, size=rng.integers(1, 6), replace=False) for _ in range(20)]
+    np.testing.assert_allclose(sb.coverage(swarms), [_truth(sb, s) for s in swarms],
+                               rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_min_swarm_is_the_fewest_by_enumeration(seed):
+    sb = _bank(seed)
+    need = sb.reach - 0.02
+    res = min_swarm_stereo(sb, target=sb.reach, eps_tol=0.02, n_max=14)
+    assert res.status == "optimal" and res.gap == 0.0
+    assert _truth(sb, res.indices) >= need - 1e-12
+    assert res.n == 1 or _best(sb, res.n - 1) < need
+
+
+@pytest.mark.parametrize("seed", range(2))
+def test_max_coverage_and_curve_match_enumeration(seed):
+    sb = _bank(seed)
+    for n in (2, 3):
+        r = max_coverage_stereo(sb, n)
+        assert r.optimal and r.coverage == pytest.approx(_best(sb, n), abs=1e-12)
+    curve = stereo_curve(sb, 4)
+    assert all(s == "optimal" for s in curve.status)
+    assert np.all(np.diff(curve.coverage) >= -1e-15)
+    assert curve.coverage[2] == pytest.approx(_best(sb, 3), abs=1e-12)
+
+
+def test_separation_keeps_pairs_apart():
+    sb = _bank(5)
+    sb.bank.d_sep = 1e5
+    step_m = sb.bank.d_sep * sb.bank.step        # about one grid step along the ring
+    top = max_coverage_stereo(sb, 14, min_separation=2.5 * step_m).coverage
+    assert top < sb.reach          # the separation costs coverage here
+    res = min_swarm_stereo(sb, target=top, eps_tol=0.01, n_max=14,
+                           min_separation=2.5 * step_m)
+    d = np.abs(res.indices[:, None] - res.indices[None, :])
+    d = np.minimum(d, 14 - d)[np.triu_indices(res.n, 1)]
+    assert (d >= 3).all()
+
+
+def test_greedy_starts_from_the_best_pair():
+    sb = _bank(1)
+    swarms, covs = greedy_stereo(sb, 0, 4)
+    best_pair = max(_truth(sb, s) for s in itertools.combinations(range(14), 2))
+    assert swarms[0].size == 2 and covs[0] == pytest.approx(best_pair, abs=1e-12)
+    assert np.all(np.diff(covs) >= -1e-15)
