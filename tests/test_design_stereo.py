@@ -94,3 +94,27 @@ def test_greedy_starts_from_the_best_pair():
     best_pair = max(_truth(sb, s) for s in itertools.combinations(range(14), 2))
     assert swarms[0].size == 2 and covs[0] == pytest.approx(best_pair, abs=1e-12)
     assert np.all(np.diff(covs) >= -1e-15)
+
+
+def test_stereo_campaign_end_to_end_flown_coverage_meets_the_design(tmp_path, eros1708):
+    """The store's coverage is the quality pass of the flown swarm (stereo from any pair);
+    it must equal the designer's pair-model coverage and meet the target."""
+    from pathlib import Path
+
+    import xarray as xr
+
+    from ideas_hpc.campaign.run import run_file
+
+    campaign = Path(__file__).resolve().parent.parent / "campaigns" / "eros-stereo-design.toml"
+    sets = ["design.angle_step_deg=12", "design.n_max=20", "design.verify_samples=0",
+            "design.time_limit_s=20", "run.workers=0"]
+    ds = xr.open_zarr(run_file(campaign, out=tmp_path / "s.zarr", overrides=sets))
+    assert str(ds["design_method"].values) == "exact"
+    flown = float(ds["coverage"].values.ravel()[0])
+    assert flown == pytest.approx(float(ds["design_coverage"]), abs=1e-12)
+    need = ds.attrs["target_coverage"] - 0.001
+    assert flown >= need - 1e-12
+    assert float(ds["coverage_seen"].values.ravel()[0]) >= flown
+    assert int(ds["best_swarm_size"]) >= 2               # stereo needs two spacecraft here
+    gap = float(ds["optimality_gap"])
+    assert (str(ds["solver_status"].values) == "optimal") == (gap == 0.0)

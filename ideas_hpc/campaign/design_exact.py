@@ -114,6 +114,7 @@ def design_exact(c, setup, client) -> ExactDesign:
     curve = (stereo_curve(scorer, d.n_max, min_separation=sep, time_limit=d.time_limit_s)
              if stereo else
              coverage_curve(bank, d.n_max, min_separation=sep, time_limit=d.time_limit_s))
+    curve.include(res.indices, res.coverage)
     k_eval = k if k else 1
     data = {
         "design_method": ((), "exact"),

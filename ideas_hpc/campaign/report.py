@@ -91,10 +91,17 @@ def _design_lines(ds) -> list[str]:
     if "coverage_vs_n" in ds:
         n, c = ds["n_spacecraft"].values, ds["coverage_vs_n"].values
         stop = int(np.argmax(c >= c[-1])) + 1       # the curve is flat after its maximum
-        pts = ", ".join(f"{int(k)}: {100 * v:.3f} %" for k, v in zip(n[:stop], c[:stop]))
+        st = ds["coverage_vs_n_status"].values if "coverage_vs_n_status" in ds else \
+            np.full(n.size, "optimal")
+        gp = ds["coverage_vs_n_gap"].values if "coverage_vs_n_gap" in ds else np.zeros(n.size)
+        pts = ", ".join(f"{int(k)}: {100 * v:.3f} %" + ("" if s == "optimal" else
+                                                        f" (gap {100 * g:.2g} %)")
+                        for k, v, s, g in zip(n[:stop], c[:stop], st[:stop], gp[:stop]))
         if stop < n.size:
             pts += f" (the same up to N = {int(n[-1])})"
-        out.append(f"best coverage for N spacecraft (proven): {pts}")
+        label = "proven" if all(s == "optimal" for s in st) else \
+            "proven unless a gap to the proven bound is shown"
+        out.append(f"best coverage for N spacecraft ({label}): {pts}")
     if "worst_failure_coverage" in ds:
         out.append(f"worst case after {a.get('failures_evaluated', 1)} failure(s): "
                    f"{100 * float(ds['worst_failure_coverage']):.3f} % (failed spacecraft "

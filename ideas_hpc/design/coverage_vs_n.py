@@ -49,6 +49,21 @@ class CoverageCurve:
     swarms: list
     solve_time: float
 
+    def include(self, swarm: np.ndarray, coverage: float) -> None:
+        """Take a swarm found elsewhere (the design itself) where it beats the curve.
+
+        Points at its size and above that it beats get it, with their gaps to
+        their (unchanged, still proven) bounds recomputed.
+        """
+        for i in range(self.n.size):
+            if self.n[i] >= swarm.size and coverage > self.coverage[i]:
+                self.coverage[i] = coverage
+                self.swarms[i] = np.asarray(swarm)
+                b = self.bound[i]
+                self.gap[i] = max(0.0, (b - coverage) / b) if b > 0 else 0.0
+                if self.gap[i] < 1e-9:
+                    self.gap[i], self.status[i] = 0.0, "optimal"
+
     def angles(self, theta: np.ndarray) -> np.ndarray:
         """(len(n), max n) swarm angles, rad, NaN-padded."""
         out = np.full((self.n.size, int(self.n.max())), np.nan)
