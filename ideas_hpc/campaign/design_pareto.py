@@ -36,6 +36,8 @@ from contextlib import nullcontext
 import numpy as np
 import xarray as xr
 
+from ..candidates import candidate_stereo_pairs
+from ..design.stereo import check_grid
 from ..design import build_bank, coverage_curve
 from ..design.bank import grid_size, separation_steps
 from ..design.objectives import OBJECTIVES, check_objectives, evaluate
@@ -133,6 +135,11 @@ def run_design_pareto(c, out, *, workers=None, scheduler=None, cluster="local",
     _log(f"body: {setup.body.note}")
     target(setup, np.linspace(0.0, 2 * np.pi, 16, endpoint=False))
     n_grid = grid_size(d.grid_step_rad)
+    if "stereo_coverage" in names:
+        try:
+            check_grid(n_grid)
+        except InputError as exc:
+            raise c.error(exc.message, exc.field) from None
     try:  # a separation no two grid points satisfy fails before any mask is computed
         separation_steps(2 * math.pi / n_grid, setup.d_sep, sep, n_grid)
     except InputError as exc:
@@ -142,7 +149,12 @@ def run_design_pareto(c, out, *, workers=None, scheduler=None, cluster="local",
     with (nullcontext(None) if local else
           connect(cluster=cluster, workers=workers, scheduler=scheduler,
                   slurm_config=slurm_config)) as client:
-        bank = build_bank(setup, d.grid_step_rad, client=client, chunk_size=d.chunk_size)
+        quality = bool({"stereo_coverage", "mean_resolution"} & set(names))
+        bank = build_bank(setup, d.grid_step_rad, client=client, chunk_size=d.chunk_size,
+                          quality=quality)
+    if "stereo_coverage" in names:     # stereo from two spacecraft: the pair table
+        bank.pairs = candidate_stereo_pairs(
+            setup, [(float(t), 0.0, i) for i, t in enumerate(bank.theta)])
     t_masks = time.perf_counter() - t0
     _log(f"candidate masks: {bank.n_candidates} grid angles ({math.degrees(bank.step):g} deg) "
          f"in {t_masks:.1f} s")

@@ -52,6 +52,9 @@ class CandidateBank:
         candidate maps alone.
     resolution : (K, V) float64, optional
         Best effective ground sample per candidate, m (inf: unobserved).
+    pairs : (K (K - 1) / 2, V) bool, optional
+        Candidate pairs that map a vertex in stereo (two spacecraft,
+        :mod:`ideas_hpc.core.stereo_pairs`), when a design asks for it.
     """
 
     theta: np.ndarray
@@ -62,6 +65,7 @@ class CandidateBank:
     usable: np.ndarray | None = None
     stereo: np.ndarray | None = None
     resolution: np.ndarray | None = None
+    pairs: np.ndarray | None = None
 
     @property
     def n_candidates(self) -> int:

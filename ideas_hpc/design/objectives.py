@@ -10,8 +10,10 @@ stored with their natural sign; the search minimises ``sense * value``:
   bank (maximised);
 * ``worst_failure_coverage``: ``min_i A(S \\ {i})``, the coverage after the
   worst single failure, 0 for N = 1 (as :func:`~ideas_hpc.design.worst_failure`);
-* ``stereo_coverage``: area fraction of the union of the members' rows of
-  ``bank.stereo`` (vertices a candidate maps in stereo from its own track);
+* ``stereo_coverage``: area fraction mapped in stereo: the union of the
+  members' rows of ``bank.stereo`` (a stereo pair from one track) and, when
+  the bank has ``pairs``, of the rows of every pair of members (two
+  spacecraft; with nadir pointing on Eros that is where stereo comes from);
 * ``mean_resolution``: with ``r_v(S) = min_{i in S} bank.resolution[i, v]``
   (m), ``sum_{v in M} a_v r_v / sum_{v in M} a_v`` over the vertices
   ``M = {v : v in the union of the masks, r_v finite}`` (minimised;
@@ -83,7 +85,15 @@ def _optional(bank, name: str, objective: str) -> np.ndarray:
 
 
 def _stereo(bank, members):
-    return _union(_optional(bank, "stereo", "stereo_coverage"), bank.areas, members)
+    own = _optional(bank, "stereo", "stereo_coverage")
+    if getattr(bank, "pairs", None) is None:
+        return _union(own, bank.areas, members)
+    from dataclasses import replace
+
+    from .stereo import StereoBank
+
+    sb = StereoBank(replace(bank, masks=own), bank.pairs)
+    return sb.coverage([m[m >= 0] for m in members])
 
 
 def _mean_resolution(bank, members):
