@@ -16,12 +16,15 @@ mapped area fraction and ``coverage_seen`` the plain observed fraction.
 Stereo defaults, 10-40 deg: the convergence angle between two lines of sight
 must be large enough to give a height signal above the matching noise and
 small enough that the two images still match (perspective and, for
-stereophotoclinometry, illumination change). 10-40 deg is the range commonly
-used in planetary stereo practice; for stereo-pair selection criteria in this
-spirit (stated there as a parallax/height ratio, plus resolution and
-illumination limits) see Becker et al. (2015), "Criteria for automated
-identification of stereo image pairs", LPSC 46, and for SPC Gaskell et al.
-(2008), Meteoritics & Planetary Science 43, 1049. Both bounds are settable.
+stereophotoclinometry, illumination change). The NASA Ames Stereo Pipeline's
+guidelines for selecting stereo pairs (docs, "Guidelines for selecting stereo
+pairs") call 10-60 deg "likely reasonable", citing Becker et al. (2015),
+"Criteria for automated identification of stereo image pairs", LPSC 46,
+abstract 2703 (bibcode 2015LPI....46.2703B). We keep the lower bound and take
+40 deg as the upper one, the conservative end of that range for matching
+across the large perspective changes of a close flyby; for SPC see Gaskell et
+al. (2008), Meteoritics & Planetary Science 43, 1049. Both bounds are settable
+(``stereo_min_deg``, ``stereo_max_deg``).
 """
 
 from __future__ import annotations
