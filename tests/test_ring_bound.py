@@ -95,7 +95,7 @@ def test_swap_search_keeps_size_and_separation_and_never_gets_worse():
     assert c >= bank.coverage([start])[0] and c == pytest.approx(bank.coverage([sw])[0])
 
 
-@pytest.mark.parametrize("seed", range(3))
+@pytest.mark.parametrize("seed", range(8))
 def test_min_swarm_with_the_ring_proof_matches_enumeration(seed):
     bank = _circle_bank(seed, k=20, v=80)
     need = bank.reach - 0.01
@@ -114,3 +114,23 @@ def test_bound_is_above_the_proven_optimum_on_eros(eros1708):
     rb = ring_bound(bank, red, 0, 4)
     for n in range(1, 5):
         assert rb.upper[n] >= max_coverage(bank, n).coverage - 1e-12
+
+
+def test_swarm_above_the_bound_is_proven_by_the_programme():
+    """When the bound is loose, the swap search's larger swarm is kept and HiGHS only
+    has to rule out the sizes below it; its infeasibility proves that swarm optimal."""
+    from types import SimpleNamespace
+
+    from ideas_hpc.design.exact import _min_result, prepare
+
+    bank = _circle_bank(3, k=20, v=80)
+    need = bank.reach - 0.01
+    exact = min_swarm(bank, target=bank.reach, eps_tol=0.01, n_max=10)
+    red, m = prepare(bank, 0.0)
+    above = exact.indices
+    infeasible = SimpleNamespace(x=None, status=2, message="infeasible", mip_dual_bound=None)
+    r = _min_result(bank, red, infeasible, 0.1, bank.reach, need, 10, m, exact.n - 1, above)
+    assert r.status == "optimal" and r.n == exact.n and r.gap == 0.0
+    stopped = SimpleNamespace(x=None, status=1, message="time", mip_dual_bound=exact.n - 1.5)
+    r = _min_result(bank, red, stopped, 0.1, bank.reach, need, 10, m, exact.n - 2, above)
+    assert r.status == "time_limit" and r.bound == exact.n - 1 and r.n == exact.n

@@ -160,7 +160,7 @@ def min_swarm(bank: CandidateBank, *, target: float, eps_tol: float, n_max: int 
         raise InputError(f"target {100 * target:.3f} % (minus eps_tol) is not reachable: the "
                          f"highest coverage any swarm on this grid reaches is {100 * reach:.4f} %",
                          field="design.eps_tol_pct")
-    low, found, t_ring = _by_ring(bank, red, min_separation, m, need, n_max)
+    low, found, above, t_ring = _by_ring(bank, red, min_separation, m, need, n_max)
     if found is not None:
         out = _ring_result(bank, found, target, t_ring)
     else:
@@ -171,16 +171,16 @@ def min_swarm(bank: CandidateBank, *, target: float, eps_tol: float, n_max: int 
         sep = _separation_rows(red, m, bank.n_candidates, nc + g)
         if sep is not None:
             cons.append(sep)
-        cons.append(LinearConstraint(np.r_[np.ones(nc), np.zeros(g)][None, :], low or 0,
-                                     np.inf if n_max is None else int(n_max)))
+        top = (np.inf if n_max is None else int(n_max)) if above is None else above.size - 1
+        cons.append(LinearConstraint(np.r_[np.ones(nc), np.zeros(g)][None, :], low or 0, top))
         c = np.r_[np.ones(nc), np.zeros(g)]
         lower = np.r_[np.zeros(nc), heavy_groups(red, need).astype(np.float64)]
         left = None if time_limit is None else max(1e-3, time_limit - t_ring)
         res, dt = solve(c, cons, np.r_[np.ones(nc), np.zeros(g)], left, lower)
-        if m > 0 and res.x is None and res.status == 2:
+        if m > 0 and res.x is None and res.status == 2 and above is None:
             out = None
         else:
-            out = _min_result(bank, red, res, dt + t_ring, target, need, n_max, m, low)
+            out = _min_result(bank, red, res, dt + t_ring, target, need, n_max, m, low, above)
     if m == 0:
         return out
     # Does the separation cost spacecraft? Solve without it (merged columns: fast).
@@ -199,22 +199,31 @@ def min_swarm(bank: CandidateBank, *, target: float, eps_tol: float, n_max: int 
 
 
 def _by_ring(bank, red, min_separation, m, need, n_max):
-    """(lower bound on N or None, a swarm of that size reaching ``need`` or None, seconds)."""
+    """Ring-gap bound and swap searches: ``(low, found, above, seconds)``.
+
+    ``low``: proven lower bound on N (None without a bound); ``found``: a swarm
+    of ``low`` reaching ``need`` (then optimal); ``above``: otherwise the
+    smallest swarm of ``low + 1 .. low + 2`` the swap search finds reaching it.
+    """
     t = time.perf_counter()
     grid_order = red.rep.size == bank.n_candidates and np.array_equal(
         red.rep, np.arange(bank.n_candidates))
     full = red if grid_order else prepare(bank, min_separation, redundancy=True)[0]
-    rb = ring_bound(bank, full, m, int(n_max) if n_max is not None else 64, need)
+    top = int(n_max) if n_max is not None else 64
+    rb = ring_bound(bank, full, m, top, need)
     low = None if rb is None else rb.n_bound(need)
     if low is None:
-        return None, None, time.perf_counter() - t
-    for start in (rb.swarm(low), greedy_swarm(bank, m, low)[0]):
-        if start.size != low or np.any(start < 0):
-            continue
-        sw, cov = swap_search(bank, start, m, need=need)
-        if cov >= need:
-            return low, sw, time.perf_counter() - t
-    return low, None, time.perf_counter() - t
+        return None, None, None, time.perf_counter() - t
+    rb = ring_bound(bank, full, m, min(top, low + 2))        # the swarms of the next sizes
+    for n in range(low, min(top, low + 2) + 1):
+        for start in (rb.swarm(n), greedy_swarm(bank, m, n)[0]):
+            if start.size != n or np.any(start < 0):
+                continue
+            sw, cov = swap_search(bank, start, m, need=need)
+            if cov >= need:
+                return (low, sw, None, time.perf_counter() - t) if n == low else \
+                    (low, None, sw, time.perf_counter() - t)
+    return low, None, None, time.perf_counter() - t
 
 
 def _ring_result(bank, idx, target, dt) -> ExactResult:
@@ -226,12 +235,26 @@ def _ring_result(bank, idx, target, dt) -> ExactResult:
                               f"{idx.size} that do; no integer programme needed"])
 
 
-def _min_result(bank, red, res, dt, target, need, n_max, m, low=None) -> ExactResult:
+def _min_result(bank, red, res, dt, target, need, n_max, m, low=None,
+                above=None) -> ExactResult:
+    """The design from HiGHS's outcome; ``above`` is a swarm found before it (the
+    programme then looked only for smaller ones)."""
     notes = []
     bound = getattr(res, "mip_dual_bound", None)
     bound = math.ceil(bound - 1e-6) if bound is not None and np.isfinite(bound) else 1
     bound = max(bound, low or 1)
-    if res.x is None:
+    if res.x is None and above is not None:
+        found = f"a swap search found {above.size} spacecraft reaching the target"
+        if res.status == 2:     # nothing smaller exists: above is optimal
+            bound = above.size
+            notes.append(f"{found}; the integer programme proves no smaller swarm does "
+                         f"(ring-gap bound {low})")
+        else:
+            notes.append(f"{found}; the integer programme found nothing smaller within "
+                         f"design.time_limit_s (proven lower bound {bound})")
+        idx = above
+        res_status = 0 if res.status == 2 else 1
+    elif res.x is None:
         if res.status == 2:
             what = (f"with spacecraft at least {m + 1} grid steps apart "
                     if m else "")
