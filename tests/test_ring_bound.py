@@ -134,3 +134,31 @@ def test_swarm_above_the_bound_is_proven_by_the_programme():
     stopped = SimpleNamespace(x=None, status=1, message="time", mip_dual_bound=exact.n - 1.5)
     r = _min_result(bank, red, stopped, 0.1, bank.reach, need, 10, m, exact.n - 2, above)
     assert r.status == "time_limit" and r.bound == exact.n - 1 and r.n == exact.n
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_redundancy_polish_keeps_the_target_and_no_swap_adds_overlap(seed):
+    from ideas_hpc.design.ring_bound import redundancy_polish
+
+    bank = _circle_bank(seed, k=20, v=80)
+    need = bank.reach - 0.05
+    start = min_swarm(bank, target=bank.reach, eps_tol=0.05, n_max=10).indices
+    m = 1
+    w = bank.areas / bank.areas.sum()
+    twice = lambda s: w[bank.masks[list(s)].sum(axis=0) >= 2].sum()   # noqa: E731
+    d = np.abs(start[:, None] - start[None, :])
+    if (np.minimum(d, 20 - d)[np.triu_indices(start.size, 1)] <= m).any():
+        m = 0
+    out = redundancy_polish(bank, start, m, need)
+    assert out.size == start.size and bank.coverage([out])[0] >= need - 1e-12
+    assert twice(out) >= twice(start) - 1e-15
+    for p in range(out.size):                     # brute force: a local optimum
+        for c in range(20):
+            if c in out:
+                continue
+            s = np.sort(np.r_[np.delete(out, p), c])
+            dd = np.abs(s[:, None] - s[None, :])
+            if (np.minimum(dd, 20 - dd)[np.triu_indices(s.size, 1)] <= m).any():
+                continue
+            if bank.coverage([s])[0] >= need:
+                assert twice(s) <= twice(out) + 1e-12

@@ -48,7 +48,7 @@ from scipy.optimize import Bounds, LinearConstraint, milp
 
 from ..errors import InputError
 from .bank import CandidateBank, Reduced, conflict_windows, reduce_problem, separation_steps
-from .ring_bound import ring_bound, swap_search
+from .ring_bound import redundancy_polish, ring_bound, swap_search
 
 #: Coverage tolerance of the solver's constraints (fractions); the true union
 #: coverage of every returned swarm is recomputed from the masks.
@@ -221,6 +221,7 @@ def _by_ring(bank, red, min_separation, m, need, n_max):
                 continue
             sw, cov = swap_search(bank, start, m, need=need)
             if cov >= need:
+                sw = redundancy_polish(bank, sw, m, need)
                 return (low, sw, None, time.perf_counter() - t) if n == low else \
                     (low, None, sw, time.perf_counter() - t)
     return low, None, None, time.perf_counter() - t
