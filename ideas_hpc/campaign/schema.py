@@ -345,32 +345,16 @@ def build_models(raw: dict, config: CampaignConfig) -> dict:
         ctrl = {"preset": "fov" if config.attitude.maneuver == "fov" else "np"}
     coverage = coverage_options_from_config(cov, prefix="coverage.")
     if coverage.require_stereo and config.kind.startswith("design"):
-        _check_stereo_design(config)
+        from ..design.stereo import check_campaign
+
+        d = config.design
+        check_campaign(config.kind, d.method, d.failures_tolerated, d.grid_step_rad)
     return {
         "force_model": force_model_from_config(_sub_table(raw, "dynamics"), prefix="dynamics."),
         "spacecraft": spacecraft_from_config(_sub_table(raw, "spacecraft"), prefix="spacecraft."),
         "gains": gains_from_config(ctrl, prefix="controller."),
         "coverage": coverage,
     }
-
-
-def _check_stereo_design(config) -> None:
-    """Stereo from two spacecraft is not a union of per-spacecraft rows: only the exact
-    NP designer's pair formulation (:mod:`ideas_hpc.design.stereo`) solves it."""
-    if config.kind != "design-nadir" or config.design.method != "exact":
-        what = (f"design.method = {config.design.method!r}" if config.kind == "design-nadir"
-                else f"kind {config.kind!r}")
-        raise InputError(f"stereo from two spacecraft is a condition on pairs, which {what} "
-                         "cannot score; use kind design-nadir with design.method = \"exact\"",
-                         field="coverage.require_stereo")
-    from ..design.bank import grid_size
-    from ..design.stereo import check_grid
-
-    check_grid(grid_size(config.design.grid_step_rad))
-    if config.design.failures_tolerated:
-        raise InputError("failure tolerance with stereo from two spacecraft is not solved yet; "
-                         "set design.failures_tolerated = 0 (the Monte Carlo verification "
-                         "still flies failures)", field="design.failures_tolerated")
 
 
 def load(path, overrides: list[str] | None = None) -> Campaign:

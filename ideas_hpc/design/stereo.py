@@ -35,7 +35,8 @@ from scipy.optimize import LinearConstraint
 from ..core.stereo_pairs import pair_index
 from ..core.union import population_coverage
 from ..errors import InputError
-from .bank import CandidateBank, conflict_windows, reduce_problem, separation_steps
+from .bank import (CandidateBank, conflict_windows, grid_size, reduce_problem,
+                   separation_steps)
 from .exact import FEAS_TOL, GAP_ZERO, ExactResult, check_time_limit, heavy_groups, solve
 from .ring_bound import swap_search
 
@@ -50,6 +51,20 @@ def check_grid(n_candidates: int) -> None:
                          f"{n_candidates} grid angles are too many (at most {MAX_CANDIDATES}): "
                          f"use design.angle_step_deg >= {step:g} with coverage.require_stereo",
                          field="design.angle_step_deg")
+
+
+def check_campaign(kind: str, method: str, failures_tolerated: int, step: float) -> None:
+    """A design campaign with ``require_stereo``: only the exact NP designer scores pairs."""
+    if kind != "design-nadir" or method != "exact":
+        what = f"design.method = {method!r}" if kind == "design-nadir" else f"kind {kind!r}"
+        raise InputError(f"stereo from two spacecraft is a condition on pairs, which {what} "
+                         "cannot score; use kind design-nadir with design.method = \"exact\"",
+                         field="coverage.require_stereo")
+    check_grid(grid_size(step))
+    if failures_tolerated:
+        raise InputError("failure tolerance with stereo from two spacecraft is not solved yet; "
+                         "set design.failures_tolerated = 0 (the Monte Carlo verification "
+                         "still flies failures)", field="design.failures_tolerated")
 
 
 @dataclass
