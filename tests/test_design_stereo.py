@@ -118,3 +118,26 @@ def test_stereo_campaign_end_to_end_flown_coverage_meets_the_design(tmp_path, er
     assert int(ds["best_swarm_size"]) >= 2               # stereo needs two spacecraft here
     gap = float(ds["optimality_gap"])
     assert (str(ds["solver_status"].values) == "optimal") == (gap == 0.0)
+
+
+def test_stereo_ga_campaign_scores_pairs_and_states_its_gap(tmp_path, eros1708):
+    from pathlib import Path
+
+    import xarray as xr
+
+    from ideas_hpc.campaign.run import run_file
+
+    campaign = Path(__file__).resolve().parent.parent / "campaigns" / "eros-nadir-ga.toml"
+    sets = ["coverage.require_stereo=true", 'coverage.mode="exact"', "coverage.occlusion=true",
+            "design.angle_step_rad=0.2094395102393195", "design.angle_step_deg=12",
+            "design.population=16", "design.generations=4", "design.n_max=20",
+            "design.time_limit_s=20", "run.workers=0"]
+    ds = xr.open_zarr(run_file(campaign, out=tmp_path / "g.zarr", overrides=sets))
+    flown = float(ds["coverage"].values.ravel()[0])
+    # the GA's own score of its best genome (pair model) equals the flown quality pass
+    best = int(np.argmax(ds["fitness"].values))
+    assert np.array_equal(ds["population"].values[best], ds["best_genome"].values)
+    assert float(ds["population_coverage"].values[best]) == pytest.approx(flown, abs=1e-12)
+    assert str(ds["design_method"].values) == "ga"
+    n = int(ds["best_swarm_size"])
+    assert float(ds["optimality_gap"]) == pytest.approx((n - float(ds["proven_bound"])) / n)

@@ -348,7 +348,8 @@ def build_models(raw: dict, config: CampaignConfig) -> dict:
         from ..design.stereo import check_campaign
 
         d = config.design
-        check_campaign(config.kind, d.method, d.failures_tolerated, d.grid_step_rad)
+        check_campaign(config.kind, d.method, d.failures_tolerated, d.grid_step_rad,
+                       d.angle_step_rad)
     return {
         "force_model": force_model_from_config(_sub_table(raw, "dynamics"), prefix="dynamics."),
         "spacecraft": spacecraft_from_config(_sub_table(raw, "spacecraft"), prefix="spacecraft."),

@@ -42,24 +42,32 @@ from .ring_bound import swap_search
 
 #: Largest candidate grid of the pair formulation (K (K - 1) / 2 pair rows).
 MAX_CANDIDATES = 180
+TWO_PI = 2.0 * math.pi
 
 
-def check_grid(n_candidates: int) -> None:
+def check_grid(n_candidates: int, field: str = "design.angle_step_deg") -> None:
+    """At most :data:`MAX_CANDIDATES` grid angles (``field`` names the step key)."""
     if n_candidates > MAX_CANDIDATES:
-        step = 360.0 / MAX_CANDIDATES
+        least = (f"{360.0 / MAX_CANDIDATES:g}" if field.endswith("_deg")
+                 else f"{TWO_PI / MAX_CANDIDATES:.4f}")
         raise InputError(f"stereo from two spacecraft needs a pair variable per candidate pair; "
                          f"{n_candidates} grid angles are too many (at most {MAX_CANDIDATES}): "
-                         f"use design.angle_step_deg >= {step:g} with coverage.require_stereo",
-                         field="design.angle_step_deg")
+                         f"use {field} >= {least} with coverage.require_stereo", field=field)
 
 
-def check_campaign(kind: str, method: str, failures_tolerated: int, step: float) -> None:
-    """A design campaign with ``require_stereo``: only the exact NP designer scores pairs."""
-    if kind != "design-nadir" or method != "exact":
-        what = f"design.method = {method!r}" if kind == "design-nadir" else f"kind {kind!r}"
-        raise InputError(f"stereo from two spacecraft is a condition on pairs, which {what} "
-                         "cannot score; use kind design-nadir with design.method = \"exact\"",
+def check_campaign(kind: str, method: str, failures_tolerated: int, step: float,
+                   ga_step: float) -> None:
+    """A design campaign with ``require_stereo``: the NP designers score pairs (the
+    exact one on ``design.angle_step_deg``, the GA on ``design.angle_step_rad``)."""
+    if kind != "design-nadir":
+        raise InputError(f"stereo from two spacecraft is a condition on pairs, which kind "
+                         f"{kind!r} cannot score; use kind design-nadir",
                          field="coverage.require_stereo")
+    if method == "ga":
+        if not ga_step > 0:
+            raise InputError("the GA scores stereo pairs on its angle grid: set "
+                             "design.angle_step_rad > 0", field="design.angle_step_rad")
+        check_grid(grid_size(ga_step, "design.angle_step_rad"), "design.angle_step_rad")
     check_grid(grid_size(step))
     if failures_tolerated:
         raise InputError("failure tolerance with stereo from two spacecraft is not solved yet; "
