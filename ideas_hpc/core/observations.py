@@ -13,7 +13,7 @@ import numpy as np
 from numba import njit
 
 from .bvh import cone_clear, segment_blocked
-from .time_tree import _classify
+from .time_tree import LEAF, _classify, time_tree
 from .visibility import _seen
 
 #: Layout of ``limits``.
@@ -60,7 +60,25 @@ def _lit(j, i, lc, px, py, pz, nx, ny, nz, sun_T, node_bounds, node_info, tri, t
 
 
 @njit(cache=True)
-def _scan(j, k, px, py, pz, nx, ny, nz, nabs, NF, NI, stack, lc, vertices, normals, r_T,
+def scan_setup(r_T, dcm_BT, tan_eta, limits):
+    """What every scan of a pass shares: ``(NF, NI, sec_eta, check_ang, c_emi, c_inc, c_pha)``.
+
+    The time tree of the images, the secant of the half angle (with a
+    relative 1e-12 margin, as the time tree's bounds), whether any angle limit
+    is set, and the cosines of the emission, incidence and phase limits
+    (-2 when a limit is not set: the cosine test then always holds).
+    """
+    NF, NI = time_tree(r_T, dcm_BT, LEAF)
+    sec_eta = np.sqrt(1.0 + tan_eta * tan_eta) * (1.0 + 1e-12)
+    check_ang = limits[L_EMI] < np.inf or limits[L_INC] < np.inf or limits[L_PHA] < np.inf
+    c_emi = np.cos(limits[L_EMI]) if limits[L_EMI] < np.inf else -2.0
+    c_inc = np.cos(limits[L_INC]) if limits[L_INC] < np.inf else -2.0
+    c_pha = np.cos(limits[L_PHA]) if limits[L_PHA] < np.inf else -2.0
+    return NF, NI, sec_eta, check_ang, c_emi, c_inc, c_pha
+
+
+@njit(cache=True)
+def _scan(j, k, NF, NI, stack, lc, vertices, normals, r_T,
           dcm_BT, image_times, tan_eta, sec_eta, near, far, exact, sin_min_elev, max_range,
           occlusion, illumination, sun_T, node_bounds, node_info, tri, tri_vid, rho, limits,
           check_ang, c_emi, c_inc, c_pha, require_lit, U, m, vlit, cnt, first, bres, bk, bi):
@@ -74,6 +92,13 @@ def _scan(j, k, px, py, pz, nx, ny, nz, nabs, NF, NI, stack, lc, vertices, norma
     (one of k's observations meets every limit). ``lc`` caches lighting per
     image for this vertex (it does not depend on the spacecraft).
     """
+    px = vertices[j, 0]
+    py = vertices[j, 1]
+    pz = vertices[j, 2]
+    nx = normals[j, 0]
+    ny = normals[j, 1]
+    nz = normals[j, 2]
+    nabs = np.sqrt(nx * nx + ny * ny + nz * nz)
     seen_k = False
     usable_k = False
     sp = 1

@@ -47,8 +47,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from .observations import L_EMI, L_INC, L_PHA, L_RES, L_SMAX, L_SMIN, _scan
-from .time_tree import LEAF, time_tree
+from .observations import L_SMAX, L_SMIN, _scan, scan_setup
 
 #: Radius of the direction caps of the stereo test, rad (an efficiency knob
 #: only; the result does not depend on it).
@@ -199,13 +198,7 @@ def quality_vertices(vertices, normals, r_T, dcm_BT, image_times, tan_eta, near,
     nv = vertices.shape[0]
     nsc = r_T.shape[0]
     nimg = r_T.shape[1]
-    NF, NI = time_tree(r_T, dcm_BT, LEAF)
-    sec_eta = np.sqrt(1.0 + tan_eta * tan_eta) * (1.0 + 1e-12)
-    check_ang = limits[L_EMI] < np.inf or limits[L_INC] < np.inf or limits[L_PHA] < np.inf
-    # cosines of the angle limits (-2: no limit, the test always holds)
-    c_emi = np.cos(limits[L_EMI]) if limits[L_EMI] < np.inf else -2.0
-    c_inc = np.cos(limits[L_INC]) if limits[L_INC] < np.inf else -2.0
-    c_pha = np.cos(limits[L_PHA]) if limits[L_PHA] < np.inf else -2.0
+    NF, NI, sec_eta, check_ang, c_emi, c_inc, c_pha = scan_setup(r_T, dcm_BT, tan_eta, limits)
     times_seen = np.zeros(nv, dtype=np.int32)
     first_seen = np.full(nv, np.nan)
     lit = np.zeros(nv, dtype=np.bool_)
@@ -237,7 +230,6 @@ def quality_vertices(vertices, normals, r_T, dcm_BT, image_times, tan_eta, near,
             nx = normals[j, 0]
             ny = normals[j, 1]
             nz = normals[j, 2]
-            nabs = np.sqrt(nx * nx + ny * ny + nz * nz)
             cnt = 0
             first = np.inf
             vlit = False
@@ -251,7 +243,7 @@ def quality_vertices(vertices, normals, r_T, dcm_BT, image_times, tan_eta, near,
                 if not active[k]:
                     continue
                 m, vlit, cnt, first, bres, bk, bi, seen_k, usable_k = _scan(
-                    j, k, px, py, pz, nx, ny, nz, nabs, NF, NI, stack, lc, vertices,
+                    j, k, NF, NI, stack, lc, vertices,
                     normals, r_T, dcm_BT, image_times, tan_eta, sec_eta, near, far, exact,
                     sin_min_elev, max_range, occlusion, illumination, sun_T, node_bounds,
                     node_info, tri, tri_vid, rho, limits, check_ang, c_emi, c_inc, c_pha,

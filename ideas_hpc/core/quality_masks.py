@@ -21,9 +21,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from .observations import L_EMI, L_INC, L_PHA, L_SMAX, L_SMIN, _scan
+from .observations import L_SMAX, L_SMIN, _scan, scan_setup
 from .quality import _CHUNK, _stereo
-from .time_tree import LEAF, time_tree
 
 
 @njit(parallel=True, cache=True)
@@ -46,12 +45,7 @@ def quality_by_spacecraft(vertices, normals, r_T, dcm_BT, image_times, tan_eta, 
     nv = vertices.shape[0]
     nsc = r_T.shape[0]
     nimg = r_T.shape[1]
-    NF, NI = time_tree(r_T, dcm_BT, LEAF)
-    sec_eta = np.sqrt(1.0 + tan_eta * tan_eta) * (1.0 + 1e-12)
-    check_ang = limits[L_EMI] < np.inf or limits[L_INC] < np.inf or limits[L_PHA] < np.inf
-    c_emi = np.cos(limits[L_EMI]) if limits[L_EMI] < np.inf else -2.0
-    c_inc = np.cos(limits[L_INC]) if limits[L_INC] < np.inf else -2.0
-    c_pha = np.cos(limits[L_PHA]) if limits[L_PHA] < np.inf else -2.0
+    NF, NI, sec_eta, check_ang, c_emi, c_inc, c_pha = scan_setup(r_T, dcm_BT, tan_eta, limits)
     usable = np.zeros((nsc, nv), dtype=np.bool_)
     stereo = np.zeros((nsc, nv), dtype=np.bool_)
     resolution = np.full((nsc, nv), np.inf)
@@ -69,18 +63,11 @@ def quality_by_spacecraft(vertices, normals, r_T, dcm_BT, image_times, tan_eta, 
         fill = np.empty(nimg, dtype=np.int64)
         for j in range(ch * _CHUNK, min(nv, (ch + 1) * _CHUNK)):
             lc[:] = 0       # lighting per image: shared by every spacecraft of this vertex
-            px = vertices[j, 0]
-            py = vertices[j, 1]
-            pz = vertices[j, 2]
-            nx = normals[j, 0]
-            ny = normals[j, 1]
-            nz = normals[j, 2]
-            nabs = np.sqrt(nx * nx + ny * ny + nz * nz)
             for k in range(nsc):
                 # vlit = True: the per-vertex 'lit' output is not needed here, so
                 # shadow rays are cast only for the illumination filter and require_lit
                 m, _, _, _, bres, _, _, _, usable_k = _scan(
-                    j, k, px, py, pz, nx, ny, nz, nabs, NF, NI, stack, lc, vertices,
+                    j, k, NF, NI, stack, lc, vertices,
                     normals, r_T, dcm_BT, image_times, tan_eta, sec_eta, near, far, exact,
                     sin_min_elev, max_range, occlusion, illumination, sun_T, node_bounds,
                     node_info, tri, tri_vid, rho, limits, check_ang, c_emi, c_inc, c_pha,

@@ -24,9 +24,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from .observations import L_EMI, L_INC, L_PHA, L_SMAX, L_SMIN, _scan
+from .observations import L_SMAX, L_SMIN, _scan, scan_setup
 from .quality import _CHUNK
-from .time_tree import LEAF, time_tree
 
 #: Angular slack of the cap decisions, rad (see module docstring).
 SLACK = 1e-6
@@ -52,12 +51,7 @@ def stereo_pairs(vertices, normals, r_T, dcm_BT, image_times, tan_eta, near, far
     nv = vertices.shape[0]
     nsc = r_T.shape[0]
     nimg = r_T.shape[1]
-    NF, NI = time_tree(r_T, dcm_BT, LEAF)
-    sec_eta = np.sqrt(1.0 + tan_eta * tan_eta) * (1.0 + 1e-12)
-    check_ang = limits[L_EMI] < np.inf or limits[L_INC] < np.inf or limits[L_PHA] < np.inf
-    c_emi = np.cos(limits[L_EMI]) if limits[L_EMI] < np.inf else -2.0
-    c_inc = np.cos(limits[L_INC]) if limits[L_INC] < np.inf else -2.0
-    c_pha = np.cos(limits[L_PHA]) if limits[L_PHA] < np.inf else -2.0
+    NF, NI, sec_eta, check_ang, c_emi, c_inc, c_pha = scan_setup(r_T, dcm_BT, tan_eta, limits)
     smin = limits[L_SMIN]
     smax = limits[L_SMAX]
     cmin = np.cos(smax)
@@ -90,13 +84,6 @@ def _pairs_of_vertex(j, out, stack, lc, U, start, rad, cap, cstart, vertices, no
     """Fill column ``j`` of :func:`stereo_pairs` (scratch arrays given by the caller)."""
     nsc = r_T.shape[0]
     lc[:] = 0
-    px = vertices[j, 0]
-    py = vertices[j, 1]
-    pz = vertices[j, 2]
-    nx = normals[j, 0]
-    ny = normals[j, 1]
-    nz = normals[j, 2]
-    nabs = np.sqrt(nx * nx + ny * ny + nz * nz)
     m = 0
     nc = 0
     cos_cap = np.cos(CAP_RADIUS)
@@ -104,7 +91,7 @@ def _pairs_of_vertex(j, out, stack, lc, U, start, rad, cap, cstart, vertices, no
         start[k] = m
         cstart[k] = nc
         m, _, _, _, _, _, _, _, _ = _scan(
-            j, k, px, py, pz, nx, ny, nz, nabs, NF, NI, stack, lc, vertices, normals, r_T,
+            j, k, NF, NI, stack, lc, vertices, normals, r_T,
             dcm_BT, image_times, tan_eta, sec_eta, near, far, exact, sin_min_elev,
             max_range, occlusion, illumination, sun_T, node_bounds, node_info, tri,
             tri_vid, rho, limits, check_ang, c_emi, c_inc, c_pha, require_lit, U, m, True,
