@@ -141,3 +141,18 @@ def test_stereo_ga_campaign_scores_pairs_and_states_its_gap(tmp_path, eros1708):
     assert str(ds["design_method"].values) == "ga"
     n = int(ds["best_swarm_size"])
     assert float(ds["optimality_gap"]) == pytest.approx((n - float(ds["proven_bound"])) / n)
+
+
+def test_pareto_stereo_objective_counts_pairs_of_spacecraft():
+    from dataclasses import replace
+
+    from ideas_hpc.design.objectives import OBJECTIVES
+
+    sb = _bank(4)
+    bank = replace(sb.bank, stereo=sb.bank.masks, pairs=sb.pairs,
+                   masks=np.ones_like(sb.bank.masks))
+    members = np.array([[0, 3, -1, -1], [1, 4, 8, -1], [2, -1, -1, -1]], dtype=np.int64)
+    got = OBJECTIVES["stereo_coverage"].evaluate(bank, members)
+    want = [_truth(sb, m[m >= 0]) for m in members]
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
+    assert got[1] > 0

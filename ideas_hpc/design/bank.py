@@ -67,6 +67,16 @@ class CandidateBank:
     resolution: np.ndarray | None = None
     pairs: np.ndarray | None = None
 
+    @functools.cached_property
+    def stereo_scorer(self):
+        """Scorer of stereo coverage with pairs of spacecraft (needs ``stereo`` and ``pairs``):
+        a :class:`~ideas_hpc.design.stereo.StereoBank` over the own-track stereo rows."""
+        from dataclasses import replace
+
+        from .stereo import StereoBank
+
+        return StereoBank(replace(self, masks=self.stereo, pairs=None), self.pairs)
+
     @property
     def n_candidates(self) -> int:
         return int(self.theta.size)

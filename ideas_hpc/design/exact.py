@@ -345,15 +345,18 @@ def max_coverage(bank: CandidateBank, n: int, *, min_separation: float = 0.0,
     # no incumbent at the time limit (large shape models): the greedy swarm, with its gap
     idx = _chosen(red, res.x) if res.x is not None else greedy_swarm(bank, m, n)[0]
     cov = float(bank.coverage([idx])[0])
+    return coverage_result(bank.theta, idx, cov, res, dt,
+                           cov if res.x is not None else max(cov, bank.reach))
+
+
+def coverage_result(theta, idx, cov: float, res, dt: float, fallback: float) -> ExactResult:
+    """A max-coverage outcome: the swarm ``idx`` of coverage ``cov`` and HiGHS's proven
+    upper bound (``fallback`` when it gives none), its gap and status."""
     bound = getattr(res, "mip_dual_bound", None)
-    if bound is None or not np.isfinite(bound):
-        bound = cov if res.x is not None else max(cov, bank.reach)
-    else:
-        bound = max(cov, -float(bound))
+    bound = fallback if bound is None or not np.isfinite(bound) else max(cov, -float(bound))
     gap = (bound - cov) / bound if bound > 0 else 0.0
     if gap < GAP_ZERO:
         gap, bound = 0.0, cov
     status = "optimal" if gap == 0.0 else ("time_limit" if res.status == 1 else "feasible")
-    return ExactResult(indices=idx, theta=bank.theta[idx], n=idx.size, coverage=cov,
-                       target=cov, status=status, bound=float(bound), gap=float(gap),
-                       solve_time=dt)
+    return ExactResult(indices=idx, theta=theta[idx], n=idx.size, coverage=cov, target=cov,
+                       status=status, bound=float(bound), gap=float(gap), solve_time=dt)

@@ -88,12 +88,7 @@ def _stereo(bank, members):
     own = _optional(bank, "stereo", "stereo_coverage")
     if getattr(bank, "pairs", None) is None:
         return _union(own, bank.areas, members)
-    from dataclasses import replace
-
-    from .stereo import StereoBank
-
-    sb = StereoBank(replace(bank, masks=own), bank.pairs)
-    return sb.coverage([m[m >= 0] for m in members])
+    return bank.stereo_scorer.coverage([m[m >= 0] for m in members])
 
 
 def _mean_resolution(bank, members):

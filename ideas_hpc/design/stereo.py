@@ -24,6 +24,7 @@ is limited to :data:`MAX_CANDIDATES` candidates (2 deg or coarser).
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from dataclasses import dataclass
@@ -37,7 +38,8 @@ from ..core.union import population_coverage
 from ..errors import InputError
 from .bank import (CandidateBank, conflict_windows, grid_size, reduce_problem,
                    separation_steps)
-from .exact import FEAS_TOL, GAP_ZERO, ExactResult, check_time_limit, heavy_groups, solve
+from .exact import (FEAS_TOL, ExactResult, check_time_limit, coverage_result, heavy_groups,
+                    solve)
 from .ring_bound import swap_search
 
 #: Largest candidate grid of the pair formulation (K (K - 1) / 2 pair rows).
@@ -89,16 +91,20 @@ class StereoBank:
         return np.array(s + [k + pair_index(a, b, k) for a, b in itertools.combinations(s, 2)],
                         dtype=np.int64)
 
+    @functools.cached_property
+    def rows(self) -> np.ndarray:
+        """Own-track rows then pair rows, (K + K (K - 1) / 2, V): stacked once, scored often."""
+        return np.ascontiguousarray(np.vstack([self.bank.masks, self.pairs]))
+
     def coverage(self, swarms) -> np.ndarray:
         """Stereo-mapped area fraction of each swarm (grid indices)."""
-        rows = np.vstack([self.bank.masks, self.pairs])
         members = [self.swarm_rows(s) for s in swarms]
         width = max(1, max(m.size for m in members))
         mem = np.full((len(members), width), -1, dtype=np.int64)
         for i, m in enumerate(members):
             mem[i, :m.size] = m
         a = np.ascontiguousarray(self.bank.areas, dtype=np.float64)
-        return population_coverage(np.ascontiguousarray(rows), mem, a, float(a.sum()))[0]
+        return population_coverage(self.rows, mem, a, float(a.sum()))[0]
 
     @property
     def n_candidates(self) -> int:
@@ -112,8 +118,7 @@ class StereoBank:
 def _model(sb: StereoBank, m: int):
     """Reduced cover data: (cover (R, G) over own + useful pair rows, weight, pair ends, R_own)."""
     k = sb.bank.n_candidates
-    rows = np.vstack([sb.bank.masks, sb.pairs])
-    red = reduce_problem(rows, sb.bank.areas, merge_candidates=False)
+    red = reduce_problem(sb.rows, sb.bank.areas, merge_candidates=False)
     useful = red.cover[k:].any(axis=1)
     ends = np.array(list(itertools.combinations(range(k), 2)), dtype=np.int64).reshape(-1, 2)
     if m:   # pairs closer than the separation never fly together
@@ -295,15 +300,7 @@ def max_coverage_stereo(sb: StereoBank, n: int, *, min_separation: float = 0.0,
         c2 = float(sb.coverage([i2])[0])
         if c2 > cov:
             idx, cov = i2, c2
-    bound = getattr(res, "mip_dual_bound", None)
-    bound = sb.reach if bound is None or not np.isfinite(bound) else max(cov, -float(bound))
-    gap = (bound - cov) / bound if bound > 0 else 0.0
-    if gap < GAP_ZERO:
-        gap, bound = 0.0, cov
-    status = "optimal" if gap == 0.0 else ("time_limit" if res.status == 1 else "feasible")
-    return ExactResult(indices=idx, theta=bank.theta[idx], n=idx.size, coverage=cov,
-                       target=cov, status=status, bound=float(bound), gap=float(gap),
-                       solve_time=dt)
+    return coverage_result(bank.theta, idx, cov, res, dt, sb.reach)
 
 
 def stereo_curve(sb: StereoBank, n_max: int, *, min_separation: float = 0.0,
