@@ -25,7 +25,7 @@ from numba import njit, prange
 
 
 @njit(parallel=True, cache=True)
-def ring_gap_bound(M, n_max, m, stop_miss):
+def ring_gap_bound(M, n_max, m, stop_miss, extra):
     """Least gap-missed weight of every swarm size, per first member.
 
     Parameters
@@ -38,8 +38,11 @@ def ring_gap_bound(M, n_max, m, stop_miss):
     m : int
         Consecutive members must be more than ``m`` grid steps apart.
     stop_miss : float
-        Stop after the first size whose least missed weight is ``<= stop_miss``
-        (the bound can no longer exclude it); ``-1`` computes every size.
+        Stop ``extra`` sizes after the first size whose least missed weight is
+        ``<= stop_miss`` (the bound can no longer exclude it); ``-1`` computes
+        every size.
+    extra : int
+        Sizes computed past that one (their swarms start local searches).
 
     Returns
     -------
@@ -59,7 +62,8 @@ def ring_gap_bound(M, n_max, m, stop_miss):
         prev[s, s] = 0.0
         tot[1, s] = M[s, K]
         low = min(low, tot[1, s])
-    if low <= stop_miss:
+    left = extra if low <= stop_miss else -1
+    if left == 0:
         return tot
     for n in range(2, n_max + 1):
         for s in prange(K):
@@ -79,7 +83,11 @@ def ring_gap_bound(M, n_max, m, stop_miss):
         low = np.inf
         for s in range(K):
             low = min(low, tot[n, s])
-        if low <= stop_miss:
+        if left < 0 and low <= stop_miss:
+            left = extra
+        elif left > 0:
+            left -= 1
+        if left == 0:
             break
     return tot
 

@@ -210,12 +210,11 @@ def _by_ring(bank, red, min_separation, m, need, n_max):
         red.rep, np.arange(bank.n_candidates))
     full = red if grid_order else prepare(bank, min_separation, redundancy=True)[0]
     top = int(n_max) if n_max is not None else 64
-    rb = ring_bound(bank, full, m, top, need)
+    rb = ring_bound(bank, full, m, top, need, extra=2)      # and the two sizes above
     low = None if rb is None else rb.n_bound(need)
     if low is None:
         return None, None, None, time.perf_counter() - t
-    rb = ring_bound(bank, full, m, min(top, low + 2))        # the swarms of the next sizes
-    for n in range(low, min(top, low + 2) + 1):
+    for n in range(low, min(top, low + 2, rb.upper.size - 1) + 1):
         for start in (rb.swarm(n), greedy_swarm(bank, m, n)[0]):
             if start.size != n or np.any(start < 0):
                 continue

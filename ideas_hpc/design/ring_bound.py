@@ -94,11 +94,12 @@ class RingBound:
 
 
 def ring_bound(bank: CandidateBank, red: Reduced, m: int, n_max: int,
-               need: float | None = None) -> RingBound | None:
+               need: float | None = None, extra: int = 0) -> RingBound | None:
     """Proven coverage bounds of 1 .. n_max grid candidates (module docstring).
 
     ``red`` must hold one row per grid candidate, in grid order (no merging). With
-    ``need`` the programme stops at the first size the bound cannot exclude.
+    ``need`` the programme stops ``extra`` sizes after the first size the bound
+    cannot exclude.
     Returns None on grids finer than :data:`MAX_GRID` (too slow to be worth it).
     """
     k = bank.n_candidates
@@ -107,7 +108,7 @@ def ring_bound(bank: CandidateBank, red: Reduced, m: int, n_max: int,
     M = gap_matrix(red.cover, red.weight)
     reach = float(red.weight.sum())
     stop = -1.0 if need is None else reach - need + 1e-12
-    tot = ring_gap_bound(M, int(n_max), int(m), float(stop))
+    tot = ring_gap_bound(M, int(n_max), int(m), float(stop), int(extra))
     upper = reach - tot.min(axis=1)
     upper[0] = 0.0
     computed = np.isfinite(tot.min(axis=1))
