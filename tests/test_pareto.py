@@ -18,11 +18,10 @@ from ideas_hpc.design.pareto import (check_objectives, evaluate, members_of, min
                                      non_dominated, repair, run_pareto, swap_ascent)
 from ideas_hpc.errors import InputError
 from ideas_hpc.flyby import setup_from_campaign
+from test_design_exact import eros_bank   # same flyby geometry; shares its bank cache
 
 ROOT = Path(__file__).resolve().parent.parent
 CAMPAIGN = ROOT / "campaigns" / "eros-pareto.toml"
-STRICT = ['coverage.mode="exact"', "coverage.occlusion=true", "coverage.min_elevation_deg=5.0"]
-_BANKS: dict = {}
 
 
 def _dominated_brute(f):
@@ -171,14 +170,6 @@ def test_toy_front_against_exhaustive_search(seed):
     two = run_pareto(bank, ("n", "coverage"), n_max=3, population=20, generations=10, seed=seed)
     for n, c in zip(two.n, two.values[:, 1]):
         assert c == pytest.approx(best[n], abs=1e-12)
-
-
-def eros_bank(strict: bool, step_deg: float) -> CandidateBank:
-    key = (strict, step_deg)
-    if key not in _BANKS:
-        setup = setup_from_campaign(load(CAMPAIGN, STRICT if strict else []))
-        _BANKS[key] = build_bank(setup, np.deg2rad(step_deg))
-    return _BANKS[key]
 
 
 def _check_front_against_curve(bank, n_max, seeds, population=40, generations=15):
