@@ -52,15 +52,13 @@ def candidate_masks(setup: FlybySetup, keys) -> np.ndarray:
                                    setup.far, options=setup.coverage, sun_T=sun)
 
 
-def candidate_quality(setup: FlybySetup, keys) -> dict:
-    """Per-candidate ``usable``, ``stereo``, ``mapped`` ((K, V) bool) and ``resolution`` (m)."""
+def candidate_quality(setup: FlybySetup, keys, pairs: bool = False) -> dict:
+    """Per-candidate ``usable``, ``stereo``, ``mapped`` ((K, V) bool) and ``resolution`` (m);
+    with ``pairs`` also the stereo table of every candidate pair, ``pairs``
+    ((K (K - 1) / 2, V) bool), from the same flights."""
     r_img, dcm, sun = _views(setup, keys)
-    return quality_per_spacecraft(setup.body.shape, r_img, dcm, setup.image_times, setup.eta,
-                                  setup.near, setup.far, options=setup.coverage, sun_T=sun)
-
-
-def candidate_stereo_pairs(setup: FlybySetup, keys) -> np.ndarray:
-    """(K (K - 1) / 2, V) bool: candidate pair ``a < b`` maps the vertex in stereo."""
-    r_img, dcm, sun = _views(setup, keys)
-    return stereo_pair_table(setup.body.shape, r_img, dcm, setup.image_times, setup.eta,
-                             setup.near, setup.far, options=setup.coverage, sun_T=sun)
+    args = (setup.body.shape, r_img, dcm, setup.image_times, setup.eta, setup.near, setup.far)
+    out = quality_per_spacecraft(*args, options=setup.coverage, sun_T=sun)
+    if pairs:
+        out["pairs"] = stereo_pair_table(*args, options=setup.coverage, sun_T=sun)
+    return out

@@ -22,9 +22,8 @@ import numpy as np
 import xarray as xr
 
 from ..design.bank import grid_size, separation_steps
-from ..candidates import candidate_stereo_pairs
 from ..design import build_bank, coverage_curve, failure_tolerant, min_swarm, worst_failure
-from ..design.stereo import StereoBank, min_swarm_stereo, stereo_curve
+from ..design.stereo import min_swarm_stereo, stereo_curve
 from ..errors import InputError
 from ..flyby import fly
 from ..montecarlo.verify import verify_swarm
@@ -86,11 +85,8 @@ def design_exact(c, setup, client) -> ExactDesign:
     stereo = setup.coverage.require_stereo      # grid size checked with the config
     t0 = time.perf_counter()
     bank = build_bank(setup, d.grid_step_rad, client=client, chunk_size=d.chunk_size,
-                      quality=stereo)
-    scorer = bank
-    if stereo:
-        keys = [(float(t), 0.0, i) for i, t in enumerate(bank.theta)]
-        scorer = StereoBank(bank, candidate_stereo_pairs(setup, keys))
+                      quality=stereo, pairs=stereo)
+    scorer = bank.stereo_scorer if stereo else bank
     t_masks = time.perf_counter() - t0
     _log(f"candidate {'rows' if setup.coverage.requirement else 'masks'}: {bank.n_candidates} "
          f"grid angles ({math.degrees(bank.step):g} deg)"

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from ..candidates import candidate_masks, candidate_stereo_pairs
+from ..candidates import candidate_masks
 from ..errors import InputError
 from ..flyby import fly, setup_from_campaign, target
 from ..ga_local import GridCover
@@ -68,16 +68,15 @@ def _stereo_ga(c: Campaign, setup, client):
     """The NP GA scoring stereo from two spacecraft with the pair model
     (:class:`~ideas_hpc.design.stereo.StereoBank` on the GA's own angle grid)."""
     from ..design import build_bank
-    from ..design.stereo import StereoBank, min_swarm_stereo
+    from ..design.stereo import min_swarm_stereo
     from ..ga import run_nadir_ga
 
     d = c.config.design
     step = d.angle_step_rad
     t = time.perf_counter()
     bank = build_bank(setup, step, client=client, chunk_size=d.chunk_size, snap=False,
-                      quality=True)
-    sb = StereoBank(bank, candidate_stereo_pairs(
-        setup, [(float(a), 0.0, i) for i, a in enumerate(bank.theta)]))
+                      quality=True, pairs=True)
+    sb = bank.stereo_scorer
     eps = d.eps_tol_pct / 100.0
     target = 1.0 if sb.reach >= 1.0 - eps else sb.reach
     _log(f"candidate rows and stereo pairs: {bank.n_candidates} grid angles in "

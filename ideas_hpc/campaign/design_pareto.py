@@ -36,7 +36,6 @@ from contextlib import nullcontext
 import numpy as np
 import xarray as xr
 
-from ..candidates import candidate_stereo_pairs
 from ..design.stereo import check_grid
 from ..design import build_bank, coverage_curve
 from ..design.bank import grid_size, separation_steps
@@ -150,11 +149,9 @@ def run_design_pareto(c, out, *, workers=None, scheduler=None, cluster="local",
           connect(cluster=cluster, workers=workers, scheduler=scheduler,
                   slurm_config=slurm_config)) as client:
         quality = bool({"stereo_coverage", "mean_resolution"} & set(names))
+        # stereo from two spacecraft needs the pair table
         bank = build_bank(setup, d.grid_step_rad, client=client, chunk_size=d.chunk_size,
-                          quality=quality)
-    if "stereo_coverage" in names:     # stereo from two spacecraft: the pair table
-        bank.pairs = candidate_stereo_pairs(
-            setup, [(float(t), 0.0, i) for i, t in enumerate(bank.theta)])
+                          quality=quality, pairs="stereo_coverage" in names)
     t_masks = time.perf_counter() - t0
     _log(f"candidate masks: {bank.n_candidates} grid angles ({math.degrees(bank.step):g} deg) "
          f"in {t_masks:.1f} s")

@@ -106,7 +106,8 @@ def grid_size(step: float, field: str = "design.angle_step_deg") -> int:
 
 
 def build_bank(setup, step: float, *, client=None, chunk_size: int = 32,
-               mask_bank=None, snap: bool = True, quality: bool = False) -> CandidateBank:
+               mask_bank=None, snap: bool = True, quality: bool = False,
+               pairs: bool = False) -> CandidateBank:
     """Masks of every grid angle (rad step) for a flyby setup, ring or helix.
 
     ``snap`` makes the step divide the circle (``2 pi / round(2 pi / step)``);
@@ -114,7 +115,9 @@ def build_bank(setup, step: float, *, client=None, chunk_size: int = 32,
     :class:`~ideas_hpc.swarm_eval.MaskBank`) is reused when given, so a GA run
     and its exact reference share the computed masks. ``quality`` also fills
     ``usable``, ``stereo`` and ``resolution`` (one quality pass per candidate
-    chunk, :func:`ideas_hpc.candidates.candidate_quality`).
+    chunk, :func:`ideas_hpc.candidates.candidate_quality`); ``pairs`` (implies
+    ``quality``) also the stereo table of candidate pairs, from one pass over all
+    candidates (a pair spans chunks).
     """
     from ..candidates import candidate_masks, candidate_quality
     from ..swarm_eval import MaskBank
@@ -124,6 +127,10 @@ def build_bank(setup, step: float, *, client=None, chunk_size: int = 32,
     keys = [(k * step, 0.0, k) for k in range(n)]
     common = dict(theta=step * np.arange(n), step=step, d_sep=float(setup.d_sep),
                   areas=np.asarray(setup.body.shape.vertex_areas, dtype=np.float64))
+    if pairs:
+        q = candidate_quality(setup, keys, pairs=True)
+        return CandidateBank(masks=q["mapped"], usable=q["usable"], stereo=q["stereo"],
+                             resolution=q["resolution"], pairs=q["pairs"], **common)
     if quality and mask_bank is None:
         chunks = [keys[i:i + chunk_size] for i in range(0, n, chunk_size)]
         part = functools.partial(candidate_quality, setup)
