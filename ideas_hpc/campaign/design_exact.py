@@ -24,6 +24,7 @@ import xarray as xr
 from ..design.bank import grid_size, separation_steps
 from ..design import build_bank, coverage_curve, failure_tolerant, min_swarm, worst_failure
 from ..design.stereo import min_swarm_stereo, stereo_curve
+from ..design.stereo import scorer as stereo_scorer
 from ..errors import InputError
 from ..flyby import fly
 from ..montecarlo.verify import verify_swarm
@@ -86,7 +87,7 @@ def design_exact(c, setup, client) -> ExactDesign:
     t0 = time.perf_counter()
     bank = build_bank(setup, d.grid_step_rad, client=client, chunk_size=d.chunk_size,
                       quality=stereo, pairs=stereo)
-    scorer = bank.stereo_scorer if stereo else bank
+    scorer = stereo_scorer(bank) if stereo else bank
     t_masks = time.perf_counter() - t0
     _log(f"candidate {'rows' if setup.coverage.requirement else 'masks'}: {bank.n_candidates} "
          f"grid angles ({math.degrees(bank.step):g} deg)"

@@ -68,7 +68,7 @@ def _stereo_ga(c: Campaign, setup, client):
     """The NP GA scoring stereo from two spacecraft with the pair model
     (:class:`~ideas_hpc.design.stereo.StereoBank` on the GA's own angle grid)."""
     from ..design import build_bank
-    from ..design.stereo import min_swarm_stereo
+    from ..design.stereo import min_swarm_stereo, scorer
     from ..ga import run_nadir_ga
 
     d = c.config.design
@@ -76,7 +76,7 @@ def _stereo_ga(c: Campaign, setup, client):
     t = time.perf_counter()
     bank = build_bank(setup, step, client=client, chunk_size=d.chunk_size, snap=False,
                       quality=True, pairs=True)
-    sb = bank.stereo_scorer
+    sb = scorer(bank)
     eps = d.eps_tol_pct / 100.0
     target = 1.0 if sb.reach >= 1.0 - eps else sb.reach
     _log(f"candidate rows and stereo pairs: {bank.n_candidates} grid angles in "

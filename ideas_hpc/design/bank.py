@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -66,16 +66,8 @@ class CandidateBank:
     stereo: np.ndarray | None = None
     resolution: np.ndarray | None = None
     pairs: np.ndarray | None = None
-
-    @functools.cached_property
-    def stereo_scorer(self):
-        """Scorer of stereo coverage with pairs of spacecraft (needs ``stereo`` and ``pairs``):
-        a :class:`~ideas_hpc.design.stereo.StereoBank` over the own-track stereo rows."""
-        from dataclasses import replace
-
-        from .stereo import StereoBank
-
-        return StereoBank(replace(self, masks=self.stereo, pairs=None), self.pairs)
+    #: Scorers derived from the rows, built on first use (:func:`ideas_hpc.design.stereo.scorer`).
+    derived: dict = field(default_factory=dict, repr=False, compare=False)
 
     @property
     def n_candidates(self) -> int:

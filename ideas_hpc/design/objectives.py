@@ -88,7 +88,9 @@ def _stereo(bank, members):
     own = _optional(bank, "stereo", "stereo_coverage")
     if getattr(bank, "pairs", None) is None:
         return _union(own, bank.areas, members)
-    return bank.stereo_scorer.coverage([m[m >= 0] for m in members])
+    from .stereo import scorer
+
+    return scorer(bank).coverage([m[m >= 0] for m in members])
 
 
 def _mean_resolution(bank, members):

@@ -27,7 +27,7 @@ from __future__ import annotations
 import functools
 import itertools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy import sparse
@@ -113,6 +113,22 @@ class StereoBank:
     @property
     def reach(self) -> float:
         return float(self.coverage([np.arange(self.bank.n_candidates)])[0])
+
+
+def scorer(bank: CandidateBank) -> StereoBank:
+    """Stereo coverage with pairs of spacecraft for a bank built with ``pairs=True``: a
+    :class:`StereoBank` over its own-track stereo rows, built once per bank.
+
+    With ``require_stereo`` the own-track stereo rows are the bank's mapped rows (a
+    stereo pair is made of usable observations).
+    """
+    if bank.stereo is None or bank.pairs is None:
+        raise InputError("stereo from two spacecraft needs the candidates' stereo rows and "
+                         "pair table (build_bank(..., pairs=True))", field="coverage")
+    if "stereo" not in bank.derived:
+        bank.derived["stereo"] = StereoBank(replace(bank, masks=bank.stereo, pairs=None,
+                                                    derived={}), bank.pairs)
+    return bank.derived["stereo"]
 
 
 def _model(sb: StereoBank, m: int):
