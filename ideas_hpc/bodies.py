@@ -105,6 +105,9 @@ def load_body(name_or_path, *, data_path=None, resolution: int = 3,
         p = params or dataclasses.replace(eros, name="sphere", c20=0.0, c22=0.0)
         return Body("sphere", shape, p, shape.source)
     path = Path(key).expanduser()
+    if path.is_dir():
+        raise InputError(f"{key!r} is a directory, not a shape file (.tab/.obj/.ply/.stl/.off)",
+                         field="body")
     if path.suffix and (path.is_file() or "/" in key or "\\" in key):
         shape = load_shape_file(path)
         if params is None and shape.name.lower().startswith("eros"):

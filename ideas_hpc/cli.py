@@ -51,6 +51,8 @@ def _cmd_size(args) -> int:
         print(format_table(paper, "Sizing from the paper's R_max 17.670 km, R_min 3.222 km"))
         return 0
     if args.r_av is not None:
+        if not args.r_av > 0:
+            raise InputError(f"must be > 0 km, got {args.r_av:g}", field="--r-av")
         s = size_flyby(r_av=args.r_av * KM, **inst)
         print(format_table(s, f"Sizing for a given mean radius R_av = {args.r_av:g} km", paper))
         return 0

@@ -73,9 +73,11 @@ class CampaignSource:
 
         Overridden fields report ``--set`` instead of a file line.
         """
-        for ov in self.overrides:
-            if ov.split("=", 1)[0].strip() == dotted:
-                return "--set", None
+        keys = [ov.split("=", 1)[0].strip() for ov in self.overrides]
+        if dotted.split("[")[0] in keys:  # swarm.angles_rad[1] came with swarm.angles_rad
+            return "--set", None
+        if dotted not in self.lines and any(k.startswith(dotted + ".") for k in keys):
+            return "--set", None  # a table only --set introduced (a typo there)
         key = dotted
         while key:
             if key in self.lines:

@@ -1,5 +1,6 @@
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -47,3 +48,35 @@ def test_bad_tab_file_names_line(tmp_path):
     p.write_text("v 1 0 0\nv 0 1 0\nv 0 0 1\nv 0 0 0\nf 0 1\n")
     r = run_cli("size", "--body", str(p))
     assert r.returncode == 2 and f"{p}:5" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_size_negative_radius_in_input_unit():
+    r = run_cli("size", "--r-av", "-5")
+    assert r.returncode == 2 and "--r-av: must be > 0 km, got -5" in r.stderr
+    assert "-5000" not in r.stderr and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_existing_plain_file_as_out(tmp_path, capsys):
+    plain = tmp_path / "notastore"
+    plain.write_text("keep me")
+    flyby = str(Path(__file__).parent.parent / "campaigns" / "eros-flyby.toml")
+    code = main(["run", flyby, "--out", str(plain), "--no-progress"])
+    err = capsys.readouterr().err
+    assert code == 2 and "--out:" in err and "existing file, not a store" in err
+    assert plain.read_text() == "keep me" and sorted(tmp_path.iterdir()) == [plain]
+
+
+def test_report_on_incomplete_store_names_missing_chunks(tmp_path, capsys):
+    import numpy as np
+    import xarray as xr
+
+    from ideas_hpc.engine.store import create_store, write_chunk_region
+
+    tpl = xr.Dataset({"coverage": (("sample",), np.zeros(6), {"units": "1", "long_name": "c"})})
+    store = tmp_path / "mc.zarr"
+    create_store(store, tpl, config={"a": 1}, campaign_seed=1, chunk_size=2)
+    write_chunk_region(store, 1, 2, 4, {"coverage": np.ones(2)})
+    code = main(["report", str(store)])
+    err = capsys.readouterr().err
+    assert code == 2 and "chunk(s) 0, 2 of 3 not done" in err and "Traceback" not in err
+    assert not (tmp_path / "mc-report").exists()

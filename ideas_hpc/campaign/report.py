@@ -191,6 +191,29 @@ def _quality_maps(ds, shape, out):
     return figs
 
 
+def _ranges(ids) -> str:
+    """``[0, 1, 2, 5]`` -> ``"0-2, 5"``."""
+    parts, start = [], None
+    for i, k in enumerate(ids):
+        if start is None:
+            start = k
+        if i + 1 == len(ids) or ids[i + 1] != k + 1:
+            parts.append(f"{start}" if start == k else f"{start}-{k}")
+            start = None
+    return ", ".join(parts)
+
+
+def _check_complete(ds, store: Path) -> None:
+    """Refuse a store with unfinished chunks (their samples read as NaN)."""
+    if "chunk_done" not in ds:
+        return
+    missing = np.flatnonzero(~ds["chunk_done"].values.astype(bool)).tolist()
+    if missing:
+        raise InputError(f"incomplete store: chunk(s) {_ranges(missing)} of "
+                         f"{ds.sizes['chunk']} not done; finish it with 'ideas-hpc run "
+                         "CAMPAIGN --out STORE --resume'", file=store)
+
+
 def write_report(store, out=None) -> Path:
     """Write PNGs and ``summary.txt`` for a store; returns the summary path."""
     store = Path(store)
@@ -200,6 +223,7 @@ def write_report(store, out=None) -> Path:
         ds = xr.open_zarr(store)
     except Exception as exc:
         raise InputError(f"not a readable zarr store: {exc}", file=store) from None
+    _check_complete(ds, store)
     out = Path(out) if out else store.with_name(store.name.removesuffix(".zarr") + "-report")
     out.mkdir(parents=True, exist_ok=True)
     figs: list[Path] = []

@@ -10,7 +10,9 @@ same resolved config).
 
 from __future__ import annotations
 
+import os
 import sys
+import tempfile
 from pathlib import Path
 
 from ..engine.lock import StoreLock
@@ -41,18 +43,37 @@ def run_file(path, *, out=None, overrides=None, workers=None, scheduler=None, re
         raise c.source.locate(exc) from None
 
 
+def _check_execution(out: Path, workers, w_field: str, kind, scheduler) -> None:
+    """Refuse a bad ``--workers`` or ``--out`` before anything is computed or written."""
+    if workers is not None and scheduler is None and (workers < 0 or (workers == 0 and kind.chunked)):
+        need = ">= 1" if kind.chunked else ">= 0 (0: in this process)"
+        raise InputError(f"must be {need} for kind {kind.name!r}, got {workers}", field=w_field)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"{out} is an existing file, not a store; choose another --out",
+                         field="--out")
+    parent = out.absolute().parent
+    try:  # a probe file: root passes os.access checks where writes still fail (/proc)
+        parent.mkdir(parents=True, exist_ok=True)
+        fd, probe = tempfile.mkstemp(dir=parent, prefix=f".{out.name}.probe-")
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise InputError(f"cannot write in {parent}: {exc.strerror}", field="--out") from None
+
+
 def _run(c: Campaign, *, out, workers, scheduler, resume, cluster, slurm_config,
          progress) -> Path:
     out = Path(out) if out else Path(Path(c.source.path).stem + ".zarr")
+    w_field = "--workers" if workers is not None else "run.workers"
     workers = workers if workers is not None else c.config.run.workers
     kind = KINDS[c.kind]
+    _check_execution(out, workers, w_field, kind, scheduler)
     run = kind.runner()
     exec_kw = dict(workers=workers, scheduler=scheduler, cluster=cluster,
                    slurm_config=slurm_config)
     if kind.chunked:
         run(c, out, resume=resume, progress=progress, **exec_kw)
         return out
-    out.absolute().parent.mkdir(parents=True, exist_ok=True)
     config, seed = resolved_config(c), c.config.seed
     with StoreLock(out):
         if check_existing(out, config=config, campaign_seed=seed, resume=resume):

@@ -59,6 +59,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -118,7 +119,8 @@ FLYBY = {
 }
 
 SWARM = {
-    "angles_rad": Field("floats", None, nullable=True, lo=-10.0, hi=10.0),
+    "angles_rad": Field("floats", None, nullable=True, lo=0.0, hi=2 * math.pi, hi_open=True,
+                        doc="ring angle of each spacecraft, in [0, 2 pi)"),
     "sweep_periods_min": Field("floats", None, nullable=True, si="sweep_periods_s",
                                to_si=MINUTE, lo=0, lo_open=True),
     "min_separation_km": Field("float", 1.0, si="min_separation_m", to_si=KM, lo=0, lo_open=True,
