@@ -84,6 +84,43 @@ _VARS = (
     StoreVar("population_coverage", ("individual",),
              long_name="area coverage of the final population"),
     StoreVar("best_genome", ("gene",), long_name="best genome"),
+    StoreVar("snapshot_time", ("snapshot",), units="s", long_name="time of each DCM snapshot"),
+    StoreVar("max_wheel_torque", SC, units="N m", long_name="largest reaction wheel torque"),
+    StoreVar("max_wheel_momentum", SC, units="N m s",
+             long_name="largest reaction wheel angular momentum"),
+    # designs (issue 13): dimensionless counts and fractions are units "1" (CF)
+    StoreVar("design_method", (), str, long_name="design method (exact, ga)"),
+    StoreVar("best_swarm_size", (), np.int64, long_name="spacecraft in the design"),
+    StoreVar("best_coverage", (), long_name="coverage of the design, area fraction (mapped "
+             "when a [coverage] requirement is set)"),
+    StoreVar("design_coverage", (), long_name="coverage of the design on the designer's "
+             "candidate masks, area fraction"),
+    StoreVar("proven_bound", (), long_name="proven lower bound on the number of spacecraft"),
+    StoreVar("optimality_gap", (), long_name="(N - proven lower bound) / N"),
+    StoreVar("solver_status", (), str, long_name="solver status (optimal, time_limit, ...)"),
+    StoreVar("solve_time", (), units="s", long_name="wall time of the design solve"),
+    StoreVar("failure_cases", (), np.int64, long_name="failure cases evaluated"),
+    StoreVar("worst_failure", ("failed",), np.int32,
+             long_name="spacecraft whose failure gives the worst case"),
+    StoreVar("coverage_vs_n", ("n_spacecraft",),
+             long_name="best coverage of N spacecraft, area fraction"),
+    StoreVar("coverage_vs_n_gap", ("n_spacecraft",),
+             long_name="proven upper bound minus the coverage found for N spacecraft"),
+    StoreVar("coverage_vs_n_status", ("n_spacecraft",), str,
+             long_name="solver status of each point of the coverage-vs-N curve"),
+    StoreVar("coverage_vs_n_swarm", ("n_spacecraft", "slot"), units="rad",
+             long_name="swarm angles of the best N-spacecraft swarm (NaN beyond N)"),
+    StoreVar("verify_coverage", ("verify_sample",),
+             long_name="coverage of each dispersed verification sample"),
+    StoreVar("verify_n_failed", ("verify_sample",), np.int32,
+             long_name="failed spacecraft in each verification sample"),
+    # written by the engine into every store
+    StoreVar("chunk_done", ("chunk",), bool,
+             long_name="chunk finished (True once all its samples are written, written last)"),
+    StoreVar("chunk_start", ("chunk",), np.int64, long_name="first sample of the chunk"),
+    StoreVar("chunk_stop", ("chunk",), np.int64, long_name="end of the chunk (exclusive)"),
+    StoreVar("sample_seed", ("sample", "seed_word"), np.uint32,
+             long_name="first 4 words of SeedSequence(campaign_seed, spawn_key=(sample,))"),
 )
 VARS: dict[str, StoreVar] = {v.name: v for v in _VARS}
 
@@ -95,6 +132,47 @@ PER_SAMPLE = ("coverage", "coverage_count", "coverage_seen", "observed", "first_
               "times_seen", "arrival_error")
 #: Closed-loop attitude series (simulated attitude only).
 ATTITUDE_SERIES = ("sigma_error", "omega_error", "wheel_speed", "wheel_torque")
+
+
+#: Index coordinates: dim -> (units, long_name). Every dim of a store gets one
+#: (:func:`describe`); those without natural values count from 0.
+DIMS: dict[str, tuple[str, str]] = {
+    "sample": ("1", "Monte Carlo sample"),
+    "spacecraft": ("1", "spacecraft"),
+    "time": ("s", "time since the flyby start t0"),
+    "iteration": ("1", "targeting Newton iteration"),
+    "vertex": ("1", "shape model vertex"),
+    "face": ("1", "shape model face"),
+    "corner": ("1", "corner of a face"),
+    "axis": ("1", "Cartesian axis"),
+    "wheel": ("1", "reaction wheel"),
+    "snapshot": ("1", "camera DCM snapshot"),
+    "row": ("1", "DCM row"),
+    "col": ("1", "DCM column"),
+    "generation": ("1", "GA generation"),
+    "individual": ("1", "member of the final GA population"),
+    "gene": ("1", "GA gene"),
+    "n_spacecraft": ("1", "number of spacecraft N"),
+    "slot": ("1", "spacecraft slot of a swarm (NaN-padded)"),
+    "pareto": ("1", "point of the Pareto front"),
+    "verify_sample": ("1", "Monte Carlo verification sample"),
+    "failed": ("1", "failed spacecraft of the worst case"),
+    "chunk": ("1", "campaign chunk"),
+    "seed_word": ("1", "word of the sample's seed state"),
+}
+
+
+def describe(ds):
+    """Make ``ds`` self-describing (CF style): a coordinate on every dim, ``units``
+    (``"1"`` when dimensionless) and ``long_name`` on every variable declared
+    here. Returns a new dataset; undeclared variables keep their attrs."""
+    missing = {d: np.arange(n) for d, n in ds.sizes.items() if d not in ds.coords}
+    ds = ds.assign_coords(missing) if missing else ds.copy(deep=False)
+    for d in ds.dims:
+        units, long_name = DIMS.get(d, ("1", d))
+        ds[d].attrs.setdefault("units", units)
+        ds[d].attrs.setdefault("long_name", long_name)
+    return with_attrs(ds)
 
 
 def with_attrs(ds):

@@ -46,6 +46,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from ..errors import InputError
+from ..store_schema import describe
 # re-exported: the engine's public seed helpers are those of ideas_hpc.seeds
 from ..seeds import SEED_WORDS, sample_rng, sample_seed_sequence, seeds_for  # noqa: F401
 from .chunk_write import done_mask, write_chunk_region  # noqa: F401
@@ -227,7 +228,7 @@ def _build_dataset(template, plan: ChunkPlan, campaign_seed: int):
     ds[DONE_VAR] = xr.Variable((CHUNK_DIM,), np.zeros(plan.n_chunks, dtype=bool), attrs={
         "description": "True once every sample of the chunk is written (written last)"})
     ds = ds.assign_coords(chunk_start=((CHUNK_DIM,), ch[:, 1]), chunk_stop=((CHUNK_DIM,), ch[:, 2]))
-    return ds
+    return describe(ds)
 
 
 def _encoding(ds, plan: ChunkPlan, compressors) -> dict:
