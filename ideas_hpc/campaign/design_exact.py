@@ -29,6 +29,7 @@ from ..errors import InputError
 from ..flyby import fly
 from ..montecarlo.verify import verify_swarm
 from . import datasets
+from .vocabulary import requirement_line, verification_verdict
 
 
 def _log(msg: str) -> None:
@@ -58,7 +59,8 @@ def _target(bank, eps_tol: float, coverage, notes: list) -> float:
             f"{coverage.mode} mode (strict options: {coverage.strict})"
         notes.append(f"100 % is not reachable from this ring with {what}; the highest "
                      f"reachable coverage is {100 * reach:.3f} % (all {bank.n_candidates} grid "
-                     f"angles), and the design reaches that instead")
+                     f"angles), so the target is that and the threshold "
+                     f"{100 * (reach - eps_tol):.3f} % (target - eps_tol)")
         return reach
     return 1.0
 
@@ -128,21 +130,17 @@ def design_exact(c, setup, client) -> ExactDesign:
         **(failure_vars(scorer, res.indices, k_eval) if res.n > k_eval else {}),
     }
     ds = xr.Dataset(data, coords={"n_spacecraft": curve.n})
-    ds["coverage_vs_n"].attrs.update(units="1", long_name="best coverage of N spacecraft "
-                                     "(proven per N)")
-    ds["optimality_gap"].attrs.update(units="1", long_name="(N - proven lower bound) / N")
-    ds["solve_time"].attrs["units"] = "s"
-    if "worst_failure_coverage" in ds:
+    if "worst_failure_coverage" in ds:  # the other units and names: store_schema
         ds["worst_failure_coverage"].attrs.update(
             units="1", long_name=f"lowest coverage after any {k_eval} failure(s)")
-        ds["worst_failure"].attrs["long_name"] = "spacecraft whose failure gives the worst case"
     attrs = {"design_method": "exact", "solver_status": res.status,
              "optimality_gap": float(res.gap), "target_coverage": float(target),
+             "threshold_coverage": float(target - eps),
              "design_masks_s": float(t_masks), "design_solve_s": float(t_design - t_masks),
              "coverage_curve_s": float(curve.solve_time), "failures_tolerated": int(k),
              "failures_evaluated": int(k_eval), "angle_step_rad": float(bank.step)}
     summary = (f"exact design: N = {res.n} ({res.status}, gap {100 * res.gap:.1f} %, bound "
-               f"{res.bound:g}), coverage {100 * res.coverage:.3f} %, "
+               f"{res.bound:g}), {requirement_line(target, target - eps, res.coverage)}, "
                f"{'k = %d tolerant, ' % k if k else ''}masks {t_masks:.1f} s + solve "
                f"{t_design - t_masks:.1f} s; coverage-vs-N curve in {curve.solve_time:.1f} s")
     return ExactDesign(theta=res.theta, data=ds, attrs=attrs, notes=notes, summary=summary)
@@ -184,12 +182,12 @@ def verification_vars(c, setup, theta, threshold: float, client) -> tuple[dict, 
         return {}, {}, "Monte Carlo verification: off (design.verify_samples = 0)"
     v = verify_swarm(setup, theta, None, mc=c.config.monte_carlo, seed=c.config.seed,
                      n_samples=m, threshold=threshold, client=client)
-    data = {"verify_coverage": (("verify_sample",), v.coverage,
-                                {"units": "1", "long_name": "coverage of each dispersed sample"}),
-            "verify_n_failed": (("verify_sample",), v.n_failed,
-                                {"long_name": "failed spacecraft in each sample"})}
+    data = {"verify_coverage": (("verify_sample",), v.coverage),
+            "verify_n_failed": (("verify_sample",), v.n_failed)}
+    required = getattr(c.config.design, "success_probability", None)
     attrs = {"verify_samples": int(m), "verify_threshold": float(threshold),
-             "verify_probability": v.probability, "verify_wall_s": float(v.wall_s)}
+             "verify_probability": v.probability, "verify_wall_s": float(v.wall_s),
+             "verify_verdict": verification_verdict(v.probability, m, threshold, required)}
     return data, attrs, v.summary()
 
 
@@ -207,9 +205,11 @@ def run_exact(c, setup, *, workers=None, scheduler=None, cluster="local",
         _log(res.summary)
         for note in res.notes:
             _log(f"note: {note}")
-        threshold = res.attrs["target_coverage"] - c.config.design.eps_tol_pct / 100.0
+        threshold = res.attrs["threshold_coverage"]
         vdata, vattrs, vline = verification_vars(c, setup, res.theta, threshold, client)
     _log(vline)
+    if vattrs:
+        _log(vattrs["verify_verdict"])
     flight = fly(setup, res.theta)
     ds = datasets.flyby_dataset(setup, flight)
     ds = xr.merge([ds, res.data, xr.Dataset(vdata)], combine_attrs="override")

@@ -27,6 +27,7 @@ from ..swarm_geometry import min_separation_angle
 from . import datasets
 from .design_exact import ga_gap, run_exact
 from .schema import Campaign
+from .vocabulary import requirement_line
 
 
 def _log(msg: str) -> None:
@@ -233,8 +234,12 @@ def run_design(c: Campaign, out: Path, *, workers=None, scheduler=None, cluster=
                      slurm_config=slurm_config) as client:
             res, theta, periods = design(c, setup, client)
     wall = time.perf_counter() - t
+    nadir = c.kind == "design-nadir"
+    threshold = res.target_coverage - c.config.design.eps_tol_pct / 100.0
     _log(f"GA: {res.evaluations} designs evaluated in {wall:.1f} s; best: N = "
-         f"{res.best_swarm_size}, coverage {100 * res.best_coverage:.3f} %")
+         f"{res.best_swarm_size}, " + (requirement_line(res.target_coverage, threshold,
+                                                       res.best_coverage) if nadir else
+                                       f"reached {100 * res.best_coverage:.3f} %"))
     for note in res.notes:
         _log(f"note: {note}")
     flight = fly(setup, theta, periods)
@@ -252,10 +257,11 @@ def run_design(c: Campaign, out: Path, *, workers=None, scheduler=None, cluster=
     ds = xr.merge([ds, datasets.with_attrs(g)], combine_attrs="override")
     if getattr(res, "gap_data", None) is not None:
         ds = xr.merge([ds, res.gap_data], combine_attrs="override")
-    ds["best_fitness"].attrs["long_name"] = ("fitness (-N if feasible)" if c.kind == "design-nadir"
+    ds["best_fitness"].attrs["long_name"] = ("fitness (-N if feasible)" if nadir
                                             else "coverage, %")
     ds.attrs.update(datasets.base_attrs(c, setup))
     ds.attrs.update({"ga_evaluations": int(res.evaluations), "ga_wall_s": float(wall),
                      "target_coverage": float(res.target_coverage),
+                     **({"threshold_coverage": float(threshold)} if nadir else {}),
                      "notes": json.dumps(res.notes)})
     return ds

@@ -12,6 +12,7 @@ import xarray as xr
 from ..errors import InputError
 from ..plots import figures
 from ..units import DEG, KM
+from .vocabulary import requirement_line, verification_verdict
 
 
 
@@ -41,8 +42,7 @@ def _summary(ds, figs) -> str:
         lines.append(f"GA: {ds.sizes['generation']} generations, population "
                      f"{ds.sizes['individual']}, {a.get('ga_evaluations')} designs evaluated in "
                      f"{a.get('ga_wall_s', float('nan')):.1f} s; best swarm size "
-                     f"{int(ds['best_swarm_size'])}, coverage {100 * float(ds['best_coverage']):.3f} %"
-                     f" (target {100 * a.get('target_coverage', 1.0):.3f} %)")
+                     f"{int(ds['best_swarm_size'])}, " + _requirement(ds))
         for note in json.loads(a.get("notes", "[]")):
             lines.append(f"note: {note}")
     if "design_method" in ds:
@@ -78,6 +78,16 @@ def _summary(ds, figs) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _requirement(ds) -> str:
+    """target, threshold and reached, as in the run's own summary (vocabulary.py)."""
+    a = ds.attrs
+    target = float(a.get("target_coverage", 1.0))
+    if "threshold_coverage" not in a and "verify_threshold" not in a:
+        return f"reached {100 * float(ds['best_coverage']):.3f} %"
+    thr = float(a.get("threshold_coverage", a.get("verify_threshold")))
+    return requirement_line(target, thr, float(ds["best_coverage"]))
+
+
 def _design_lines(ds) -> list[str]:
     """The certified design's status, trade curve and worst failure (issue 13)."""
     a = ds.attrs
@@ -87,7 +97,8 @@ def _design_lines(ds) -> list[str]:
         out.append(f"design: method {method}, status {str(ds['solver_status'].values)}, "
                    f"N = {int(ds['best_swarm_size'])}, proven lower bound "
                    f"{float(ds['proven_bound']):g}, optimality gap "
-                   f"{100 * float(ds['optimality_gap']):.1f} %")
+                   f"{100 * float(ds['optimality_gap']):.1f} %"
+                   + (f"; {_requirement(ds)}" if method == "exact" else ""))
     if "coverage_vs_n" in ds:
         n, c = ds["n_spacecraft"].values, ds["coverage_vs_n"].values
         stop = int(np.argmax(c >= c[-1])) + 1       # the curve is flat after its maximum
@@ -108,11 +119,14 @@ def _design_lines(ds) -> list[str]:
                    f"{ds['worst_failure'].values.tolist()})")
     if "verify_coverage" in ds:
         c = 100 * ds["verify_coverage"].values
-        out.append(f"Monte Carlo verification: P(coverage >= {100 * a['verify_threshold']:.2f} %)"
+        out.append(f"Monte Carlo verification: P(coverage >= threshold "
+                   f"{100 * a['verify_threshold']:.2f} %)"
                    f" = {100 * a['verify_probability']:.1f} % over {c.size} dispersed samples "
                    f"(min {c.min():.2f} %, 5th percentile {np.percentile(c, 5):.2f} %, median "
                    f"{np.median(c):.2f} %; {int((ds['verify_n_failed'].values > 0).sum())} "
                    "samples with a failed spacecraft)")
+        out.append(a.get("verify_verdict") or verification_verdict(
+            float(a["verify_probability"]), c.size, float(a["verify_threshold"])))
     if method == "exact":
         out.extend(f"note: {n}" for n in json.loads(a.get("notes", "[]")))
     return out

@@ -117,7 +117,7 @@ def failure_tolerant(bank: CandidateBank, k: int, *, target: float, eps_tol: flo
             best = found
         elif done:
             bound += 1
-        notes.append(f"clique search over the pairs reaching the target: "
+        notes.append(f"clique search over the pairs reaching the threshold: "
                      + ("found a swarm of the lower bound" if found is not None else
                         "none of the lower bound" if done else "stopped at its budget"))
     # k = 1: all K single failures at once are K dense rows, which HiGHS handles in one
