@@ -1,4 +1,4 @@
-"""``ideas-hpc`` command line: ``size``, ``run``, ``report``.
+"""``ideas-hpc`` command line: ``size``, ``run``, ``report``, ``scan-arrival``.
 
 Bad input (an :class:`~ideas_hpc.errors.InputError`) prints one line naming
 the problem and exits with status 2; no traceback.
@@ -65,7 +65,11 @@ def _cmd_size(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="ideas-hpc", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog="ideas-hpc",
+        description="Design spacecraft swarms that map a small body in one flyby: size the "
+                    "camera and flyby, run a campaign file into a zarr store, report on it.",
+        epilog="Run 'ideas-hpc COMMAND --help' for the options of one command.")
     parser.add_argument("--version", action="version", version=f"ideas_hpc {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     _add_size(sub)

@@ -25,6 +25,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from .core.union import population_coverage
+from .progress import map_chunks
 
 TWO_PI = 2.0 * math.pi
 Key = tuple  # (theta rad, period s (0: nadir), ic key int)
@@ -85,21 +86,20 @@ class MaskBank:
                 np.zeros((0, self.n_vertices), dtype=np.bool_)
         return self._masks
 
-    def ensure(self, keys: Sequence[Key]) -> None:
-        """Compute the masks of keys the bank does not hold yet (deterministic order)."""
+    def ensure(self, keys: Sequence[Key], desc: str | None = None) -> None:
+        """Compute the masks of keys the bank does not hold yet (deterministic order);
+        ``desc`` shows a progress bar (:mod:`ideas_hpc.progress`)."""
         missing = sorted({k for k in keys if k not in self._index})
         if not missing:
             return
         chunks = [missing[i:i + self.chunk_size] for i in range(0, len(missing), self.chunk_size)]
-        if self.client is None:
+        if self.client is None and self.progress:
             results = []
             for i, c in enumerate(chunks):
                 results.append(self.compute(c))
-                if self.progress:
-                    self.progress(i + 1, len(chunks))
+                self.progress(i + 1, len(chunks))
         else:
-            futures = self.client.map(self.compute, chunks, pure=False, retries=2)
-            results = self.client.gather(futures)
+            results = map_chunks(self.compute, chunks, self.client, desc=desc, retries=2)
         for chunk, res in zip(chunks, results):
             res = np.asarray(res, dtype=np.bool_)
             if res.shape != (len(chunk), self.n_vertices):

@@ -80,3 +80,12 @@ def test_report_on_incomplete_store_names_missing_chunks(tmp_path, capsys):
     err = capsys.readouterr().err
     assert code == 2 and "chunk(s) 0, 2 of 3 not done" in err and "Traceback" not in err
     assert not (tmp_path / "mc-report").exists()
+
+
+def test_help_texts_plain_and_complete():
+    top = run_cli("--help").stdout
+    assert "``" not in top and "scan-arrival" in top and "report" in top
+    run = run_cli("run", "--help").stdout
+    assert "``" not in run and all(k in run for k in ("design-pareto", "monte-carlo", "flyby"))
+    rep = run_cli("report", "--help").stdout
+    assert "summary" in rep.split("positional arguments")[0]  # a description, not only usage

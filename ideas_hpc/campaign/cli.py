@@ -28,9 +28,17 @@ def _cmd_scan(args) -> int:
 
 
 def add_commands(sub) -> None:
+    import argparse
+    import textwrap
+
+    from .kinds import KINDS
+
+    kinds = "\n".join(textwrap.fill(f"{k.name:<14} {k.doc}", 78, initial_indent="  ",
+                                     subsequent_indent=" " * 17) for k in KINDS.values())
     p = sub.add_parser("run", help="run a campaign file and write a zarr store",
-                       description="Run a campaign (flyby, design-nadir, design-fov, "
-                                   "monte-carlo) and write its zarr store.")
+                       formatter_class=argparse.RawDescriptionHelpFormatter,
+                       description="Run a campaign file and write its zarr store. The file's "
+                                   "'kind' is one of:\n" + kinds)
     p.add_argument("campaign", help="campaign TOML file")
     p.add_argument("--out", help="store path (default: CAMPAIGN_NAME.zarr here)")
     p.add_argument("--set", action="append", default=[], metavar="dotted.key=value",
@@ -50,7 +58,11 @@ def add_commands(sub) -> None:
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(handler=_cmd_run)
 
-    r = sub.add_parser("report", help="write figures and a text summary of a store")
+    r = sub.add_parser("report", help="write figures and a text summary of a store",
+                       description="Write the figures that apply to a store (PNG) and a text "
+                                   "summary (summary.txt, also printed): body, design, "
+                                   "target/threshold/reached, verification verdict. A store "
+                                   "with unfinished chunks is refused.")
     r.add_argument("store", help="zarr store written by 'ideas-hpc run'")
     r.add_argument("--out", default=None, help="output folder (default: STORE-report)")
     r.set_defaults(handler=_cmd_report)

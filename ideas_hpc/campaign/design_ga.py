@@ -23,6 +23,7 @@ from ..errors import InputError
 from ..flyby import fly, setup_from_campaign, target
 from ..ga_local import GridCover
 from ..swarm_eval import MaskBank, fov_keys, nadir_keys, snap_angle
+from ..progress import bar as progress_bar
 from ..swarm_geometry import min_separation_angle
 from . import datasets
 from .design_exact import ga_gap, run_exact
@@ -35,9 +36,7 @@ def _log(msg: str) -> None:
 
 
 def _progress_printer(total: int, label: str):
-    from tqdm.auto import tqdm
-
-    bar = tqdm(total=total, desc=label, unit="gen", file=sys.stderr, leave=True)
+    bar = progress_bar(total, label, unit="gen")
 
     def cb(gen, best, mean):
         bar.update(1)
@@ -58,7 +57,7 @@ def _fill_grid(bank: MaskBank, setup, step: float) -> tuple[float, np.ndarray]:
     n = max(1, int(round(2 * np.pi / step)))
     keys = [(k * step, 0.0, k) for k in range(n)]
     t = time.perf_counter()
-    bank.ensure(keys)
+    bank.ensure(keys, desc="candidate masks")
     cov, _ = bank.union_coverage([keys], setup.body.shape.vertex_areas)
     _log(f"candidate masks: {n} grid angles in {time.perf_counter() - t:.1f} s; a ring of all "
          f"of them reaches {100 * cov[0]:.3f} % (area)")

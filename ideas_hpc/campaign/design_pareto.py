@@ -54,9 +54,9 @@ def _log(msg: str) -> None:
 
 
 def _progress(total: int):
-    from tqdm.auto import tqdm
+    from ..progress import bar as progress_bar
 
-    bar = tqdm(total=total, desc="NSGA-II", unit="gen", file=sys.stderr, leave=True)
+    bar = progress_bar(total, "NSGA-II", unit="gen")
 
     def cb(gen, front):
         bar.update(1)

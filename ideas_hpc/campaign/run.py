@@ -18,6 +18,7 @@ from pathlib import Path
 from ..engine.lock import StoreLock
 from ..engine.single import check_existing, write_complete
 from ..errors import InputError
+from ..progress import enabled as progress_enabled
 from .kinds import KINDS
 from .schema import SCHEMA, Campaign, load, resolved_config
 
@@ -35,8 +36,9 @@ def run_file(path, *, out=None, overrides=None, workers=None, scheduler=None, re
     """
     c = load(path, overrides)
     try:
-        return _run(c, out=out, workers=workers, scheduler=scheduler, resume=resume,
-                    cluster=cluster, slurm_config=slurm_config, progress=progress)
+        with progress_enabled(progress):
+            return _run(c, out=out, workers=workers, scheduler=scheduler, resume=resume,
+                        cluster=cluster, slurm_config=slurm_config, progress=progress)
     except InputError as exc:
         if (exc.field or "").split(".")[0] not in SCHEMA:  # --out, --resume: no file line
             raise

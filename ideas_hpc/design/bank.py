@@ -24,6 +24,7 @@ import numpy as np
 
 from ..core.union import population_coverage
 from ..errors import InputError
+from ..progress import map_chunks
 from ..swarm_geometry import min_separation_angle
 
 TWO_PI = 2.0 * math.pi
@@ -126,8 +127,7 @@ def build_bank(setup, step: float, *, client=None, chunk_size: int = 32,
     if quality and mask_bank is None:
         chunks = [keys[i:i + chunk_size] for i in range(0, n, chunk_size)]
         part = functools.partial(candidate_quality, setup)
-        rows = client.gather(client.map(part, chunks, pure=False, retries=2)) if client \
-            else [part(c) for c in chunks]
+        rows = map_chunks(part, chunks, client, desc="candidate rows", retries=2)
         q = {name: np.ascontiguousarray(np.concatenate([r[name] for r in rows]))
              for name in ("mapped", "usable", "stereo", "resolution")}
         return CandidateBank(masks=q["mapped"], usable=q["usable"], stereo=q["stereo"],
@@ -135,7 +135,7 @@ def build_bank(setup, step: float, *, client=None, chunk_size: int = 32,
     if mask_bank is None:
         mask_bank = MaskBank(functools.partial(candidate_masks, setup),
                              setup.body.shape.n_vertices, chunk_size=chunk_size, client=client)
-    mask_bank.ensure(keys)
+    mask_bank.ensure(keys, desc="candidate masks")
     masks = np.ascontiguousarray(mask_bank.masks[mask_bank.rows(keys)])
     return CandidateBank(masks=masks, **common)
 

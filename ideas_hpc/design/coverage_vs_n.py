@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..progress import steps
 from .bank import CandidateBank
 from .exact import greedy_swarm, max_coverage, prepare
 from .ring_bound import ring_bound, swap_search
@@ -85,7 +86,7 @@ def coverage_curve(bank: CandidateBank, n_max: int, *, min_separation: float = 0
     best = int(np.argmax(single))
     cov, bnd, gap, status, swarms = [float(single[best])], [float(single[best])], [0.0], \
         ["optimal"], [np.array([best])]
-    for n in range(2, int(n_max) + 1):
+    for n in steps(range(2, int(n_max) + 1), "coverage vs N", unit="N"):
         if cov[-1] >= reach - REACH_TOL and status[-1] == "optimal":
             cov.append(cov[-1])
             bnd.append(reach)

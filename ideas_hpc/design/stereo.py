@@ -36,6 +36,7 @@ from scipy.optimize import LinearConstraint
 from ..core.stereo_pairs import pair_index
 from ..core.union import population_coverage
 from ..errors import InputError
+from ..progress import steps
 from .bank import (CandidateBank, conflict_windows, grid_size, reduce_problem,
                    separation_steps)
 from .exact import (FEAS_TOL, ExactResult, check_time_limit, coverage_result, heavy_groups,
@@ -328,7 +329,7 @@ def stereo_curve(sb: StereoBank, n_max: int, *, min_separation: float = 0.0,
 
     t0 = time.perf_counter()
     out = []
-    for n in range(1, int(n_max) + 1):
+    for n in steps(range(1, int(n_max) + 1), "coverage vs N (stereo)", unit="N"):
         left = None if time_limit is None else max(1e-3, time_limit - (time.perf_counter() - t0))
         r = max_coverage_stereo(sb, n, min_separation=min_separation, time_limit=left)
         if out and r.coverage < out[-1].coverage:      # non-decreasing: the last one fits

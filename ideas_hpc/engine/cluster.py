@@ -95,6 +95,11 @@ def local_cluster(workers: int | None = None, **kwargs: Any):
     opts = dict(n_workers=_check_workers(workers), threads_per_worker=1, processes=True,
                 env=dict(WORKER_ENV), dashboard_address=None, silence_logs=logging.WARNING)
     opts.update(kwargs)
+    if opts["dashboard_address"] is None and "scheduler_kwargs" not in opts:
+        # No dashboard, but the scheduler still serves HTTP (health checks) and
+        # would try 8787 first, warning "Port 8787 is already in use" whenever
+        # another cluster runs on the machine: a free port, on localhost.
+        opts["scheduler_kwargs"] = {"dashboard": False, "dashboard_address": "127.0.0.1:0"}
     import dask
 
     # Worker processes inherit this environment at spawn. The nanny exports

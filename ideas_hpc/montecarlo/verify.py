@@ -11,12 +11,14 @@ the same seed, swarm and ``[monte_carlo]`` table reproduces any sample.
 
 from __future__ import annotations
 
+import functools
 import time
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..flyby import FlybySetup, Perturbation
+from ..progress import map_chunks
 from .dispersions import draw_sample
 from .sample import Nominal, design_nominal, fly_sample
 
@@ -79,12 +81,9 @@ def verify_swarm(setup: FlybySetup, theta, periods, *, mc, seed: int, n_samples:
     nom = design_nominal(setup, theta, periods)
     kw = dict(setup=setup, nominal=nom.for_tasks(), mc=mc, seed=seed)
     ks = list(range(int(n_samples)))
-    if client is None:
-        rows = _samples(ks, **kw)
-    else:
-        parts = [ks[i:i + chunk_size] for i in range(0, len(ks), chunk_size)]
-        futures = client.map(_samples, parts, **kw, pure=False)
-        rows = [r for part in client.gather(futures) for r in part]
+    parts = [ks[i:i + chunk_size] for i in range(0, len(ks), chunk_size)]
+    rows = [r for part in map_chunks(functools.partial(_samples, **kw), parts, client,
+                                     desc="verification") for r in part]
     cov = np.array([r[0] for r in rows], dtype=np.float64)
     failed = np.array([r[1] for r in rows], dtype=np.int32)
     return Verification(cov, failed, float(threshold), time.perf_counter() - t0)
