@@ -267,7 +267,8 @@ def write_report(store, out=None) -> Path:
                                          ds["position"].values[:, k],
                                          ds["camera_dcm_BT"].values[:, j],
                                          float(ds.attrs["half_angle_rad"]), float(snap_t[j]),
-                                         vertices=shape.vertices_T, faces=shape.faces))
+                                         vertices=shape.vertices_T, faces=shape.faces,
+                                         body=shape.name))
     if "observed" in ds and shape is not None:
         from ..plots.coverage_map import render_coverage_map
 
@@ -280,7 +281,7 @@ def write_report(store, out=None) -> Path:
                                             title="fraction of samples that saw each vertex"))
         else:
             figs.append(render_coverage_map(shape, obs, out / "fig25_coverage_map.png",
-                                            kind="observed"))
+                                            kind="observed", title="coverage map"))
             figs.append(render_coverage_map(shape, fs, out / "fig25b_first_seen.png",
                                             kind="first_seen"))
     if "best_resolution" in ds and shape is not None:

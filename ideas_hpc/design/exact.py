@@ -231,7 +231,7 @@ def _ring_result(bank, idx, target, dt) -> ExactResult:
                        coverage=float(bank.coverage([idx])[0]), target=target, status="optimal",
                        bound=float(idx.size), gap=0.0, solve_time=dt,
                        notes=[f"proven by the ring-gap bound (no {idx.size - 1} grid candidates "
-                              f"can reach the target) and a swap search that found "
+                              f"can reach the threshold) and a swap search that found "
                               f"{idx.size} that do; no integer programme needed"])
 
 
@@ -244,7 +244,7 @@ def _min_result(bank, red, res, dt, target, need, n_max, m, low=None,
     bound = math.ceil(bound - 1e-6) if bound is not None and np.isfinite(bound) else 1
     bound = max(bound, low or 1)
     if res.x is None and above is not None:
-        found = f"a swap search found {above.size} spacecraft reaching the target"
+        found = f"a swap search found {above.size} spacecraft reaching the threshold"
         if res.status == 2:     # nothing smaller exists: above is optimal
             bound = above.size
             notes.append(f"{found}; the integer programme proves no smaller swarm does "

@@ -3,11 +3,11 @@
 The body is drawn twice side by side (the given view and the opposite side,
 azimuth + 180 deg) with the Agg backend. A face takes the mean of its three
 vertex values: for ``kind='observed'`` the fraction of its vertices observed
-(blue = observed, grey = not), for ``kind='first_seen'`` the mean first-seen
-time in s (faces with a never-seen vertex are grey), for ``kind='fraction'`` a
+(blue = observed, red = not), for ``kind='first_seen'`` the mean first-seen
+time in s (faces with a never-seen vertex are red), for ``kind='fraction'`` a
 per-vertex fraction in 0..1 (e.g. of Monte Carlo samples that saw the vertex),
 for ``kind='value'`` any per-vertex quantity (issue 14 quality maps: best
-resolution, angles, spacecraft counts; NaN grey), labelled by ``label``.
+resolution, angles, spacecraft counts; NaN red), labelled by ``label``.
 """
 
 from __future__ import annotations
@@ -53,6 +53,8 @@ def render_coverage_map(shape, values, path, *, kind: str = "observed", title=No
     from matplotlib import cm, colors
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
+    from .figures import close
+
     if kind not in _KINDS:
         raise InputError(f"must be one of {_KINDS}, got {kind!r}", field="kind")
     vals = np.asarray(values)
@@ -70,22 +72,28 @@ def render_coverage_map(shape, values, path, *, kind: str = "observed", title=No
     v_km = shape.vertices_T / 1e3
     tris = v_km[shape.faces]
     grey = np.array([0.78, 0.78, 0.78, 1.0])
+    unseen = np.array([0.86, 0.15, 0.1, 1.0])   # never-seen faces stand out (issue 22)
+    area = np.asarray(shape.vertex_areas, dtype=np.float64)
     if kind == "fraction":
         v01 = np.clip(np.nan_to_num(vals.astype(np.float64), nan=0.0), 0.0, 1.0)
         frac = v01[shape.faces].mean(axis=1)
         cmap = colors.LinearSegmentedColormap.from_list("frac", [grey[:3], (0.12, 0.35, 0.85)])
         norm = colors.Normalize(0.0, 1.0)
         fc = cmap(norm(frac))
+        fc[frac == 0.0] = unseen
         label = label or "fraction"
-        stat = f"mean {float(v01.mean()):.3f}"
+        stat = (f"area-weighted mean {100 * float(area @ v01 / area.sum()):.3f} %; "
+                f"red: never seen")
     elif kind == "observed":
         frac = vals.astype(bool)[shape.faces].mean(axis=1)
         cmap = colors.LinearSegmentedColormap.from_list("obs", [grey[:3], (0.12, 0.35, 0.85)])
         norm = colors.Normalize(0.0, 1.0)
         fc = cmap(norm(frac))
+        fc[frac == 0.0] = unseen
         label = "observed fraction of face vertices"
-        n_obs = int(vals.astype(bool).sum())
-        stat = f"{n_obs}/{nv} vertices observed"
+        obs = vals.astype(bool)
+        stat = (f"seen: {100 * float(area[obs].sum() / area.sum()):.3f} % of the area "
+                f"({int(obs.sum())}/{nv} vertices); red: never seen")
     elif kind == "value":
         x = vals.astype(np.float64)
         fin = np.isfinite(x)
@@ -99,7 +107,7 @@ def render_coverage_map(shape, values, path, *, kind: str = "observed", title=No
         cmap = cm.viridis
         norm = colors.Normalize(lo, hi)
         fc = cmap(norm(tm))
-        fc[never] = grey
+        fc[never] = unseen
         label = label or "value"
         stat = (f"median {float(np.median(x[fin])):.3g} over {int(fin.sum())}/{nv} vertices"
                 if fin.any() else "no finite values")
@@ -114,9 +122,11 @@ def render_coverage_map(shape, values, path, *, kind: str = "observed", title=No
         cmap = cm.viridis
         norm = colors.Normalize(lo, hi)
         fc = cmap(norm(tm))
-        fc[never] = grey
+        fc[never] = unseen
         label = "first seen, s"
-        stat = f"{int(np.isfinite(vals).sum())}/{nv} vertices seen"
+        seen = np.isfinite(vals)
+        stat = (f"seen: {100 * float(area[seen].sum() / area.sum()):.3f} % of the area; "
+                "red: never seen")
     # Simple Lambert shading so the shape reads in 3-D.
     light = np.array([0.4, -0.5, 0.77])
     light /= np.linalg.norm(light)
@@ -144,7 +154,7 @@ def render_coverage_map(shape, values, path, *, kind: str = "observed", title=No
     fig.subplots_adjust(left=0.0, right=0.9, bottom=0.02, top=0.9, wspace=0.08)
     cax = fig.add_axes((0.93, 0.2, 0.012, 0.6))
     fig.colorbar(sm, cax=cax, label=label)
-    fig.suptitle((title + "  -  " if title else "") + stat)
+    fig.suptitle((title + "  -  " if title else "") + stat + f" ({shape.name})")
     fig.savefig(path, dpi=dpi)
-    plt.close(fig)
+    close(fig, path)
     return path

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.ticker import MaxNLocator
 
-from .figures import plt, save_png
+from .figures import body_name, plt, save_png
 
 KM = 1e3
 
@@ -46,50 +46,89 @@ def ring_view(ds, path) -> "Path":  # noqa: F821
     ax.set_aspect("equal")
     ax.grid(alpha=0.3)
     ax.legend(loc="lower right", fontsize=7)
-    return save_png(fig, path)
+    return save_png(fig, path, body=body_name(ds))
+
+
+def _requirement_lines(ax, ds) -> None:
+    """Horizontal target and threshold lines (issue 22 vocabulary), in %."""
+    a = ds.attrs
+    if a.get("target_coverage") is not None:
+        ax.axhline(100 * float(a["target_coverage"]), color="k", ls=":", lw=1,
+                   label=f"target {100 * float(a['target_coverage']):.3f} %")
+    thr = a.get("threshold_coverage", a.get("verify_threshold"))
+    if thr is not None:
+        ax.axhline(100 * float(thr), color="tab:purple", ls="-.", lw=1,
+                   label=f"threshold {100 * float(thr):.3f} % (target - eps_tol)")
 
 
 def coverage_vs_n(ds, path) -> "Path":  # noqa: F821
-    """Best coverage any N spacecraft reach against N (each point proven unless marked)."""
+    """Best coverage any N spacecraft reach against N (each point proven unless
+    marked): the whole curve, and a zoom on the decision region around the threshold."""
     n = ds["n_spacecraft"].values
     c = 100.0 * ds["coverage_vs_n"].values
-    fig, ax = plt.subplots(figsize=(6.4, 4.0))
-    ax.plot(n, c, "o-", color="tab:blue", label="best coverage of N spacecraft")
-    if "coverage_vs_n_gap" in ds:
-        open_ = ds["coverage_vs_n_gap"].values > 0
+    a = ds.attrs
+    tgt = 100.0 * float(a.get("target_coverage", c.max() / 100.0))
+    thr = 100.0 * float(a.get("threshold_coverage", a.get("verify_threshold", tgt / 100.0)))
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    open_ = ds["coverage_vs_n_gap"].values > 0 if "coverage_vs_n_gap" in ds else \
+        np.zeros(n.size, bool)
+    for ax in axes:
+        ax.plot(n, c, "o-", color="tab:blue", label="best coverage of N spacecraft")
         if open_.any():
             ax.plot(n[open_], c[open_], "x", color="tab:orange", ms=9,
                     label="not proven (time limit): best found")
-    target = ds.attrs.get("target_coverage")
-    if target is not None:
-        ax.axhline(100 * float(target), color="k", ls=":", lw=1,
-                   label=f"target {100 * float(target):.2f} %")
-    if "spacecraft" in ds.sizes:
-        ax.axvline(ds.sizes["spacecraft"], color="tab:red", ls="--", lw=1,
-                   label=f"design: N = {ds.sizes['spacecraft']}")
-    ax.set_xlabel("swarm size N")
-    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
-    ax.set_ylabel("area coverage, %")
-    ax.set_title("what each extra spacecraft buys")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    return save_png(fig, path)
+        _requirement_lines(ax, ds)
+        if "spacecraft" in ds.sizes:
+            ax.axvline(ds.sizes["spacecraft"], color="tab:red", ls="--", lw=1,
+                       label=f"design: N = {ds.sizes['spacecraft']}")
+        ax.set_xlabel("swarm size N")
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+        ax.set_ylabel("area coverage, %")
+        ax.grid(alpha=0.3)
+    axes[0].set_title("what each extra spacecraft buys")
+    # The decision lies between the threshold and the target: a few eps_tol around them.
+    band = max(tgt - thr, 0.05)
+    lo, hi = thr - 4 * band, max(tgt, float(c.max())) + band
+    axes[1].set_ylim(lo, hi)
+    near = np.flatnonzero(c >= lo)
+    k0 = int(n[near[0]]) if near.size else int(n[0])
+    axes[1].set_xlim(max(int(n[0]), k0 - 1) - 0.5, min(int(n[-1]), k0 + 6) + 0.5)
+    axes[1].ticklabel_format(axis="y", useOffset=False, style="plain")
+    axes[1].set_title("zoom on the decision region")
+    axes[1].legend(fontsize=7, loc="lower right")
+    fig.suptitle("coverage versus swarm size")
+    return save_png(fig, path, body=body_name(ds))
 
 
 def verification(ds, path) -> "Path":  # noqa: F821
-    """Monte Carlo verification: coverage distribution of the dispersed samples."""
-    cov = 100.0 * ds["verify_coverage"].values
+    """Monte Carlo verification: the fraction of dispersed samples reaching each
+    coverage (complementary ECDF, every sample resolved) with the threshold."""
+    cov = np.sort(100.0 * ds["verify_coverage"].values)
     thr = 100.0 * float(ds.attrs["verify_threshold"])
-    fig, ax = plt.subplots(figsize=(6.4, 4.0))
-    ax.hist(cov, bins=min(30, max(5, cov.size // 3)), color="tab:green", edgecolor="k")
-    ax.axvline(thr, color="k", ls=":", label=f"target - eps_tol = {thr:.2f} %")
-    ax.set_xlabel("area coverage, %")
-    ax.set_ylabel("samples")
-    ax.set_title(f"P(coverage >= {thr:.2f} %) = {100 * float(ds.attrs['verify_probability']):.1f}"
-                 f" % over {cov.size} samples")
+    p = float(ds.attrs["verify_probability"])
+    m = cov.size
+    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    frac = 1.0 - np.arange(m) / m          # P(coverage >= cov[i])
+    ax.step(cov, frac, where="post", color="tab:green", lw=1.5,
+            label=f"P(coverage >= x), {m} samples")
+    ax.plot(cov, frac, "o", color="tab:green", ms=3)
+    ax.axvline(thr, color="tab:purple", ls="-.", label=f"threshold {thr:.3f} % "
+               "(target - eps_tol)")
+    ax.axhline(p, color="k", ls=":", lw=1, label=f"P(coverage >= threshold) = {100 * p:.1f} %")
+    # x range on the threshold region: samples far below (failures) are counted, not drawn
+    span = max(cov[-1] - thr, thr - float(np.median(cov)), 0.05)
+    lo = thr - 3 * span
+    cut = int((cov < lo).sum())
+    ax.set_xlim(lo, max(cov[-1], thr) + 0.3 * span)
+    ax.set_ylim(0.0, 1.05)
+    ax.ticklabel_format(axis="x", useOffset=False, style="plain")
+    ax.set_xlabel("area coverage x, %" + (f" ({cut} samples below {lo:.2f} % not shown)"
+                                          if cut else ""))
+    ax.set_ylabel("fraction of samples with coverage >= x")
+    ax.set_title(f"verification: P(coverage >= {thr:.2f} %) = {100 * p:.1f} % over {m} samples")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
-    return save_png(fig, path)
+    ax.legend(fontsize=7, loc="lower left")
+    return save_png(fig, path, body=body_name(ds))
 
 
 def _axis(ds, name):
@@ -132,4 +171,4 @@ def pareto_front(ds, path) -> "Path":  # noqa: F821
     for ax in axes.ravel()[len(pairs):]:
         ax.set_visible(False)
     fig.suptitle("design-pareto: non-dominated swarms (NSGA-II)")
-    return save_png(fig, path)
+    return save_png(fig, path, body=body_name(ds))

@@ -7,6 +7,7 @@ reader's: km, deg, rpm, min.
 
 from __future__ import annotations
 
+from contextlib import contextmanager
 from pathlib import Path
 
 import matplotlib
@@ -14,17 +15,65 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.ticker import MaxNLocator  # noqa: E402
 
 RPM = 60.0 / (2.0 * np.pi)
 
 
-def save_png(fig, path) -> Path:
-    """Tight layout, 120 dpi PNG (parent folders created), figure closed."""
+#: ``{file name: Figure}`` while :func:`kept` is active: figures are kept open
+#: (not closed) so that tests can inspect axes, titles and lines.
+_KEPT: dict | None = None
+
+
+@contextmanager
+def kept():
+    """Keep every figure written in this block open; yields ``{file name: Figure}``."""
+    global _KEPT
+    old, _KEPT = _KEPT, {}
+    try:
+        yield _KEPT
+    finally:
+        _KEPT = old
+
+
+def close(fig, path) -> None:
+    """Close a written figure (or keep it, under :func:`kept`)."""
+    if _KEPT is not None:
+        _KEPT[Path(path).name] = fig
+    else:
+        plt.close(fig)
+
+
+def body_name(ds) -> str:
+    """The body a store was computed on, as figures name it."""
+    a = ds.attrs
+    return str(a.get("shape_model") or a.get("body") or "body")
+
+
+def name_body(fig, body: str | None) -> None:
+    """Put the body name in the figure's title (the suptitle, else the first axes')."""
+    if not body:
+        return
+    sup = fig._suptitle.get_text() if fig._suptitle is not None else ""
+    if sup:
+        if body not in sup:
+            fig.suptitle(f"{sup} ({body})")
+        return
+    ax = fig.axes[0]
+    t = ax.get_title()
+    if body not in t:
+        ax.set_title(f"{t} ({body})" if t else body)
+
+
+def save_png(fig, path, *, body: str | None = None) -> Path:
+    """Body name in the title, tight layout, 120 dpi PNG (parent folders created),
+    figure closed."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    name_body(fig, body)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
-    plt.close(fig)
+    close(fig, path)
     return path
 
 
@@ -36,10 +85,12 @@ def ga_fitness(ds, path, *, title="GA fitness") -> Path:
     ax.plot(g, ds["mean_fitness"].values, "s-", ms=3, label="population mean")
     ax.set_xlabel("generation")
     ax.set_ylabel(ds["best_fitness"].attrs.get("long_name", "fitness"))
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    ax.ticklabel_format(axis="y", useOffset=False, style="plain")  # no "+9.999e1"
     ax.set_title(title)
     ax.grid(alpha=0.3)
     ax.legend()
-    return save_png(fig, path)
+    return save_png(fig, path, body=body_name(ds))
 
 
 def population_histogram(ds, path, *, design: str) -> Path:
@@ -50,13 +101,17 @@ def population_histogram(ds, path, *, design: str) -> Path:
         bins = np.arange(n.min() - 0.5, n.max() + 1.5)
         ax.hist(n, bins=bins, color="tab:blue", edgecolor="k")
         ax.set_xlabel("swarm size N")
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+        ax.set_title("final population: swarm sizes")
     else:
         c = 100.0 * ds["population_coverage"].values
         ax.hist(c, bins=20, color="tab:green", edgecolor="k")
         ax.set_xlabel("area coverage, %")
+        ax.set_title("final population: coverage")
     ax.set_ylabel("individuals in the final generation")
+    ax.yaxis.set_major_locator(MaxNLocator(integer=True))
     ax.grid(alpha=0.3)
-    return save_png(fig, path)
+    return save_png(fig, path, body=body_name(ds))
 
 
 def _body_wire(ax, vertices_km, faces, every=1):
@@ -84,7 +139,8 @@ def trajectories(ds, path, *, vertices=None, faces=None) -> Path:
     ax.set_title("Targeted trajectories (frame T)")
     if pos.shape[0] <= 10:
         ax.legend(fontsize=7, loc="upper left")
-    return save_png(fig, path)
+    ax.set_box_aspect(None, zoom=0.85)   # room for the z label
+    return save_png(fig, path, body=body_name(ds))
 
 
 def targeting_error(ds, path) -> Path:
@@ -93,18 +149,26 @@ def targeting_error(ds, path) -> Path:
     miss = ds["targeting_miss"].values
     if miss.ndim == 3:
         miss = miss[0]
-    for i in range(miss.shape[0]):
+    n_sc = miss.shape[0]
+    markers = "osD^vP*X<>"
+    for i in range(n_sc):
         m = miss[i]
         k = np.isfinite(m)
-        ax.semilogy(np.arange(m.size)[k], m[k], "o-", ms=4, label=f"sc {i + 1}")
+        # spacecraft with the same iterates would hide each other: a small x offset
+        # and a marker each keep every one visible
+        dx = 0.3 * (i - (n_sc - 1) / 2) / max(n_sc, 1)
+        ax.semilogy(np.arange(m.size)[k] + dx, m[k], "-", marker=markers[i % len(markers)],
+                    ms=5, mfc="none", lw=1, alpha=0.85, label=f"sc {i + 1}")
     tol = ds.attrs.get("targeting_tolerance_m")
     if tol:
         ax.axhline(float(tol), color="k", ls="--", lw=1, label="tolerance")
     ax.set_xlabel("iteration k")
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set_ylabel("|Δr_k|, m")
+    ax.set_title("Targeting: position miss per Newton iteration")
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=7, ncol=2)
-    return save_png(fig, path)
+    return save_png(fig, path, body=body_name(ds))
 
 
 def attitude_series(ds, var, path, *, ylabel, scale=1.0, title=None, log=False) -> Path:
@@ -134,12 +198,12 @@ def attitude_series(ds, var, path, *, ylabel, scale=1.0, title=None, log=False) 
     axes[-1].set_xlabel("time, min")
     if vals.ndim == 3 and vals.shape[0] <= 10:
         axes[0].legend(fontsize=7, ncol=4)
-    if title:
-        axes[0].set_title(title)
-    return save_png(fig, path)
+    kind = "Monte Carlo min-max envelope per spacecraft, " if vals.ndim == 4 else ""
+    axes[0].set_title(title or f"{kind}{da.attrs.get('long_name', var)}")
+    return save_png(fig, path, body=body_name(ds))
 
 
-def fov_pyramids(path, r_T, dcm_BT, eta, time_s, *, vertices, faces) -> Path:
+def fov_pyramids(path, r_T, dcm_BT, eta, time_s, *, vertices, faces, body=None) -> Path:
     """FoV pyramids of every spacecraft at one instant, with the body (Figs. 24, 33).
 
     ``r_T`` (N, 3) m and ``dcm_BT`` (N, 3, 3) at time ``time_s``; ``eta`` rad.
@@ -161,8 +225,9 @@ def fov_pyramids(path, r_T, dcm_BT, eta, time_s, *, vertices, faces) -> Path:
     ax.set_title(f"FoV pyramids at t = {time_s / 60.0:.2f} min")
     ax.set_xlabel("x_T, km")
     ax.set_ylabel("y_T, km")
-    ax.set_zlabel("z_T, km")
-    return save_png(fig, path)
+    ax.set_zlabel("z_T, km", labelpad=8)
+    ax.set_box_aspect(None, zoom=0.8)   # the z label inside the figure
+    return save_png(fig, path, body=body)
 
 
 def mc_coverage(ds, path) -> Path:
@@ -172,22 +237,27 @@ def mc_coverage(ds, path) -> Path:
     axes[0].hist(cov, bins=min(30, max(5, cov.size // 4)), color="tab:blue", edgecolor="k")
     axes[0].set_xlabel("area coverage, %")
     axes[0].set_ylabel("samples")
+    axes[0].yaxis.set_major_locator(MaxNLocator(integer=True))
+    axes[0].set_title(f"coverage of {cov.size} samples")
     if "n_failed" in ds:
         nf = ds["n_failed"].values
         axes[1].scatter(nf + np.random.default_rng(0).uniform(-0.1, 0.1, nf.size), cov, s=8)
         axes[1].set_xlabel("failed spacecraft")
+        axes[1].xaxis.set_major_locator(MaxNLocator(integer=True))
         axes[1].set_ylabel("area coverage, %")
+        axes[1].set_title("coverage against failed spacecraft")
+    else:
+        axes[1].set_visible(False)
     for ax in axes:
         ax.grid(alpha=0.3)
-    return save_png(fig, path)
+    fig.suptitle("Monte Carlo coverage")
+    return save_png(fig, path, body=body_name(ds))
 
 
 def quality_histograms(ds, path):
     """Area-weighted histograms of the quality variables (issue 14): best
     resolution (m) and emission, incidence, phase at best (deg). Monte Carlo
     stores pool every sample."""
-    import matplotlib.pyplot as plt
-
     a = np.asarray(ds["vertex_area"].values, dtype=float)
     panels = [("best_resolution", "best resolution, m", 1.0),
               ("emission_at_best", "emission at best, deg", 180.0 / np.pi),
@@ -202,7 +272,5 @@ def quality_histograms(ds, path):
             ax.hist(x[ok], bins=40, weights=w[ok] / w.sum(), color="C0")
         ax.set_xlabel(label)
         ax.set_ylabel("area fraction")
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    fig.suptitle("observation quality, area-weighted")
+    return save_png(fig, path, body=body_name(ds))
