@@ -15,8 +15,10 @@ def _cmd_run(args) -> int:
 def _cmd_report(args) -> int:
     from .report import write_report
 
-    out = write_report(args.store, args.out)
+    out = write_report(args.store, args.out, html=args.html)
     print(out.read_text() if out.suffix == ".txt" else out)
+    if args.html:
+        print(f"interactive report: {out.with_name('report.html')}")
     return 0
 
 
@@ -65,6 +67,10 @@ def add_commands(sub) -> None:
                                    "with unfinished chunks is refused.")
     r.add_argument("store", help="zarr store written by 'ideas-hpc run'")
     r.add_argument("--out", default=None, help="output folder (default: STORE-report)")
+    r.add_argument("--html", action="store_true",
+                   help="also write report.html: one self-contained interactive page (3-D "
+                        "body coloured by the per-vertex result, ring and swarm, trade "
+                        "curves, verification distribution); opens offline")
     r.set_defaults(handler=_cmd_report)
 
     s = sub.add_parser("scan-arrival", help="coverage with lighting versus arrival epoch",

@@ -228,8 +228,9 @@ def _check_complete(ds, store: Path) -> None:
                          "CAMPAIGN --out STORE --resume'", file=store)
 
 
-def write_report(store, out=None) -> Path:
-    """Write PNGs and ``summary.txt`` for a store; returns the summary path."""
+def write_report(store, out=None, *, html: bool = False) -> Path:
+    """Write PNGs and ``summary.txt`` for a store (and ``report.html`` with ``html``,
+    :mod:`~ideas_hpc.campaign.report_html`); returns the summary path."""
     store = Path(store)
     if not store.exists():
         raise InputError("no such store", field="STORE", file=store)
@@ -299,4 +300,8 @@ def write_report(store, out=None) -> Path:
         figs.append(figures.mc_coverage(ds, out / "mc_coverage.png"))
     summary = out / "summary.txt"
     summary.write_text(_summary(ds, figs))
+    if html:
+        from .report_html import write_html
+
+        write_html(ds, summary.read_text(), out / "report.html")
     return summary
