@@ -154,9 +154,12 @@ def test_bad_design_input_names_the_field():
     with pytest.raises(InputError, match="highest coverage") as ei:
         min_swarm(bank, target=1.0, eps_tol=0.0) if bank.reach < 1 else \
             min_swarm(bank, target=1.5, eps_tol=0.0)
-    with pytest.raises(InputError, match="the highest coverage 1 reach is") as ei:
+    with pytest.raises(InputError, match="N_max too small: no swarm of at most 1 ") as ei:
         min_swarm(bank, target=bank.reach, eps_tol=0.0, n_max=1)
     assert ei.value.field == "design.n_max"
+    best1 = max(bank.coverage([[k] for k in range(bank.n_candidates)]))   # enumeration
+    assert f"the best with 1 is {100 * best1:.3f} %;" in ei.value.message
+    assert "time_limit" not in ei.value.message                 # proven: not the cause
     with pytest.raises(InputError) as ei:
         min_swarm(bank, target=bank.reach, eps_tol=0.0, min_separation=1e9)
     assert ei.value.field == "swarm.min_separation_km"

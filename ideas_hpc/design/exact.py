@@ -141,6 +141,18 @@ def _chosen(red: Reduced, x: np.ndarray) -> np.ndarray:
     return np.sort(red.rep[np.flatnonzero(x[:red.rep.size] > 0.5)])
 
 
+def n_max_too_small(n_max: int, what: str, top) -> InputError:
+    """The programme proved no swarm of at most ``n_max`` works: say so, with the best
+    ``n_max`` reach (``top``, a max-coverage result); the time limit is named only for
+    that best value when it is not proven (it is not the cause of the failure)."""
+    best = f"{100 * top.coverage:.3f} %" + ("" if top.status == "optimal" else
+                                          " (best found, not proven within "
+                                          "design.time_limit_s)")
+    return InputError(f"N_max too small: no swarm of at most {n_max} spacecraft {what} "
+                      f"(proven); the best with {n_max} is {best}; raise design.n_max",
+                      field="design.n_max")
+
+
 def min_swarm(bank: CandidateBank, *, target: float, eps_tol: float, n_max: int | None = None,
               min_separation: float = 0.0, time_limit: float | None = None) -> ExactResult:
     """The fewest grid candidates whose union covers ``target - eps_tol`` (fractions).
@@ -259,9 +271,7 @@ def _min_result(bank, red, res, dt, target, need, n_max, m, low=None,
             what = (f"with spacecraft at least {m + 1} grid steps apart "
                     if m else "")
             top = max_coverage(bank, n_max, prepared=(red, m))
-            raise InputError(f"no swarm of at most {n_max} spacecraft {what}reaches "
-                             f"{100 * need:.3f} %; the highest coverage {n_max} reach is "
-                             f"{100 * top.coverage:.3f} % ({top.status})", field="design.n_max")
+            raise n_max_too_small(n_max, f"{what}reaches {100 * need:.3f} %", top)
         idx = greedy_cover(bank, need, m, n_max)
         if idx is None:
             raise InputError(f"no swarm found within the time limit ({res.message}); raise "

@@ -40,7 +40,7 @@ from ..progress import steps
 from .bank import (CandidateBank, conflict_windows, grid_size, reduce_problem,
                    separation_steps)
 from .exact import (FEAS_TOL, ExactResult, check_time_limit, coverage_result, heavy_groups,
-                    solve)
+                    n_max_too_small, solve)
 from .ring_bound import swap_search
 
 #: Largest candidate grid of the pair formulation (K (K - 1) / 2 pair rows).
@@ -271,10 +271,7 @@ def min_swarm_stereo(sb: StereoBank, *, target: float, eps_tol: float, n_max: in
         if heur is None:
             best = max_coverage_stereo(sb, int(n_max), min_separation=min_separation,
                                        time_limit=time_limit)
-            raise InputError(f"no swarm of at most {n_max} spacecraft maps "
-                             f"{100 * need:.3f} % in stereo; the highest coverage {n_max} "
-                             f"reach is {100 * best.coverage:.3f} % ({best.status})",
-                             field="design.n_max")
+            raise n_max_too_small(n_max, f"maps {100 * need:.3f} % in stereo", best)
         return _stereo_result(sb, heur, target, need, heur.size, dt, "optimal",
                               [note + "; the integer programme proves nothing smaller works"])
     if heur is None:

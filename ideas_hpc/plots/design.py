@@ -107,9 +107,9 @@ def verification(ds, path) -> "Path":  # noqa: F821
     thr = 100.0 * float(ds.attrs["verify_threshold"])
     p = float(ds.attrs["verify_probability"])
     m = cov.size
-    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    fig, ax = plt.subplots(figsize=(7.2, 4.2))
     frac = 1.0 - np.arange(m) / m          # P(coverage >= cov[i])
-    ax.step(cov, frac, where="post", color="tab:green", lw=1.5,
+    ax.step(cov, frac, where="pre", color="tab:green", lw=1.5,   # P(cov >= x) on (c_i-1, c_i]
             label=f"P(coverage >= x), {m} samples")
     ax.plot(cov, frac, "o", color="tab:green", ms=3)
     ax.axvline(thr, color="tab:purple", ls="-.", label=f"threshold {thr:.3f} % "
@@ -125,7 +125,8 @@ def verification(ds, path) -> "Path":  # noqa: F821
     ax.set_xlabel("area coverage x, %" + (f" ({cut} samples below {lo:.2f} % not shown)"
                                           if cut else ""))
     ax.set_ylabel("fraction of samples with coverage >= x")
-    ax.set_title(f"verification: P(coverage >= {thr:.2f} %) = {100 * p:.1f} % over {m} samples")
+    ax.set_title(f"verification: P(coverage >= {thr:.2f} %) = {100 * p:.1f} % ({m} samples)",
+                 fontsize=10)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, loc="lower left")
     return save_png(fig, path, body=body_name(ds))

@@ -1,0 +1,60 @@
+"""Every shipped campaign runs as shipped (issue 22): on the built-in ellipsoid with
+only the sizes that make it slow made small (never design.n_max nor the requirement),
+and, marked slow, on eros001708 exactly as shipped."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+import xarray as xr
+
+from ideas_hpc.campaign.report import write_report
+from ideas_hpc.campaign.run import run_file
+
+CAMPAIGNS = Path(__file__).resolve().parent.parent / "campaigns"
+FILES = sorted(p.name for p in CAMPAIGNS.glob("*.toml"))
+
+#: file -> overrides of sizes only (samples, population, generations, grid step, the
+#: solver's time budget)
+SMALL = {
+    "eros-design.toml": ["design.verify_samples=2", "design.angle_step_deg=3.0"],
+    "eros-flyby.toml": [],
+    "eros-fov-ga.toml": ["design.population=6", "design.generations=2"],
+    "eros-monte-carlo.toml": ["monte_carlo.samples=2", "run.chunk_size=1"],
+    "eros-nadir-ga.toml": ["design.population=8", "design.generations=3",
+                           "design.angle_step_rad=0.1"],
+    "eros-nadir.toml": ["design.verify_samples=2", "design.angle_step_deg=3.0"],
+    "eros-pareto.toml": ["design.population=8", "design.generations=3",
+                         "design.angle_step_deg=5.0"],
+    "eros-stereo-design.toml": ["design.verify_samples=2", "design.angle_step_deg=12.0",
+                                "design.time_limit_s=5"],
+}
+FORBIDDEN = ("design.n_max", "design.eps_tol_pct", "coverage.", "design.failures_tolerated")
+
+
+def test_every_campaign_file_is_listed_and_only_sizes_change():
+    assert sorted(SMALL) == FILES
+    assert not [s for sets in SMALL.values() for s in sets if s.startswith(FORBIDDEN)]
+
+
+def _run(name: str, sets: list, out: Path) -> xr.Dataset:
+    workers = 1 if name == "eros-monte-carlo.toml" else 0
+    store = run_file(CAMPAIGNS / name, out=out / "s.zarr", overrides=sets, workers=workers,
+                     progress=False)
+    summary = write_report(store, out / "report").read_text()
+    assert "body: " in summary.splitlines()[1]
+    return xr.open_zarr(store)
+
+
+@pytest.mark.parametrize("name", FILES)
+def test_campaign_runs_on_the_ellipsoid(name, tmp_path):
+    ds = _run(name, ['body.name="ellipsoid"'] + SMALL[name], tmp_path)
+    assert ds.attrs["body"] == "ellipsoid"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", FILES)
+def test_campaign_runs_on_eros001708_as_shipped(name, tmp_path, eros1708):
+    ds = _run(name, ['body.name="eros001708"'], tmp_path)
+    assert ds.attrs["shape_model"] == "eros001708"
