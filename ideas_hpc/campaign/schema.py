@@ -24,7 +24,8 @@ pass's ground sample).
 turn of swarm angle), ``d_sep_km`` (default from the sizing), ``tolerance_m``,
 ``max_iterations``, ``dt_s`` (attitude step and trajectory sampling),
 ``epoch_s`` (arrival epoch after the body's element epoch: the Sun direction at
-flyby time ``t`` is the ephemeris at ``epoch_s + t``).
+flyby time ``t`` is the ephemeris at ``epoch_s + t``); ``geometry = "encounter"`` and its
+keys: :mod:`ideas_hpc.campaign.encounter_schema`.
 
 ``[swarm]`` ``angles_rad`` and ``sweep_periods_min`` (flyby and Monte Carlo),
 ``min_separation_km`` (closest allowed distance between two spacecraft on the
@@ -68,6 +69,7 @@ from ..errors import InputError
 from ..schema import Field, to_typed, typed_table, validate, with_defaults
 from ..units import CM, DEG, KM, MINUTE, MM, UM
 from ..sizing import INSTRUMENT_DEFAULTS as _CAM
+from .encounter_schema import ENCOUNTER, check_encounter
 from .kinds import KINDS as REGISTRY
 
 KINDS = tuple(REGISTRY)
@@ -115,6 +117,7 @@ FLYBY = {
     "epoch_s": Field("float", 0.0, doc="arrival epoch: flyby time 0 is this many seconds "
                                        "after the body's element epoch (sets the Sun "
                                        "direction and the body's rotation phase)"),
+    **ENCOUNTER,
 }
 
 SWARM = {
@@ -300,6 +303,7 @@ def _cross_checks(c: CampaignConfig) -> None:
         raise InputError(f"cannot exceed the swarm size {len(sw.angles_rad)}",
                          field="monte_carlo.failures_k")
     check_objectives(d.objectives)
+    check_encounter(fb)
     step = fb.dt_s
     img = 1.0 / c.instrument.image_rate_hz
     if abs(img / step - round(img / step)) > 1e-9:
