@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .attitude import default_spacecraft, ideal_dcm_BT
 from .core.encounter import dcm_BT_from_BN, dcm_NS, pointing_demand, straight_tracks_T
 from .errors import InputError
 from .trajectory import TargetingResult, propagate_swarm, target_swarm
@@ -150,7 +151,8 @@ def target_encounter(setup, theta, *, raise_on_failure: bool = True) -> Targetin
     except InputError as exc:
         if exc.field == "r0_T":
             raise InputError(f"{exc.message}: the imaging window starts inside the body's "
-                             "bounding sphere; shorten flyby.before_km (or flyby.before_s)",
+                             "bounding sphere; start it further out (flyby.before_km or before_s) "
+                             "with the ring outside R_max (flyby.d_sep_km)",
                              field="flyby.before_km") from None
         if exc.field == "r_target_T":
             raise InputError(f"{exc.message}: the ring passes inside the body's bounding "
@@ -207,3 +209,30 @@ def pointing_check(dcm_BN, dt: float, spacecraft) -> dict:
                    "(slower encounter, larger d_sep or stronger wheels)")
     return {"pointing_rate": rate, "pointing_torque": tq, "pointing_momentum": h,
             "pointing_feasible": ok, "summary": summary}
+
+
+def pointing_profile(setup, theta, periods=None) -> dict:
+    """:func:`pointing_check` of the swarm's reference attitude at the image times.
+
+    Paper geometry: ``[B N] = [B T] R3(w t)``; encounter: the maneuver in N.
+    """
+    th = np.asarray(theta, dtype=np.float64).ravel()
+    img_t = setup.image_times - setup.t0
+    kw = dict(mode=setup.att_mode, periods=periods, theta_max=setup.theta_max, p_min=setup.p_min)
+    if setup.encounter is not None:
+        bn = ideal_dcm_BT(th, 0.0, img_t, dcm_TS=setup.encounter.dcm_NS, **kw)
+    else:
+        ws = setup.body.params.spin_rate
+        bn = dcm_BT_from_BN(ideal_dcm_BT(th, ws, img_t, **kw), -ws, img_t, 0.0)
+    return pointing_check(bn, setup.image_dt, setup.spacecraft or default_spacecraft())
+
+
+def encounter_attrs(setup) -> dict:
+    """Store attrs of an encounter (SI): speed, approach angles, closest approach, phase."""
+    enc = setup.encounter
+    if enc is None:
+        return {"geometry": "paper"}
+    sun = setup.sun_T([enc.t_ca_s])[0]
+    return {"geometry": "encounter", "speed_m_s": enc.speed_m_s, "approach_ra_rad": enc.ra_rad,
+            "approach_dec_rad": enc.dec_rad, "t_ca_s": enc.t_ca_s,
+            "phase_angle_rad": phase_angle(enc, sun), "v_inf_T_m_s": enc.v_inf_T.tolist()}
