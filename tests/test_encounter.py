@@ -204,3 +204,34 @@ def test_pointing_demand_of_a_sweep_matches_euler():
     assert rate[0] == pytest.approx(amp * w, rel=1e-4)
     assert h[0] == pytest.approx(inertia[0] * amp * w, rel=1e-4)
     assert tq[0] == pytest.approx(inertia[0] * amp * w * w, rel=1e-3)
+
+
+def test_scan_encounter_ring_and_reachability(tmp_path):
+    from ideas_hpc.campaign.scan_encounter import encounter_scan
+
+    s = _setup(tmp_path, "speed_km_s = 10.0\nd_sep_km = 40.0\nbefore_km = 20.0\nafter_km = 20.0")
+    c = load(tmp_path / "enc.toml")
+    decs, phases = np.radians([-40.0, 10.0, 90.0]), np.radians([50.0, 100.0])
+    ds = encounter_scan(s, c.config.flyby, decs, phases, step_rad=math.radians(45.0),
+                        theta=[0.0, 2.0])
+    assert np.isnan(ds["ring_coverage"].values).any()
+    assert np.isfinite(ds["ring_coverage"].values).sum() >= 2
+    sun = s.sun_T([s.encounter.t_ca_s])[0]
+    rho = math.hypot(sun[0], sun[1])
+    for i, d in enumerate(decs):
+        for j, p in enumerate(phases):
+            reachable = abs(-math.cos(p) - math.sin(d) * sun[2]) <= math.cos(d) * rho
+            assert np.isnan(ds["ring_coverage"].values[i, j]) != reachable
+            if not reachable:
+                continue
+            ra = ds["approach_ra"].values[i, j]
+            u = [math.cos(d) * math.cos(ra), math.cos(d) * math.sin(ra), math.sin(d)]
+            assert math.acos(-np.dot(u, sun)) == pytest.approx(p, abs=1e-9)
+            # the ring's union, flown as one swarm through the flyby's coverage kernel
+            enc = dataclasses.replace(s.encounter, ra_rad=ra, dec_rad=d)
+            ring = fly(s.with_(encounter=enc), np.radians(np.arange(0.0, 360.0, 45.0)))
+            assert ds["ring_coverage"].values[i, j] == pytest.approx(ring.coverage.coverage,
+                                                                    abs=1e-12)
+            two = fly(s.with_(encounter=enc), [0.0, 2.0]).coverage.coverage
+            assert ds["swarm_coverage"].values[i, j] == pytest.approx(two, abs=1e-12)
+            assert 1 <= ds["n_greedy"].values[i, j] <= 8
