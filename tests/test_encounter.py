@@ -235,3 +235,36 @@ def test_scan_encounter_ring_and_reachability(tmp_path):
             two = fly(s.with_(encounter=enc), [0.0, 2.0]).coverage.coverage
             assert ds["swarm_coverage"].values[i, j] == pytest.approx(two, abs=1e-12)
             assert 1 <= ds["n_greedy"].values[i, j] <= 8
+
+
+def test_pointing_the_wheels_cannot_follow_is_reported():
+    from ideas_hpc.attitude import SpacecraftModel
+    from ideas_hpc.encounter import pointing_check
+
+    t = np.arange(0.0, 20.0, 0.1)
+    bn = Rotation.from_rotvec(np.outer(0.2 * np.sin(t), [0.0, 1.0, 0.0])).as_matrix()
+    bn = np.ascontiguousarray(np.stack([np.broadcast_to(np.eye(3), bn.shape), bn]))
+    weak = SpacecraftModel(u_max=1e-4)
+    out = pointing_check(bn, 0.1, weak)
+    assert out["pointing_feasible"].tolist() == [True, False]
+    assert out["summary"].startswith("WARNING") and "spacecraft [1]" in out["summary"]
+    assert pointing_check(bn, 0.1, SpacecraftModel())["summary"].endswith("can follow")
+
+
+def test_encounter_flyby_store_and_report(tmp_path):
+    import xarray as xr
+
+    from ideas_hpc.campaign.report import write_report
+    from ideas_hpc.campaign.run import run_file
+
+    p = tmp_path / "enc.toml"
+    p.write_text(BASE.format(res=2, rate=5.0, dt=0.1, flyby="approach_dec_deg = 30.0\n"
+                             "phase_angle_deg = 70.0\nd_sep_km = 50.0"))
+    ds = xr.open_zarr(run_file(p, out=tmp_path / "enc.zarr", progress=False))
+    assert ds.attrs["geometry"] == "encounter"
+    assert math.degrees(ds.attrs["phase_angle_rad"]) == pytest.approx(70.0, abs=1e-9)
+    assert ds["pointing_feasible"].values.all()
+    # ring frames fixed in N on a straight track: the reference asks for no rate
+    assert float(ds["pointing_rate"].max()) < 1e-9
+    text = write_report(tmp_path / "enc.zarr", tmp_path / "rep").read_text()
+    assert "encounter: 10 km/s" in text and "phase angle 70.0 deg" in text

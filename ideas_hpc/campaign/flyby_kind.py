@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from ..encounter import encounter_attrs, pointing_profile
+from ..encounter import pointing_profile
 from ..flyby import fly, setup_from_campaign
 from . import datasets
 from .schema import Campaign
@@ -36,5 +36,4 @@ def run_flyby(c: Campaign, out: Path, **_) -> xr.Dataset:
     _log(point.pop("summary"))
     for name, v in point.items():
         ds[name] = (("spacecraft",), v)
-    ds.attrs.update(encounter_attrs(setup))
     return datasets.with_attrs(ds)
