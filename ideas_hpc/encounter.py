@@ -26,7 +26,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .attitude import default_spacecraft, ideal_dcm_BT
-from .core.encounter import dcm_BT_from_BN, dcm_NS, pointing_demand, straight_tracks_T
+from .core.encounter import (dcm_BT_from_BN, dcm_NS, pointing_demand, straight_tracks_T,
+                             track_dcm_BN)
 from .errors import InputError
 from .trajectory import TargetingResult, propagate_swarm, target_swarm
 
@@ -188,6 +189,17 @@ def camera_dcms_encounter(setup, theta, periods, ideal, simulate, *, sigma0=None
     return bt, att, bn
 
 
+def track_dcms(setup, r_img_T) -> tuple[np.ndarray, np.ndarray]:
+    """``([B T], [B N])`` (N, n_img, 3, 3) of the body-tracking camera (``attitude.maneuver =
+    "track"``) along the flown positions ``r_img_T`` at the image times."""
+    enc = setup.encounter
+    t = np.ascontiguousarray(setup.image_times)
+    w = setup.body.params.spin_rate
+    bn = track_dcm_BN(np.ascontiguousarray(r_img_T, dtype=np.float64), t, enc.t_ca_s, w,
+                      np.ascontiguousarray(enc.dcm_NS[:, 2]))
+    return dcm_BT_from_BN(bn, w, t, enc.t_ca_s), bn
+
+
 def pointing_check(dcm_BN, dt: float, spacecraft) -> dict:
     """Peak rate, torque and momentum the pointing profile asks for, against the wheels.
 
@@ -211,12 +223,16 @@ def pointing_check(dcm_BN, dt: float, spacecraft) -> dict:
             "pointing_feasible": ok, "summary": summary}
 
 
-def pointing_profile(setup, theta, periods=None) -> dict:
+def pointing_profile(setup, theta, periods=None, r_img_T=None) -> dict:
     """:func:`pointing_check` of the swarm's reference attitude at the image times.
 
-    Paper geometry: ``[B N] = [B T] R3(w t)``; encounter: the maneuver in N.
+    Paper geometry: ``[B N] = [B T] R3(w t)``; encounter: the maneuver in N;
+    body tracking: along the flown positions ``r_img_T``.
     """
     th = np.asarray(theta, dtype=np.float64).ravel()
+    sc = setup.spacecraft or default_spacecraft()
+    if setup.maneuver == "track":
+        return pointing_check(track_dcms(setup, r_img_T)[1], setup.image_dt, sc)
     img_t = setup.image_times - setup.t0
     kw = dict(mode=setup.att_mode, periods=periods, theta_max=setup.theta_max, p_min=setup.p_min)
     if setup.encounter is not None:
@@ -224,7 +240,7 @@ def pointing_profile(setup, theta, periods=None) -> dict:
     else:
         ws = setup.body.params.spin_rate
         bn = dcm_BT_from_BN(ideal_dcm_BT(th, ws, img_t, **kw), -ws, img_t, 0.0)
-    return pointing_check(bn, setup.image_dt, setup.spacecraft or default_spacecraft())
+    return pointing_check(bn, setup.image_dt, sc)
 
 
 def encounter_attrs(setup) -> dict:

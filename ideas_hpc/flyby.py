@@ -30,7 +30,7 @@ from .attitude import Gains, SpacecraftModel, ideal_dcm_BT, initial_conditions, 
 from .bodies import Body, load_body
 from .core.mrp import dcm_from_mrp, mrp_from_prv
 from .encounter import (Encounter, approach_angles, camera_dcms_encounter, endpoints_encounter,
-                        target_encounter, window_s)
+                        target_encounter, track_dcms, window_s)
 from .errors import InputError
 from .mapping import CoverageOptions, CoverageResult, compute_coverage
 from .sizing import Sizing, size_flyby
@@ -284,12 +284,15 @@ class FlybyOutcome:
 
 
 def camera_dcms(setup: FlybySetup, theta, periods=None, *, sigma0=None, omega0=None,
-                wheel0=None, spin_rate=None):
+                wheel0=None, spin_rate=None, r_img_T=None):
     """Camera DCMs at the image times, and the attitude result when simulated.
 
+    ``r_img_T`` (N, n_img, 3): the flown positions, for body tracking.
     Returns ``(dcm_BT (N, n_img, 3, 3), AttitudeResult or None)``.
     """
     th = np.asarray(theta, dtype=np.float64)
+    if setup.maneuver == "track":
+        return track_dcms(setup, r_img_T)[0], None
     ws = setup.body.params.spin_rate if spin_rate is None else spin_rate
     duration = setup.tf - setup.t0
     img_t = setup.image_times - setup.t0
@@ -375,7 +378,7 @@ def fly_open_loop(setup: FlybySetup, theta, periods, r0_T, v0_T,
 def _image(setup: FlybySetup, th, periods, r_img, ics, misalignment, active, counts):
     """Attitude at the images, camera misalignment, Sun, coverage: the common tail of a flyby."""
     s0, w0, W0 = ics if ics is not None else (None, None, None)
-    dcm, att = camera_dcms(setup, th, periods, sigma0=s0, omega0=w0, wheel0=W0)
+    dcm, att = camera_dcms(setup, th, periods, sigma0=s0, omega0=w0, wheel0=W0, r_img_T=r_img)
     if misalignment is not None:
         dcm = np.ascontiguousarray(np.matmul(misalignment[:, None], dcm))  # [CB][BT]
     img_t = setup.image_times

@@ -268,3 +268,30 @@ def test_encounter_flyby_store_and_report(tmp_path):
     assert float(ds["pointing_rate"].max()) < 1e-9
     text = write_report(tmp_path / "enc.zarr", tmp_path / "rep").read_text()
     assert "encounter: 10 km/s" in text and "phase angle 70.0 deg" in text
+
+
+def test_body_tracking_demand_matches_the_straight_pass(tmp_path):
+    """Camera on the body centre along a straight pass at v, distance d: it turns about
+    y_B at v d / (d^2 + v^2 tau^2), peak v / d, peak acceleration (3 sqrt 3 / 8) v^2 / d^2
+    (at tau = d / (sqrt 3 v)); 15 km/s at 20 km asks more torque than the wheels have."""
+    from ideas_hpc.attitude import default_spacecraft
+    from ideas_hpc.encounter import pointing_profile
+
+    s = _setup(tmp_path, "speed_km_s = 15.0\napproach_dec_deg = 20.0\napproach_ra_deg = 10.0\n"
+               "d_sep_km = 20.0", rate=50.0, dt=0.02, mu=0.0, spin_period=1e15)
+    s = s.with_(maneuver="track")
+    out = fly(s, [0.0, 2.5])
+    # the boresight +z_B points at the body centre at every image
+    los = -out.r_img_T / np.linalg.norm(out.r_img_T, axis=-1, keepdims=True)
+    np.testing.assert_allclose(np.einsum("nkj,nkj->nk", out.dcm_BT[:, :, 2], los), 1.0,
+                               atol=1e-12)
+    p = pointing_profile(s, [0.0, 2.5], None, out.r_img_T)
+    v, d = 15e3, 20e3
+    i_y = default_spacecraft().inertia_rw[1]
+    np.testing.assert_allclose(p["pointing_rate"], v / d, rtol=1e-3)
+    np.testing.assert_allclose(p["pointing_momentum"], i_y * v / d, rtol=1e-3)
+    np.testing.assert_allclose(p["pointing_torque"], i_y * 3 * math.sqrt(3) / 8 * (v / d) ** 2,
+                               rtol=1e-2)
+    assert not p["pointing_feasible"].any() and p["summary"].startswith("WARNING")
+    # and the swarm's ring-frame nadir pointing asks for nothing
+    assert pointing_profile(s.with_(maneuver="nadir"), [0.0, 2.5])["pointing_rate"].max() < 1e-9

@@ -48,8 +48,15 @@ _ANGLE_KEYS = (("speed_m_s", "speed_km_s"), ("approach_dec_rad", "approach_dec_d
                ("approach_ra_rad", "approach_ra_deg"), ("phase_angle_rad", "phase_angle_deg"))
 
 
-def check_encounter(fb) -> None:
+def check_encounter(fb, attitude) -> None:
     """Cross-checks of the encounter keys (one :class:`InputError` naming the field)."""
+    if attitude.maneuver == "track":
+        if fb.geometry != "encounter":
+            raise InputError('body tracking needs flyby.geometry = "encounter"',
+                             field="attitude.maneuver")
+        if attitude.mode != "ideal":
+            raise InputError('"track" is flown in attitude.mode = "ideal" only (its demand on '
+                             "the wheels is reported)", field="attitude.mode")
     given = [key for si, key in _ANGLE_KEYS if getattr(fb, si) is not None]
     if fb.geometry != "encounter":
         extra = given + [k for k in ("v_inf_km_s", "before_km", "after_km", "before_s",

@@ -32,7 +32,7 @@ def run_flyby(c: Campaign, out: Path, **_) -> xr.Dataset:
          f"{time.perf_counter() - t:.1f} s")
     ds = datasets.flyby_dataset(setup, res)
     ds.attrs.update(datasets.base_attrs(c, setup))
-    point = pointing_profile(setup, sw.angles_rad, periods)
+    point = pointing_profile(setup, sw.angles_rad, periods, res.r_img_T)
     _log(point.pop("summary"))
     for name, v in point.items():
         ds[name] = (("spacecraft",), v)

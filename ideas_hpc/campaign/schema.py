@@ -32,8 +32,8 @@ keys: :mod:`ideas_hpc.campaign.encounter_schema`.
 ring, default 1 km; checked once ``d_sep`` is known, see
 :func:`ideas_hpc.swarm_geometry.check_separation`).
 
-``[attitude]`` ``mode`` (``ideal`` or ``simulated``), ``maneuver`` (``nadir``
-or ``fov``), ``decimate`` (keep every k-th attitude step in the store),
+``[attitude]`` ``mode`` (``ideal`` or ``simulated``), ``maneuver`` (``nadir``,
+``fov``, or ``track``: the body centre, encounters in ideal mode), ``decimate`` (keep every k-th attitude step in the store),
 ``theta_max_deg`` (default eta_N / 2).
 
 ``[dynamics]``, ``[spacecraft]``, ``[controller]``, ``[coverage]``: passed to
@@ -130,7 +130,7 @@ SWARM = {
 
 ATTITUDE = {
     "mode": Field("str", "ideal", choices=("ideal", "simulated")),
-    "maneuver": Field("str", "nadir", choices=("nadir", "fov")),
+    "maneuver": Field("str", "nadir", choices=("nadir", "fov", "track")),
     "decimate": Field("int", 10, lo=1),
     "theta_max_deg": Field("float", None, nullable=True, si="theta_max_rad",
                            to_si=DEG, lo=0, lo_open=True, hi=90),
@@ -303,7 +303,7 @@ def _cross_checks(c: CampaignConfig) -> None:
         raise InputError(f"cannot exceed the swarm size {len(sw.angles_rad)}",
                          field="monte_carlo.failures_k")
     check_objectives(d.objectives)
-    check_encounter(fb)
+    check_encounter(fb, c.attitude)
     step = fb.dt_s
     img = 1.0 / c.instrument.image_rate_hz
     if abs(img / step - round(img / step)) > 1e-9:

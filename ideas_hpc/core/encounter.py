@@ -208,3 +208,53 @@ def pointing_demand(dcm_BN, dt, inertia):
                 torque[i] = max(torque[i], np.sqrt(u[0] ** 2 + u[1] ** 2 + u[2] ** 2))
             w0[:] = w1
     return rate, torque, mom
+
+
+@njit(cache=True, parallel=True)
+def track_dcm_BN(r_T, times, t_ca, spin_rate, z_S):
+    """Body-tracking camera ``[B N]``: boresight on the body centre along the actual track.
+
+    With ``r_N = R3(spin_rate (t - t_ca))^T r_T``: ``z_B = -r_N / |r_N|``,
+    ``x_B = unit(z_S - (z_S . z_B) z_B)`` (along track, as the ring frame's
+    ``x_R = z_S``), ``y_B = z_B x x_B``. At closest approach this is the ring
+    frame of nadir pointing; for a straight track at speed ``v`` and distance
+    ``d`` it turns about ``y_B`` at ``v d / (d^2 + v^2 tau^2)``.
+
+    Parameters
+    ----------
+    r_T : (N, T, 3) float64
+        Positions at ``times``, m, frame T.
+    times : (T,) float64
+        s.
+    t_ca, spin_rate : float
+        s, rad/s.
+    z_S : (3,) float64
+        Approach direction (unit), frame N.
+
+    Returns
+    -------
+    (N, T, 3, 3) float64
+        Rows ``x_B, y_B, z_B`` in N components.
+    """
+    n = r_T.shape[0]
+    m = r_T.shape[1]
+    out = np.empty((n, m, 3, 3))
+    for i in prange(n):
+        for k in range(m):
+            phi = spin_rate * (times[k] - t_ca)
+            c = np.cos(phi)
+            s = np.sin(phi)
+            x = c * r_T[i, k, 0] - s * r_T[i, k, 1]
+            y = s * r_T[i, k, 0] + c * r_T[i, k, 1]
+            z = r_T[i, k, 2]
+            rn = np.sqrt(x * x + y * y + z * z)
+            zb = np.array([-x / rn, -y / rn, -z / rn])
+            d = z_S[0] * zb[0] + z_S[1] * zb[1] + z_S[2] * zb[2]
+            xb = np.array([z_S[0] - d * zb[0], z_S[1] - d * zb[1], z_S[2] - d * zb[2]])
+            xb /= np.sqrt(xb[0] ** 2 + xb[1] ** 2 + xb[2] ** 2)
+            out[i, k, 0] = xb
+            out[i, k, 1, 0] = zb[1] * xb[2] - zb[2] * xb[1]
+            out[i, k, 1, 1] = zb[2] * xb[0] - zb[0] * xb[2]
+            out[i, k, 1, 2] = zb[0] * xb[1] - zb[1] * xb[0]
+            out[i, k, 2] = zb
+    return out
