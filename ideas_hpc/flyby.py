@@ -192,10 +192,10 @@ def target(setup: FlybySetup, theta, *, raise_on_failure: bool = True) -> Target
     naming the campaign field to change (:func:`targeting_input_error`).
     """
     th = np.asarray(theta, dtype=np.float64).ravel()
-    r0, rt = endpoints(setup, th)
     try:
         if setup.encounter is not None:
             return target_encounter(setup, th, raise_on_failure=raise_on_failure)
+        r0, rt = endpoints(setup, th)
         return target_swarm(setup.body, r0, rt, setup.t0, setup.tf,
                             force_model=setup.force_model, dt_sample=setup.dt, tol=setup.tol,
                             max_iter=setup.max_iter, raise_on_failure=raise_on_failure)

@@ -66,6 +66,9 @@ def check_encounter(fb, attitude) -> None:
             raise InputError("is an encounter key: set flyby.geometry = \"encounter\"",
                              field=f"flyby.{extra[0]}")
         return
+    if fb.configuration != "ring":
+        raise InputError("an encounter flies a ring perpendicular to v_inf: use 'ring'",
+                         field="flyby.configuration")
     if fb.v_inf_m_s is not None and given:
         raise InputError(f"gives the approach already: drop flyby.{given[0]}",
                          field="flyby.v_inf_km_s")
