@@ -334,3 +334,15 @@ def test_exact_design_over_the_encounter_ring_is_minimal(tmp_path):
             break
     assert n_true is not None and n_true >= 2 and int(ds["best_swarm_size"]) == n_true
     assert float(ds["best_coverage"]) >= target - 1e-12
+
+
+def test_scan_encounter_cli_table_and_plot(tmp_path, capsys):
+    from ideas_hpc.cli import main
+
+    p = tmp_path / "enc.toml"
+    p.write_text(BASE.format(res=2, rate=5.0, dt=0.1, flyby="d_sep_km = 40.0"))
+    code = main(["scan-encounter", str(p), "--dec-deg", "0", "45", "--phase-deg", "60",
+                 "--step-deg", "60", "--plot", str(tmp_path / "scan.png"),
+                 "--out", str(tmp_path / "scan.nc")])
+    out = capsys.readouterr().out
+    assert code in (0, None) and "ring coverage %" in out and (tmp_path / "scan.png").stat().st_size

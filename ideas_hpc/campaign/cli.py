@@ -32,7 +32,8 @@ def _cmd_scan_encounter(args) -> int:
     from .scan_encounter import scan_encounter_file
 
     scan_encounter_file(args.campaign, args.set, decs_deg=args.dec_deg,
-                        phases_deg=args.phase_deg, step_deg=args.step_deg, out=args.out)
+                        phases_deg=args.phase_deg, step_deg=args.step_deg, out=args.out,
+                        plot=args.plot)
     return 0
 
 
@@ -90,4 +91,5 @@ def add_commands(sub) -> None:
     e.add_argument("--set", action="append", default=[], metavar="dotted.key=value",
                    help="override a campaign field (TOML value), repeatable")
     e.add_argument("--out", default=None, help="write the scan to this netCDF file")
+    e.add_argument("--plot", default=None, help="write the coverage map to this PNG")
     e.set_defaults(handler=_cmd_scan_encounter)

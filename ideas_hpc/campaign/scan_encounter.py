@@ -11,7 +11,7 @@ reaches at that grid step), and ``swarm_coverage``, what the campaign's own
 the phase angle unreachable at that declination.
 
     ideas-hpc scan-encounter campaigns/eros-fast-encounter.toml \
-        [--dec-deg -60 -30 0 30 60 90] [--phase-deg 30 60 90 120] [--step-deg 10] [--out scan.nc]
+        [--dec-deg -60 -30 0 30 60 90] [--phase-deg 30 60 90 120] [--step-deg 10] [--out scan.nc] [--plot scan.png]
 """
 
 from __future__ import annotations
@@ -95,7 +95,7 @@ def encounter_scan(setup, fb, decs_rad, phases_rad, *, step_rad: float = 10 * DE
 
 
 def scan_encounter_file(path, overrides=None, *, decs_deg=None, phases_deg=None,
-                        step_deg: float = 10.0, out=None) -> xr.Dataset:
+                        step_deg: float = 10.0, out=None, plot=None) -> xr.Dataset:
     """Scan a campaign's encounter over ``decs_deg`` x ``phases_deg``; print a table."""
     from .schema import load
 
@@ -124,4 +124,8 @@ def scan_encounter_file(path, overrides=None, *, decs_deg=None, phases_deg=None,
         print(f"{d:6g} " + " ".join(f"{x:>18}" for x in cells))
     if out is not None:
         ds.to_netcdf(out)
+    if plot is not None:
+        from ..plots.encounter import scan_map
+
+        print(f"figure: {scan_map(ds, plot)}")
     return ds
