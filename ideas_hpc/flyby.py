@@ -329,7 +329,7 @@ def fly_open_loop(setup: FlybySetup, theta, periods, r0_T, v0_T,
     v0 = v0_T if p.velocity_error_T is None else v0_T + p.velocity_error_T
     _, pos, _ = propagate_swarm(setup.body, r0, v0, setup.t0, setup.tf,
                                 force_model=setup.force_model, dt_sample=setup.dt,
-                                params_override=p.params_override)
+                                params_override=p.params_override, views=True)
     r_img = np.ascontiguousarray(pos[:, ::setup.image_every])
     mis = None if p.misalignment_prv is None else misalignment_dcms(p.misalignment_prv)
     dcm, att, cov = _image(setup, th, periods, r_img, p.ics, mis, p.active, counts)
