@@ -179,27 +179,3 @@ def test_mc_in_process_matches_one_worker(one_worker, tmp_path):
     _same(xr.open_zarr(one_worker), xr.open_zarr(out))
     assert done_mask(out).all()
 
-
-def test_job_cluster_rule_and_one_shared_cluster():
-    from ideas_hpc.engine.job_cluster import (IN_PROCESS_MAX_TESTS, JobCluster,
-                                              runs_in_process, visibility_tests)
-
-    small, big = IN_PROCESS_MAX_TESTS / 2, IN_PROCESS_MAX_TESTS * 2
-    assert visibility_tests(2, 3, 5, 7) == 210.0
-    assert runs_in_process(workers=None, scheduler=None, cluster="local", work=small)
-    assert not runs_in_process(workers=None, scheduler=None, cluster="local", work=big)
-    assert runs_in_process(workers=0, scheduler=None, cluster="local", work=big)
-    for kw in (dict(workers=1), dict(workers=None, scheduler="tcp://x:1"),
-               dict(workers=None, cluster="slurm")):  # explicit: honoured
-        assert not runs_in_process(**{"scheduler": None, "cluster": "local", **kw},
-                                   work=small), kw
-    calls = []
-    with JobCluster(workers=None, work=small) as job:
-        assert job.client(warm=lambda: calls.append(1)) is None and job.started == 0
-    assert calls == []  # in process: nothing to warm for
-    with JobCluster(workers=1, work=small) as job:
-        a = job.client(warm=lambda: calls.append("masks"))
-        b = job.client(warm=lambda: calls.append("verification"))
-        assert a is b and job.started == 1
-        assert len(a.scheduler_info()["workers"]) == 1
-    assert calls == ["masks", "verification"]  # each phase warmed here first

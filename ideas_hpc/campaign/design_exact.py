@@ -29,6 +29,7 @@ from ..engine.job_cluster import JobCluster, phase_client, visibility_tests
 from ..errors import InputError
 from ..candidates import candidate_masks
 from ..flyby import fly
+from .. import precompile
 from ..montecarlo.verify import verify_swarm
 from . import datasets
 
@@ -208,6 +209,15 @@ def run_exact(c, setup, *, workers=None, scheduler=None, cluster="local",
               slurm_config=None) -> xr.Dataset:
     """Kind ``design-nadir``, method ``exact``: certified design, its Monte Carlo
     verification, then a flyby of it (the store)."""
+    helper = precompile.start(setup)  # cold cache: later kernels compile alongside
+    try:
+        return _run_exact(c, setup, workers, scheduler, cluster, slurm_config)
+    finally:
+        if helper is not None:
+            helper.close()
+
+
+def _run_exact(c, setup, workers, scheduler, cluster, slurm_config) -> xr.Dataset:
     d = c.config.design
     n_img, n_v = setup.image_times.size, setup.body.shape.n_vertices
     work = (visibility_tests(grid_size(d.grid_step_rad), 1, n_img, n_v)
