@@ -18,7 +18,8 @@ from the eq. 4 guess to 1 cm, then the converged trajectory sampled every
   compiled form it accepts.
 
 Prints the time per right-hand-side evaluation of both; last line
-``targeting: <R>x faster than scipy DOP853``.
+``targeting: <R>x faster than scipy DOP853 with a compiled RHS`` (the NumPy-RHS
+ratio is the line before).
 """
 
 from __future__ import annotations
@@ -204,7 +205,9 @@ def main():
     per_sp = (time.perf_counter() - t) / m
     print(f"time per RHS evaluation (state + STM, degree 2 + SRP): ideas_hpc {per_nb * 1e9:.0f} ns, "
           f"numpy {per_sp * 1e6:.1f} us ({per_sp / per_nb:.0f}x)")
-    print(f"targeting: {t_sp / t_nb:.0f}x faster than scipy DOP853")
+    print(f"vs scipy DOP853 with the NumPy RHS: {t_sp / t_nb:.0f}x faster")
+    # the headline is the stronger peer: SciPy's stepper on the same compiled RHS
+    print(f"targeting: {t_sc / t_nb:.0f}x faster than scipy DOP853 with a compiled RHS")
 
 
 if __name__ == "__main__":
