@@ -15,12 +15,12 @@ P). Wall seconds are measured around the subprocess; on a shared machine they
 include other users' load (say so when reporting). Last line
 ``startup: cold <C> s, warm <W> s (<R>x)``.
 
-``--without-helper`` adds a third run, cold again on another empty cache with
-the precompile helper off (``IDEAS_HPC_NO_PRECOMPILE=1``), to show what the
-helper process saves.
+``--helper`` adds a third run, cold again on another empty cache with the
+opt-in precompile helper on (``IDEAS_HPC_PRECOMPILE=1``,
+:mod:`ideas_hpc.precompile`), to show what it saves or costs.
 
 Usage: ``python benchmarks/bench_startup.py [--campaign campaigns/eros-design.toml]
-[--set KEY=VALUE ...] [--workers N] [--without-helper]``.
+[--set KEY=VALUE ...] [--workers N] [--helper]``.
 """
 
 from __future__ import annotations
@@ -46,10 +46,11 @@ def _summary(stderr: str) -> list[str]:
 
 
 def run_job(campaign: Path, out: Path, cache: Path, sets, workers,
-            helper: bool = True) -> tuple[float, str]:
+            helper: bool = False) -> tuple[float, str]:
     env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), MPLBACKEND="Agg")
-    if not helper:
-        env["IDEAS_HPC_NO_PRECOMPILE"] = "1"
+    env.pop("IDEAS_HPC_PRECOMPILE", None)
+    if helper:
+        env["IDEAS_HPC_PRECOMPILE"] = "1"
     cmd = [sys.executable, "-m", "ideas_hpc.cli", "run", str(campaign), "--out", str(out),
            "--no-progress"]
     for s in sets:
@@ -69,8 +70,8 @@ def main(argv=None) -> None:
     ap.add_argument("--campaign", default=str(ROOT / "campaigns" / "eros-design.toml"))
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     ap.add_argument("--workers", type=int, default=None)
-    ap.add_argument("--without-helper", action="store_true",
-                    help="also run cold without the precompile helper (another empty cache)")
+    ap.add_argument("--helper", action="store_true",
+                    help="also run cold with the precompile helper (another empty cache)")
     a = ap.parse_args(argv)
     with tempfile.TemporaryDirectory(prefix="bench-startup-") as tmp:
         tmp = Path(tmp)
@@ -79,10 +80,10 @@ def main(argv=None) -> None:
         cold, err_c = run_job(Path(a.campaign), tmp / "cold.zarr", cache, a.set, a.workers)
         n_files = sum(1 for _ in cache.rglob("*.nbi"))
         warm, err_w = run_job(Path(a.campaign), tmp / "warm.zarr", cache, a.set, a.workers)
-        if a.without_helper:
+        if a.helper:
             (tmp / "cache2").mkdir()
             cold1, _ = run_job(Path(a.campaign), tmp / "cold1.zarr", tmp / "cache2", a.set,
-                               a.workers, helper=False)
+                               a.workers, helper=True)
     print(f"workload: {Path(a.campaign).name} {' '.join(a.set)} "
           f"(workers: {'job default' if a.workers is None else a.workers}); "
           f"machine load {os.getloadavg()[0]:.1f}")
@@ -92,9 +93,9 @@ def main(argv=None) -> None:
     same = _summary(err_c) == _summary(err_w)
     print(f"cold cache: {cold:.1f} s ({n_files} cached kernels written); warm cache: "
           f"{warm:.1f} s; same summary: {same}")
-    if a.without_helper:
-        print(f"cold cache without the precompile helper: {cold1:.1f} s "
-              f"(helper saves {cold1 - cold:.1f} s)")
+    if a.helper:
+        print(f"cold cache with the precompile helper (IDEAS_HPC_PRECOMPILE=1): {cold1:.1f} s "
+              f"(saves {cold - cold1:.1f} s)")
     if not same:
         sys.exit("cold and warm runs disagree:\n" + "\n".join(_summary(err_c)) + "\n--\n"
                  + "\n".join(_summary(err_w)))

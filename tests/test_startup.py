@@ -40,9 +40,13 @@ def test_precompile_helper_warms_the_kernels_the_job_calls(monkeypatch):
                                                   "coverage.occlusion=true"]))
     precompile.warm_kernels(setup)  # the helper's work, here
     assert precompile.cache_is_warm()
+    monkeypatch.setenv("IDEAS_HPC_PRECOMPILE", "1")
     assert precompile.start(setup) is None  # nothing to do on a warm cache
     calls = []
     monkeypatch.setattr(precompile, "cache_is_warm", lambda: False)
+    monkeypatch.delenv("IDEAS_HPC_PRECOMPILE")
+    assert precompile.start(setup) is None  # opt-in only
+    monkeypatch.setenv("IDEAS_HPC_PRECOMPILE", "1")
     monkeypatch.setattr(precompile.subprocess, "Popen",
                         lambda cmd, **kw: calls.append(cmd) or _Done())
     h = precompile.start(setup)
