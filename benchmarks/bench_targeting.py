@@ -10,9 +10,16 @@ from the eq. 4 guess to 1 cm, then the converged trajectory sampled every
 * reference: ``scipy.integrate.solve_ivp(method="DOP853")`` with a vectorised
   NumPy right-hand side (matrix products for the STM, closed-form degree-2
   gradient, NumPy Kepler solve for the Sun), one spacecraft after another.
+* second reference: the same SciPy loop with the project's own compiled
+  right-hand side (``@njit`` wrapper of :func:`ideas_hpc.core.propagate.rhs`,
+  the function the kernels integrate), so what remains is SciPy's stepper
+  overhead. ``solve_ivp`` takes a Python callable only (``LowLevelCallable``
+  is for ``quad``), so a jitted function called from Python is the closest
+  compiled form it accepts.
 
 Prints the time per right-hand-side evaluation of both; last line
-``targeting: <R>x faster than scipy DOP853``.
+``targeting: <R>x faster than scipy DOP853 with a compiled RHS`` (the NumPy-RHS
+ratio is the line before).
 """
 
 from __future__ import annotations
@@ -129,6 +136,23 @@ def _rhs_loop(n, y, dy, fi, ff):
     return dy[0]
 
 
+def best_of_3(fn):
+    """(best wall time of 3 calls, the last result)."""
+    best, out = math.inf, None
+    for _ in range(3):
+        t = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - t)
+    return best, out
+
+
+@njit(cache=True)
+def _compiled_rhs(t, y, fi, ff):
+    dy = np.empty_like(y)
+    P.rhs(t, y, dy, fi, ff)
+    return dy
+
+
 def main():
     body = load_body("eros")
     params = body.params
@@ -149,16 +173,22 @@ def main():
     pk = pack_force_model(body, fm)
     srp_coef = pk.ff[K_SRP]
     rhs = make_numpy_rhs(params, srp_coef)
-    t_sp = math.inf
-    for _ in range(3):
-        t = time.perf_counter()
-        ref, nfev_sp = scipy_target(rhs, r0, rt, t0, tf, res.times)
-        t_sp = min(t_sp, time.perf_counter() - t)
+    t_sp, (ref, nfev_sp) = best_of_3(lambda: scipy_target(rhs, r0, rt, t0, tf, res.times))
     dv = max(np.linalg.norm(ref[i][0] - res.v0_T[i]) for i in range(8))
     dpos = max(np.max(np.linalg.norm(ref[i][2][:3].T - res.position_T[i], axis=1)) for i in range(8))
     print(f"scipy DOP853 (best of 3): {t_sp * 1e3:.1f} ms ({nfev_sp} RHS evals in the Newton loops), all converged: "
           f"{all(r[1] for r in ref)}; max |dv0| vs ideas_hpc {dv:.2e} m/s, max sample "
           f"difference {dpos * 1e3:.4f} mm")
+
+    fi, ff = pk.args()
+    crhs = lambda t, y: _compiled_rhs(t, y, fi, ff)  # noqa: E731
+    crhs(0.0, np.concatenate([r0[0], res.v0_T[0], np.eye(6).ravel()]))
+    t_sc, (ref_c, nfev_c) = best_of_3(lambda: scipy_target(crhs, r0, rt, t0, tf, res.times))
+    dv_c = max(np.linalg.norm(ref_c[i][0] - res.v0_T[i]) for i in range(8))
+    print(f"scipy DOP853 + compiled RHS (best of 3): {t_sc * 1e3:.1f} ms ({nfev_c} RHS evals), "
+          f"all converged: {all(r[1] for r in ref_c)}; max |dv0| vs ideas_hpc {dv_c:.2e} m/s "
+          f"-> ideas_hpc {t_sc / t_nb:.0f}x faster, compiled RHS gives SciPy "
+          f"{t_sp / t_sc:.1f}x")
 
     # time per RHS evaluation (42 states)
     y = np.concatenate([r0[0], res.v0_T[0], np.eye(6).ravel()])
@@ -175,7 +205,9 @@ def main():
     per_sp = (time.perf_counter() - t) / m
     print(f"time per RHS evaluation (state + STM, degree 2 + SRP): ideas_hpc {per_nb * 1e9:.0f} ns, "
           f"numpy {per_sp * 1e6:.1f} us ({per_sp / per_nb:.0f}x)")
-    print(f"targeting: {t_sp / t_nb:.0f}x faster than scipy DOP853")
+    print(f"vs scipy DOP853 with the NumPy RHS: {t_sp / t_nb:.0f}x faster")
+    # the headline is the stronger peer: SciPy's stepper on the same compiled RHS
+    print(f"targeting: {t_sc / t_nb:.0f}x faster than scipy DOP853 with a compiled RHS")
 
 
 if __name__ == "__main__":

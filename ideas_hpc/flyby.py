@@ -351,14 +351,16 @@ def fly(setup: FlybySetup, theta, periods=None, *, sample: int = 0, ics=None,
 
 
 def fly_open_loop(setup: FlybySetup, theta, periods, r0_T, v0_T,
-                  perturbation: Perturbation = Perturbation()) -> FlybyOutcome:
+                  perturbation: Perturbation = Perturbation(), *,
+                  counts: bool = True) -> FlybyOutcome:
     """Fly a designed swarm open loop (no retargeting) through a perturbed world.
 
     The Monte Carlo sample: the start states ``r0_T``, ``v0_T`` (N, 3; m, m/s)
     targeted on the nominal model, plus the perturbation's state errors, are
     propagated through its gravity and SRP, its attitude initial conditions
     are flown, its camera misalignments applied and its failed spacecraft left
-    out of the coverage.
+    out of the coverage. ``counts=False`` skips the per-vertex image counts
+    (``times_seen`` is then 0/1; the coverage and first-seen times are the same).
     """
     th = np.asarray(theta, dtype=np.float64).ravel()
     p = perturbation
@@ -366,10 +368,10 @@ def fly_open_loop(setup: FlybySetup, theta, periods, r0_T, v0_T,
     v0 = v0_T if p.velocity_error_T is None else v0_T + p.velocity_error_T
     _, pos, _ = propagate_swarm(setup.body, r0, v0, setup.t0, setup.tf,
                                 force_model=setup.force_model, dt_sample=setup.dt,
-                                params_override=p.params_override)
+                                params_override=p.params_override, views=True)
     r_img = np.ascontiguousarray(pos[:, ::setup.image_every])
     mis = None if p.misalignment_prv is None else misalignment_dcms(p.misalignment_prv)
-    dcm, att, cov = _image(setup, th, periods, r_img, p.ics, mis, p.active, True)
+    dcm, att, cov = _image(setup, th, periods, r_img, p.ics, mis, p.active, counts)
     return FlybyOutcome(theta=th, periods=None if periods is None else np.asarray(periods),
                         targeting=None, image_times=setup.image_times, r_img_T=r_img,
                         dcm_BT=dcm, coverage=cov, attitude=att, position_T=pos)

@@ -233,7 +233,7 @@ def target_swarm(body, r0_T, r_target_T, t0, tf, *, force_model: ForceModel = Fo
 
 def propagate_swarm(body, r0_T, v0_T, t0, tf, *, force_model: ForceModel = ForceModel(),
                     dt_sample: float = 0.1, params_override=None,
-                    packed: PackedForceModel | None = None):
+                    packed: PackedForceModel | None = None, views: bool = False):
     """Fly every spacecraft from given initial states, without targeting.
 
     Monte Carlo use: the designed ``v0`` (from :func:`target_swarm` on the
@@ -243,7 +243,9 @@ def propagate_swarm(body, r0_T, v0_T, t0, tf, *, force_model: ForceModel = Force
     -------
     times : (T,) s
     position_T, velocity_T : (N, T, 3)
-        m and m/s, frame T.
+        m and m/s, frame T; contiguous copies, or with ``views=True`` strided
+        views of the integrator's ``(N, T, 6)`` states (no copy: a Monte Carlo
+        sample reads only the image positions and the arrival points).
 
     Raises
     ------
@@ -260,6 +262,8 @@ def propagate_swarm(body, r0_T, v0_T, t0, tf, *, force_model: ForceModel = Force
     if np.any(status != 0):
         bad = np.where(status != 0)[0].tolist()
         raise RuntimeError(f"propagation failed for spacecraft {bad} (status {status[bad]})")
+    if views:
+        return times, states[:, :, :3], states[:, :, 3:]
     return (times, np.ascontiguousarray(states[:, :, :3]),
             np.ascontiguousarray(states[:, :, 3:]))
 

@@ -169,3 +169,13 @@ def test_mc_on_existing_scheduler(one_worker, tmp_path):
         out = run_file(MC, out=tmp_path / "sched.zarr", overrides=SHORT,
                        scheduler=cluster.scheduler_address, progress=False)
     _same(xr.open_zarr(one_worker), xr.open_zarr(out))
+
+
+def test_mc_in_process_matches_one_worker(one_worker, tmp_path):
+    # workers=0 (and any job below IN_PROCESS_MAX_TESTS without a count) runs the
+    # chunk tasks in this process: same store as a dask worker writes
+    out = tmp_path / "w0.zarr"
+    run_file(MC, out=out, overrides=SHORT, workers=0, progress=False)
+    _same(xr.open_zarr(one_worker), xr.open_zarr(out))
+    assert done_mask(out).all()
+

@@ -49,3 +49,43 @@ def test_design_store_holds_the_verification(tmp_path):
     thr = ds.attrs["verify_threshold"]
     assert thr == ds.attrs["target_coverage"] - 0.001
     assert ds.attrs["verify_probability"] == np.mean(cov >= thr)
+
+
+def _counted_vs_uncounted(c, ks):
+    """Fly samples ``ks`` both ways; the counted path is the oracle (full scan)."""
+    from ideas_hpc.flyby import Perturbation
+    from ideas_hpc.montecarlo.dispersions import draw_sample
+    from ideas_hpc.montecarlo.sample import design_nominal, fly_sample
+
+    setup = setup_from_campaign(c)
+    nom = design_nominal(setup, c.config.swarm.angles_rad, None)
+    most = 0
+    for k in ks:
+        _, pert = draw_sample(c.config.monte_carlo, c.config.seed, k, nom.theta, setup)
+        full = fly_sample(setup, nom, Perturbation(**pert))
+        fast = fly_sample(setup, nom, Perturbation(**pert), counts=False)
+        most = max(most, int(full["times_seen"].max()))
+        assert fast["coverage"] == full["coverage"], k
+        assert fast["coverage_count"] == full["coverage_count"], k
+        assert np.array_equal(fast["observed"], full["times_seen"] > 0), k
+        assert np.array_equal(fast["first_seen"], full["first_seen"], equal_nan=True), k
+        assert np.array_equal(fast["times_seen"], (full["times_seen"] > 0).astype(np.int32))
+        assert 0.0 < full["coverage"] or not pert["active"].any(), k
+    assert most > 1  # the counted path really counted
+
+
+STRICT = ['attitude.mode="ideal"', 'coverage.mode="exact"', "coverage.occlusion=true",
+          "coverage.min_elevation_deg=5.0", "monte_carlo.failure_probability=0.3"]
+
+
+def test_uncounted_samples_have_the_counted_coverage_ellipsoid():
+    # the verification's no-counts path against full per-vertex counts, paper and strict
+    _counted_vs_uncounted(load(MC, SHORT + ["monte_carlo.failure_probability=0.3"]), range(3))
+    _counted_vs_uncounted(load(MC, SHORT + STRICT), range(3))
+
+
+def test_uncounted_samples_have_the_counted_coverage_eros(eros1708):
+    c = load(MC, ['body.name="eros"', "flyby.tf_s=300", "flyby.z_start_km=-20",
+                  "flyby.z_stop_km=20", "swarm.angles_rad=[0.2, 2.4, 4.4]"] + STRICT)
+    assert setup_from_campaign(c).body.shape.n_vertices == eros1708.shape.n_vertices
+    _counted_vs_uncounted(c, range(4))

@@ -56,8 +56,10 @@ def add_commands(sub) -> None:
     p.add_argument("--set", action="append", default=[], metavar="dotted.key=value",
                    help="override a campaign field (TOML value), repeatable")
     p.add_argument("--workers", type=int, default=None,
-                   help="local dask worker processes, or SLURM jobs (default: CPU count); "
-                        "0 runs GA designs in this process without dask")
+                   help="local dask worker processes, or SLURM jobs; 0 runs in this "
+                        "process without dask (default: in this process for jobs below "
+                        "2e10 vertex-image tests, else one worker per CPU; see "
+                        "ideas_hpc/engine/job_cluster.py)")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="use an existing dask scheduler (tcp://host:8786)")
     p.add_argument("--cluster", choices=("local", "slurm"), default="local",

@@ -11,11 +11,11 @@ swarm, and the store variables ``design_method``, ``solver_status``,
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 import sys
 import time
-from contextlib import nullcontext
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -25,8 +25,11 @@ from ..design.bank import grid_size, separation_steps
 from ..design import build_bank, coverage_curve, failure_tolerant, min_swarm, worst_failure
 from ..design.stereo import min_swarm_stereo, stereo_curve
 from ..design.stereo import scorer as stereo_scorer
+from ..engine.job_cluster import JobCluster, phase_client, visibility_tests
 from ..errors import InputError
+from ..candidates import candidate_masks
 from ..flyby import fly
+from .. import precompile
 from ..montecarlo.verify import verify_swarm
 from . import datasets
 from .vocabulary import requirement_line, verification_verdict
@@ -75,7 +78,11 @@ def failure_vars(bank, swarm_idx, k: int) -> dict:
 
 
 def design_exact(c, setup, client) -> ExactDesign:
-    """The certified NP design of a campaign (module docstring)."""
+    """The certified NP design of a campaign (module docstring).
+
+    ``client``: a :class:`distributed.Client`, None (this process) or the
+    job's :class:`~ideas_hpc.engine.job_cluster.JobCluster`.
+    """
     d = c.config.design
     eps = d.eps_tol_pct / 100.0
     k = d.failures_tolerated
@@ -87,6 +94,9 @@ def design_exact(c, setup, client) -> ExactDesign:
         raise c.error(exc.message, exc.field) from None
     stereo = setup.coverage.require_stereo      # grid size checked with the config
     t0 = time.perf_counter()
+    if not stereo:  # the pair table is one pass in this process
+        client = phase_client(client, functools.partial(candidate_masks, setup,
+                                                        [(0.0, 0.0, 0)]))
     bank = build_bank(setup, d.grid_step_rad, client=client, chunk_size=d.chunk_size,
                       quality=stereo, pairs=stereo)
     scorer = stereo_scorer(bank) if stereo else bank
@@ -180,8 +190,10 @@ def verification_vars(c, setup, theta, threshold: float, client) -> tuple[dict, 
     m = c.config.design.verify_samples
     if m == 0:
         return {}, {}, "Monte Carlo verification: off (design.verify_samples = 0)"
-    v = verify_swarm(setup, theta, None, mc=c.config.monte_carlo, seed=c.config.seed,
-                     n_samples=m, threshold=threshold, client=client)
+    kw = dict(mc=c.config.monte_carlo, seed=c.config.seed, threshold=threshold)
+    client = phase_client(client, functools.partial(verify_swarm, setup, theta, None,
+                                                    n_samples=1, **kw))
+    v = verify_swarm(setup, theta, None, n_samples=m, client=client, **kw)
     data = {"verify_coverage": (("verify_sample",), v.coverage),
             "verify_n_failed": (("verify_sample",), v.n_failed)}
     required = getattr(c.config.design, "success_probability", None)
@@ -195,12 +207,22 @@ def run_exact(c, setup, *, workers=None, scheduler=None, cluster="local",
               slurm_config=None) -> xr.Dataset:
     """Kind ``design-nadir``, method ``exact``: certified design, its Monte Carlo
     verification, then a flyby of it (the store)."""
-    from ..engine.cluster import connect
+    helper = precompile.start(setup)  # cold cache: later kernels compile alongside
+    try:
+        return _run_exact(c, setup, workers, scheduler, cluster, slurm_config)
+    finally:
+        if helper is not None:
+            helper.close()
 
-    local = workers == 0 and scheduler is None and cluster == "local"
-    with (nullcontext(None) if local else
-          connect(cluster=cluster, workers=workers, scheduler=scheduler,
-                  slurm_config=slurm_config)) as client:
+
+def _run_exact(c, setup, workers, scheduler, cluster, slurm_config) -> xr.Dataset:
+    d = c.config.design
+    n_img, n_v = setup.image_times.size, setup.body.shape.n_vertices
+    work = (visibility_tests(grid_size(d.grid_step_rad), 1, n_img, n_v)
+            + visibility_tests(d.verify_samples, d.n_max, n_img, n_v))
+    # one cluster at most, for every phase (masks, verification), when it pays back
+    with JobCluster(workers=workers, scheduler=scheduler, cluster=cluster,
+                    slurm_config=slurm_config, work=work) as client:
         res = design_exact(c, setup, client)
         _log(res.summary)
         for note in res.notes:

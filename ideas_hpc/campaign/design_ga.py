@@ -19,6 +19,8 @@ import numpy as np
 import xarray as xr
 
 from ..candidates import candidate_masks
+from ..design.bank import grid_size
+from ..engine.job_cluster import JobCluster, visibility_tests
 from ..errors import InputError
 from ..flyby import fly, setup_from_campaign, target
 from ..ga_local import GridCover
@@ -213,8 +215,6 @@ def design_fov(c: Campaign, setup, client):
 def run_design(c: Campaign, out: Path, *, workers=None, scheduler=None, cluster="local",
                slurm_config=None, **_) -> xr.Dataset:
     """Kinds ``design-nadir`` and ``design-fov``: GA, then a full flyby of the best swarm."""
-    from ..engine.cluster import connect
-
     setup = setup_from_campaign(c, maneuver="fov" if c.kind == "design-fov" else None)
     _log(f"body: {setup.body.note}")
     # A targeting failure is the user's to fix: find it here, in one line, rather
@@ -226,12 +226,16 @@ def run_design(c: Campaign, out: Path, *, workers=None, scheduler=None, cluster=
         return run_exact(c, setup, workers=workers, scheduler=scheduler, cluster=cluster,
                          slurm_config=slurm_config)
     design = design_nadir if c.kind == "design-nadir" else design_fov
-    if workers == 0 and scheduler is None and cluster == "local":
-        res, theta, periods = design(c, setup, None)  # in this process, no dask
-    else:
-        with connect(cluster=cluster, workers=workers, scheduler=scheduler,
-                     slurm_config=slurm_config) as client:
-            res, theta, periods = design(c, setup, client)
+    d = c.config.design
+    # distinct candidate flights the GA can ask for: at most every grid angle
+    # (nadir on a grid), at most every spacecraft of every individual
+    n_flights = d.population * d.generations * d.n_max
+    if c.kind == "design-nadir" and d.angle_step_rad > 0:
+        n_flights = min(n_flights, grid_size(d.angle_step_rad))
+    work = visibility_tests(n_flights, 1, setup.image_times.size, setup.body.shape.n_vertices)
+    with JobCluster(workers=workers, scheduler=scheduler, cluster=cluster,
+                    slurm_config=slurm_config, work=work) as job:
+        res, theta, periods = design(c, setup, job.client())
     wall = time.perf_counter() - t
     nadir = c.kind == "design-nadir"
     threshold = res.target_coverage - c.config.design.eps_tol_pct / 100.0

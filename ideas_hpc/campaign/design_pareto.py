@@ -31,7 +31,6 @@ import json
 import math
 import sys
 import time
-from contextlib import nullcontext
 
 import numpy as np
 import xarray as xr
@@ -41,6 +40,7 @@ from ..design import build_bank, coverage_curve
 from ..design.bank import grid_size, separation_steps
 from ..design.objectives import OBJECTIVES, check_objectives, evaluate
 from ..design.pareto import run_pareto
+from ..engine.job_cluster import JobCluster, visibility_tests
 from ..errors import InputError
 from ..flyby import setup_from_campaign, target
 from . import datasets
@@ -122,8 +122,6 @@ def exact_reference(bank, ds: xr.Dataset, n_max: int, sep: float, time_limit: fl
 def run_design_pareto(c, out, *, workers=None, scheduler=None, cluster="local",
                       slurm_config=None, **_) -> xr.Dataset:
     """Kind ``design-pareto``: bank, NSGA-II, the non-dominated set (module docstring)."""
-    from ..engine.cluster import connect
-
     d = c.config.design
     sep = c.config.swarm.min_separation_m
     try:
@@ -143,15 +141,15 @@ def run_design_pareto(c, out, *, workers=None, scheduler=None, cluster="local",
         separation_steps(2 * math.pi / n_grid, setup.d_sep, sep, n_grid)
     except InputError as exc:
         raise c.error(exc.message, exc.field) from None
-    local = workers == 0 and scheduler is None and cluster == "local"
     t0 = time.perf_counter()
-    with (nullcontext(None) if local else
-          connect(cluster=cluster, workers=workers, scheduler=scheduler,
-                  slurm_config=slurm_config)) as client:
+    work = visibility_tests(n_grid, 1, setup.image_times.size, setup.body.shape.n_vertices)
+    with JobCluster(workers=workers, scheduler=scheduler, cluster=cluster,
+                    slurm_config=slurm_config, work=work) as job:
         quality = bool({"stereo_coverage", "mean_resolution"} & set(names))
-        # stereo from two spacecraft needs the pair table
-        bank = build_bank(setup, d.grid_step_rad, client=client, chunk_size=d.chunk_size,
-                          quality=quality, pairs="stereo_coverage" in names)
+        # stereo from two spacecraft needs the pair table (one pass, no cluster)
+        pairs = "stereo_coverage" in names
+        bank = build_bank(setup, d.grid_step_rad, client=None if pairs else job.client(),
+                          chunk_size=d.chunk_size, quality=quality, pairs=pairs)
     t_masks = time.perf_counter() - t0
     _log(f"candidate masks: {bank.n_candidates} grid angles ({math.degrees(bank.step):g} deg) "
          f"in {t_masks:.1f} s")

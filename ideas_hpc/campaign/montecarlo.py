@@ -19,10 +19,12 @@ from __future__ import annotations
 
 import functools
 import sys
+from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
+from ..engine.job_cluster import JobCluster, visibility_tests
 from ..engine.runner import run_campaign
 from ..flyby import FlybySetup, Perturbation, setup_from_campaign
 from ..montecarlo.dispersions import DISPERSION_ORDER, DISPERSION_VARS, draw_sample
@@ -115,10 +117,16 @@ def run_monte_carlo(c: Campaign, out, *, workers=None, scheduler=None, resume=Fa
                            seed=c.config.seed)
     attrs = datasets.base_attrs(c, setup)
     attrs["dispersion_order"] = list(DISPERSION_ORDER)  # fixes the draw order
-    summary = run_campaign(out, template, fn, config=resolved_config(c),
-                           campaign_seed=c.config.seed, chunk_size=c.config.run.chunk_size,
-                           attrs=attrs, resume=resume,
-                           workers=workers, scheduler=scheduler, cluster=cluster,
-                           slurm_config=slurm_config, progress=progress)
+    work = visibility_tests(n, nom.theta.size, setup.image_times.size,
+                            setup.body.shape.n_vertices)
+    logs = Path(out).absolute().parent / f"{Path(out).name}.slurm-logs"
+    with JobCluster(workers=workers, scheduler=scheduler, cluster=cluster,
+                    slurm_config=slurm_config, work=work, log_directory=logs) as job:
+        # sample 0 here first: the workers load its kernels from the Numba cache
+        client = job.client(warm=functools.partial(fn, 0, 0, 1))
+        summary = run_campaign(out, template, fn, config=resolved_config(c),
+                               campaign_seed=c.config.seed,
+                               chunk_size=c.config.run.chunk_size, attrs=attrs, resume=resume,
+                               client=client, in_process=job.in_process, progress=progress)
     print(str(summary), file=sys.stderr, flush=True)
     return summary

@@ -54,7 +54,7 @@ def _lit(j, i, lc, px, py, pz, nx, ny, nz, sun_T, node_bounds, node_info, tri, t
         ok = sx * nx + sy * ny + sz * nz > 0.0
         if ok:
             ok = not segment_blocked(node_bounds, node_info, tri, tri_vid, px, py, pz,
-                                     sx, sy, sz, np.inf, j)
+                                     sx, sy, sz, np.inf, np.int64(j))
         lc[i] = 1 if ok else 2
     return lc[i] == 1
 

@@ -24,6 +24,12 @@ from numba import njit, prange
 
 from .propagate import STATUS_OK, propagate
 
+# ``with_stm`` as a plain (not literal) bool: numba types a literal True/False
+# argument as ``Literal[bool]`` and compiled the whole integrator twice (one
+# specialisation per flag value) on a cold cache.
+STM = np.bool_(True)
+NO_STM = np.bool_(False)
+
 
 @njit(cache=True)
 def _solve3(m, b, out):
@@ -99,7 +105,7 @@ def target_one(r0, r_target, t0, tf, tol, max_iter, rtol, atol, max_steps,
     k = 0
     converged = False
     while True:
-        y, nf, status = propagate(r0, v0, t0, tf, True, rtol, atol, empty_t, empty_y,
+        y, nf, status = propagate(r0, v0, t0, tf, STM, rtol, atol, empty_t, empty_y,
                                   max_steps, fi, ff)
         nfev += nf
         if status != STATUS_OK:
@@ -170,7 +176,7 @@ def target_batch(r0, r_target, t0, tf, tol, max_iter, rtol, atol, max_steps, t_o
         n_iter[i] = k
         converged[i] = ok
         nfev[i] = nf
-        propagate(r0[i], v0[i], t0, tf, False, rtol, atol, t_out, states[i], max_steps,
+        propagate(r0[i], v0[i], t0, tf, NO_STM, rtol, atol, t_out, states[i], max_steps,
                   fi, ff)
     return v0, miss, n_iter, converged, states, nfev
 
@@ -195,7 +201,7 @@ def propagate_batch(r0, v0, t0, tf, rtol, atol, max_steps, t_out,
     states = np.full((n, t_out.shape[0], 6), np.nan)
     status = np.zeros(n, dtype=np.int64)
     for i in prange(n):
-        y, nf, st = propagate(r0[i], v0[i], t0, tf, False, rtol, atol, t_out, states[i],
+        y, nf, st = propagate(r0[i], v0[i], t0, tf, NO_STM, rtol, atol, t_out, states[i],
                               max_steps, fi, ff)
         status[i] = st
     return states, status

@@ -95,11 +95,11 @@ def _seen(j, k, i, vertices, normals, r_T, dcm_BT, tan_eta, near, far, exact,
             return False
     if occlusion:
         if segment_blocked(node_bounds, node_info, tri, tri_vid, px, py, pz,
-                           -dx, -dy, -dz, 1.0, j):
+                           -dx, -dy, -dz, 1.0, np.int64(j)):
             return False
     if illumination:
         if segment_blocked(node_bounds, node_info, tri, tri_vid, px, py, pz,
-                           sun_T[i, 0], sun_T[i, 1], sun_T[i, 2], np.inf, j):
+                           sun_T[i, 0], sun_T[i, 1], sun_T[i, 2], np.inf, np.int64(j)):
             return False
     return True
 

@@ -112,7 +112,8 @@ def _run_chunk(store_path: str, chunk_fn: ChunkFn, chunk_id: int, start: int,
 def run_chunks(store_path: str | os.PathLike, chunk_fn: ChunkFn, plan: ChunkPlan | None = None,
                *, resume: bool = False, workers: int | None = None, scheduler: str | None = None,
                cluster: str = "local", slurm_config: str | os.PathLike | None = None,
-               progress: bool = True, retries: int = 2, client=None) -> RunSummary:
+               progress: bool = True, retries: int = 2, client=None,
+               in_process: bool = False) -> RunSummary:
     """Run every not-done chunk of a store, one dask task each.
 
     Parameters
@@ -134,6 +135,10 @@ def run_chunks(store_path: str | os.PathLike, chunk_fn: ChunkFn, plan: ChunkPlan
         How many times dask re-runs a chunk task that raised.
     client : distributed.Client, optional
         Use this client instead of starting or connecting to a cluster.
+    in_process : bool
+        Without a client: run the chunk tasks one after the other in this
+        process (same tasks, writes, retries and gate), no dask
+        (:mod:`ideas_hpc.engine.job_cluster` decides when a job is that small).
 
     Returns
     -------
@@ -164,6 +169,8 @@ def run_chunks(store_path: str | os.PathLike, chunk_fn: ChunkFn, plan: ChunkPlan
         if todo:
             if client is not None:
                 _submit_all(client, path, chunk_fn, todo, summary, progress, retries)
+            elif in_process:
+                _run_all_here(path, chunk_fn, todo, summary, progress, retries)
             else:
                 logs = path.absolute().parent / f"{path.name}.slurm-logs"
                 with connect(cluster=cluster, workers=workers, scheduler=scheduler,
@@ -211,6 +218,33 @@ def _submit_all(client, path: Path, chunk_fn: ChunkFn, todo, summary: RunSummary
     finally:
         bar.close()
     summary.failed.sort()
+
+
+def _run_all_here(path: Path, chunk_fn: ChunkFn, todo, summary: RunSummary, progress: bool,
+                  retries: int) -> None:
+    """:func:`_submit_all` without dask: the same tasks in this process, in order."""
+    from tqdm.auto import tqdm
+
+    summary.n_workers = 0
+    gate = gate_from_env()
+    with tqdm(total=summary.n_chunks, initial=summary.chunks_skipped, unit="chunk",
+              desc=path.name, disable=not progress, dynamic_ncols=True) as bar:
+        for cid, start, stop in todo:
+            for attempt in range(retries + 1):
+                try:
+                    _cid, n, t_c, t_w = _run_chunk(str(path), chunk_fn, cid, start, stop, gate)
+                except Exception as exc:  # noqa: BLE001 - recorded like a failed dask task
+                    if attempt < retries:
+                        continue
+                    summary.failed.append(cid)
+                    summary.errors.append(f"chunk {cid}: {type(exc).__name__}: {exc}")
+                else:
+                    summary.chunks_run += 1
+                    summary.samples_run += n
+                    summary.compute_s += t_c
+                    summary.write_s += t_w
+                break
+            bar.update(1)
 
 
 def _accepts_n_workers(client) -> bool:

@@ -39,9 +39,15 @@ def design_nominal(setup: FlybySetup, theta, periods) -> Nominal:
                    tg.times, tg.position_T, tg.velocity_T, tg.miss)
 
 
-def fly_sample(setup: FlybySetup, nom: Nominal, pert: Perturbation) -> dict:
-    """One Monte Carlo sample: the flyby pipeline with the sample's perturbation."""
-    f = fly_open_loop(setup, nom.theta, nom.periods, nom.r0_T, nom.v0_T, pert)
+def fly_sample(setup: FlybySetup, nom: Nominal, pert: Perturbation, *,
+               counts: bool = True) -> dict:
+    """One Monte Carlo sample: the flyby pipeline with the sample's perturbation.
+
+    ``counts=False`` when ``times_seen`` is not stored (the verification): the
+    coverage kernel then stops each vertex's scan at its first sighting, and
+    every other output is unchanged (``times_seen`` is 0/1).
+    """
+    f = fly_open_loop(setup, nom.theta, nom.periods, nom.r0_T, nom.v0_T, pert, counts=counts)
     cov = f.coverage
     out = {"coverage": cov.coverage, "coverage_count": cov.coverage_count,
            "coverage_seen": cov.coverage_seen, **quality_arrays(cov),
