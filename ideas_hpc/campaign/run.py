@@ -47,9 +47,8 @@ def run_file(path, *, out=None, overrides=None, workers=None, scheduler=None, re
 
 def _check_execution(out: Path, workers, w_field: str, kind, scheduler) -> None:
     """Refuse a bad ``--workers`` or ``--out`` before anything is computed or written."""
-    if workers is not None and scheduler is None and (workers < 0 or (workers == 0 and kind.chunked)):
-        need = ">= 1" if kind.chunked else ">= 0 (0: in this process)"
-        raise InputError(f"must be {need} for kind {kind.name!r}, got {workers}", field=w_field)
+    if workers is not None and scheduler is None and workers < 0:
+        raise InputError(f"must be >= 0 (0: in this process), got {workers}", field=w_field)
     if out.exists() and not out.is_dir():
         raise InputError(f"{out} is an existing file, not a store; choose another --out",
                          field="--out")
