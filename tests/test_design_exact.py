@@ -229,7 +229,8 @@ def test_time_limit_returns_best_so_far_with_gap(eros1708):
     """Strict eros001708, k = 1, a budget spent before the failure programme starts (1 ns):
     a tolerant swarm (greedy completion) with its gap to the proven bound."""
     bank = eros_bank(True, 0.5)
-    res = failure_tolerant(bank, 1, target=min(1.0, bank.reach), eps_tol=EPS, n_max=20,
+    # n_max 40: the greedy completion needs 21 (the optimum is far fewer)
+    res = failure_tolerant(bank, 1, target=min(1.0, bank.reach), eps_tol=EPS, n_max=40,
                            time_limit=1e-9)
     assert res.status == "time_limit" and res.gap > 0.0
     assert res.bound <= res.n and res.gap == pytest.approx((res.n - res.bound) / res.n)
@@ -245,7 +246,7 @@ def test_time_limit_without_incumbent_falls_back_to_a_greedy_design():
     # a time-limited design with its gap to the proven bound, not a traceback.
     from types import SimpleNamespace
 
-    from ideas_hpc.design.exact import _min_result, greedy_cover, prepare
+    from ideas_hpc.design.exact import _min_result, greedy_cover, greedy_swarm, prepare
 
     bank = _toy(2)
     need = bank.reach - 0.02
@@ -258,12 +259,16 @@ def test_time_limit_without_incumbent_falls_back_to_a_greedy_design():
     assert "greedy" in res.notes[0]
     exact = min_swarm(bank, target=bank.reach, eps_tol=0.02)
     assert res.n >= exact.n  # never better than the optimum
-    # separation respected by the greedy cover (2 grid steps)
-    idx = greedy_cover(bank, need, 2, None)
-    if idx is not None:
-        d = np.abs(idx[:, None] - idx[None, :])
-        d = np.minimum(d, bank.n_candidates - d)
-        assert (d[np.triu_indices(idx.size, 1)] > 2).all()
+    # separation respected by the greedy cover (2 grid steps), asked for what it can reach
+    # with that separation (the need above it cannot: it returns None)
+    assert greedy_cover(bank, need, 2, None) is None
+    reach_sep = greedy_swarm(bank, 2, None)[1]
+    idx = greedy_cover(bank, reach_sep, 2, None)
+    assert idx is not None and idx.size >= 3
+    assert subset_coverage(bank.masks, bank.areas, idx[None, :])[0] >= reach_sep - 1e-12
+    d = np.abs(idx[:, None] - idx[None, :])
+    d = np.minimum(d, bank.n_candidates - d)
+    assert (d[np.triu_indices(idx.size, 1)] > 2).all()
 
 
 def test_max_coverage_without_incumbent_gives_the_greedy_swarm_and_its_gap(monkeypatch):

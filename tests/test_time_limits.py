@@ -22,6 +22,7 @@ import ideas_hpc.design.exact as ex
 import ideas_hpc.design.stereo as st
 from design_oracle import subset_coverage
 from ideas_hpc.design import CandidateBank, coverage_curve, failure_tolerant, min_swarm
+from ideas_hpc.errors import InputError
 from test_design_stereo import _bank as stereo_bank
 from test_design_stereo import _best as stereo_best
 from test_design_stereo import _truth as stereo_truth
@@ -152,3 +153,14 @@ def test_stereo_designer_timed_out(monkeypatch, incumbent):
     assert 1 <= res.bound <= n_true <= res.n
     assert res.gap == pytest.approx((res.n - res.bound) / res.n)
     assert stereo_truth(sb, res.indices) >= need - 1e-12
+
+
+def test_failure_tolerant_out_of_time_and_n_max_names_the_time_limit():
+    # The greedy completion after a spent budget needs 11 spacecraft, one more than the
+    # optimum 10 = n_max: an input error naming the time limit, not a traceback.
+    bank = _toy()
+    assert failure_tolerant(bank, 1, target=bank.reach, eps_tol=EPS, n_max=10,
+                            time_limit=600).n == 10
+    with pytest.raises(InputError, match="within the time limit") as ei:
+        failure_tolerant(bank, 1, target=bank.reach, eps_tol=EPS, n_max=10, time_limit=BINDS)
+    assert ei.value.field == "design.time_limit_s"
