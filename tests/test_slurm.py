@@ -136,21 +136,30 @@ def test_unreachable_controller_fails_in_ci_and_skips_outside(monkeypatch):
     def hang(cmd, **kw):
         raise subprocess.TimeoutExpired(cmd, kw.get("timeout"))
 
+    def outcome():   # caught here: a skip must not end this test as skipped
+        try:
+            require_slurm()
+        except pytest.fail.Exception as exc:
+            return "fail", str(exc)
+        except pytest.skip.Exception as exc:
+            return "skip", str(exc)
+        return "run", ""
+
     monkeypatch.setattr(shutil, "which", lambda name: "/usr/bin/" + name)
     monkeypatch.setattr(subprocess, "run", hang)
     _slurm_unreachable.cache_clear()
     try:
         monkeypatch.setenv("CI", "true")
-        with pytest.raises(pytest.fail.Exception, match="did not answer within 20 s"):
-            require_slurm()
+        got = outcome()
+        assert got[0] == "fail" and "did not answer within 20 s" in got[1], got
         monkeypatch.delenv("CI")
-        with pytest.raises(pytest.skip.Exception, match="did not answer within 20 s"):
-            require_slurm()
+        got = outcome()
+        assert got[0] == "skip" and "did not answer within 20 s" in got[1], got
         monkeypatch.setattr(shutil, "which", lambda name: None)
         _slurm_unreachable.cache_clear()
         monkeypatch.setenv("CI", "true")
-        with pytest.raises(pytest.fail.Exception, match="not on PATH"):
-            require_slurm()
+        got = outcome()
+        assert got[0] == "fail" and "not on PATH" in got[1], got
     finally:
         _slurm_unreachable.cache_clear()
 
