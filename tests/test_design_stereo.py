@@ -106,18 +106,21 @@ def test_stereo_campaign_end_to_end_flown_coverage_meets_the_design(tmp_path, er
     from ideas_hpc.campaign.run import run_file
 
     campaign = Path(__file__).resolve().parent.parent / "campaigns" / "eros-stereo-design.toml"
+    # eps_tol 5 %: the programme proves N in ~20 s (loaded machine); 600 s is far above
+    # need, so optimality is asserted (the time-limited branch: tests/test_time_limits.py)
     sets = ["design.angle_step_deg=12", "design.n_max=20", "design.verify_samples=0",
-            "design.time_limit_s=20", "run.workers=0"]
+            "design.eps_tol_pct=5.0", "design.time_limit_s=600", "run.workers=0"]
     ds = xr.open_zarr(run_file(campaign, out=tmp_path / "s.zarr", overrides=sets))
     assert str(ds["design_method"].values) == "exact"
     flown = float(ds["coverage"].values.ravel()[0])
     assert flown == pytest.approx(float(ds["design_coverage"]), abs=1e-12)
-    need = ds.attrs["target_coverage"] - 0.001
+    need = ds.attrs["target_coverage"] - 0.05
     assert flown >= need - 1e-12
     assert float(ds["coverage_seen"].values.ravel()[0]) >= flown
     assert int(ds["best_swarm_size"]) >= 2               # stereo needs two spacecraft here
-    gap = float(ds["optimality_gap"])
-    assert (str(ds["solver_status"].values) == "optimal") == (gap == 0.0)
+    assert str(ds["solver_status"].values) == "optimal"
+    assert float(ds["optimality_gap"]) == 0.0
+    assert float(ds["proven_bound"]) == int(ds["best_swarm_size"])
 
 
 def test_stereo_ga_campaign_scores_pairs_and_states_its_gap(tmp_path, eros1708):

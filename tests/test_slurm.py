@@ -9,6 +9,7 @@
 
 from __future__ import annotations
 
+import functools
 import os
 import shutil
 import subprocess
@@ -92,19 +93,75 @@ def test_slurm_config_errors(tmp_path):
 
 # ------------------------------------------------------------------ real SLURM
 
-def _idle_node() -> bool:
+@functools.lru_cache(maxsize=1)
+def _slurm_unreachable() -> str | None:
+    """None when the controller answers with an idle node, else why it does not."""
     if shutil.which("sinfo") is None:
-        return False
+        return "sinfo is not on PATH"
     try:
         out = subprocess.run(["sinfo", "-h", "-o", "%T"], capture_output=True, text=True,
                              timeout=20)
-    except (OSError, subprocess.SubprocessError):
-        return False
-    return out.returncode == 0 and any(s.strip() in ("idle", "mixed") for s in out.stdout.split())
+    except subprocess.TimeoutExpired:
+        return "sinfo did not answer within 20 s (controller hung?)"
+    except (OSError, subprocess.SubprocessError) as exc:
+        return f"sinfo failed: {exc}"
+    if out.returncode != 0:
+        return f"sinfo exited with {out.returncode}: {out.stderr.strip()[:200]}"
+    if not any(s.strip() in ("idle", "mixed") for s in out.stdout.split()):
+        return f"no idle node (sinfo says {out.stdout.split()!r})"
+    return None
 
 
-needs_slurm = pytest.mark.skipif(not _idle_node(), reason="no SLURM controller with an idle node "
-                                 "(start one with slurm/ci_local_slurm.sh start)")
+def require_slurm() -> None:
+    """Skip when no SLURM controller answers, with the reason; in CI (``CI=true``, as
+    ``.ci/run`` sets it) fail instead, so that a hung or missing controller is not green."""
+    why = _slurm_unreachable()
+    if why is None:
+        return
+    if os.environ.get("CI", "").strip().lower() in ("true", "1", "yes"):
+        pytest.fail(f"CI needs the SLURM controller: {why}", pytrace=False)
+    pytest.skip(f"no SLURM controller with an idle node: {why} "
+                "(start one with slurm/ci_local_slurm.sh start)")
+
+
+@pytest.fixture
+def slurm_controller():
+    require_slurm()
+
+
+needs_slurm = pytest.mark.usefixtures("slurm_controller")
+
+
+def test_unreachable_controller_fails_in_ci_and_skips_outside(monkeypatch):
+    def hang(cmd, **kw):
+        raise subprocess.TimeoutExpired(cmd, kw.get("timeout"))
+
+    def outcome():   # caught here: a skip must not end this test as skipped
+        try:
+            require_slurm()
+        except pytest.fail.Exception as exc:
+            return "fail", str(exc)
+        except pytest.skip.Exception as exc:
+            return "skip", str(exc)
+        return "run", ""
+
+    monkeypatch.setattr(shutil, "which", lambda name: "/usr/bin/" + name)
+    monkeypatch.setattr(subprocess, "run", hang)
+    _slurm_unreachable.cache_clear()
+    try:
+        monkeypatch.setenv("CI", "true")
+        got = outcome()
+        assert got[0] == "fail" and "did not answer within 20 s" in got[1], got
+        monkeypatch.delenv("CI")
+        got = outcome()
+        assert got[0] == "skip" and "did not answer within 20 s" in got[1], got
+        monkeypatch.setattr(shutil, "which", lambda name: None)
+        _slurm_unreachable.cache_clear()
+        monkeypatch.setenv("CI", "true")
+        got = outcome()
+        assert got[0] == "fail" and "not on PATH" in got[1], got
+    finally:
+        _slurm_unreachable.cache_clear()
 
 
 @pytest.fixture(scope="module")

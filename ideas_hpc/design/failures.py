@@ -160,8 +160,9 @@ def failure_tolerant(bank: CandidateBank, k: int, *, target: float, eps_tol: flo
         best = _greedy_complete(bank, plain.indices, k, need, n_max)
         notes.append("out of time: greedy completion of the plain optimum")
         if best is None:
-            raise RuntimeError(f"no {k}-failure-tolerant swarm found within "
-                               f"design.time_limit_s (lower bound {bound} spacecraft)")
+            raise InputError(f"no {k}-failure-tolerant swarm of at most {n_max} found "
+                             f"within the time limit (lower bound {bound} spacecraft); raise "
+                             "design.time_limit_s or design.n_max", field="design.time_limit_s")
     if rounds and k == 1:
         notes.append(f"all {len(scen)} single failures in one integer programme")
     elif rounds:
