@@ -120,3 +120,26 @@ def test_streams_share_no_seed():
                                progress=False)
     assert bank.attrs["scenario_stream"] == SCENARIO_STREAM
     assert bank.attrs["validation_stream"] == VALIDATION_STREAM
+
+
+@pytest.mark.parametrize("sets", [[], ['coverage.mode="paper"', "coverage.occlusion=false",
+                                       "coverage.min_elevation_deg=0.0"]],
+                         ids=["strict", "paper"])
+def test_fast_rows_equal_full_recomputation_on_eros(eros1708, sets):
+    # The witness / budget-window / face-cone shortcuts against the flyby pipeline
+    # recomputing every row of the perturbed flight, on the real (concave) Eros.
+    from ideas_hpc.montecarlo.scenario_rows import full_rows
+    from ideas_hpc.montecarlo.scenarios import grid_theta, row_engine
+
+    c = load(DESIGN, sets)
+    setup = setup_from_campaign(c)
+    mc = c.config.monte_carlo
+    theta = grid_theta(np.deg2rad(3.0))
+    eng = row_engine(setup, theta, mc, 11, SCENARIO_STREAM)
+    for s in (1, 2):
+        pert = Perturbation(**draw_world(mc, setup, theta, 11, SCENARIO_STREAM, s))
+        fast = eng.rows(*eng.flight(pert))
+        full = full_rows(setup, theta, None, eng.r0_T, eng.v0_T, pert)
+        np.testing.assert_array_equal(fast, full)
+        assert full.any() and not full.all()
+        assert (full != (eng.witness >= 0)).any()     # the scenario moved footprints

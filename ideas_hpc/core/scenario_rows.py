@@ -41,7 +41,7 @@ import numpy as np
 from numba import njit, prange
 
 from .time_tree import LEAF, _FP, _classify, _scan, time_tree
-from .segments import segment_hit
+from .segments import face_blocks_cone, segment_hit
 from .visibility import _seen
 
 #: Bound on ||C'||_2 for the flown rotation matrices (checked by the boundary layer).
@@ -232,6 +232,90 @@ def _seen_hint(j, k, i, hint, vertices, normals, r_T, dcm_BT, tan_eta, near, far
     return True
 
 
+@njit(cache=True, inline="always")
+def _below_elevation(NF, k, node, px, py, pz, nx, ny, nz, nabs, sin_min_elev, max_range):
+    """True when every image of the node fails the elevation or the range test.
+
+    With ``|r_k - r_m| <= e_r``: ``(r_k - p) . n <= (r_m - p) . n + |n| e_r`` and
+    ``|r_k - p| >= |r_m - p| - e_r``.
+    """
+    vx = NF[k, node, 9] - px
+    vy = NF[k, node, 10] - py
+    vz = NF[k, node, 11] - pz
+    dist = np.sqrt(vx * vx + vy * vy + vz * vz)
+    er = NF[k, node, 14]
+    fp = _FP * (dist + er + NF[k, node, 12])
+    if dist - er - fp > max_range:
+        return True
+    if sin_min_elev <= 0.0:
+        return False
+    los_hi = vx * nx + vy * ny + vz * nz + nabs * er + fp
+    return los_hi < (dist - er - fp) * sin_min_elev
+
+
+@njit(cache=True, inline="always")
+def _scan_range(j, k, a, b, NF, NI, stack, hint, vertices, normals, r_T, dcm_BT, tan_eta,
+                sec_eta, near, far, exact, strict, sin_min_elev, max_range, occlusion,
+                illumination, sun_T, node_bounds, node_info, tri, tri_vid):
+    """Does spacecraft ``k`` see vertex ``j`` in an image ``a <= i < b``? Exact.
+
+    Walks the perturbed flight's time tree: a node failing culling or clipping
+    with margin is skipped (:func:`~ideas_hpc.core.time_tree._classify`), and so
+    is a node whose sight lines all lie in a cone the last blocking face
+    ``hint[0]`` covers (:func:`~ideas_hpc.core.segments.face_blocks_cone`); leaf
+    images are tested one by one (:func:`_seen_hint`).
+    """
+    px = vertices[j, 0]
+    py = vertices[j, 1]
+    pz = vertices[j, 2]
+    nx = normals[j, 0]
+    ny = normals[j, 1]
+    nz = normals[j, 2]
+    nabs = np.sqrt(nx * nx + ny * ny + nz * nz)
+    sp = 1
+    stack[0] = NI.shape[0] - 1
+    while sp > 0:
+        sp -= 1
+        node = stack[sp]
+        i0 = NI[node, 0]
+        i1 = NI[node, 1]
+        if i1 <= a or i0 >= b:
+            continue
+        cls = _classify(NF, k, node, px, py, pz, nx, ny, nz, nabs, tan_eta, sec_eta, near,
+                        far, exact)
+        if cls == 0:
+            continue
+        if cls == 2 and not strict and i0 >= a and i1 <= b:
+            return True
+        if sin_min_elev > -1.0 or max_range < np.inf:
+            if _below_elevation(NF, k, node, px, py, pz, nx, ny, nz, nabs, sin_min_elev,
+                                max_range):
+                continue
+        if occlusion and hint[0] >= 0:
+            vx = NF[k, node, 9] - px
+            vy = NF[k, node, 10] - py
+            vz = NF[k, node, 11] - pz
+            dist = np.sqrt(vx * vx + vy * vy + vz * vz)
+            er = NF[k, node, 14]
+            if er < 0.5 * dist and face_blocks_cone(tri, tri_vid, hint[0], j, px, py, pz,
+                                                    vx / dist, vy / dist, vz / dist,
+                                                    np.arcsin(er / dist), dist - er):
+                continue
+        if NI[node, 2] >= 0:
+            if NI[node, 3] >= 0:
+                stack[sp] = NI[node, 3]
+                sp += 1
+            stack[sp] = NI[node, 2]
+            sp += 1
+            continue
+        for i in range(max(i0, a), min(i1, b)):
+            if _seen_hint(j, k, i, hint, vertices, normals, r_T, dcm_BT, tan_eta, near, far,
+                          exact, sin_min_elev, max_range, occlusion, illumination, sun_T,
+                          node_bounds, node_info, tri, tri_vid):
+                return True
+    return False
+
+
 @njit(cache=True, parallel=True)
 def perturbed_rows(witness, window, i_ok, vertices, normals, r_T, dcm_BT, tan_eta, near, far,
                    exact, sin_min_elev, max_range, occlusion, illumination, sun_T, node_bounds,
@@ -243,17 +327,14 @@ def perturbed_rows(witness, window, i_ok, vertices, normals, r_T, dcm_BT, tan_et
     with the same budget; other arguments as
     :func:`ideas_hpc.core.coverage.observed_by_spacecraft`, for the perturbed flight.
     A (candidate, vertex) not settled by its witness image is scanned exactly
-    over the images before ``i_ok`` (time tree of the perturbed flight) and
-    over its window from ``i_ok`` on (image by image, the occlusion query
-    starting at the face that blocked the previous image).
+    over the images before ``i_ok`` and over its window from ``i_ok`` on
+    (:func:`_scan_range`).
     """
     nv = vertices.shape[0]
     nsc = r_T.shape[0]
-    nimg = r_T.shape[1]
     NF, NI = time_tree(r_T, dcm_BT, LEAF)
     sec_eta = np.sqrt(1.0 + tan_eta * tan_eta) * (1.0 + 1e-12)
     strict = occlusion or illumination or sin_min_elev > -1.0 or max_range < np.inf
-    idx = np.arange(nimg).astype(np.float64)
     mask = np.zeros((nsc, nv), dtype=np.bool_)
     for j in prange(nv):
         stack = np.empty(128, dtype=np.int64)
@@ -265,22 +346,16 @@ def perturbed_rows(witness, window, i_ok, vertices, normals, r_T, dcm_BT, tan_et
                                 sun_T, node_bounds, node_info, tri, tri_vid):
                 mask[k, j] = True
                 continue
-            seen = False
-            if i_ok[k] > 0:
-                c, _ = _scan(j, k, NF, NI, stack, idx, float(i_ok[k]), True, vertices, normals,
-                             r_T, dcm_BT, tan_eta, sec_eta, near, far, exact, strict,
-                             sin_min_elev, max_range, occlusion, illumination, sun_T,
-                             node_bounds, node_info, tri, tri_vid)
-                seen = c > 0
-            lo = max(window[k, j, 0], i_ok[k])
-            hi = window[k, j, 1]
-            if window[k, j, 0] >= 0:
-                hint[0] = -1
-                for i in range(lo, hi + 1):
-                    if seen:
-                        break
-                    seen = _seen_hint(j, k, i, hint, vertices, normals, r_T, dcm_BT, tan_eta,
-                                      near, far, exact, sin_min_elev, max_range, occlusion,
-                                      illumination, sun_T, node_bounds, node_info, tri, tri_vid)
+            hint[0] = -1
+            seen = _scan_range(j, k, 0, i_ok[k], NF, NI, stack, hint, vertices, normals,
+                               r_T, dcm_BT, tan_eta, sec_eta, near, far, exact, strict,
+                               sin_min_elev, max_range, occlusion, illumination, sun_T,
+                               node_bounds, node_info, tri, tri_vid)
+            if not seen and window[k, j, 0] >= 0:
+                seen = _scan_range(j, k, max(window[k, j, 0], i_ok[k]), window[k, j, 1] + 1,
+                                   NF, NI, stack, hint, vertices, normals, r_T, dcm_BT,
+                                   tan_eta, sec_eta, near, far, exact, strict, sin_min_elev,
+                                   max_range, occlusion, illumination, sun_T, node_bounds,
+                                   node_info, tri, tri_vid)
             mask[k, j] = seen
     return mask

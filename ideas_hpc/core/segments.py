@@ -170,3 +170,71 @@ def segments_blocked(node_bounds, node_info, tri, tri_vid, origins, targets, ski
                                  targets[k, 1] - origins[k, 1],
                                  targets[k, 2] - origins[k, 2], 1.0, skip[k])
     return out
+
+
+@njit(cache=True, inline="always")
+def face_blocks_cone(tri, tri_vid, f, skip_vertex, px, py, pz, ax, ay, az, alpha, length):
+    """True only when every segment from ``p`` (m) of length ``>= length`` (m) whose
+    direction is within ``alpha`` (rad) of the unit axis ``a`` crosses face ``f``
+    as :func:`segment_blocked` counts it (so all of them are blocked).
+
+    The directions from ``p`` to the face form a spherical triangle (``p`` off
+    the face's plane by more than 1e-6 m); the cone lies inside it when the
+    axis is inside and its angular distance to each edge's great circle
+    exceeds ``alpha`` (inflated by 1e-9 rad, relative and absolute, far above
+    the rounding of the Moller-Trumbore test). The crossing point is a convex
+    combination of the corners, so it is nearer than the farthest corner,
+    which must be nearer than ``length``.
+    """
+    if f < 0 or tri_vid[f, 0] == skip_vertex or tri_vid[f, 1] == skip_vertex \
+            or tri_vid[f, 2] == skip_vertex:
+        return False
+    x0 = tri[f, 0] - px
+    y0 = tri[f, 1] - py
+    z0 = tri[f, 2] - pz
+    x1 = x0 + tri[f, 3]
+    y1 = y0 + tri[f, 4]
+    z1 = z0 + tri[f, 5]
+    x2 = x0 + tri[f, 6]
+    y2 = y0 + tri[f, 7]
+    z2 = z0 + tri[f, 8]
+    n0 = np.sqrt(x0 * x0 + y0 * y0 + z0 * z0)
+    n1 = np.sqrt(x1 * x1 + y1 * y1 + z1 * z1)
+    n2 = np.sqrt(x2 * x2 + y2 * y2 + z2 * z2)
+    if not max(n0, n1, n2) * (1.0 + 1e-9) < length:
+        return False
+    # distance from p to the face's plane
+    cx = tri[f, 4] * tri[f, 8] - tri[f, 5] * tri[f, 7]
+    cy = tri[f, 5] * tri[f, 6] - tri[f, 3] * tri[f, 8]
+    cz = tri[f, 3] * tri[f, 7] - tri[f, 4] * tri[f, 6]
+    cn = np.sqrt(cx * cx + cy * cy + cz * cz)
+    if not (cn > 0.0 and abs(x0 * cx + y0 * cy + z0 * cz) > 1e-6 * cn):
+        return False
+    x0 /= n0
+    y0 /= n0
+    z0 /= n0
+    x1 /= n1
+    y1 /= n1
+    z1 /= n1
+    x2 /= n2
+    y2 /= n2
+    z2 /= n2
+    det = (y0 * z1 - z0 * y1) * x2 + (z0 * x1 - x0 * z1) * y2 + (x0 * y1 - y0 * x1) * z2
+    if abs(det) < 1e-12:
+        return False
+    sgn = 1.0 if det > 0.0 else -1.0
+    s_min = np.sin(min(alpha * (1.0 + 1e-9) + 1e-9, 0.5 * np.pi))
+    for e in range(3):
+        if e == 0:
+            ux, uy, uz, vx, vy, vz = x0, y0, z0, x1, y1, z1
+        elif e == 1:
+            ux, uy, uz, vx, vy, vz = x1, y1, z1, x2, y2, z2
+        else:
+            ux, uy, uz, vx, vy, vz = x2, y2, z2, x0, y0, z0
+        nx = uy * vz - uz * vy
+        ny = uz * vx - ux * vz
+        nz = ux * vy - uy * vx
+        nn = np.sqrt(nx * nx + ny * ny + nz * nz)
+        if not (nn > 0.0 and sgn * (nx * ax + ny * ay + nz * az) > s_min * nn):
+            return False
+    return True
