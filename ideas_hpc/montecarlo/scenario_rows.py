@@ -77,7 +77,8 @@ class RowEngine:
             return self
         r_img, dcm = self.nominal()
         v, n, r, c, te, ne, fa, ex, se, mr, oc, il, s, tree = self._args(r_img, dcm)
-        self.witness = _k.nominal_witness(v, n, r, c, te, ne, fa, ex, se, mr, oc, il, s, *tree)
+        self.witness = _k.nominal_witness(v, n, r, c, te, ne, fa, ex, se, mr, oc, il, s,
+                                          *tree).astype(np.int32)   # shipped to workers
         if pilot is not None:
             rp, dp = self.flight(pilot)
             dev_r = np.linalg.norm(rp - r_img, axis=2)
@@ -87,7 +88,8 @@ class RowEngine:
             bc = HEADROOM * float(np.percentile(dev_c[:, half:].max(axis=1), 99))
             self.budget = (bc, br)
         bc, br = self.budget
-        self.window = _k.reachable(v, n, r, c, te, ne, fa, ex, se, mr, float(bc), float(br))
+        self.window = _k.reachable(v, n, r, c, te, ne, fa, ex, se, mr, float(bc),
+                                   float(br)).astype(np.int32)
         return self
 
     def flight(self, pert: Perturbation):

@@ -24,6 +24,7 @@ Streams: :mod:`ideas_hpc.seeds` (``SCENARIO_STREAM`` for the bank,
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import time
 from dataclasses import dataclass
@@ -37,6 +38,7 @@ from ..seeds import (SCENARIO_STREAM, STREAM_ATTITUDE, STREAM_BODY, STREAM_SPACE
                      VALIDATION_STREAM, stream_rng)
 from .dispersions import DISPERSIONS, reference_start
 from .scenario_rows import RowEngine
+from .scenario_store import build_into_store, chunk_task
 
 TWO_PI = 2.0 * math.pi
 #: Dispersions drawn once per scenario and shared by all spacecraft.
@@ -124,7 +126,7 @@ def row_engine(setup: FlybySetup, theta, mc, seed: int, stream: int) -> RowEngin
     return RowEngine(setup, theta, r0, v0).prepare(pilot)
 
 
-def _run_chunks(ks, kw, client, chunk_size, progress, label):
+def _run_chunks(ks, fn, client, chunk_size, progress, label):
     parts = [ks[i:i + chunk_size] for i in range(0, len(ks), chunk_size)]
     bar = None
     if progress:
@@ -135,12 +137,12 @@ def _run_chunks(ks, kw, client, chunk_size, progress, label):
     out = []
     if client is None:
         for p in parts:
-            out.append(_rows_chunk(p, **kw))
+            out.append(fn(p))
             if bar is not None:
                 bar.update(len(p))
     else:
         from distributed import as_completed
-        futures = client.map(_rows_chunk, parts, **kw, pure=False)
+        futures = client.map(fn, parts, pure=False)
         index = {f.key: i for i, f in enumerate(futures)}
         res = [None] * len(parts)
         for f in as_completed(futures):
@@ -201,25 +203,41 @@ def build_scenario_bank(setup: FlybySetup, step_rad: float, mc, *, seed: int, n_
     client : distributed.Client, optional
         Spread chunks of ``chunk_size`` scenarios over its workers (same numbers).
     store : str, optional
-        Zarr path to build into (not yet supported: must be None).
+        Zarr path to build into: an engine store chunked by scenario, resumed
+        when some chunks are missing and read back without flying when it is
+        complete and its shaping config is unchanged
+        (:mod:`ideas_hpc.montecarlo.scenario_store`).
     progress : bool
         Progress bar on stderr.
     """
-    if store is not None:
-        raise NotImplementedError("scenario bank stores: not yet")
     t0 = time.perf_counter()
     theta = grid_theta(step_rad)
-    kw = dict(engine=row_engine(setup, theta, mc, seed, SCENARIO_STREAM), mc=mc, seed=int(seed),
-              stream=SCENARIO_STREAM)
-    rows = _run_chunks(list(range(int(n_scenarios))), kw, client, chunk_size, progress,
-                       "scenario bank")
+    areas = np.asarray(setup.body.shape.vertex_areas, dtype=np.float64)
+    config = shaping_config(setup, mc, step_rad, seed, n_scenarios)
     attrs = {"seed": int(seed), "scenario_stream": SCENARIO_STREAM,
              "validation_stream": VALIDATION_STREAM, "n_scenarios": int(n_scenarios),
-             "config_hash": config_hash(shaping_config(setup, mc, step_rad, seed, n_scenarios)),
-             "build_s": time.perf_counter() - t0}
-    return ScenarioBank(theta=theta, rows=rows,
-                        areas=np.asarray(setup.body.shape.vertex_areas, dtype=np.float64),
-                        attrs=attrs)
+             "config_hash": config_hash(config)}
+    engines: list = []
+
+    def chunk_rows():
+        if not engines:
+            engines.append(row_engine(setup, theta, mc, seed, SCENARIO_STREAM))
+        return functools.partial(_rows_chunk, engine=engines[0], mc=mc, seed=int(seed),
+                                 stream=SCENARIO_STREAM)
+
+    if store is None:
+        rows = _run_chunks(list(range(int(n_scenarios))), chunk_rows(), client, chunk_size,
+                           progress, "scenario bank")
+    else:
+        rows, note = build_into_store(store, make_chunk_fn=lambda: chunk_task(chunk_rows()),
+                                      theta=theta, areas=areas, n_scenarios=n_scenarios,
+                                      chunk_size=chunk_size, config=config, seed=seed,
+                                      attrs=attrs, client=client, progress=progress)
+        attrs.update(note)
+    if engines:
+        attrs["budget"] = [float(x) for x in engines[0].budget]
+    attrs["build_s"] = time.perf_counter() - t0
+    return ScenarioBank(theta=theta, rows=rows, areas=areas, attrs=attrs)
 
 
 def fly_members(setup: FlybySetup, theta, periods, mc, *, seed: int, n_samples: int,
@@ -229,7 +247,7 @@ def fly_members(setup: FlybySetup, theta, periods, mc, *, seed: int, n_samples: 
     th = np.asarray(theta, dtype=np.float64).ravel()
     if periods is not None:
         raise NotImplementedError("fly_members: FoV sweeping periods are not supported yet")
-    kw = dict(engine=row_engine(setup, th, mc, seed, VALIDATION_STREAM), mc=mc, seed=int(seed),
-              stream=VALIDATION_STREAM)
-    return _run_chunks(list(range(int(n_samples))), kw, client, chunk_size, progress,
+    fn = functools.partial(_rows_chunk, engine=row_engine(setup, th, mc, seed, VALIDATION_STREAM),
+                           mc=mc, seed=int(seed), stream=VALIDATION_STREAM)
+    return _run_chunks(list(range(int(n_samples))), fn, client, chunk_size, progress,
                        "validation flights")
