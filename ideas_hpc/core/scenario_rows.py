@@ -18,7 +18,8 @@ e_min|) B_r`` and ``B_r``. Illumination does not depend on the spacecraft.
 
 So with a *budget* ``(B_C, B_r)`` fixed before any scenario:
 
-* :func:`nominal_witness` gives, per (candidate, vertex), the first nominal
+* :func:`nominal_witness` (:func:`ideas_hpc.core.coverage.first_image_by_spacecraft`)
+  gives, per (candidate, vertex), the first nominal
   image that sees the vertex (-1: unseen), and :func:`reachable` whether any
   image could pass culling, clipping, field of view, elevation and range for
   some deviation within the budget (a superset test with floating-point slack);
@@ -41,39 +42,12 @@ import numpy as np
 from numba import njit, prange
 
 from .time_tree import LEAF, _FP, _classify, _scan, time_tree
+from .coverage import first_image_by_spacecraft as nominal_witness  # noqa: F401
 from .segments import face_blocks_cone, segment_hit
 from .visibility import _seen
 
 #: Bound on ||C'||_2 for the flown rotation matrices (checked by the boundary layer).
 S_MAX = 1.0 + 1e-9
-
-
-@njit(cache=True, parallel=True)
-def nominal_witness(vertices, normals, r_T, dcm_BT, tan_eta, near, far, exact, sin_min_elev,
-                    max_range, occlusion, illumination, sun_T, node_bounds, node_info, tri,
-                    tri_vid):
-    """(N, V) int64: first image index at which spacecraft k sees vertex j, -1 if never.
-
-    Arguments as :func:`ideas_hpc.core.coverage.observed_by_spacecraft`.
-    """
-    nv = vertices.shape[0]
-    nsc = r_T.shape[0]
-    nimg = r_T.shape[1]
-    NF, NI = time_tree(r_T, dcm_BT, LEAF)
-    sec_eta = np.sqrt(1.0 + tan_eta * tan_eta) * (1.0 + 1e-12)
-    strict = occlusion or illumination or sin_min_elev > -1.0 or max_range < np.inf
-    idx = np.arange(nimg).astype(np.float64)
-    out = np.full((nsc, nv), -1, dtype=np.int64)
-    for j in prange(nv):
-        stack = np.empty(128, dtype=np.int64)
-        for k in range(nsc):
-            c, best = _scan(j, k, NF, NI, stack, idx, np.inf, True, vertices, normals, r_T,
-                            dcm_BT, tan_eta, sec_eta, near, far, exact, strict, sin_min_elev,
-                            max_range, occlusion, illumination, sun_T, node_bounds, node_info,
-                            tri, tri_vid)
-            if c > 0:
-                out[k, j] = int(best)
-    return out
 
 
 @njit(cache=True, inline="always")
