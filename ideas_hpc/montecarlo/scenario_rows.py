@@ -13,7 +13,8 @@ requirement (quality masks) take the full recomputation.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import uuid
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -24,6 +25,8 @@ from ..mapping import _check_geometry, _mesh, _strict_args
 
 #: Head room on the pilot's deviations (speed only).
 HEADROOM = 1.5
+#: Per process: engine token -> nominal positions and ideal DCMs (see RowEngine.nominal).
+_NOMINAL: dict = {}
 #: Largest ``||C C^T - I||_F`` accepted for the perturbed DCMs (the kernels assume
 #: ``||C||_2 <= 1 + 1e-9``); anything worse takes the full recomputation.
 ORTHO_TOL = 1e-10
@@ -58,19 +61,23 @@ class RowEngine:
         exact = setup.coverage.mode == "exact"
         return v, n, r, c, tan_eta, near, far, exact, sin_e, max_r, occ, ill, s, tree
 
-    def __getstate__(self):
-        state = dict(self.__dict__)
-        state.pop("_nominal", None)       # recomputed where needed (large, cheap)
-        return state
+    token: str = field(default_factory=lambda: uuid.uuid4().hex)
 
     def nominal(self):
-        """Positions and ideal camera DCMs of the nominal flight at the images (cached)."""
-        if "_nominal" not in self.__dict__:
+        """Positions and ideal camera DCMs of the nominal flight at the images.
+
+        Large and cheap to recompute, so never shipped: each process keeps the
+        last engines' (by ``token``), since every chunk task unpickles its own copy."""
+        got = _NOMINAL.get(self.token)
+        if got is None:
             ideal = self.setup.with_(attitude_mode="ideal")
             r_img, dcm, _, _ = open_loop_views(ideal, self.theta, None, self.r0_T, self.v0_T,
                                                Perturbation())
-            self.__dict__["_nominal"] = (r_img, dcm)
-        return self.__dict__["_nominal"]
+            got = (r_img, dcm)
+            while len(_NOMINAL) >= 2:
+                _NOMINAL.pop(next(iter(_NOMINAL)))
+            _NOMINAL[self.token] = got
+        return got
 
     def prepare(self, pilot: Perturbation | None) -> "RowEngine":
         """Witnesses, budget from the pilot perturbation, reachability."""
