@@ -44,7 +44,6 @@ class RowEngine:
     window: np.ndarray | None = None       # (K, V, 2) int32
     margin: np.ndarray | None = None       # (K, V) m
     budget: tuple = (0.0, 0.0)             # (Frobenius, m)
-    stats: dict | None = None
 
     @property
     def fast(self) -> bool:
