@@ -29,6 +29,7 @@ from ..errors import InputError
 from ..flyby import fly
 from ..montecarlo.verify import verify_swarm
 from . import datasets
+from .schema_design import verify_samples
 
 
 def _log(msg: str) -> None:
@@ -179,7 +180,7 @@ def verification_vars(c, setup, theta, threshold: float, client) -> tuple[dict, 
     Flies the swarm through the campaign's ``[monte_carlo]`` dispersions with
     the campaign seed; returns store variables, attrs and a summary line.
     """
-    m = c.config.design.verify_samples
+    m = verify_samples(c.config.design)
     if m == 0:
         return {}, {}, "Monte Carlo verification: off (design.verify_samples = 0)"
     v = verify_swarm(setup, theta, None, mc=c.config.monte_carlo, seed=c.config.seed,
