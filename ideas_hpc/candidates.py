@@ -43,7 +43,13 @@ def _views(setup: FlybySetup, keys):
 
 def candidate_masks(setup: FlybySetup, keys) -> np.ndarray:
     """(K, V) bool rows of the designers: seen, or mapped when a requirement is set."""
-    r_img, dcm, sun = _views(setup, keys)
+    return rows_from_views(setup, *_views(setup, keys))
+
+
+def rows_from_views(setup: FlybySetup, r_img, dcm, sun) -> np.ndarray:
+    """(K, V) bool rows (seen, or mapped with a requirement) of flown candidates:
+    positions ``r_img`` (K, n_img, 3) m and camera ``dcm`` (K, n_img, 3, 3) at the
+    image times, ``sun`` (n_img, 3) or None."""
     if setup.coverage.requirement:
         return quality_per_spacecraft(setup.body.shape, r_img, dcm, setup.image_times,
                                       setup.eta, setup.near, setup.far,

@@ -322,6 +322,19 @@ def fly_open_loop(setup: FlybySetup, theta, periods, r0_T, v0_T,
     out of the coverage.
     """
     th = np.asarray(theta, dtype=np.float64).ravel()
+    r_img, dcm, att, pos = open_loop_views(setup, th, periods, r0_T, v0_T, perturbation)
+    cov = _coverage(setup, r_img, dcm, perturbation.active, True)
+    return FlybyOutcome(theta=th, periods=None if periods is None else np.asarray(periods),
+                        targeting=None, image_times=setup.image_times, r_img_T=r_img,
+                        dcm_BT=dcm, coverage=cov, attitude=att, position_T=pos)
+
+
+def open_loop_views(setup: FlybySetup, theta, periods, r0_T, v0_T,
+                    perturbation: Perturbation = Perturbation()):
+    """What :func:`fly_open_loop` images from: positions ``r_img_T`` (N, n_img, 3) m and
+    camera DCMs (N, n_img, 3, 3) at the image times (misalignment applied), the
+    attitude result (simulated) and the trajectory (N, T, 3) m. Failures are not applied."""
+    th = np.asarray(theta, dtype=np.float64).ravel()
     p = perturbation
     r0 = r0_T if p.position_error_T is None else r0_T + p.position_error_T
     v0 = v0_T if p.velocity_error_T is None else v0_T + p.velocity_error_T
@@ -330,23 +343,30 @@ def fly_open_loop(setup: FlybySetup, theta, periods, r0_T, v0_T,
                                 params_override=p.params_override)
     r_img = np.ascontiguousarray(pos[:, ::setup.image_every])
     mis = None if p.misalignment_prv is None else misalignment_dcms(p.misalignment_prv)
-    dcm, att, cov = _image(setup, th, periods, r_img, p.ics, mis, p.active, True)
-    return FlybyOutcome(theta=th, periods=None if periods is None else np.asarray(periods),
-                        targeting=None, image_times=setup.image_times, r_img_T=r_img,
-                        dcm_BT=dcm, coverage=cov, attitude=att, position_T=pos)
+    dcm, att = _camera(setup, th, periods, p.ics, mis)
+    return r_img, dcm, att, pos
 
 
-def _image(setup: FlybySetup, th, periods, r_img, ics, misalignment, active, counts):
-    """Attitude at the images, camera misalignment, Sun, coverage: the common tail of a flyby."""
+def _camera(setup: FlybySetup, th, periods, ics, misalignment):
+    """Camera DCMs at the images (attitude, then the camera misalignment)."""
     s0, w0, W0 = ics if ics is not None else (None, None, None)
     dcm, att = camera_dcms(setup, th, periods, sigma0=s0, omega0=w0, wheel0=W0)
     if misalignment is not None:
         dcm = np.ascontiguousarray(np.matmul(misalignment[:, None], dcm))  # [CB][BT]
+    return dcm, att
+
+
+def _image(setup: FlybySetup, th, periods, r_img, ics, misalignment, active, counts):
+    """Attitude at the images, camera misalignment, Sun, coverage: the common tail of a flyby."""
+    dcm, att = _camera(setup, th, periods, ics, misalignment)
+    return dcm, att, _coverage(setup, r_img, dcm, active, counts)
+
+
+def _coverage(setup: FlybySetup, r_img, dcm, active, counts):
     img_t = setup.image_times
     sun = None
     if setup.coverage.needs_sun:
         sun = setup.sun_T(img_t)
-    cov = compute_coverage(setup.body.shape, r_img, dcm, img_t, setup.eta, setup.near,
-                           setup.far, options=setup.coverage, sun_T=sun, active=active,
-                           counts=counts)
-    return dcm, att, cov
+    return compute_coverage(setup.body.shape, r_img, dcm, img_t, setup.eta, setup.near,
+                            setup.far, options=setup.coverage, sun_T=sun, active=active,
+                            counts=counts)

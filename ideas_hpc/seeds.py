@@ -9,6 +9,22 @@ takes children of its own sequence, ``spawn_key=(k, c)`` (e.g. the Monte Carlo
 dispersions use ``c = 1`` while the attitude initial conditions use the
 sample's own stream).
 
+Design streams (issue 20)
+------------------------
+The reliability designer draws from two more families, keyed by three words
+so that they can never be a Monte Carlo sample's key (one word, ``(k,)``) or
+a sample child's (two words, ``(k, c)``)::
+
+    scenario s of the scenario bank:     SeedSequence(seed, spawn_key=(SCENARIO_STREAM, s, c))
+    validation sample m of a design:     SeedSequence(seed, spawn_key=(VALIDATION_STREAM, m, c))
+
+``c`` selects the purpose (:data:`STREAM_BODY`: gravity and reflectivity,
+shared by all spacecraft; :data:`STREAM_SPACECRAFT`: initial state errors and
+misalignment, one independent draw per spacecraft; :data:`STREAM_ATTITUDE`:
+the initial attitude, rates and wheel speeds per spacecraft). The two stream
+words differ, so the scenario and validation families share no sequence
+(:func:`stream_seed_sequence`); stores record both words.
+
 Stores keep ``s`` in their attrs and, per sample, the first :data:`SEED_WORDS`
 words of the sample's sequence state (:func:`seeds_for`), which identify it.
 """
@@ -46,3 +62,29 @@ def seeds_for(campaign_seed: int, n_samples: int) -> np.ndarray:
     for k in range(int(n_samples)):
         out[k] = sample_seed_sequence(campaign_seed, k).generate_state(SEED_WORDS, np.uint32)
     return out
+
+
+#: First spawn-key word of the scenario bank's streams (issue 20).
+SCENARIO_STREAM = 0x5CE7A210
+#: First spawn-key word of a reliability design's validation samples (issue 20).
+VALIDATION_STREAM = 0x7A11DA7E
+#: Purposes within one scenario / validation sample (third spawn-key word).
+STREAM_BODY, STREAM_SPACECRAFT, STREAM_ATTITUDE = 0, 1, 2
+
+
+def stream_seed_sequence(campaign_seed: int, stream: int, k: int,
+                         purpose: int) -> np.random.SeedSequence:
+    """``SeedSequence(campaign_seed, spawn_key=(stream, k, purpose))``: draw ``k`` of a design stream.
+
+    ``stream`` is :data:`SCENARIO_STREAM` or :data:`VALIDATION_STREAM`; three
+    key words keep these apart from every Monte Carlo sample (module docstring).
+    """
+    if int(stream) not in (SCENARIO_STREAM, VALIDATION_STREAM):
+        raise InputError(f"unknown design stream {stream!r}", field="stream")
+    return np.random.SeedSequence(int(campaign_seed),
+                                  spawn_key=(int(stream), int(k), int(purpose)))
+
+
+def stream_rng(campaign_seed: int, stream: int, k: int, purpose: int) -> np.random.Generator:
+    """Generator of :func:`stream_seed_sequence`."""
+    return np.random.default_rng(stream_seed_sequence(campaign_seed, stream, k, purpose))

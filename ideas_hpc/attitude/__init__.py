@@ -45,12 +45,14 @@ from ..units import RPM
 from .gains import GAIN_PRESETS, Gains, gains_from_config, validate_gains
 from .maneuvers import (MANEUVERS, P_MIN_DEFAULT, THETA_MAX_DEFAULT, Maneuver,
                         get_maneuver)
-from .simulate import AttitudeResult, ideal_dcm_BT, initial_conditions, simulate_attitude
+from .simulate import (AttitudeResult, draw_initial_conditions, ideal_dcm_BT, initial_conditions,
+                       simulate_attitude)
 from .spacecraft import (SpacecraftModel, default_spacecraft, spacecraft_from_config,
                          validate_spacecraft)
 
 __all__ = ["GAIN_PRESETS", "MANEUVERS", "P_MIN_DEFAULT", "RPM", "THETA_MAX_DEFAULT",
            "AttitudeResult", "Gains", "Maneuver", "SpacecraftModel", "default_spacecraft",
-           "gains_from_config", "get_maneuver", "ideal_dcm_BT", "initial_conditions",
+           "draw_initial_conditions", "gains_from_config", "get_maneuver", "ideal_dcm_BT",
+           "initial_conditions",
            "simulate_attitude", "spacecraft_from_config", "validate_gains",
            "validate_spacecraft"]

@@ -35,7 +35,11 @@ def initial_conditions(seed: int, sample: int, n_spacecraft: int):
     omega_BN0_B : (N, 3) float64, rad/s
     wheel_speed0 : (N, 3) float64, rad/s
     """
-    rng = sample_rng(seed, sample)
+    return draw_initial_conditions(sample_rng(seed, sample), n_spacecraft)
+
+
+def draw_initial_conditions(rng: np.random.Generator, n_spacecraft: int):
+    """The draws of :func:`initial_conditions` from generator ``rng`` (same order and laws)."""
     n = int(n_spacecraft)
     sigma = rng.uniform(-1.0, 1.0, (n, 3))
     omega = rng.uniform(-1.0, 1.0, (n, 3)) * RPM

@@ -1,0 +1,242 @@
+"""The scenario bank of the reliability designer, and the validation flights (issue 20).
+
+A *scenario* is one draw of the continuous ``[monte_carlo]`` dispersions for
+the whole candidate grid:
+
+* the body-level ones (gravity ``mu``, ``C20``, ``C22``; SRP reflectivity) are
+  drawn once and shared by every candidate;
+* the per-spacecraft ones (initial position and velocity errors, camera
+  misalignment and, with ``attitude.mode = "simulated"``, the initial attitude,
+  rates and wheel speeds) are drawn independently for every candidate.
+
+Failures are not drawn: the designer handles them exactly. Every candidate is
+targeted once on the nominal model and flown open loop through each scenario
+(:func:`ideas_hpc.flyby.open_loop_views`); its row is what it sees, or with a
+``[coverage]`` requirement what it maps (:func:`ideas_hpc.candidates.rows_from_views`).
+Members fly independently, so a swarm's coverage in scenario ``s`` is the union
+of its members' rows ``rows[s, members]``.
+
+Streams: :mod:`ideas_hpc.seeds` (``SCENARIO_STREAM`` for the bank,
+``VALIDATION_STREAM`` for :func:`fly_members`); scenario ``s`` depends only on
+``(seed, s)``, never on the chunking or the worker count.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..attitude import draw_initial_conditions
+from ..candidates import rows_from_views
+from ..engine.store_meta import config_hash
+from ..flyby import FlybySetup, Perturbation, endpoints, open_loop_views, target
+from ..seeds import (SCENARIO_STREAM, STREAM_ATTITUDE, STREAM_BODY, STREAM_SPACECRAFT,
+                     VALIDATION_STREAM, stream_rng)
+from .dispersions import DISPERSIONS, reference_start
+
+TWO_PI = 2.0 * math.pi
+#: Dispersions drawn once per scenario and shared by all spacecraft.
+BODY_LEVEL = ("gravity", "reflectivity")
+#: Dispersions drawn independently for every spacecraft (attitude has its own stream).
+PER_SPACECRAFT = ("initial_state", "misalignment")
+#: Not drawn: failures are exact in the designer; the attitude is drawn below.
+NOT_DRAWN = ("failures", "attitude")
+_unclassified = {d.name for d in DISPERSIONS} - set(BODY_LEVEL + PER_SPACECRAFT + NOT_DRAWN)
+assert not _unclassified, f"classify dispersions {_unclassified} in scenarios.py"
+
+
+@dataclass(frozen=True)
+class ScenarioBank:
+    """Per-scenario candidate rows (module docstring).
+
+    Attributes
+    ----------
+    theta : (C,) rad
+        The design grid, ``theta_k = k 2 pi / C``.
+    rows : (S, C, V) bool
+        Vertex ``v`` seen (or mapped) by candidate ``c`` in scenario ``s``.
+    areas : (V,) m^2
+        Vertex areas.
+    attrs : dict
+        Provenance: seed, stream words, ``n_scenarios``, config hash, timing.
+    """
+
+    theta: np.ndarray
+    rows: np.ndarray
+    areas: np.ndarray
+    attrs: dict
+
+    @property
+    def n_scenarios(self) -> int:
+        return int(self.rows.shape[0])
+
+
+def draw_world(mc, setup: FlybySetup, theta: np.ndarray, seed: int, stream: int,
+               k: int) -> dict:
+    """Perturbation keywords of draw ``k`` of a design stream for spacecraft ``theta`` (rad).
+
+    Body-level dispersions from purpose ``STREAM_BODY``, per-spacecraft ones
+    from ``STREAM_SPACECRAFT`` (each in :data:`~ideas_hpc.montecarlo.dispersions.DISPERSIONS`
+    order, ``n = theta.size`` rows), the initial attitude (simulated attitude
+    only) from ``STREAM_ATTITUDE`` with the laws of
+    :func:`ideas_hpc.attitude.initial_conditions`, or the undispersed start
+    when ``monte_carlo.attitude_dispersion`` is off. No failures.
+    """
+    n = theta.size
+    body = stream_rng(seed, stream, k, STREAM_BODY)
+    per_sc = stream_rng(seed, stream, k, STREAM_SPACECRAFT)
+    pert: dict = {}
+    for d in DISPERSIONS:
+        if d.name in NOT_DRAWN:
+            continue
+        v = d.draw(body if d.name in BODY_LEVEL else per_sc, n, mc, setup, theta)
+        for key, val in d.perturb(v).items():
+            if isinstance(val, dict):
+                pert.setdefault(key, {}).update(val)
+            else:
+                pert[key] = val
+    if setup.attitude_mode == "simulated":
+        if mc.attitude_dispersion:
+            pert["ics"] = draw_initial_conditions(
+                stream_rng(seed, stream, k, STREAM_ATTITUDE), n)
+        else:
+            pert["ics"] = reference_start(setup.body.params.spin_rate, theta)
+    return pert
+
+
+def rows_setup(setup: FlybySetup) -> FlybySetup:
+    """The setup the rows are flown with: closed-loop time series not kept (one sample)."""
+    if setup.attitude_mode != "simulated":
+        return setup
+    return setup.with_(decimate=max(1, int(round((setup.tf - setup.t0) / setup.dt))))
+
+
+def flight_rows(setup: FlybySetup, theta, periods, r0_T, v0_T, pert: dict) -> np.ndarray:
+    """(K, V) bool rows of spacecraft ``theta`` flown open loop through one perturbation."""
+    r_img, dcm, _, _ = open_loop_views(rows_setup(setup), theta, periods, r0_T, v0_T,
+                                       Perturbation(**pert))
+    sun = setup.sun_T() if setup.coverage.needs_sun else None
+    return rows_from_views(setup, r_img, dcm, sun)
+
+
+def _rows_chunk(ks, *, setup, theta, periods, r0_T, v0_T, mc, seed, stream):
+    out = np.empty((len(ks), theta.size, setup.body.shape.n_vertices), dtype=bool)
+    for i, k in enumerate(ks):
+        pert = draw_world(mc, setup, theta, seed, stream, int(k))
+        out[i] = flight_rows(setup, theta, periods, r0_T, v0_T, pert)
+    return out
+
+
+def _run_chunks(ks, kw, client, chunk_size, progress, label):
+    parts = [ks[i:i + chunk_size] for i in range(0, len(ks), chunk_size)]
+    bar = None
+    if progress:
+        import sys
+
+        from tqdm.auto import tqdm
+        bar = tqdm(total=len(ks), desc=label, unit="scenario", file=sys.stderr, leave=False)
+    out = []
+    if client is None:
+        for p in parts:
+            out.append(_rows_chunk(p, **kw))
+            if bar is not None:
+                bar.update(len(p))
+    else:
+        from distributed import as_completed
+        futures = client.map(_rows_chunk, parts, **kw, pure=False)
+        index = {f.key: i for i, f in enumerate(futures)}
+        res = [None] * len(parts)
+        for f in as_completed(futures):
+            res[index[f.key]] = f.result()
+            if bar is not None:
+                bar.update(len(parts[index[f.key]]))
+        out = res
+    if bar is not None:
+        bar.close()
+    return np.concatenate(out) if out else None
+
+
+def grid_theta(step_rad: float) -> np.ndarray:
+    """The snapped design grid ``k 2 pi / C`` (as :func:`ideas_hpc.design.bank.build_bank`)."""
+    from ..design.bank import grid_size
+    n = grid_size(step_rad)
+    return (TWO_PI / n) * np.arange(n)
+
+
+def nominal_start(setup: FlybySetup, theta) -> tuple[np.ndarray, np.ndarray]:
+    """Start states (N, 3) m, m/s of spacecraft ``theta`` targeted on the nominal model."""
+    r0, _ = endpoints(setup, theta)
+    return r0, target(setup, theta).v0_T
+
+
+def shaping_config(setup: FlybySetup, mc, step_rad: float, seed: int, n: int) -> dict:
+    """What shapes a scenario bank (its hash decides reuse): the flyby, the body,
+    the continuous dispersions, the grid, the seed and the number of scenarios."""
+    skip = {"samples", "failure_probability", "failures_k"}
+    mc_d = {f.name: getattr(mc, f.name) for f in dataclasses.fields(mc) if f.name not in skip}
+    sh = setup.body.shape
+    fs = {f.name: repr(getattr(setup, f.name)) for f in dataclasses.fields(setup)
+          if f.name not in ("body", "seed", "decimate")}
+    import hashlib
+    mesh = hashlib.sha256(np.ascontiguousarray(sh.vertices_T).tobytes()
+                          + np.ascontiguousarray(sh.faces).tobytes()).hexdigest()
+    return {"setup": fs, "body": {"params": repr(setup.body.params), "mesh": mesh},
+            "monte_carlo": mc_d, "step_rad": float(step_rad), "seed": int(seed),
+            "n_scenarios": int(n), "stream": SCENARIO_STREAM}
+
+
+def build_scenario_bank(setup: FlybySetup, step_rad: float, mc, *, seed: int, n_scenarios: int,
+                        client=None, store: str | None = None, progress: bool = True,
+                        chunk_size: int = 4) -> ScenarioBank:
+    """Rows of every grid candidate in ``n_scenarios`` scenarios (module docstring).
+
+    Parameters
+    ----------
+    setup : FlybySetup
+        The exact designer's setup.
+    step_rad : float
+        Grid step, rad (snapped to divide the circle).
+    mc : MonteCarlo
+        The validated ``[monte_carlo]`` table (SI); failures are not used.
+    seed : int
+        Campaign seed; scenario ``s`` draws from ``(SCENARIO_STREAM, s, purpose)``.
+    n_scenarios : int
+    client : distributed.Client, optional
+        Spread chunks of ``chunk_size`` scenarios over its workers (same numbers).
+    store : str, optional
+        Zarr path to build into (not yet supported: must be None).
+    progress : bool
+        Progress bar on stderr.
+    """
+    if store is not None:
+        raise NotImplementedError("scenario bank stores: not yet")
+    t0 = time.perf_counter()
+    theta = grid_theta(step_rad)
+    r0, v0 = nominal_start(setup, theta)
+    kw = dict(setup=setup, theta=theta, periods=None, r0_T=r0, v0_T=v0, mc=mc, seed=int(seed),
+              stream=SCENARIO_STREAM)
+    rows = _run_chunks(list(range(int(n_scenarios))), kw, client, chunk_size, progress,
+                       "scenario bank")
+    attrs = {"seed": int(seed), "scenario_stream": SCENARIO_STREAM,
+             "validation_stream": VALIDATION_STREAM, "n_scenarios": int(n_scenarios),
+             "config_hash": config_hash(shaping_config(setup, mc, step_rad, seed, n_scenarios)),
+             "build_s": time.perf_counter() - t0}
+    return ScenarioBank(theta=theta, rows=rows,
+                        areas=np.asarray(setup.body.shape.vertex_areas, dtype=np.float64),
+                        attrs=attrs)
+
+
+def fly_members(setup: FlybySetup, theta, periods, mc, *, seed: int, n_samples: int,
+                client=None, progress: bool = True, chunk_size: int = 8) -> np.ndarray:
+    """(M, N, V) bool: per-member rows of swarm ``theta`` (rad) in ``n_samples`` fresh draws
+    of the continuous dispersions (no failures), stream ``VALIDATION_STREAM``."""
+    th = np.asarray(theta, dtype=np.float64).ravel()
+    r0, v0 = nominal_start(setup, th)
+    kw = dict(setup=setup, theta=th, periods=periods, r0_T=r0, v0_T=v0, mc=mc, seed=int(seed),
+              stream=VALIDATION_STREAM)
+    return _run_chunks(list(range(int(n_samples))), kw, client, chunk_size, progress,
+                       "validation flights")

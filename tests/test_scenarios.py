@@ -1,0 +1,122 @@
+"""The scenario bank and the validation flights of the reliability designer (issue 20)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ideas_hpc.campaign.schema import load
+from ideas_hpc.design.bank import build_bank
+from ideas_hpc.flyby import Perturbation, fly_open_loop, setup_from_campaign
+from ideas_hpc.montecarlo.scenarios import (build_scenario_bank, draw_world, fly_members,
+                                            nominal_start)
+from ideas_hpc.seeds import SCENARIO_STREAM, VALIDATION_STREAM
+
+ROOT = Path(__file__).resolve().parent.parent
+DESIGN = ROOT / "campaigns" / "eros-design.toml"
+ELLIPSOID = ['body.name="ellipsoid"', "flyby.tf_s=60", "flyby.z_start_km=-3",
+             "flyby.z_stop_km=3", "dynamics.srp=false"]
+QUIET = [f"monte_carlo.{k}=0.0" for k in ("sigma_c20_pct", "sigma_c22_pct", "sigma_gm_pct",
+                                           "sigma_position_m", "sigma_velocity_mm_s",
+                                           "sigma_misalignment_deg")]
+STEP = np.deg2rad(30.0)
+
+
+def _campaign(sets=()):
+    c = load(DESIGN, ELLIPSOID + list(sets))
+    return c, setup_from_campaign(c)
+
+
+def _slice(pert: dict, c: int) -> Perturbation:
+    """Candidate ``c``'s share of a whole-grid perturbation."""
+    out = {}
+    for k, v in pert.items():
+        if k == "ics":
+            out[k] = tuple(np.ascontiguousarray(a[c:c + 1]) for a in v)
+        elif k == "params_override":
+            out[k] = v
+        else:
+            out[k] = np.ascontiguousarray(v[c:c + 1])
+    return Perturbation(**out)
+
+
+@pytest.mark.parametrize("sets", [[], ['coverage.mode="exact"', "coverage.occlusion=true",
+                                       "coverage.min_elevation_deg=5.0"]],
+                         ids=["paper", "strict"])
+def test_rows_are_single_candidate_flights(sets):
+    # Each row is the flyby pipeline flying that one candidate alone through the
+    # scenario's draws (body-level shared, its own state error and misalignment).
+    c, setup = _campaign(sets)
+    mc = c.config.monte_carlo
+    bank = build_scenario_bank(setup, STEP, mc, seed=7, n_scenarios=3, progress=False)
+    n_c = bank.theta.size
+    assert bank.rows.shape == (3, n_c, setup.body.shape.n_vertices)
+    r0, v0 = nominal_start(setup, bank.theta)
+    changed = 0
+    for s in range(3):
+        pert = draw_world(mc, setup, bank.theta, 7, SCENARIO_STREAM, s)
+        assert set(pert["params_override"]) == {"mu", "c20", "c22", "reflectivity"}
+        for k in range(0, n_c, 3):
+            f = fly_open_loop(setup, bank.theta[k:k + 1], None, r0[k:k + 1], v0[k:k + 1],
+                              _slice(pert, k))
+            np.testing.assert_array_equal(bank.rows[s, k], f.coverage.observed)
+        changed += int((bank.rows[s] != bank.rows[0]).sum())
+    assert changed > 0          # the scenarios differ
+
+
+def test_quiet_scenarios_are_the_nominal_bank():
+    # No continuous dispersion: every scenario is the designer's nominal bank.
+    c, setup = _campaign(QUIET)
+    mc = c.config.monte_carlo
+    nominal = build_bank(setup, STEP)
+    bank = build_scenario_bank(setup, STEP, mc, seed=3, n_scenarios=2, progress=False)
+    np.testing.assert_allclose(bank.theta, nominal.theta, rtol=0, atol=1e-15)
+    for s in range(2):
+        np.testing.assert_array_equal(bank.rows[s], nominal.masks)
+    members = fly_members(setup, nominal.theta[[0, 4, 8]], None, mc, seed=3, n_samples=2,
+                          progress=False)
+    assert members.shape == (2, 3, setup.body.shape.n_vertices)
+    for m in range(2):
+        np.testing.assert_array_equal(members[m], nominal.masks[[0, 4, 8]])
+
+
+def test_member_flights_use_the_validation_stream():
+    c, setup = _campaign()
+    mc = c.config.monte_carlo
+    theta = np.deg2rad([0.0, 120.0, 240.0])
+    got = fly_members(setup, theta, None, mc, seed=5, n_samples=2, progress=False)
+    r0, v0 = nominal_start(setup, theta)
+    for m in range(2):
+        pert = draw_world(mc, setup, theta, 5, VALIDATION_STREAM, m)
+        f = fly_open_loop(setup, theta, None, r0, v0, Perturbation(**pert))
+        np.testing.assert_array_equal(got[m].any(axis=0), f.coverage.observed)
+        for j in range(3):
+            fj = fly_open_loop(setup, theta[j:j + 1], None, r0[j:j + 1], v0[j:j + 1],
+                               _slice(pert, j))
+            np.testing.assert_array_equal(got[m, j], fj.coverage.observed)
+
+
+def test_streams_share_no_seed():
+    # Scenario draws, validation draws and Monte Carlo samples (and their
+    # children) never share a seed sequence state.
+    from ideas_hpc.seeds import sample_seed_sequence, stream_seed_sequence
+
+    def words(ss):
+        return tuple(ss.generate_state(4).tolist())
+
+    for seed in (0, 2026):
+        scen = {words(stream_seed_sequence(seed, SCENARIO_STREAM, k, p))
+                for k in range(300) for p in range(3)}
+        val = {words(stream_seed_sequence(seed, VALIDATION_STREAM, k, p))
+               for k in range(300) for p in range(3)}
+        mc = {words(sample_seed_sequence(seed, k, *ch)) for k in range(300)
+              for ch in ((), (1,))}
+        assert len(scen) == len(val) == 900 and len(mc) == 600
+        assert not scen & val and not scen & mc and not val & mc
+    c, setup = _campaign(QUIET)
+    bank = build_scenario_bank(setup, STEP, c.config.monte_carlo, seed=3, n_scenarios=1,
+                               progress=False)
+    assert bank.attrs["scenario_stream"] == SCENARIO_STREAM
+    assert bank.attrs["validation_stream"] == VALIDATION_STREAM
