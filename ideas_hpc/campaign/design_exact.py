@@ -45,6 +45,7 @@ class ExactDesign:
     attrs: dict
     notes: list = field(default_factory=list)
     summary: str = ""
+    bank: object = field(default=None, repr=False)     # the nominal candidate bank
 
 
 def _target(bank, eps_tol: float, coverage, notes: list) -> float:
@@ -146,7 +147,8 @@ def design_exact(c, setup, client) -> ExactDesign:
                f"{res.bound:g}), coverage {100 * res.coverage:.3f} %, "
                f"{'k = %d tolerant, ' % k if k else ''}masks {t_masks:.1f} s + solve "
                f"{t_design - t_masks:.1f} s; coverage-vs-N curve in {curve.solve_time:.1f} s")
-    return ExactDesign(theta=res.theta, data=ds, attrs=attrs, notes=notes, summary=summary)
+    return ExactDesign(theta=res.theta, data=ds, attrs=attrs, notes=notes, summary=summary,
+                       bank=bank)
 
 
 def ga_gap(c, setup, mask_bank, n_ga: int, target: float) -> tuple[xr.Dataset, list]:
@@ -189,28 +191,36 @@ def verification_vars(c, setup, theta, threshold: float, client) -> tuple[dict, 
                                 {"units": "1", "long_name": "coverage of each dispersed sample"}),
             "verify_n_failed": (("verify_sample",), v.n_failed,
                                 {"long_name": "failed spacecraft in each sample"})}
+    passed = bool(v.probability >= 1.0)
     attrs = {"verify_samples": int(m), "verify_threshold": float(threshold),
-             "verify_probability": v.probability, "verify_wall_s": float(v.wall_s)}
-    return data, attrs, v.summary()
+             "verify_probability": v.probability, "verify_wall_s": float(v.wall_s),
+             "verify_passed": int(passed)}
+    verdict = ("PASSED: every sample reaches the threshold" if passed else
+               "FAILED: the design holds only if nothing goes wrong (design.success_probability "
+               "designs for a probability)")
+    return data, attrs, f"{v.summary()} -> check {verdict}"
 
 
 def run_exact(c, setup, *, workers=None, scheduler=None, cluster="local",
-              slurm_config=None) -> xr.Dataset:
+              slurm_config=None, designer=None) -> xr.Dataset:
     """Kind ``design-nadir``, method ``exact``: certified design, its Monte Carlo
-    verification, then a flyby of it (the store)."""
+    verification, then a flyby of it (the store). ``designer`` replaces
+    :func:`design_exact` (the success-probability design validates its own swarm)."""
     from ..engine.cluster import connect
 
     local = workers == 0 and scheduler is None and cluster == "local"
     with (nullcontext(None) if local else
           connect(cluster=cluster, workers=workers, scheduler=scheduler,
                   slurm_config=slurm_config)) as client:
-        res = design_exact(c, setup, client)
+        res = (designer or design_exact)(c, setup, client)
         _log(res.summary)
         for note in res.notes:
             _log(f"note: {note}")
         threshold = res.attrs["target_coverage"] - c.config.design.eps_tol_pct / 100.0
-        vdata, vattrs, vline = verification_vars(c, setup, res.theta, threshold, client)
-    _log(vline)
+        vdata, vattrs, vline = ({}, {}, None) if designer else \
+            verification_vars(c, setup, res.theta, threshold, client)
+    if vline:
+        _log(vline)
     flight = fly(setup, res.theta)
     ds = datasets.flyby_dataset(setup, flight)
     ds = xr.merge([ds, res.data, xr.Dataset(vdata)], combine_attrs="override")

@@ -12,7 +12,7 @@ import xarray as xr
 from ..errors import InputError
 from ..plots import figures
 from ..units import DEG, KM
-
+from .report_reliability import reliability_figures, reliability_lines
 
 
 def _shape(ds):
@@ -113,6 +113,7 @@ def _design_lines(ds) -> list[str]:
                    f"(min {c.min():.2f} %, 5th percentile {np.percentile(c, 5):.2f} %, median "
                    f"{np.median(c):.2f} %; {int((ds['verify_n_failed'].values > 0).sum())} "
                    "samples with a failed spacecraft)")
+    out.extend(reliability_lines(ds))
     if method == "exact":
         out.extend(f"note: {n}" for n in json.loads(a.get("notes", "[]")))
     return out
@@ -154,6 +155,7 @@ def _design_figures(ds, out: Path) -> list[Path]:
         figs.append(design.pareto_front(ds, out / "design_pareto_front.png"))
     if "verify_coverage" in ds:
         figs.append(design.verification(ds, out / "design_verification.png"))
+    figs.extend(reliability_figures(ds, out))
     return figs
 
 

@@ -64,6 +64,7 @@ class ReliableResult:
     best: dict = field(default_factory=dict)       # N -> (swarm, P_bank) best found
     u_bar: dict = field(default_factory=dict)      # m -> Ubar_m (fraction)
     notes: list = field(default_factory=list)
+    designer: object = field(default=None, repr=False, compare=False)
 
 
 def _dist_ok(c_n: int, rest: np.ndarray, m: int) -> np.ndarray:
@@ -281,7 +282,8 @@ def min_swarm_reliable(rows, areas, *, p: float, p_f: float, need: float, n_max:
                                   per_scenario=d.ev.per_scenario([sw])[0], status=status,
                                   bound=float(bound), gap=float(gap),
                                   solve_time=time.perf_counter() - d.t0, upper=upper,
-                                  best=dict(d.best), u_bar=dict(d.u_bar), notes=notes)
+                                  best=dict(d.best), u_bar=dict(d.u_bar), notes=notes,
+                                  designer=d)
         if n not in d.exhausted:
             unresolved.append(n)
     best_p = max((v for _, v in d.best.values()), default=0.0)
