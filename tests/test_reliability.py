@@ -147,7 +147,7 @@ def test_bound_solver_time_limit_gives_gap():
         return BoundResult(m, rows.shape[0], 0, None, "time_limit", 0.0)
 
     res = min_swarm_reliable(rows, areas, p=0.5, p_f=0.01, need=0.9, n_max=8,
-                             enumerate_budget=0, bound_solver=stub)
+                             enumerate_budget=0, bound_solver=stub, ring_prebound=False)
     assert res.status == "time_limit"
     assert res.gap > 0 and res.bound < res.n
     assert brute_probability(rows, res.indices, areas, 0.9, 0.01) >= 0.5

@@ -105,7 +105,8 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
     _with(new, "reliability_vs_n_swarm", "rad", "swarm angles of the curve's swarms (NaN: unused)")
     _with(new, "tolerant_swarm_size", None, "spacecraft of the k-failure-tolerant design")
     _with(new, "tolerant_probability", "1", "its P on the scenario bank")
-    ds = xr.merge([ds, new], combine_attrs="override")
+    ds = xr.merge([ds.drop_vars([k for k in new.data_vars if k in ds]), new],
+                  combine_attrs="override")
     attrs = dict(nominal.attrs)
     attrs.update({
         "design_method": "exact-reliability", "solver_status": chosen.status,

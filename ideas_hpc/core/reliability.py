@@ -147,3 +147,30 @@ def minimal_sets(packed):
             kept[n_kept] = g
             n_kept += 1
     return keep
+
+
+@njit(cache=True, parallel=True)
+def swarm_coverages(rows, swarms, w):
+    """(K, S) area fraction of the union of each swarm's rows in each scenario.
+
+    Parameters
+    ----------
+    rows : (S, C, V) bool
+    swarms : (K, N) int64
+    w : (V,) float64
+        Vertex area fractions.
+    """
+    k_n, n = swarms.shape
+    s_n, _, v_n = rows.shape
+    out = np.zeros((k_n, s_n))
+    for j in prange(k_n * s_n):
+        k = j // s_n
+        s = j - k * s_n
+        a = 0.0
+        for v in range(v_n):
+            for i in range(n):
+                if rows[s, swarms[k, i], v]:
+                    a += w[v]
+                    break
+        out[k, s] = a
+    return out

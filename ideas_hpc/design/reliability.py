@@ -39,9 +39,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.reliability import swarm_probabilities
+from ..core.reliability import swarm_coverages, swarm_probabilities
 from ..errors import InputError
+from .bank import CandidateBank, reduce_problem
 from .reliability_stats import failure_upper_bound
+from .ring_bound import ring_bound
 from .scenario_mip import ScenarioMIP
 
 #: Largest swarm whose 2^N failure subsets are enumerated.
@@ -94,13 +96,22 @@ class Evaluator:
     def __call__(self, swarms) -> np.ndarray:
         return self.per_scenario(swarms).mean(axis=1)
 
+    def scored(self, swarms) -> np.ndarray:
+        """(K,) order keys: ``P_bank``, ties (e.g. P = 0 below the threshold) broken by
+        the mean coverage, so searches move on the plateaus too."""
+        sw = np.ascontiguousarray(np.atleast_2d(np.asarray(swarms, dtype=np.int64)))
+        p = self(sw)
+        cov = swarm_coverages(self.rows, sw, self.w).mean(axis=1)
+        return np.round(p, 12) + 1e-6 * cov
+
 
 def improve(ev: Evaluator, start, m: int, *, radius: int = 6, rounds: int = 30):
     """Best-improvement single moves of each member within ``radius`` grid steps
     (keeping distances > ``m``), maximising the exact ``P_bank``. Returns (swarm, P)."""
     c_n = ev.rows.shape[1]
+    radius = c_n // 2 if c_n <= 96 else radius
     sw = np.sort(np.asarray(start, dtype=np.int64))
-    cur = float(ev([sw])[0])
+    cur = float(ev.scored([sw])[0])
     for _ in range(rounds):
         trials = []
         for p in range(sw.size):
@@ -111,12 +122,12 @@ def improve(ev: Evaluator, start, m: int, *, radius: int = 6, rounds: int = 30):
             trials += [np.sort(np.r_[rest, c]) for c in near if ok[c]]
         if not trials:
             break
-        vals = ev(np.array(trials))
+        vals = ev.scored(np.array(trials))
         i = int(np.argmax(vals))
-        if vals[i] <= cur + 1e-12:
+        if vals[i] <= cur + 1e-13:
             break
         sw, cur = trials[i], float(vals[i])
-    return sw, cur
+    return sw, float(ev([sw])[0])
 
 
 def extend(ev: Evaluator, sw, m: int):
@@ -129,7 +140,7 @@ def extend(ev: Evaluator, sw, m: int):
     if cand.size == 0:
         return None
     trials = np.sort(np.c_[np.repeat(sw[None, :], cand.size, axis=0), cand], axis=1)
-    vals = ev(trials)
+    vals = ev.scored(trials)
     return trials[int(np.argmax(vals))]
 
 
@@ -163,6 +174,29 @@ class ReliabilityDesigner:
         self.mip_swarm: dict = {}
         self.best: dict = {}
         self.exhausted: set = set()
+        self._lows = None
+
+    def ring_lows(self, n_max: int) -> np.ndarray:
+        """(S,) proven lower bound on each scenario's fewest covering spacecraft (ring-gap
+        bound, :mod:`ideas_hpc.design.ring_bound`; ``n_max + 1``: none of ``n_max`` covers)."""
+        if self._lows is None:
+            lows = np.ones(self.s_n, dtype=np.int64)
+            step = 2 * math.pi / self.c_n
+            areas = self.ev.w
+            for s in range(self.s_n):
+                bank = CandidateBank(theta=step * np.arange(self.c_n), masks=self.ev.rows[s],
+                                     areas=areas, step=step, d_sep=1.0)
+                red = reduce_problem(bank.masks, areas, merge_candidates=False)
+                rb = ring_bound(bank, red, self.m, int(n_max), self.ev.need)
+                if rb is not None:
+                    low = rb.n_bound(self.ev.need)
+                    lows[s] = int(n_max) + 1 if low is None else max(1, low)
+            self._lows = lows
+        return self._lows
+
+    def cheap_ubar(self, m: int) -> float:
+        """``U_m <=`` the fraction of scenarios whose ring-gap bound allows m spacecraft."""
+        return float(np.mean(self._lows <= m)) if self._lows is not None else 1.0
 
     def left(self):
         return None if self.deadline is None else max(1e-3, self.deadline - time.perf_counter())
@@ -181,11 +215,17 @@ class ReliabilityDesigner:
                 self.mip_swarm[m] = b.swarm
         return self.u_bar[m]
 
-    def upper(self, n: int) -> float:
-        """Proven ``UB(n)`` (module docstring); cheap ``1 - p_f^n`` first."""
-        if 1.0 - self.p_f ** n <= 0.0:
-            return 0.0
-        return failure_upper_bound(n, [self.ubar(k) for k in range(n + 1)], self.p_f)
+    def upper(self, n: int, p: float | None = None) -> float:
+        """Proven ``UB(n)`` (module docstring). The ring-gap fractions first; the
+        programme refines ``Ubar_m`` from ``m = n`` down only while ``UB(n) >= p``."""
+        u = [0.0] + [min(self.cheap_ubar(k), self.u_bar.get(k, 1.0)) for k in range(1, n + 1)]
+        ub = failure_upper_bound(n, u, self.p_f)
+        for k in range(n, 0, -1):
+            if (p is not None and ub < p - 1e-12) or u[k] == 0.0:
+                break
+            u[k] = min(u[k], self.ubar(k))
+            ub = failure_upper_bound(n, u, self.p_f)
+        return ub
 
     def best_of(self, n: int, target: float = math.inf):
         """Best swarm of n found (exhaustive when the count is within the budget)."""
@@ -218,18 +258,20 @@ class ReliabilityDesigner:
             s = extend(self.ev, s, self.m) if s is not None else None
         if s is not None:
             starts.append(s)
-        top = (np.zeros(0, np.int64), 0.0)
+        top = (np.zeros(0, np.int64), -1.0)
         for s in starts:
             sw, val = improve(self.ev, s, self.m)
             if val > top[1]:
                 top = (sw, val)
+        top = (top[0], max(top[1], 0.0))
         self.best[n] = top
         return top
 
 
 def min_swarm_reliable(rows, areas, *, p: float, p_f: float, need: float, n_max: int,
                        sep_steps: int = 0, time_limit: float | None = None,
-                       enumerate_budget: int = 20000, bound_solver=None) -> ReliableResult:
+                       enumerate_budget: int = 20000, bound_solver=None,
+                       ring_prebound: bool = True) -> ReliableResult:
     """The fewest grid candidates with ``P_bank >= p`` (module docstring).
 
     Parameters
@@ -252,6 +294,8 @@ def min_swarm_reliable(rows, areas, *, p: float, p_f: float, need: float, n_max:
         Score every swarm of a size when there are at most this many.
     bound_solver : callable, optional
         ``(m, seconds) -> BoundResult`` in place of the programme (tests).
+    ring_prebound : bool
+        Bound ``U_m`` first by the per-scenario ring-gap bounds (cheap, no programme).
 
     Raises
     ------
@@ -264,8 +308,10 @@ def min_swarm_reliable(rows, areas, *, p: float, p_f: float, need: float, n_max:
                             bound_solver=bound_solver)
     upper: dict = {}
     unresolved: list = []
+    if ring_prebound:
+        d.ring_lows(n_max)
     for n in range(1, int(n_max) + 1):
-        upper[n] = d.upper(n)
+        upper[n] = d.upper(n, p)
         if upper[n] < p - 1e-12:
             continue
         sw, val = d.best_of(n)
