@@ -43,8 +43,9 @@ def _slice(pert: dict, c: int) -> Perturbation:
 
 
 @pytest.mark.parametrize("sets", [[], ['coverage.mode="exact"', "coverage.occlusion=true",
-                                       "coverage.min_elevation_deg=5.0"]],
-                         ids=["paper", "strict"])
+                                       "coverage.min_elevation_deg=5.0"],
+                                  ['attitude.mode="simulated"']],
+                         ids=["paper", "strict", "closed-loop"])
 def test_rows_are_single_candidate_flights(sets):
     # Each row is the flyby pipeline flying that one candidate alone through the
     # scenario's draws (body-level shared, its own state error and misalignment).
@@ -58,6 +59,7 @@ def test_rows_are_single_candidate_flights(sets):
     for s in range(3):
         pert = draw_world(mc, setup, bank.theta, 7, SCENARIO_STREAM, s)
         assert set(pert["params_override"]) == {"mu", "c20", "c22", "reflectivity"}
+        assert ("ics" in pert) == (setup.attitude_mode == "simulated")
         for k in range(0, n_c, 3):
             f = fly_open_loop(setup, bank.theta[k:k + 1], None, r0[k:k + 1], v0[k:k + 1],
                               _slice(pert, k))
@@ -120,3 +122,50 @@ def test_streams_share_no_seed():
                                progress=False)
     assert bank.attrs["scenario_stream"] == SCENARIO_STREAM
     assert bank.attrs["validation_stream"] == VALIDATION_STREAM
+
+
+@pytest.mark.parametrize("sets", [[], ['coverage.mode="paper"', "coverage.occlusion=false",
+                                       "coverage.min_elevation_deg=0.0"]],
+                         ids=["strict", "paper"])
+def test_fast_rows_equal_full_recomputation_on_eros(eros1708, sets):
+    # The witness / budget-window / face-cone shortcuts against the flyby pipeline
+    # recomputing every row of the perturbed flight, on the real (concave) Eros.
+    from ideas_hpc.montecarlo.scenario_rows import full_rows
+    from ideas_hpc.montecarlo.scenarios import grid_theta, row_engine
+
+    c = load(DESIGN, sets)
+    setup = setup_from_campaign(c)
+    mc = c.config.monte_carlo
+    theta = grid_theta(np.deg2rad(3.0))
+    eng = row_engine(setup, theta, mc, 11, SCENARIO_STREAM)
+    for s in (1, 2):
+        pert = Perturbation(**draw_world(mc, setup, theta, 11, SCENARIO_STREAM, s))
+        fast = eng.rows(*eng.flight(pert))
+        full = full_rows(setup, theta, None, eng.r0_T, eng.v0_T, pert)
+        np.testing.assert_array_equal(fast, full)
+        assert full.any() and not full.all()
+        assert (full != (eng.witness >= 0)).any()     # the scenario moved footprints
+
+
+def test_closed_loop_rows_include_the_convergence(eros1708):
+    # Closed-loop attitude from dispersed initial attitudes: the fast rows (full
+    # scans while the attitude converges, budget windows after) equal the full
+    # recomputation, and they differ from the ideal-attitude rows of the same world.
+    from ideas_hpc.montecarlo.scenario_rows import full_rows
+    from ideas_hpc.montecarlo.scenarios import grid_theta, row_engine
+
+    c = load(DESIGN, ['attitude.mode="simulated"'])
+    setup = setup_from_campaign(c)
+    mc = c.config.monte_carlo
+    theta = grid_theta(np.deg2rad(6.0))
+    eng = row_engine(setup, theta, mc, 13, SCENARIO_STREAM)
+    pert = Perturbation(**draw_world(mc, setup, theta, 13, SCENARIO_STREAM, 1))
+    r_img, dcm = eng.flight(pert)
+    from ideas_hpc.core.scenario_rows import deviation_start
+    r_nom, dcm_nom = eng.nominal()
+    i_ok = deviation_start(r_nom, dcm_nom, r_img, dcm, *eng.budget)
+    assert np.all(i_ok > 0)                     # converging: outside the budget at first
+    fast = eng.rows(r_img, dcm)
+    np.testing.assert_array_equal(fast, full_rows(setup, theta, None, eng.r0_T, eng.v0_T, pert))
+    ideal = full_rows(setup.with_(attitude_mode="ideal"), theta, None, eng.r0_T, eng.v0_T, pert)
+    assert (fast != ideal).any()

@@ -27,6 +27,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .segments import segment_blocked, segment_hit, segments_blocked
+
+__all__ = ["build_bvh", "cone_clear", "segment_blocked", "segment_hit", "segments_blocked"]
+
 LEAF_SIZE = 4
 
 
@@ -142,126 +146,6 @@ def build_bvh(vertices, faces):
             tri[i, 3 + k] = vertices[ib, k] - vertices[ia, k]
             tri[i, 6 + k] = vertices[ic, k] - vertices[ia, k]
     return (node_bounds[:n_nodes].copy(), node_info[:n_nodes].copy(), tri, tri_vid)
-
-
-@njit(cache=True, inline="always")
-def _ray_box(ox, oy, oz, ix, iy, iz, tmax, b, node):
-    """Slab test: does the ray ``o + t d`` (``i = 1/d``) meet box ``node`` for t in [0, tmax]?"""
-    t0 = (b[node, 0] - ox) * ix
-    t1 = (b[node, 3] - ox) * ix
-    lo = min(t0, t1)
-    hi = max(t0, t1)
-    t0 = (b[node, 1] - oy) * iy
-    t1 = (b[node, 4] - oy) * iy
-    lo = max(lo, min(t0, t1))
-    hi = min(hi, max(t0, t1))
-    t0 = (b[node, 2] - oz) * iz
-    t1 = (b[node, 5] - oz) * iz
-    lo = max(lo, min(t0, t1))
-    hi = min(hi, max(t0, t1))
-    return hi >= max(lo, 0.0) and lo <= tmax
-
-
-@njit(cache=True)
-def segment_blocked(node_bounds, node_info, tri, tri_vid,
-                    ox, oy, oz, dx, dy, dz, tmax, skip_vertex):
-    """Any-hit query: does the ray ``o + t d``, ``t_min < t < tmax``, cross a face?
-
-    Parameters
-    ----------
-    node_bounds, node_info, tri, tri_vid : arrays from :func:`build_bvh`
-    ox, oy, oz : float
-        Ray origin, m (a mesh vertex for the occlusion and shadow tests).
-    dx, dy, dz : float
-        Ray direction (any length; ``t`` is in units of it).
-    tmax : float
-        Largest ``t`` that counts (``1`` for the segment ``o -> o + d``;
-        ``inf`` for a ray to the Sun).
-    skip_vertex : int
-        Faces that contain this vertex are ignored (the ray starts on them);
-        ``-1`` ignores none.
-
-    Returns
-    -------
-    bool
-        True when a face is crossed (Moller-Trumbore, both face sides). Hits
-        with ``t <= 1e-9 |d|``-relative slack at the origin are ignored.
-    """
-    # A zero direction component gets a huge finite inverse: (b - o) * inf would
-    # be NaN when the origin lies on a slab plane.
-    ix = 1.0 / dx if dx != 0.0 else 1e300
-    iy = 1.0 / dy if dy != 0.0 else 1e300
-    iz = 1.0 / dz if dz != 0.0 else 1e300
-    dn = np.sqrt(dx * dx + dy * dy + dz * dz)
-    # Minimum t: 1 nm (ignore round-off hits at the start point).
-    t_min = 1e-9 / dn
-    stack = np.empty(64, dtype=np.int64)
-    sp = 0
-    stack[0] = 0
-    sp = 1
-    while sp > 0:
-        sp -= 1
-        node = stack[sp]
-        if not _ray_box(ox, oy, oz, ix, iy, iz, tmax, node_bounds, node):
-            continue
-        left = node_info[node, 0]
-        if left >= 0:
-            stack[sp] = left
-            stack[sp + 1] = node_info[node, 1]
-            sp += 2
-            continue
-        start = node_info[node, 2]
-        for i in range(start, start + node_info[node, 3]):
-            if (tri_vid[i, 0] == skip_vertex or tri_vid[i, 1] == skip_vertex
-                    or tri_vid[i, 2] == skip_vertex):
-                continue
-            e1x = tri[i, 3]
-            e1y = tri[i, 4]
-            e1z = tri[i, 5]
-            e2x = tri[i, 6]
-            e2y = tri[i, 7]
-            e2z = tri[i, 8]
-            px = dy * e2z - dz * e2y
-            py = dz * e2x - dx * e2z
-            pz = dx * e2y - dy * e2x
-            det = e1x * px + e1y * py + e1z * pz
-            if det == 0.0:
-                continue
-            inv = 1.0 / det
-            sx = ox - tri[i, 0]
-            sy = oy - tri[i, 1]
-            sz = oz - tri[i, 2]
-            u = (sx * px + sy * py + sz * pz) * inv
-            if u < 0.0 or u > 1.0:
-                continue
-            qx = sy * e1z - sz * e1y
-            qy = sz * e1x - sx * e1z
-            qz = sx * e1y - sy * e1x
-            v = (dx * qx + dy * qy + dz * qz) * inv
-            if v < 0.0 or u + v > 1.0:
-                continue
-            t = (e2x * qx + e2y * qy + e2z * qz) * inv
-            if t > t_min and t < tmax:
-                return True
-    return False
-
-
-@njit(cache=True)
-def segments_blocked(node_bounds, node_info, tri, tri_vid, origins, targets, skip):
-    """Batch of :func:`segment_blocked` for segments ``origins[k] -> targets[k]`` (m).
-
-    ``skip[k]`` is the vertex whose faces are ignored (``-1``: none). Serial;
-    used by tests and by the boundary for one-off queries.
-    """
-    n = origins.shape[0]
-    out = np.empty(n, dtype=np.bool_)
-    for k in range(n):
-        out[k] = segment_blocked(node_bounds, node_info, tri, tri_vid,
-                                 origins[k, 0], origins[k, 1], origins[k, 2],
-                                 targets[k, 0] - origins[k, 0],
-                                 targets[k, 1] - origins[k, 1],
-                                 targets[k, 2] - origins[k, 2], 1.0, skip[k])
-    return out
 
 
 @njit(cache=True, inline="always")

@@ -24,6 +24,7 @@ Streams: :mod:`ideas_hpc.seeds` (``SCENARIO_STREAM`` for the bank,
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import time
 from dataclasses import dataclass
@@ -31,12 +32,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..attitude import draw_initial_conditions
-from ..candidates import rows_from_views
 from ..engine.store_meta import config_hash
-from ..flyby import FlybySetup, Perturbation, endpoints, open_loop_views, target
+from ..flyby import FlybySetup, Perturbation, endpoints, target
 from ..seeds import (SCENARIO_STREAM, STREAM_ATTITUDE, STREAM_BODY, STREAM_SPACECRAFT,
                      VALIDATION_STREAM, stream_rng)
 from .dispersions import DISPERSIONS, reference_start
+from .scenario_rows import RowEngine
+from .scenario_store import build_into_store, chunk_task
 
 TWO_PI = 2.0 * math.pi
 #: Dispersions drawn once per scenario and shared by all spacecraft.
@@ -108,30 +110,23 @@ def draw_world(mc, setup: FlybySetup, theta: np.ndarray, seed: int, stream: int,
     return pert
 
 
-def rows_setup(setup: FlybySetup) -> FlybySetup:
-    """The setup the rows are flown with: closed-loop time series not kept (one sample)."""
-    if setup.attitude_mode != "simulated":
-        return setup
-    return setup.with_(decimate=max(1, int(round((setup.tf - setup.t0) / setup.dt))))
-
-
-def flight_rows(setup: FlybySetup, theta, periods, r0_T, v0_T, pert: dict) -> np.ndarray:
-    """(K, V) bool rows of spacecraft ``theta`` flown open loop through one perturbation."""
-    r_img, dcm, _, _ = open_loop_views(rows_setup(setup), theta, periods, r0_T, v0_T,
-                                       Perturbation(**pert))
-    sun = setup.sun_T() if setup.coverage.needs_sun else None
-    return rows_from_views(setup, r_img, dcm, sun)
-
-
-def _rows_chunk(ks, *, setup, theta, periods, r0_T, v0_T, mc, seed, stream):
-    out = np.empty((len(ks), theta.size, setup.body.shape.n_vertices), dtype=bool)
+def _rows_chunk(ks, *, engine: RowEngine, mc, seed, stream):
+    setup = engine.setup
+    out = np.empty((len(ks), engine.theta.size, setup.body.shape.n_vertices), dtype=bool)
     for i, k in enumerate(ks):
-        pert = draw_world(mc, setup, theta, seed, stream, int(k))
-        out[i] = flight_rows(setup, theta, periods, r0_T, v0_T, pert)
+        pert = Perturbation(**draw_world(mc, setup, engine.theta, seed, stream, int(k)))
+        out[i] = engine.rows(*engine.flight(pert))
     return out
 
 
-def _run_chunks(ks, kw, client, chunk_size, progress, label):
+def row_engine(setup: FlybySetup, theta, mc, seed: int, stream: int) -> RowEngine:
+    """Targeted candidates ``theta`` with their nominal witnesses; budget from draw 0."""
+    r0, v0 = nominal_start(setup, theta)
+    pilot = Perturbation(**draw_world(mc, setup, theta, seed, stream, 0))
+    return RowEngine(setup, theta, r0, v0).prepare(pilot)
+
+
+def _run_chunks(ks, fn, client, chunk_size, progress, label):
     parts = [ks[i:i + chunk_size] for i in range(0, len(ks), chunk_size)]
     bar = None
     if progress:
@@ -142,12 +137,12 @@ def _run_chunks(ks, kw, client, chunk_size, progress, label):
     out = []
     if client is None:
         for p in parts:
-            out.append(_rows_chunk(p, **kw))
+            out.append(fn(p))
             if bar is not None:
                 bar.update(len(p))
     else:
         from distributed import as_completed
-        futures = client.map(_rows_chunk, parts, **kw, pure=False)
+        futures = client.map(fn, parts, pure=False)
         index = {f.key: i for i, f in enumerate(futures)}
         res = [None] * len(parts)
         for f in as_completed(futures):
@@ -208,26 +203,41 @@ def build_scenario_bank(setup: FlybySetup, step_rad: float, mc, *, seed: int, n_
     client : distributed.Client, optional
         Spread chunks of ``chunk_size`` scenarios over its workers (same numbers).
     store : str, optional
-        Zarr path to build into (not yet supported: must be None).
+        Zarr path to build into: an engine store chunked by scenario, resumed
+        when some chunks are missing and read back without flying when it is
+        complete and its shaping config is unchanged
+        (:mod:`ideas_hpc.montecarlo.scenario_store`).
     progress : bool
         Progress bar on stderr.
     """
-    if store is not None:
-        raise NotImplementedError("scenario bank stores: not yet")
     t0 = time.perf_counter()
     theta = grid_theta(step_rad)
-    r0, v0 = nominal_start(setup, theta)
-    kw = dict(setup=setup, theta=theta, periods=None, r0_T=r0, v0_T=v0, mc=mc, seed=int(seed),
-              stream=SCENARIO_STREAM)
-    rows = _run_chunks(list(range(int(n_scenarios))), kw, client, chunk_size, progress,
-                       "scenario bank")
+    areas = np.asarray(setup.body.shape.vertex_areas, dtype=np.float64)
+    config = shaping_config(setup, mc, step_rad, seed, n_scenarios)
     attrs = {"seed": int(seed), "scenario_stream": SCENARIO_STREAM,
              "validation_stream": VALIDATION_STREAM, "n_scenarios": int(n_scenarios),
-             "config_hash": config_hash(shaping_config(setup, mc, step_rad, seed, n_scenarios)),
-             "build_s": time.perf_counter() - t0}
-    return ScenarioBank(theta=theta, rows=rows,
-                        areas=np.asarray(setup.body.shape.vertex_areas, dtype=np.float64),
-                        attrs=attrs)
+             "config_hash": config_hash(config)}
+    engines: list = []
+
+    def chunk_rows():
+        if not engines:
+            engines.append(row_engine(setup, theta, mc, seed, SCENARIO_STREAM))
+        return functools.partial(_rows_chunk, engine=engines[0], mc=mc, seed=int(seed),
+                                 stream=SCENARIO_STREAM)
+
+    if store is None:
+        rows = _run_chunks(list(range(int(n_scenarios))), chunk_rows(), client, chunk_size,
+                           progress, "scenario bank")
+    else:
+        rows, note = build_into_store(store, make_chunk_fn=lambda: chunk_task(chunk_rows()),
+                                      theta=theta, areas=areas, n_scenarios=n_scenarios,
+                                      chunk_size=chunk_size, config=config, seed=seed,
+                                      attrs=attrs, client=client, progress=progress)
+        attrs.update(note)
+    if engines:
+        attrs["budget"] = [float(x) for x in engines[0].budget]
+    attrs["build_s"] = time.perf_counter() - t0
+    return ScenarioBank(theta=theta, rows=rows, areas=areas, attrs=attrs)
 
 
 def fly_members(setup: FlybySetup, theta, periods, mc, *, seed: int, n_samples: int,
@@ -235,8 +245,9 @@ def fly_members(setup: FlybySetup, theta, periods, mc, *, seed: int, n_samples: 
     """(M, N, V) bool: per-member rows of swarm ``theta`` (rad) in ``n_samples`` fresh draws
     of the continuous dispersions (no failures), stream ``VALIDATION_STREAM``."""
     th = np.asarray(theta, dtype=np.float64).ravel()
-    r0, v0 = nominal_start(setup, th)
-    kw = dict(setup=setup, theta=th, periods=periods, r0_T=r0, v0_T=v0, mc=mc, seed=int(seed),
-              stream=VALIDATION_STREAM)
-    return _run_chunks(list(range(int(n_samples))), kw, client, chunk_size, progress,
+    if periods is not None:
+        raise NotImplementedError("fly_members: FoV sweeping periods are not supported yet")
+    fn = functools.partial(_rows_chunk, engine=row_engine(setup, th, mc, seed, VALIDATION_STREAM),
+                           mc=mc, seed=int(seed), stream=VALIDATION_STREAM)
+    return _run_chunks(list(range(int(n_samples))), fn, client, chunk_size, progress,
                        "validation flights")

@@ -1,0 +1,361 @@
+"""Exact per-candidate rows of a perturbed flight, re-testing only what can change (issue 20).
+
+A scenario moves every candidate's camera by a small deviation from its
+nominal flight: positions ``r'_i = r_i + dr_i`` and camera DCMs
+``C'_i = C_i + dC_i`` at the images. For a vertex ``p``, the camera
+coordinates move by (same derivation as :mod:`ideas_hpc.core.time_tree`)
+
+    q'_i - q_i = (C'_i - C_i)(p - r_i) + C'_i (r_i - r'_i),
+    |q'_i - q_i| <= B_C |p - r_i| + s' B_r,
+
+with ``B_C >= ||C'_i - C_i||_F``, ``B_r >= |r'_i - r_i|`` and
+``s' >= ||C'_i||_2`` (1 + 1e-9 for the rotation matrices flown here, checked
+by the caller). Culling, clipping and the field of view are linear or
+|linear| in ``q`` (gradient norms 1 and ``sec eta``); the exact culling
+``(r - p) . n``, the elevation ``(r - p) . n >= |r - p| sin e_min`` and the
+range ``|r - p| <= max_range`` move by at most ``|n| B_r``, ``(|n| + |sin
+e_min|) B_r`` and ``B_r``. Illumination does not depend on the spacecraft.
+
+So with a *budget* ``(B_C, B_r)`` fixed before any scenario:
+
+* :func:`nominal_witness` gives, per (candidate, vertex), the first nominal
+  image that sees the vertex (-1: unseen), and :func:`reachable` whether any
+  image could pass culling, clipping, field of view, elevation and range for
+  some deviation within the budget (a superset test with floating-point slack);
+* :func:`perturbed_rows` then decides each (candidate, vertex) of a scenario
+  exactly: a nominally seen vertex is first tested at its witness image in
+  the perturbed flight (one exact test: a hit settles it); a vertex that is
+  not reachable stays unseen in every image where the deviation is within
+  the budget, so only the images before ``i_ok`` (the first image from which
+  the candidate's deviation stays within budget, e.g. after the closed-loop
+  attitude has converged) are scanned; anything else gets the full exact scan
+  of :func:`ideas_hpc.core.time_tree._scan` on the perturbed flight.
+
+Every answer is either an exact test on the perturbed flight or a proof from
+the bounds, so rows equal a full recomputation bit for bit.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+from .time_tree import LEAF, _FP, _classify, _scan, time_tree
+from .segments import face_blocks_cone, segment_hit
+from .visibility import _seen
+
+#: Bound on ||C'||_2 for the flown rotation matrices (checked by the boundary layer).
+S_MAX = 1.0 + 1e-9
+
+
+@njit(cache=True, parallel=True)
+def nominal_witness(vertices, normals, r_T, dcm_BT, tan_eta, near, far, exact, sin_min_elev,
+                    max_range, occlusion, illumination, sun_T, node_bounds, node_info, tri,
+                    tri_vid):
+    """(N, V) int64: first image index at which spacecraft k sees vertex j, -1 if never.
+
+    Arguments as :func:`ideas_hpc.core.coverage.observed_by_spacecraft`.
+    """
+    nv = vertices.shape[0]
+    nsc = r_T.shape[0]
+    nimg = r_T.shape[1]
+    NF, NI = time_tree(r_T, dcm_BT, LEAF)
+    sec_eta = np.sqrt(1.0 + tan_eta * tan_eta) * (1.0 + 1e-12)
+    strict = occlusion or illumination or sin_min_elev > -1.0 or max_range < np.inf
+    idx = np.arange(nimg).astype(np.float64)
+    out = np.full((nsc, nv), -1, dtype=np.int64)
+    for j in prange(nv):
+        stack = np.empty(128, dtype=np.int64)
+        for k in range(nsc):
+            c, best = _scan(j, k, NF, NI, stack, idx, np.inf, True, vertices, normals, r_T,
+                            dcm_BT, tan_eta, sec_eta, near, far, exact, strict, sin_min_elev,
+                            max_range, occlusion, illumination, sun_T, node_bounds, node_info,
+                            tri, tri_vid)
+            if c > 0:
+                out[k, j] = int(best)
+    return out
+
+
+@njit(cache=True, inline="always")
+def _could(px, py, pz, nx, ny, nz, nabs, k, i, r_T, dcm_BT, tan_eta, sec_eta, near, far,
+           exact, sin_min_elev, max_range, bc, br):
+    """False when no camera within ``(bc, br)`` of image ``i`` can pass the geometric tests."""
+    rx = r_T[k, i, 0]
+    ry = r_T[k, i, 1]
+    rz = r_T[k, i, 2]
+    dx = px - rx
+    dy = py - ry
+    dz = pz - rz
+    dn = np.sqrt(dx * dx + dy * dy + dz * dz)
+    ebr = S_MAX * br
+    fp = _FP * (dn + br + np.sqrt(rx * rx + ry * ry + rz * rz))
+    delta = bc * dn + ebr + fp
+    los_n = -(dx * nx + dy * ny + dz * nz)
+    if exact:
+        if los_n < -(nabs * br + fp * nabs):
+            return False
+    elif rx * nx + ry * ny + rz * nz < -(nabs * br + fp * nabs):
+        return False
+    qz = dcm_BT[k, i, 2, 0] * dx + dcm_BT[k, i, 2, 1] * dy + dcm_BT[k, i, 2, 2] * dz
+    if qz - near < -delta or far - qz < -delta:
+        return False
+    qx = dcm_BT[k, i, 0, 0] * dx + dcm_BT[k, i, 0, 1] * dy + dcm_BT[k, i, 0, 2] * dz
+    qy = dcm_BT[k, i, 1, 0] * dx + dcm_BT[k, i, 1, 1] * dy + dcm_BT[k, i, 1, 2] * dz
+    m2 = sec_eta * delta + (1.0 + tan_eta) * fp
+    if tan_eta * qz - abs(qx) < -m2 or tan_eta * qz - abs(qy) < -m2:
+        return False
+    if sin_min_elev > -1.0 or max_range < np.inf:
+        if dn - max_range > br + fp:
+            return False
+        if los_n - dn * sin_min_elev < -((nabs + abs(sin_min_elev)) * br + 2.0 * fp):
+            return False
+    return True
+
+
+@njit(cache=True, inline="always")
+def _extreme(NF, NI, stack, k, px, py, pz, nx, ny, nz, nabs, r_T, dcm_BT, tan_eta, sec_eta,
+             near, far, exact, sin_min_elev, max_range, bc, br, last):
+    """First (``last``: last) image that :func:`_could` see the vertex, -1 if none."""
+    sp = 1
+    stack[0] = NI.shape[0] - 1
+    while sp > 0:
+        sp -= 1
+        node = stack[sp]
+        if _classify(NF, k, node, px, py, pz, nx, ny, nz, nabs, tan_eta, sec_eta, near, far,
+                     exact) == 0:
+            continue
+        if NI[node, 2] >= 0:
+            first, second = NI[node, 3], NI[node, 2]     # pushed second, popped first
+            if last:
+                first, second = NI[node, 2], NI[node, 3]
+            if first >= 0:
+                stack[sp] = first
+                sp += 1
+            if second >= 0:
+                stack[sp] = second
+                sp += 1
+            continue
+        n = NI[node, 1] - NI[node, 0]
+        for h in range(n):
+            i = NI[node, 1] - 1 - h if last else NI[node, 0] + h
+            if _could(px, py, pz, nx, ny, nz, nabs, k, i, r_T, dcm_BT, tan_eta, sec_eta, near,
+                      far, exact, sin_min_elev, max_range, bc, br):
+                return i
+    return -1
+
+
+@njit(cache=True, parallel=True)
+def reachable(vertices, normals, r_T, dcm_BT, tan_eta, near, far, exact, sin_min_elev,
+              max_range, bc, br):
+    """(N, V, 2) int64: first and last image at which a camera within the budget could
+    see vertex j (-1, -1: none).
+
+    ``bc`` (Frobenius norm of the DCM deviation) and ``br`` (m, position
+    deviation) is the budget; outside the window no camera within it passes
+    culling, clipping, field of view, elevation and range (module docstring).
+    The nominal time tree prunes with its node bounds inflated by the budget.
+    """
+    nv = vertices.shape[0]
+    nsc = r_T.shape[0]
+    NF, NI = time_tree(r_T, dcm_BT, LEAF)
+    for k in range(nsc):
+        for node in range(NI.shape[0]):
+            NF[k, node, 14] = (NF[k, node, 14] + br) * S_MAX * (1.0 + 1e-12)
+            NF[k, node, 13] = (NF[k, node, 13] + bc) * (1.0 + 1e-12)
+    sec_eta = np.sqrt(1.0 + tan_eta * tan_eta) * (1.0 + 1e-12)
+    out = np.full((nsc, nv, 2), -1, dtype=np.int64)
+    for j in prange(nv):
+        stack = np.empty(128, dtype=np.int64)
+        px = vertices[j, 0]
+        py = vertices[j, 1]
+        pz = vertices[j, 2]
+        nx = normals[j, 0]
+        ny = normals[j, 1]
+        nz = normals[j, 2]
+        nabs = np.sqrt(nx * nx + ny * ny + nz * nz)
+        for k in range(nsc):
+            lo = _extreme(NF, NI, stack, k, px, py, pz, nx, ny, nz, nabs, r_T, dcm_BT, tan_eta,
+                          sec_eta, near, far, exact, sin_min_elev, max_range, bc, br, False)
+            if lo >= 0:
+                out[k, j, 0] = lo
+                out[k, j, 1] = _extreme(NF, NI, stack, k, px, py, pz, nx, ny, nz, nabs, r_T,
+                                        dcm_BT, tan_eta, sec_eta, near, far, exact,
+                                        sin_min_elev, max_range, bc, br, True)
+    return out
+
+
+@njit(cache=True, parallel=True)
+def deviation_start(r_nom, dcm_nom, r_T, dcm_BT, bc, br):
+    """(N,) int64: first image from which every image's deviation is within ``(bc, br)``.
+
+    ``n_img`` when the last image is already outside the budget.
+    """
+    nsc = r_T.shape[0]
+    nimg = r_T.shape[1]
+    out = np.empty(nsc, dtype=np.int64)
+    for k in prange(nsc):
+        i_ok = 0
+        for i in range(nimg - 1, -1, -1):
+            dc = 0.0
+            for a in range(3):
+                for b in range(3):
+                    dc += (dcm_BT[k, i, a, b] - dcm_nom[k, i, a, b]) ** 2
+            dr = ((r_T[k, i, 0] - r_nom[k, i, 0]) ** 2 + (r_T[k, i, 1] - r_nom[k, i, 1]) ** 2
+                  + (r_T[k, i, 2] - r_nom[k, i, 2]) ** 2)
+            if not (np.sqrt(dc) <= bc and np.sqrt(dr) <= br):
+                i_ok = i + 1
+                break
+        out[k] = i_ok
+    return out
+
+
+@njit(cache=True, inline="always")
+def _seen_hint(j, k, i, hint, vertices, normals, r_T, dcm_BT, tan_eta, near, far, exact,
+               sin_min_elev, max_range, occlusion, illumination, sun_T, node_bounds,
+               node_info, tri, tri_vid):
+    """:func:`~ideas_hpc.core.visibility._seen` with the occlusion query started at face
+    ``hint[0]`` (updated to the face that blocks, if any): the same answer."""
+    if not _seen(j, k, i, vertices, normals, r_T, dcm_BT, tan_eta, near, far, exact,
+                 sin_min_elev, max_range, False, illumination, sun_T, node_bounds, node_info,
+                 tri, tri_vid):
+        return False
+    if not occlusion:
+        return True
+    px = vertices[j, 0]
+    py = vertices[j, 1]
+    pz = vertices[j, 2]
+    f = segment_hit(node_bounds, node_info, tri, tri_vid, px, py, pz, r_T[k, i, 0] - px,
+                    r_T[k, i, 1] - py, r_T[k, i, 2] - pz, 1.0, j, hint[0])
+    if f >= 0:
+        hint[0] = f
+        return False
+    return True
+
+
+@njit(cache=True, inline="always")
+def _below_elevation(NF, k, node, px, py, pz, nx, ny, nz, nabs, sin_min_elev, max_range):
+    """True when every image of the node fails the elevation or the range test.
+
+    With ``|r_k - r_m| <= e_r``: ``(r_k - p) . n <= (r_m - p) . n + |n| e_r`` and
+    ``|r_k - p| >= |r_m - p| - e_r``.
+    """
+    vx = NF[k, node, 9] - px
+    vy = NF[k, node, 10] - py
+    vz = NF[k, node, 11] - pz
+    dist = np.sqrt(vx * vx + vy * vy + vz * vz)
+    er = NF[k, node, 14]
+    fp = _FP * (dist + er + NF[k, node, 12])
+    if dist - er - fp > max_range:
+        return True
+    if sin_min_elev <= 0.0:
+        return False
+    los_hi = vx * nx + vy * ny + vz * nz + nabs * er + fp
+    return los_hi < (dist - er - fp) * sin_min_elev
+
+
+@njit(cache=True, inline="always")
+def _scan_range(j, k, a, b, NF, NI, stack, hint, vertices, normals, r_T, dcm_BT, tan_eta,
+                sec_eta, near, far, exact, strict, sin_min_elev, max_range, occlusion,
+                illumination, sun_T, node_bounds, node_info, tri, tri_vid):
+    """Does spacecraft ``k`` see vertex ``j`` in an image ``a <= i < b``? Exact.
+
+    Walks the perturbed flight's time tree: a node failing culling or clipping
+    with margin is skipped (:func:`~ideas_hpc.core.time_tree._classify`), and so
+    is a node whose sight lines all lie in a cone the last blocking face
+    ``hint[0]`` covers (:func:`~ideas_hpc.core.segments.face_blocks_cone`); leaf
+    images are tested one by one (:func:`_seen_hint`).
+    """
+    px = vertices[j, 0]
+    py = vertices[j, 1]
+    pz = vertices[j, 2]
+    nx = normals[j, 0]
+    ny = normals[j, 1]
+    nz = normals[j, 2]
+    nabs = np.sqrt(nx * nx + ny * ny + nz * nz)
+    sp = 1
+    stack[0] = NI.shape[0] - 1
+    while sp > 0:
+        sp -= 1
+        node = stack[sp]
+        i0 = NI[node, 0]
+        i1 = NI[node, 1]
+        if i1 <= a or i0 >= b:
+            continue
+        cls = _classify(NF, k, node, px, py, pz, nx, ny, nz, nabs, tan_eta, sec_eta, near,
+                        far, exact)
+        if cls == 0:
+            continue
+        if cls == 2 and not strict and i0 >= a and i1 <= b:
+            return True
+        if sin_min_elev > -1.0 or max_range < np.inf:
+            if _below_elevation(NF, k, node, px, py, pz, nx, ny, nz, nabs, sin_min_elev,
+                                max_range):
+                continue
+        if occlusion and hint[0] >= 0:
+            vx = NF[k, node, 9] - px
+            vy = NF[k, node, 10] - py
+            vz = NF[k, node, 11] - pz
+            dist = np.sqrt(vx * vx + vy * vy + vz * vz)
+            er = NF[k, node, 14]
+            if er < 0.5 * dist and face_blocks_cone(tri, tri_vid, hint[0], j, px, py, pz,
+                                                    vx / dist, vy / dist, vz / dist,
+                                                    np.arcsin(er / dist), dist - er):
+                continue
+        if NI[node, 2] >= 0:
+            if NI[node, 3] >= 0:
+                stack[sp] = NI[node, 3]
+                sp += 1
+            stack[sp] = NI[node, 2]
+            sp += 1
+            continue
+        for i in range(max(i0, a), min(i1, b)):
+            if _seen_hint(j, k, i, hint, vertices, normals, r_T, dcm_BT, tan_eta, near, far,
+                          exact, sin_min_elev, max_range, occlusion, illumination, sun_T,
+                          node_bounds, node_info, tri, tri_vid):
+                return True
+    return False
+
+
+@njit(cache=True, parallel=True)
+def perturbed_rows(witness, window, i_ok, vertices, normals, r_T, dcm_BT, tan_eta, near, far,
+                   exact, sin_min_elev, max_range, occlusion, illumination, sun_T, node_bounds,
+                   node_info, tri, tri_vid):
+    """(N, V) bool rows of the perturbed flight ``r_T``, ``dcm_BT`` (module docstring).
+
+    ``witness`` (N, V) from :func:`nominal_witness`, ``window`` (N, V, 2) from
+    :func:`reachable` with the budget, ``i_ok`` (N,) from :func:`deviation_start`
+    with the same budget; other arguments as
+    :func:`ideas_hpc.core.coverage.observed_by_spacecraft`, for the perturbed flight.
+    A (candidate, vertex) not settled by its witness image is scanned exactly
+    over the images before ``i_ok`` and over its window from ``i_ok`` on
+    (:func:`_scan_range`).
+    """
+    nv = vertices.shape[0]
+    nsc = r_T.shape[0]
+    NF, NI = time_tree(r_T, dcm_BT, LEAF)
+    sec_eta = np.sqrt(1.0 + tan_eta * tan_eta) * (1.0 + 1e-12)
+    strict = occlusion or illumination or sin_min_elev > -1.0 or max_range < np.inf
+    mask = np.zeros((nsc, nv), dtype=np.bool_)
+    for j in prange(nv):
+        stack = np.empty(128, dtype=np.int64)
+        hint = np.full(1, -1, dtype=np.int64)
+        for k in range(nsc):
+            w = witness[k, j]
+            if w >= 0 and _seen(j, k, w, vertices, normals, r_T, dcm_BT, tan_eta, near, far,
+                                exact, sin_min_elev, max_range, occlusion, illumination,
+                                sun_T, node_bounds, node_info, tri, tri_vid):
+                mask[k, j] = True
+                continue
+            hint[0] = -1
+            seen = _scan_range(j, k, 0, i_ok[k], NF, NI, stack, hint, vertices, normals,
+                               r_T, dcm_BT, tan_eta, sec_eta, near, far, exact, strict,
+                               sin_min_elev, max_range, occlusion, illumination, sun_T,
+                               node_bounds, node_info, tri, tri_vid)
+            if not seen and window[k, j, 0] >= 0:
+                seen = _scan_range(j, k, max(window[k, j, 0], i_ok[k]), window[k, j, 1] + 1,
+                                   NF, NI, stack, hint, vertices, normals, r_T, dcm_BT,
+                                   tan_eta, sec_eta, near, far, exact, strict, sin_min_elev,
+                                   max_range, occlusion, illumination, sun_T, node_bounds,
+                                   node_info, tri, tri_vid)
+            mask[k, j] = seen
+    return mask

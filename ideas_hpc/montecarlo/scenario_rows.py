@@ -1,0 +1,131 @@
+"""Fast exact scenario rows: the nominal flight once, then only what a deviation can change.
+
+Boundary of :mod:`ideas_hpc.core.scenario_rows`. :class:`RowEngine` flies the
+candidates once on the nominal model with ideal attitude, records each
+(candidate, vertex)'s first seeing image and whether any camera within a
+deviation *budget* could see it, and then turns any perturbed flight
+(positions and camera DCMs at the images) into rows identical to
+:func:`ideas_hpc.candidates.rows_from_views` on that flight. The budget only
+decides speed, never the rows; it is taken from a pilot scenario (the
+deviations of scenario 0, with head room). Rows with a ``[coverage]``
+requirement (quality masks) take the full recomputation.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..candidates import rows_from_views
+from ..core import scenario_rows as _k
+from ..flyby import FlybySetup, Perturbation, open_loop_views
+from ..mapping import _check_geometry, _mesh, _strict_args
+
+#: Head room on the pilot's deviations (speed only).
+HEADROOM = 1.5
+#: Largest ``||C C^T - I||_F`` accepted for the perturbed DCMs (the kernels assume
+#: ``||C||_2 <= 1 + 1e-9``); anything worse takes the full recomputation.
+ORTHO_TOL = 1e-10
+
+
+@dataclass
+class RowEngine:
+    """Nominal data of one set of candidates (see module docstring)."""
+
+    setup: FlybySetup
+    theta: np.ndarray
+    r0_T: np.ndarray
+    v0_T: np.ndarray
+    witness: np.ndarray | None = None      # (K, V) int64
+    window: np.ndarray | None = None       # (K, V, 2) int64
+    budget: tuple = (0.0, 0.0)             # (Frobenius, m)
+    stats: dict | None = None
+
+    @property
+    def fast(self) -> bool:
+        return not self.setup.coverage.requirement
+
+    def _args(self, r_img, dcm):
+        setup = self.setup
+        shape = setup.body.shape
+        r, c, tan_eta, near, far, _ = _check_geometry(shape, r_img, dcm, setup.eta, setup.near,
+                                                      setup.far)
+        v, n, _ = _mesh(shape)
+        sun = setup.sun_T() if setup.coverage.needs_sun else None
+        sin_e, max_r, occ, ill, s, tree = _strict_args(shape, setup.coverage, sun, r.shape[1])
+        exact = setup.coverage.mode == "exact"
+        return v, n, r, c, tan_eta, near, far, exact, sin_e, max_r, occ, ill, s, tree
+
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state.pop("_nominal", None)       # recomputed where needed (large, cheap)
+        return state
+
+    def nominal(self):
+        """Positions and ideal camera DCMs of the nominal flight at the images (cached)."""
+        if "_nominal" not in self.__dict__:
+            ideal = self.setup.with_(attitude_mode="ideal")
+            r_img, dcm, _, _ = open_loop_views(ideal, self.theta, None, self.r0_T, self.v0_T,
+                                               Perturbation())
+            self.__dict__["_nominal"] = (r_img, dcm)
+        return self.__dict__["_nominal"]
+
+    def prepare(self, pilot: Perturbation | None) -> "RowEngine":
+        """Witnesses, budget from the pilot perturbation, reachability."""
+        if not self.fast:
+            return self
+        r_img, dcm = self.nominal()
+        v, n, r, c, te, ne, fa, ex, se, mr, oc, il, s, tree = self._args(r_img, dcm)
+        self.witness = _k.nominal_witness(v, n, r, c, te, ne, fa, ex, se, mr, oc, il, s,
+                                          *tree).astype(np.int32)   # shipped to workers
+        if pilot is not None:
+            rp, dp = self.flight(pilot)
+            dev_r = np.linalg.norm(rp - r_img, axis=2)
+            dev_c = np.sqrt(((dp - dcm) ** 2).sum(axis=(2, 3)))
+            half = dev_c.shape[1] // 2
+            br = HEADROOM * float(np.percentile(dev_r.max(axis=1), 99))
+            bc = HEADROOM * float(np.percentile(dev_c[:, half:].max(axis=1), 99))
+            self.budget = (bc, br)
+        bc, br = self.budget
+        self.window = _k.reachable(v, n, r, c, te, ne, fa, ex, se, mr, float(bc),
+                                   float(br)).astype(np.int32)
+        return self
+
+    def flight(self, pert: Perturbation):
+        """Positions and camera DCMs at the images of the perturbed flight."""
+        r_img, dcm, _, _ = open_loop_views(rows_setup(self.setup), self.theta, None, self.r0_T,
+                                           self.v0_T, pert)
+        return r_img, dcm
+
+    def rows(self, r_img, dcm) -> np.ndarray:
+        """(K, V) bool rows of a perturbed flight, identical to the full recomputation."""
+        if not self.fast or not _orthonormal(dcm):
+            sun = self.setup.sun_T() if self.setup.coverage.needs_sun else None
+            return rows_from_views(self.setup, r_img, dcm, sun)
+        bc, br = self.budget
+        r_nom, dcm_nom = self.nominal()
+        v, n, r, c, te, ne, fa, ex, se, mr, oc, il, s, tree = self._args(r_img, dcm)
+        i_ok = _k.deviation_start(r_nom, dcm_nom, r, c, float(bc), float(br))
+        return _k.perturbed_rows(self.witness, self.window, i_ok, v, n, r, c, te, ne, fa, ex,
+                                 se, mr, oc, il, s, *tree)
+
+
+def rows_setup(setup: FlybySetup) -> FlybySetup:
+    """The setup the rows are flown with: closed-loop time series not kept (one sample)."""
+    if setup.attitude_mode != "simulated":
+        return setup
+    return setup.with_(decimate=max(1, int(round((setup.tf - setup.t0) / setup.dt))))
+
+
+def full_rows(setup: FlybySetup, theta, periods, r0_T, v0_T, pert: Perturbation) -> np.ndarray:
+    """(K, V) bool rows by full recomputation: the flyby pipeline on the perturbed flight."""
+    r_img, dcm, _, _ = open_loop_views(rows_setup(setup), theta, periods, r0_T, v0_T, pert)
+    sun = setup.sun_T() if setup.coverage.needs_sun else None
+    return rows_from_views(setup, r_img, dcm, sun)
+
+
+def _orthonormal(dcm) -> bool:
+    g = np.einsum("...ij,...kj->...ik", dcm, dcm) - np.eye(3)
+    return bool(np.all(np.sqrt((g * g).sum(axis=(-2, -1))) <= ORTHO_TOL))
+
