@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import functools
 import json
+from functools import partial
 import math
 import sys
 import time
@@ -26,7 +27,7 @@ from ..swarm_eval import MaskBank, fov_keys, nadir_keys, snap_angle
 from ..swarm_geometry import min_separation_angle
 from . import datasets
 from .design_exact import ga_gap, run_exact
-from .design_reliability import design_reliable
+from .design_reliability import design_reliable, scenario_store_path
 from .schema import Campaign
 
 
@@ -226,7 +227,9 @@ def run_design(c: Campaign, out: Path, *, workers=None, scheduler=None, cluster=
     if c.kind == "design-nadir" and c.config.design.method == "exact":
         reliable = c.config.design.success_probability is not None
         return run_exact(c, setup, workers=workers, scheduler=scheduler, cluster=cluster,
-                         slurm_config=slurm_config, designer=design_reliable if reliable else None)
+                         slurm_config=slurm_config,
+                         designer=partial(design_reliable, bank_store=scenario_store_path(out))
+                         if reliable else None)
     design = design_nadir if c.kind == "design-nadir" else design_fov
     if workers == 0 and scheduler is None and cluster == "local":
         res, theta, periods = design(c, setup, None)  # in this process, no dask

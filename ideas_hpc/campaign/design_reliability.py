@@ -26,8 +26,10 @@ are exact (no sampling): ``P-hat`` is the exact P and so is its bound.
 from __future__ import annotations
 
 import math
+import shutil
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -108,7 +110,16 @@ def _tolerant(nominal_bank, rel: ReliabilityDesigner, target, eps, d, sep) -> li
     return out
 
 
-def design_reliable(c, setup, client):
+def scenario_store_path(out) -> str | None:
+    """Where a design store's scenario bank lives: ``NAME-scenarios.zarr`` beside ``NAME.zarr``
+    (reused while the config that shapes it is unchanged, resumed when cut short)."""
+    if out is None:
+        return None
+    out = Path(out)
+    return str(out.with_name(out.name.removesuffix(".zarr") + "-scenarios.zarr"))
+
+
+def design_reliable(c, setup, client, *, bank_store: str | None = None):
     """The success-probability design of a campaign (module docstring).
 
     Returns the :class:`~ideas_hpc.campaign.design_exact.ExactDesign` of the
@@ -126,15 +137,28 @@ def design_reliable(c, setup, client):
                       f"{1.0 - p_f ** d.n_max:.6g}", "design.success_probability")
     nominal = design_exact(c, setup, client)
     _log(nominal.summary.replace("exact design:", "nominal exact design (nothing goes wrong):"))
-    eps = d.eps_tol_pct / 100.0
-    target = float(nominal.attrs["target_coverage"])
-    need = target - eps
     exact = continuous_off(mc, setup)
     s_n = 1 if exact else d.scenarios
     t0 = time.perf_counter()
+    fresh = bank_store is not None and not Path(bank_store).exists()
     bank = build_scenario_bank(setup, d.grid_step_rad, mc, seed=c.config.seed, n_scenarios=s_n,
-                               client=client)
+                               client=client, store=bank_store)
     t_bank = time.perf_counter() - t0
+    try:
+        return _design_on_bank(c, setup, client, nominal, bank, t_bank, exact)
+    except InputError:
+        if fresh:    # bad input leaves no store: the bank this run made goes too
+            shutil.rmtree(bank_store, ignore_errors=True)
+        raise
+
+
+def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact):
+    d, mc = c.config.design, c.config.monte_carlo
+    p, p_f = float(d.success_probability), float(mc.failure_probability)
+    eps = d.eps_tol_pct / 100.0
+    target = float(nominal.attrs["target_coverage"])
+    need = target - eps
+    s_n = bank.rows.shape[0]
     _log(f"scenario bank: {s_n} scenarios x {bank.theta.size} candidates in {t_bank:.1f} s"
          + (" (continuous dispersions off: one exact scenario)" if exact else ""))
     n_grid = grid_size(d.grid_step_rad)
