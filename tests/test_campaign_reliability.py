@@ -68,7 +68,8 @@ def test_sample_free_design_is_exact(tmp_path):
 @pytest.mark.slow
 def test_dispersed_design_stores_validation(tmp_path):
     sets = BASE + ["design.success_probability=0.5", "design.scenarios=20",
-                   "design.verify_samples=24", "monte_carlo.failure_probability=0.05"]
+                   "design.verify_samples=24", "monte_carlo.failure_probability=0.05",
+                   "design.demonstrate=true", "design.n_max=8"]
     ds = xr.open_zarr(run_file(DESIGN, out=tmp_path / "d.zarr", overrides=sets))
     v = ds["validation_probability"].values
     assert v.shape == (24,) and np.all((v >= 0) & (v <= 1))
@@ -77,3 +78,6 @@ def test_dispersed_design_stores_validation(tmp_path):
     assert bool(ds["demonstrated"]) == (float(ds["validation_lower_bound"]) >= 0.5)
     assert int(ds["best_swarm_size"]) in ds["reliability_n"].values
     assert ds.attrs["scenario_stream"] != ds.attrs["validation_stream"]
+    # design.demonstrate: stepped up until the bound reaches p, or n_max
+    assert bool(ds["demonstrated"]) or int(ds["best_swarm_size"]) == 8
+    assert (tmp_path / "d-scenarios.zarr").exists()      # the bank, for reuse
