@@ -112,7 +112,9 @@ def _design_lines(ds) -> list[str]:
                    f" = {100 * a['verify_probability']:.1f} % over {c.size} dispersed samples "
                    f"(min {c.min():.2f} %, 5th percentile {np.percentile(c, 5):.2f} %, median "
                    f"{np.median(c):.2f} %; {int((ds['verify_n_failed'].values > 0).sum())} "
-                   "samples with a failed spacecraft)")
+                   "samples with a failed spacecraft) -> check "
+                   + ("PASSED" if a["verify_probability"] >= 1.0 else
+                      "FAILED (the design holds only if nothing goes wrong)"))
     out.extend(reliability_lines(ds))
     if method == "exact":
         out.extend(f"note: {n}" for n in json.loads(a.get("notes", "[]")))
