@@ -12,7 +12,9 @@ Bernoulli(p_f) failures are enumerated, not sampled)::
 
 * **Infeasibility.** ``U_m``, the largest fraction of scenarios an m-swarm
   reaches with no failure, has a proven upper bound ``Ubar_m`` from the
-  scenario-indicator programme (:mod:`ideas_hpc.design.scenario_mip`). The
+  scenario-indicator programme (:mod:`ideas_hpc.design.scenario_mip`) and
+  the fraction of scenarios whose ring-gap bound allows m (the only one on
+  banks above :data:`MIP_MAX_CELLS`). The
   survivors of any N-swarm after j failures are an (N-j)-swarm, so every
   N-swarm has ``P <= UB(N) = sum_j C(N,j) p_f^j (1-p_f)^(N-j) Ubar_{N-j}``
   (:func:`~ideas_hpc.design.reliability_stats.failure_upper_bound`); N is
@@ -48,6 +50,11 @@ from .scenario_mip import ScenarioMIP
 
 #: Largest swarm whose 2^N failure subsets are enumerated.
 N_ENUM_MAX = 24
+#: Largest bank (scenarios x candidates) given to the scenario programme: above it
+#: HiGHS does not return within its time limit (eros001708, 5 scenarios x 720
+#: candidates: no incumbent, 100 s for a 20 s limit), and ``Ubar_m`` comes from the
+#: per-scenario ring-gap bounds alone (still proven; the gap says what is left).
+MIP_MAX_CELLS = 5000
 
 
 @dataclass
@@ -202,6 +209,9 @@ class ReliabilityDesigner:
         return None if self.deadline is None else max(1e-3, self.deadline - time.perf_counter())
 
     def ubar(self, m: int) -> float:
+        if m not in self.u_bar and self._solver is None and self.s_n * self.c_n > MIP_MAX_CELLS:
+            self.u_bar[m] = self.cheap_ubar(m)
+            self.bound_status[m] = "ring_bound"
         if m not in self.u_bar:
             if self._solver is not None:
                 b = self._solver(m, self.left())
@@ -321,6 +331,10 @@ def min_swarm_reliable(rows, areas, *, p: float, p_f: float, need: float, n_max:
             timed = any(s == "time_limit" for s in d.bound_status.values())
             status = "optimal" if gap == 0 else ("time_limit" if timed else "feasible")
             notes = []
+            if "ring_bound" in d.bound_status.values():
+                notes.append(f"the bank ({d.s_n} scenarios x {d.c_n} candidates) is above "
+                             "the scenario programme's size: U_m bounded by the per-scenario "
+                             "ring-gap bounds only")
             if unresolved:
                 notes.append(f"sizes {unresolved} are neither proven short of p nor met by a "
                              "swarm found")
