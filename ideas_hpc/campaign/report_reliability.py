@@ -15,7 +15,8 @@ def reliability_lines(ds) -> list[str]:
     conf = 100 * float(a.get("confidence", 0.95))
     ok = bool(ds["demonstrated"])
     out = [f"requirement: P(coverage >= {thr:.3f} %) >= {p:g} at {conf:g} % confidence, "
-           f"p_f = failures enumerated exactly; {a['n_scenarios']} scenarios, "
+           f"failures (p_f = {float(a.get('failure_probability', float('nan'))):g} each) "
+           f"enumerated exactly; {a['n_scenarios']} scenarios, "
            f"{a['verify_samples']} validation samples ({a['continuous_dispersions']})",
            f"success-probability design: N = {int(ds['best_swarm_size'])} "
            f"({a['solver_status']}, gap {100 * float(a['optimality_gap']):.1f} %; nominal N = "
