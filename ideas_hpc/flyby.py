@@ -330,10 +330,12 @@ def fly_open_loop(setup: FlybySetup, theta, periods, r0_T, v0_T,
 
 
 def open_loop_views(setup: FlybySetup, theta, periods, r0_T, v0_T,
-                    perturbation: Perturbation = Perturbation()):
+                    perturbation: Perturbation = Perturbation(), *, ideal_dcm_BT=None):
     """What :func:`fly_open_loop` images from: positions ``r_img_T`` (N, n_img, 3) m and
     camera DCMs (N, n_img, 3, 3) at the image times (misalignment applied), the
-    attitude result (simulated) and the trajectory (N, T, 3) m. Failures are not applied."""
+    attitude result (simulated) and the trajectory (N, T, 3) m. Failures are not applied.
+    ``ideal_dcm_BT``: the ideal camera DCMs of these spacecraft when already computed
+    (``attitude_mode = "ideal"`` only; they do not depend on the perturbation)."""
     th = np.asarray(theta, dtype=np.float64).ravel()
     p = perturbation
     r0 = r0_T if p.position_error_T is None else r0_T + p.position_error_T
@@ -343,7 +345,10 @@ def open_loop_views(setup: FlybySetup, theta, periods, r0_T, v0_T,
                                 params_override=p.params_override)
     r_img = np.ascontiguousarray(pos[:, ::setup.image_every])
     mis = None if p.misalignment_prv is None else misalignment_dcms(p.misalignment_prv)
-    dcm, att = _camera(setup, th, periods, p.ics, mis)
+    if ideal_dcm_BT is not None and setup.attitude_mode == "ideal":
+        dcm, att = _misaligned(ideal_dcm_BT, mis), None
+    else:
+        dcm, att = _camera(setup, th, periods, p.ics, mis)
     return r_img, dcm, att, pos
 
 
@@ -351,9 +356,13 @@ def _camera(setup: FlybySetup, th, periods, ics, misalignment):
     """Camera DCMs at the images (attitude, then the camera misalignment)."""
     s0, w0, W0 = ics if ics is not None else (None, None, None)
     dcm, att = camera_dcms(setup, th, periods, sigma0=s0, omega0=w0, wheel0=W0)
-    if misalignment is not None:
-        dcm = np.ascontiguousarray(np.matmul(misalignment[:, None], dcm))  # [CB][BT]
-    return dcm, att
+    return _misaligned(dcm, misalignment), att
+
+
+def _misaligned(dcm, misalignment):
+    if misalignment is None:
+        return dcm
+    return np.ascontiguousarray(np.matmul(misalignment[:, None], dcm))  # [CB][BT]
 
 
 def _image(setup: FlybySetup, th, periods, r_img, ics, misalignment, active, counts):

@@ -33,7 +33,7 @@ from numba import njit, prange
 from .time_tree import LEAF, _scan, time_tree
 
 __all__ = ["LEAF", "coverage_counts", "coverage_fractions", "coverage_vertices",
-           "dcm_check", "observed_by_spacecraft", "time_tree"]
+           "dcm_check", "first_image_by_spacecraft", "observed_by_spacecraft", "time_tree"]
 
 
 @njit(cache=True)
@@ -264,7 +264,7 @@ def coverage_vertices(vertices, normals, vertex_areas, r_T, dcm_BT, image_times,
     return observed, first_seen, times_seen, cov, cov_n
 
 
-@njit(parallel=True, cache=True)
+@njit(cache=True)
 def observed_by_spacecraft(vertices, normals, r_T, dcm_BT, tan_eta, near, far, exact,
                            sin_min_elev, max_range, occlusion, illumination, sun_T,
                            node_bounds, node_info, tri, tri_vid):
@@ -279,6 +279,19 @@ def observed_by_spacecraft(vertices, normals, r_T, dcm_BT, tan_eta, near, far, e
     -------
     mask : (N, V) bool
     """
+    return first_image_by_spacecraft(vertices, normals, r_T, dcm_BT, tan_eta, near, far,
+                                     exact, sin_min_elev, max_range, occlusion, illumination,
+                                     sun_T, node_bounds, node_info, tri, tri_vid) >= 0
+
+
+@njit(cache=True, parallel=True)
+def first_image_by_spacecraft(vertices, normals, r_T, dcm_BT, tan_eta, near, far, exact,
+                              sin_min_elev, max_range, occlusion, illumination, sun_T,
+                              node_bounds, node_info, tri, tri_vid):
+    """(N, V) int64: first image index at which spacecraft k sees vertex j, -1 if never.
+
+    Arguments as :func:`observed_by_spacecraft` (whose mask is ``>= 0`` of this).
+    """
     nv = vertices.shape[0]
     nsc = r_T.shape[0]
     nimg = r_T.shape[1]
@@ -286,13 +299,14 @@ def observed_by_spacecraft(vertices, normals, r_T, dcm_BT, tan_eta, near, far, e
     sec_eta = np.sqrt(1.0 + tan_eta * tan_eta) * (1.0 + 1e-12)
     strict = occlusion or illumination or sin_min_elev > -1.0 or max_range < np.inf
     idx = np.arange(nimg).astype(np.float64)
-    mask = np.zeros((nsc, nv), dtype=np.bool_)
+    out = np.full((nsc, nv), -1, dtype=np.int64)
     for j in prange(nv):
         stack = np.empty(128, dtype=np.int64)
         for k in range(nsc):
-            c, _ = _scan(j, k, NF, NI, stack, idx, np.inf, True, vertices, normals, r_T,
-                         dcm_BT, tan_eta, sec_eta, near, far, exact, strict, sin_min_elev,
-                         max_range, occlusion, illumination, sun_T, node_bounds, node_info,
-                         tri, tri_vid)
-            mask[k, j] = c > 0
-    return mask
+            c, best = _scan(j, k, NF, NI, stack, idx, np.inf, True, vertices, normals, r_T,
+                            dcm_BT, tan_eta, sec_eta, near, far, exact, strict, sin_min_elev,
+                            max_range, occlusion, illumination, sun_T, node_bounds, node_info,
+                            tri, tri_vid)
+            if c > 0:
+                out[k, j] = int(best)
+    return out

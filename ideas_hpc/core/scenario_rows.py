@@ -18,7 +18,8 @@ e_min|) B_r`` and ``B_r``. Illumination does not depend on the spacecraft.
 
 So with a *budget* ``(B_C, B_r)`` fixed before any scenario:
 
-* :func:`nominal_witness` gives, per (candidate, vertex), the first nominal
+* :func:`nominal_witness` (:func:`ideas_hpc.core.coverage.first_image_by_spacecraft`)
+  gives, per (candidate, vertex), the first nominal
   image that sees the vertex (-1: unseen), and :func:`reachable` whether any
   image could pass culling, clipping, field of view, elevation and range for
   some deviation within the budget (a superset test with floating-point slack);
@@ -41,6 +42,7 @@ import numpy as np
 from numba import njit, prange
 
 from .time_tree import LEAF, _FP, _classify, _scan, time_tree
+from .coverage import first_image_by_spacecraft as nominal_witness  # noqa: F401
 from .segments import face_blocks_cone, segment_hit
 from .visibility import _seen
 
@@ -48,38 +50,17 @@ from .visibility import _seen
 S_MAX = 1.0 + 1e-9
 
 
-@njit(cache=True, parallel=True)
-def nominal_witness(vertices, normals, r_T, dcm_BT, tan_eta, near, far, exact, sin_min_elev,
-                    max_range, occlusion, illumination, sun_T, node_bounds, node_info, tri,
-                    tri_vid):
-    """(N, V) int64: first image index at which spacecraft k sees vertex j, -1 if never.
-
-    Arguments as :func:`ideas_hpc.core.coverage.observed_by_spacecraft`.
-    """
-    nv = vertices.shape[0]
-    nsc = r_T.shape[0]
-    nimg = r_T.shape[1]
-    NF, NI = time_tree(r_T, dcm_BT, LEAF)
-    sec_eta = np.sqrt(1.0 + tan_eta * tan_eta) * (1.0 + 1e-12)
-    strict = occlusion or illumination or sin_min_elev > -1.0 or max_range < np.inf
-    idx = np.arange(nimg).astype(np.float64)
-    out = np.full((nsc, nv), -1, dtype=np.int64)
-    for j in prange(nv):
-        stack = np.empty(128, dtype=np.int64)
-        for k in range(nsc):
-            c, best = _scan(j, k, NF, NI, stack, idx, np.inf, True, vertices, normals, r_T,
-                            dcm_BT, tan_eta, sec_eta, near, far, exact, strict, sin_min_elev,
-                            max_range, occlusion, illumination, sun_T, node_bounds, node_info,
-                            tri, tri_vid)
-            if c > 0:
-                out[k, j] = int(best)
-    return out
-
-
 @njit(cache=True, inline="always")
-def _could(px, py, pz, nx, ny, nz, nabs, k, i, r_T, dcm_BT, tan_eta, sec_eta, near, far,
-           exact, sin_min_elev, max_range, bc, br):
-    """False when no camera within ``(bc, br)`` of image ``i`` can pass the geometric tests."""
+def _required(px, py, pz, nx, ny, nz, nabs, k, i, r_T, dcm_BT, tan_eta, sec_eta, near, far,
+              exact, sin_min_elev, max_range, bc, br):
+    """Smallest position deviation (m) with which a camera within ``bc`` of image ``i``
+    could pass culling, clipping, field of view, elevation and range (inf: none).
+
+    Each test is ``slack >= -(its change bound)``, linear in the deviation (module
+    docstring), solved for it; ``br`` (the budget) only sizes the floating-point
+    slack, and the result is shrunk by a relative and absolute 1e-9 so that it
+    never exceeds the exact value.
+    """
     rx = r_T[k, i, 0]
     ry = r_T[k, i, 1]
     rz = r_T[k, i, 2]
@@ -87,29 +68,32 @@ def _could(px, py, pz, nx, ny, nz, nabs, k, i, r_T, dcm_BT, tan_eta, sec_eta, ne
     dy = py - ry
     dz = pz - rz
     dn = np.sqrt(dx * dx + dy * dy + dz * dz)
-    ebr = S_MAX * br
     fp = _FP * (dn + br + np.sqrt(rx * rx + ry * ry + rz * rz))
-    delta = bc * dn + ebr + fp
     los_n = -(dx * nx + dy * ny + dz * nz)
-    if exact:
-        if los_n < -(nabs * br + fp * nabs):
-            return False
-    elif rx * nx + ry * ny + rz * nz < -(nabs * br + fp * nabs):
-        return False
+    cul = los_n if exact else rx * nx + ry * ny + rz * nz
+    if nabs > 0.0:
+        need = (-cul - fp * nabs) / nabs
+    else:
+        need = 0.0 if cul >= 0.0 else np.inf
     qz = dcm_BT[k, i, 2, 0] * dx + dcm_BT[k, i, 2, 1] * dy + dcm_BT[k, i, 2, 2] * dz
-    if qz - near < -delta or far - qz < -delta:
-        return False
     qx = dcm_BT[k, i, 0, 0] * dx + dcm_BT[k, i, 0, 1] * dy + dcm_BT[k, i, 0, 2] * dz
     qy = dcm_BT[k, i, 1, 0] * dx + dcm_BT[k, i, 1, 1] * dy + dcm_BT[k, i, 1, 2] * dz
-    m2 = sec_eta * delta + (1.0 + tan_eta) * fp
-    if tan_eta * qz - abs(qx) < -m2 or tan_eta * qz - abs(qy) < -m2:
-        return False
+    base = bc * dn + fp                     # delta = base + S_MAX * deviation
+    need = max(need, (near - qz - base) / S_MAX, (qz - far - base) / S_MAX)
+    fov = max(abs(qx), abs(qy)) - tan_eta * qz - (1.0 + tan_eta) * fp
+    need = max(need, (fov / sec_eta - base) / S_MAX)
     if sin_min_elev > -1.0 or max_range < np.inf:
-        if dn - max_range > br + fp:
-            return False
-        if los_n - dn * sin_min_elev < -((nabs + abs(sin_min_elev)) * br + 2.0 * fp):
-            return False
-    return True
+        need = max(need, dn - max_range - fp,
+                   (dn * sin_min_elev - los_n - 2.0 * fp) / (nabs + abs(sin_min_elev)))
+    return max(0.0, need * (1.0 - 1e-9) - 1e-9)
+
+
+@njit(cache=True, inline="always")
+def _could(px, py, pz, nx, ny, nz, nabs, k, i, r_T, dcm_BT, tan_eta, sec_eta, near, far,
+           exact, sin_min_elev, max_range, bc, br):
+    """False when no camera within ``(bc, br)`` of image ``i`` can pass the geometric tests."""
+    return _required(px, py, pz, nx, ny, nz, nabs, k, i, r_T, dcm_BT, tan_eta, sec_eta, near,
+                     far, exact, sin_min_elev, max_range, bc, br) <= br
 
 
 @njit(cache=True, inline="always")
@@ -148,7 +132,9 @@ def _extreme(NF, NI, stack, k, px, py, pz, nx, ny, nz, nabs, r_T, dcm_BT, tan_et
 def reachable(vertices, normals, r_T, dcm_BT, tan_eta, near, far, exact, sin_min_elev,
               max_range, bc, br):
     """(N, V, 2) int64: first and last image at which a camera within the budget could
-    see vertex j (-1, -1: none).
+    see vertex j (-1, -1: none), and (N, V) the smallest position deviation (m, with
+    the DCM deviation ``bc``) that could let any image of that window see it
+    (:func:`_required`; inf when none).
 
     ``bc`` (Frobenius norm of the DCM deviation) and ``br`` (m, position
     deviation) is the budget; outside the window no camera within it passes
@@ -164,6 +150,7 @@ def reachable(vertices, normals, r_T, dcm_BT, tan_eta, near, far, exact, sin_min
             NF[k, node, 13] = (NF[k, node, 13] + bc) * (1.0 + 1e-12)
     sec_eta = np.sqrt(1.0 + tan_eta * tan_eta) * (1.0 + 1e-12)
     out = np.full((nsc, nv, 2), -1, dtype=np.int64)
+    margin = np.full((nsc, nv), np.inf)
     for j in prange(nv):
         stack = np.empty(128, dtype=np.int64)
         px = vertices[j, 0]
@@ -177,36 +164,70 @@ def reachable(vertices, normals, r_T, dcm_BT, tan_eta, near, far, exact, sin_min
             lo = _extreme(NF, NI, stack, k, px, py, pz, nx, ny, nz, nabs, r_T, dcm_BT, tan_eta,
                           sec_eta, near, far, exact, sin_min_elev, max_range, bc, br, False)
             if lo >= 0:
+                hi = _extreme(NF, NI, stack, k, px, py, pz, nx, ny, nz, nabs, r_T, dcm_BT,
+                              tan_eta, sec_eta, near, far, exact, sin_min_elev, max_range, bc,
+                              br, True)
                 out[k, j, 0] = lo
-                out[k, j, 1] = _extreme(NF, NI, stack, k, px, py, pz, nx, ny, nz, nabs, r_T,
-                                        dcm_BT, tan_eta, sec_eta, near, far, exact,
-                                        sin_min_elev, max_range, bc, br, True)
-    return out
+                out[k, j, 1] = hi
+                m = np.inf
+                for i in range(lo, hi + 1):
+                    m = min(m, _required(px, py, pz, nx, ny, nz, nabs, k, i, r_T, dcm_BT,
+                                         tan_eta, sec_eta, near, far, exact, sin_min_elev,
+                                         max_range, bc, br))
+                margin[k, j] = m
+    return out, margin
+
+
+@njit(cache=True, parallel=True)
+def orthonormality_error(dcm_BT):
+    """Largest ``||C C^T - I||_F`` over (N, n_img, 3, 3) DCMs (``||C||_2 <= sqrt(1 + it)``)."""
+    nsc = dcm_BT.shape[0]
+    nimg = dcm_BT.shape[1]
+    worst = np.zeros(nsc)
+    for k in prange(nsc):
+        w = 0.0
+        for i in range(nimg):
+            g = 0.0
+            for a in range(3):
+                for c in range(3):
+                    t = (dcm_BT[k, i, a, 0] * dcm_BT[k, i, c, 0]
+                         + dcm_BT[k, i, a, 1] * dcm_BT[k, i, c, 1]
+                         + dcm_BT[k, i, a, 2] * dcm_BT[k, i, c, 2])
+                    if a == c:
+                        t -= 1.0
+                    g += t * t
+            w = max(w, np.sqrt(g))
+        worst[k] = w
+    return worst.max() if nsc > 0 else 0.0
 
 
 @njit(cache=True, parallel=True)
 def deviation_start(r_nom, dcm_nom, r_T, dcm_BT, bc, br):
-    """(N,) int64: first image from which every image's deviation is within ``(bc, br)``.
-
-    ``n_img`` when the last image is already outside the budget.
-    """
+    """(N,) int64 first image from which every image's deviation is within ``(bc, br)``
+    (``n_img`` when the last image is already outside), and (N,) the largest position
+    deviation (m) from that image on."""
     nsc = r_T.shape[0]
     nimg = r_T.shape[1]
     out = np.empty(nsc, dtype=np.int64)
+    dev = np.zeros(nsc)
     for k in prange(nsc):
         i_ok = 0
+        dmax = 0.0
         for i in range(nimg - 1, -1, -1):
             dc = 0.0
             for a in range(3):
                 for b in range(3):
                     dc += (dcm_BT[k, i, a, b] - dcm_nom[k, i, a, b]) ** 2
-            dr = ((r_T[k, i, 0] - r_nom[k, i, 0]) ** 2 + (r_T[k, i, 1] - r_nom[k, i, 1]) ** 2
-                  + (r_T[k, i, 2] - r_nom[k, i, 2]) ** 2)
-            if not (np.sqrt(dc) <= bc and np.sqrt(dr) <= br):
+            dr = np.sqrt((r_T[k, i, 0] - r_nom[k, i, 0]) ** 2
+                         + (r_T[k, i, 1] - r_nom[k, i, 1]) ** 2
+                         + (r_T[k, i, 2] - r_nom[k, i, 2]) ** 2)
+            if not (np.sqrt(dc) <= bc and dr <= br):
                 i_ok = i + 1
                 break
+            dmax = max(dmax, dr)
         out[k] = i_ok
-    return out
+        dev[k] = dmax
+    return out, dev
 
 
 @njit(cache=True, inline="always")
@@ -317,14 +338,15 @@ def _scan_range(j, k, a, b, NF, NI, stack, hint, vertices, normals, r_T, dcm_BT,
 
 
 @njit(cache=True, parallel=True)
-def perturbed_rows(witness, window, i_ok, vertices, normals, r_T, dcm_BT, tan_eta, near, far,
+def perturbed_rows(witness, window, margin, i_ok, dev, vertices, normals, r_T, dcm_BT, tan_eta, near, far,
                    exact, sin_min_elev, max_range, occlusion, illumination, sun_T, node_bounds,
                    node_info, tri, tri_vid):
     """(N, V) bool rows of the perturbed flight ``r_T``, ``dcm_BT`` (module docstring).
 
-    ``witness`` (N, V) from :func:`nominal_witness`, ``window`` (N, V, 2) from
-    :func:`reachable` with the budget, ``i_ok`` (N,) from :func:`deviation_start`
-    with the same budget; other arguments as
+    ``witness`` (N, V) from :func:`nominal_witness`, ``window`` (N, V, 2) and
+    ``margin`` (N, V) from :func:`reachable` with the budget, ``i_ok`` and ``dev``
+    (N,) from :func:`deviation_start` with the same budget (a window is skipped
+    when the candidate's largest deviation from ``i_ok`` on is below the margin); other arguments as
     :func:`ideas_hpc.core.coverage.observed_by_spacecraft`, for the perturbed flight.
     A (candidate, vertex) not settled by its witness image is scanned exactly
     over the images before ``i_ok`` and over its window from ``i_ok`` on
@@ -351,7 +373,7 @@ def perturbed_rows(witness, window, i_ok, vertices, normals, r_T, dcm_BT, tan_et
                                r_T, dcm_BT, tan_eta, sec_eta, near, far, exact, strict,
                                sin_min_elev, max_range, occlusion, illumination, sun_T,
                                node_bounds, node_info, tri, tri_vid)
-            if not seen and window[k, j, 0] >= 0:
+            if not seen and window[k, j, 0] >= 0 and not dev[k] < margin[k, j]:
                 seen = _scan_range(j, k, max(window[k, j, 0], i_ok[k]), window[k, j, 1] + 1,
                                    NF, NI, stack, hint, vertices, normals, r_T, dcm_BT,
                                    tan_eta, sec_eta, near, far, exact, strict, sin_min_elev,

@@ -86,34 +86,8 @@ def segment_blocked(node_bounds, node_info, tri, tri_vid,
         True when a face is crossed (Moller-Trumbore, both face sides). Hits
         with ``t <= 1e-9 |d|``-relative slack at the origin are ignored.
     """
-    # A zero direction component gets a huge finite inverse: (b - o) * inf would
-    # be NaN when the origin lies on a slab plane.
-    ix = 1.0 / dx if dx != 0.0 else 1e300
-    iy = 1.0 / dy if dy != 0.0 else 1e300
-    iz = 1.0 / dz if dz != 0.0 else 1e300
-    dn = np.sqrt(dx * dx + dy * dy + dz * dz)
-    # Minimum t: 1 nm (ignore round-off hits at the start point).
-    t_min = 1e-9 / dn
-    stack = np.empty(64, dtype=np.int64)
-    sp = 0
-    stack[0] = 0
-    sp = 1
-    while sp > 0:
-        sp -= 1
-        node = stack[sp]
-        if not _ray_box(ox, oy, oz, ix, iy, iz, tmax, node_bounds, node):
-            continue
-        left = node_info[node, 0]
-        if left >= 0:
-            stack[sp] = left
-            stack[sp + 1] = node_info[node, 1]
-            sp += 2
-            continue
-        start = node_info[node, 2]
-        for i in range(start, start + node_info[node, 3]):
-            if _crosses(tri, tri_vid, i, ox, oy, oz, dx, dy, dz, t_min, tmax, skip_vertex):
-                return True
-    return False
+    return segment_hit(node_bounds, node_info, tri, tri_vid, ox, oy, oz, dx, dy, dz, tmax,
+                       skip_vertex, -1) >= 0
 
 
 @njit(cache=True)
@@ -126,10 +100,13 @@ def segment_hit(node_bounds, node_info, tri, tri_vid, ox, oy, oz, dx, dy, dz, tm
     any-hit query, so the answer ``>= 0`` is exactly ``segment_blocked``'s True.
     """
     dn = np.sqrt(dx * dx + dy * dy + dz * dz)
+    # Minimum t: 1 nm (ignore round-off hits at the start point).
     t_min = 1e-9 / dn
     if hint >= 0 and _crosses(tri, tri_vid, hint, ox, oy, oz, dx, dy, dz, t_min, tmax,
                               skip_vertex):
         return hint
+    # A zero direction component gets a huge finite inverse: (b - o) * inf would
+    # be NaN when the origin lies on a slab plane.
     ix = 1.0 / dx if dx != 0.0 else 1e300
     iy = 1.0 / dy if dy != 0.0 else 1e300
     iz = 1.0 / dz if dz != 0.0 else 1e300

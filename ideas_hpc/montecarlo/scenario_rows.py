@@ -38,7 +38,8 @@ class RowEngine:
     r0_T: np.ndarray
     v0_T: np.ndarray
     witness: np.ndarray | None = None      # (K, V) int64
-    window: np.ndarray | None = None       # (K, V, 2) int64
+    window: np.ndarray | None = None       # (K, V, 2) int32
+    margin: np.ndarray | None = None       # (K, V) m
     budget: tuple = (0.0, 0.0)             # (Frobenius, m)
     stats: dict | None = None
 
@@ -88,14 +89,16 @@ class RowEngine:
             bc = HEADROOM * float(np.percentile(dev_c[:, half:].max(axis=1), 99))
             self.budget = (bc, br)
         bc, br = self.budget
-        self.window = _k.reachable(v, n, r, c, te, ne, fa, ex, se, mr, float(bc),
-                                   float(br)).astype(np.int32)
+        window, self.margin = _k.reachable(v, n, r, c, te, ne, fa, ex, se, mr, float(bc),
+                                           float(br))
+        self.window = window.astype(np.int32)
         return self
 
     def flight(self, pert: Perturbation):
         """Positions and camera DCMs at the images of the perturbed flight."""
+        ideal = self.nominal()[1] if self.fast else None
         r_img, dcm, _, _ = open_loop_views(rows_setup(self.setup), self.theta, None, self.r0_T,
-                                           self.v0_T, pert)
+                                           self.v0_T, pert, ideal_dcm_BT=ideal)
         return r_img, dcm
 
     def rows(self, r_img, dcm) -> np.ndarray:
@@ -106,8 +109,8 @@ class RowEngine:
         bc, br = self.budget
         r_nom, dcm_nom = self.nominal()
         v, n, r, c, te, ne, fa, ex, se, mr, oc, il, s, tree = self._args(r_img, dcm)
-        i_ok = _k.deviation_start(r_nom, dcm_nom, r, c, float(bc), float(br))
-        return _k.perturbed_rows(self.witness, self.window, i_ok, v, n, r, c, te, ne, fa, ex,
+        i_ok, dev = _k.deviation_start(r_nom, dcm_nom, r, c, float(bc), float(br))
+        return _k.perturbed_rows(self.witness, self.window, self.margin, i_ok, dev, v, n, r, c, te, ne, fa, ex,
                                  se, mr, oc, il, s, *tree)
 
 
@@ -126,6 +129,4 @@ def full_rows(setup: FlybySetup, theta, periods, r0_T, v0_T, pert: Perturbation)
 
 
 def _orthonormal(dcm) -> bool:
-    g = np.einsum("...ij,...kj->...ik", dcm, dcm) - np.eye(3)
-    return bool(np.all(np.sqrt((g * g).sum(axis=(-2, -1))) <= ORTHO_TOL))
-
+    return bool(_k.orthonormality_error(np.ascontiguousarray(dcm, dtype=np.float64)) <= ORTHO_TOL)
