@@ -18,7 +18,9 @@ FILES = sorted(p.name for p in CAMPAIGNS.glob("*.toml"))
 #: file -> overrides of sizes only (samples, population, generations, grid step, the
 #: solver's time budget)
 SMALL = {
-    "eros-design.toml": ["design.verify_samples=2", "design.angle_step_deg=3.0"],
+    "eros-design.toml": ["design.scenarios=100", "design.verify_samples=100",
+                         "design.angle_step_deg=6.0"],
+    "eros-design-nominal.toml": ["design.verify_samples=2", "design.angle_step_deg=3.0"],
     "eros-flyby.toml": [],
     "eros-fov-ga.toml": ["design.population=6", "design.generations=2"],
     "eros-monte-carlo.toml": ["monte_carlo.samples=2", "run.chunk_size=1"],

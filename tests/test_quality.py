@@ -270,7 +270,7 @@ def test_design_campaigns_take_a_requirement_and_refuse_stereo_they_cannot_score
         load(ROOT_CAMPAIGNS / "eros-fov-ga.toml", ["body.name=\"ellipsoid\"",
                                                   "coverage.require_stereo=true"])
     assert ei.value.field == "coverage.require_stereo"
-    exact = ROOT_CAMPAIGNS / "eros-design.toml"
+    exact = ROOT_CAMPAIGNS / "eros-design-nominal.toml"
     load(exact, ["body.name=\"ellipsoid\"", "coverage.require_stereo=true",
                  "design.angle_step_deg=4"])
     with pytest.raises(InputError) as ei:

@@ -76,7 +76,7 @@ def exact_store(tmp_path_factory):
     sets = SMALL + ["design.angle_step_deg=5", "design.verify_samples=6",
                     "design.failures_tolerated=1", "monte_carlo.failure_probability=0.3",
                     "run.workers=0", "dynamics.srp=false"]
-    return run_file(CAMPAIGNS / "eros-design.toml",
+    return run_file(CAMPAIGNS / "eros-design-nominal.toml",
                     out=tmp_path_factory.mktemp("exact") / "d.zarr", overrides=sets)
 
 

@@ -15,7 +15,7 @@ from ideas_hpc.montecarlo.scenarios import (build_scenario_bank, draw_world, fly
 from ideas_hpc.seeds import SCENARIO_STREAM, VALIDATION_STREAM
 
 ROOT = Path(__file__).resolve().parent.parent
-DESIGN = ROOT / "campaigns" / "eros-design.toml"
+DESIGN = ROOT / "campaigns" / "eros-design-nominal.toml"
 ELLIPSOID = ['body.name="ellipsoid"', "flyby.tf_s=60", "flyby.z_start_km=-3",
              "flyby.z_stop_km=3", "dynamics.srp=false"]
 QUIET = [f"monte_carlo.{k}=0.0" for k in ("sigma_c20_pct", "sigma_c22_pct", "sigma_gm_pct",

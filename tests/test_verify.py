@@ -45,7 +45,7 @@ def test_design_store_holds_the_verification(tmp_path):
     for key in ("sigma_c20_pct", "sigma_c22_pct", "sigma_gm_pct", "sigma_position_m",
                 "sigma_velocity_mm_s", "sigma_misalignment_deg"):
         sets.append(f"monte_carlo.{key}=0.0")
-    campaign = ROOT / "campaigns" / "eros-design.toml"
+    campaign = ROOT / "campaigns" / "eros-design-nominal.toml"
     ds = xr.open_zarr(run_file(campaign, out=tmp_path / "d.zarr", overrides=sets))
     cov = ds["verify_coverage"].values
     assert cov.shape == (6,) and ds["verify_coverage"].attrs["units"] == "1"

@@ -33,6 +33,7 @@ from .. import precompile
 from ..montecarlo.verify import verify_swarm
 from . import datasets
 from .vocabulary import requirement_line, verification_verdict
+from .schema_design import verify_samples
 
 
 def _log(msg: str) -> None:
@@ -48,6 +49,7 @@ class ExactDesign:
     attrs: dict
     notes: list = field(default_factory=list)
     summary: str = ""
+    bank: object = field(default=None, repr=False)     # the nominal candidate bank
 
 
 def _target(bank, eps_tol: float, coverage, notes: list) -> float:
@@ -153,7 +155,8 @@ def design_exact(c, setup, client) -> ExactDesign:
                f"{res.bound:g}), {requirement_line(target, target - eps, res.coverage)}, "
                f"{'k = %d tolerant, ' % k if k else ''}masks {t_masks:.1f} s + solve "
                f"{t_design - t_masks:.1f} s; coverage-vs-N curve in {curve.solve_time:.1f} s")
-    return ExactDesign(theta=res.theta, data=ds, attrs=attrs, notes=notes, summary=summary)
+    return ExactDesign(theta=res.theta, data=ds, attrs=attrs, notes=notes, summary=summary,
+                       bank=bank)
 
 
 def ga_gap(c, setup, mask_bank, n_ga: int, target: float) -> tuple[xr.Dataset, list]:
@@ -187,7 +190,7 @@ def verification_vars(c, setup, theta, threshold: float, client) -> tuple[dict, 
     Flies the swarm through the campaign's ``[monte_carlo]`` dispersions with
     the campaign seed; returns store variables, attrs and a summary line.
     """
-    m = c.config.design.verify_samples
+    m = verify_samples(c.config.design)
     if m == 0:
         return {}, {}, "Monte Carlo verification: off (design.verify_samples = 0)"
     kw = dict(mc=c.config.monte_carlo, seed=c.config.seed, threshold=threshold)
@@ -197,39 +200,47 @@ def verification_vars(c, setup, theta, threshold: float, client) -> tuple[dict, 
     data = {"verify_coverage": (("verify_sample",), v.coverage),
             "verify_n_failed": (("verify_sample",), v.n_failed)}
     required = getattr(c.config.design, "success_probability", None)
+    verdict = verification_verdict(v.probability, m, threshold, required)
     attrs = {"verify_samples": int(m), "verify_threshold": float(threshold),
              "verify_probability": v.probability, "verify_wall_s": float(v.wall_s),
-             "verify_verdict": verification_verdict(v.probability, m, threshold, required)}
+             "verify_passed": int(verdict.startswith("verification PASSED")),
+             "verify_verdict": verdict}
     return data, attrs, v.summary()
 
 
 def run_exact(c, setup, *, workers=None, scheduler=None, cluster="local",
-              slurm_config=None) -> xr.Dataset:
+              slurm_config=None, designer=None) -> xr.Dataset:
     """Kind ``design-nadir``, method ``exact``: certified design, its Monte Carlo
-    verification, then a flyby of it (the store)."""
+    verification, then a flyby of it (the store). ``designer`` replaces
+    :func:`design_exact` (the success-probability design validates its own swarm)."""
     helper = precompile.start(setup)  # cold cache: later kernels compile alongside
     try:
-        return _run_exact(c, setup, workers, scheduler, cluster, slurm_config)
+        return _run_exact(c, setup, workers, scheduler, cluster, slurm_config, designer)
     finally:
         if helper is not None:
             helper.close()
 
 
-def _run_exact(c, setup, workers, scheduler, cluster, slurm_config) -> xr.Dataset:
+def _run_exact(c, setup, workers, scheduler, cluster, slurm_config, designer) -> xr.Dataset:
     d = c.config.design
     n_img, n_v = setup.image_times.size, setup.body.shape.n_vertices
-    work = (visibility_tests(grid_size(d.grid_step_rad), 1, n_img, n_v)
-            + visibility_tests(d.verify_samples, d.n_max, n_img, n_v))
-    # one cluster at most, for every phase (masks, verification), when it pays back
+    n_grid = grid_size(d.grid_step_rad)
+    work = (visibility_tests(n_grid, 1, n_img, n_v)
+            + visibility_tests(verify_samples(d), d.n_max, n_img, n_v))
+    if designer is not None:   # the scenario bank: every candidate in every scenario
+        work += visibility_tests(getattr(d, "scenarios", 0) * n_grid, 1, n_img, n_v)
+    # one cluster at most, for every phase (masks, scenarios, verification), when it pays back
     with JobCluster(workers=workers, scheduler=scheduler, cluster=cluster,
                     slurm_config=slurm_config, work=work) as client:
-        res = design_exact(c, setup, client)
+        res = (designer or design_exact)(c, setup, client)
         _log(res.summary)
         for note in res.notes:
             _log(f"note: {note}")
         threshold = res.attrs["threshold_coverage"]
-        vdata, vattrs, vline = verification_vars(c, setup, res.theta, threshold, client)
-    _log(vline)
+        vdata, vattrs, vline = ({}, {}, None) if designer else \
+            verification_vars(c, setup, res.theta, threshold, client)
+    if vline:
+        _log(vline)
     if vattrs:
         _log(vattrs["verify_verdict"])
     flight = fly(setup, res.theta)

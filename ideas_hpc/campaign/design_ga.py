@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import functools
 import json
+from functools import partial
 import math
 import sys
 import time
@@ -29,6 +30,7 @@ from ..progress import bar as progress_bar
 from ..swarm_geometry import min_separation_angle
 from . import datasets
 from .design_exact import ga_gap, run_exact
+from .design_reliability import design_reliable, scenario_store_path
 from .schema import Campaign
 from .vocabulary import requirement_line
 
@@ -223,8 +225,11 @@ def run_design(c: Campaign, out: Path, *, workers=None, scheduler=None, cluster=
            if c.kind == "design-nadir" else _fov_swarm(c))
     t = time.perf_counter()
     if c.kind == "design-nadir" and c.config.design.method == "exact":
+        reliable = c.config.design.success_probability is not None
         return run_exact(c, setup, workers=workers, scheduler=scheduler, cluster=cluster,
-                         slurm_config=slurm_config)
+                         slurm_config=slurm_config,
+                         designer=partial(design_reliable, bank_store=scenario_store_path(out))
+                         if reliable else None)
     design = design_nadir if c.kind == "design-nadir" else design_fov
     d = c.config.design
     # distinct candidate flights the GA can ask for: at most every grid angle

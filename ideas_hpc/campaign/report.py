@@ -12,6 +12,7 @@ import xarray as xr
 from ..errors import InputError
 from ..plots import figures
 from ..units import DEG, KM
+from .report_reliability import reliability_figures, reliability_lines
 from .vocabulary import requirement_line, verification_verdict
 
 
@@ -140,6 +141,7 @@ def _design_lines(ds) -> list[str]:
                    "samples with a failed spacecraft)")
         out.append(a.get("verify_verdict") or verification_verdict(
             float(a["verify_probability"]), c.size, float(a["verify_threshold"])))
+    out.extend(reliability_lines(ds))
     if method == "exact":
         out.extend(f"note: {n}" for n in json.loads(a.get("notes", "[]")))
     return out
@@ -181,6 +183,7 @@ def _design_figures(ds, out: Path) -> list[Path]:
         figs.append(design.pareto_front(ds, out / "design_pareto_front.png"))
     if "verify_coverage" in ds:
         figs.append(design.verification(ds, out / "design_verification.png"))
+    figs.extend(reliability_figures(ds, out))
     return figs
 
 

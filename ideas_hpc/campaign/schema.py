@@ -42,7 +42,9 @@ the owning modules' ``*_from_config`` (see their docstrings).
 ``[design]`` ``method`` (``exact``, the default, or ``ga`` for design-nadir),
 ``angle_step_deg``, ``time_limit_s``, ``failures_tolerated``, ``verify_samples``
 (Monte Carlo verification of the design with the ``[monte_carlo]`` dispersions)
-(exact designer);
+(exact designer); ``success_probability``, ``confidence``, ``scenarios``,
+``demonstrate`` (the success-probability designer, issue 20; tables and checks
+in :mod:`ideas_hpc.campaign.schema_design`);
 (GA) ``population``, ``generations``, ``n_max``, ``eps_tol_pct``,
 ``angle_step_rad``, ``p_min_min``, ``p_max_min``, ``period_step_min``,
 ``parents``, ``elitism``, ``mutation_probability``, ``stall_generations``;
@@ -72,6 +74,7 @@ from ..units import CM, DEG, KM, MINUTE, MM, UM
 from ..sizing import INSTRUMENT_DEFAULTS as _CAM
 from .encounter_schema import ENCOUNTER, check_encounter
 from .kinds import KINDS as REGISTRY
+from .schema_design import DESIGN, MC_SCHEMA, reliability_checks  # noqa: F401
 
 KINDS = tuple(REGISTRY)
 
@@ -136,53 +139,6 @@ ATTITUDE = {
     "decimate": Field("int", 10, lo=1),
     "theta_max_deg": Field("float", None, nullable=True, si="theta_max_rad",
                            to_si=DEG, lo=0, lo_open=True, hi=90),
-}
-
-DESIGN = {
-    "method": Field("str", "exact", choices=("exact", "ga"),
-                    doc="design-nadir: exact integer programme or the paper's GA"),
-    "angle_step_deg": Field("float", 0.5, si="grid_step_rad", to_si=DEG, lo=0, lo_open=True, hi=90,
-                            doc="exact designer's grid of candidate swarm angles"),
-    "time_limit_s": Field("float", 60.0, lo=0, lo_open=True,
-                          doc="exact designer: return the best design so far with its gap"),
-    "failures_tolerated": Field("int", 0, lo=0, doc="k: coverage must survive any k failures"),
-    "verify_samples": Field("int", 64, lo=0, hi=100000,
-                            doc="Monte Carlo samples that verify the exact design (0: off)"),
-    "population": Field("int", 100, lo=2, doc="GA population size"),
-    "generations": Field("int", 115, lo=1),
-    "n_max": Field("int", 20, lo=1, hi=200),
-    "eps_tol_pct": Field("float", 0.1, lo=0, hi=100),
-    "angle_step_rad": Field("float", 0.01, lo=0, hi=1.0),
-    "p_min_min": Field("float", 0.3, si="p_min_s", to_si=MINUTE, lo=0, lo_open=True),
-    "p_max_min": Field("float", 10.0, si="p_max_s", to_si=MINUTE, lo=0, lo_open=True),
-    "period_step_min": Field("float", 0.1, si="period_step_s", to_si=MINUTE, lo=0),
-    "parents": Field("int", None, nullable=True, lo=2),
-    "elitism": Field("int", 2, lo=0),
-    "mutation_probability": Field("float", 0.1, lo=0, hi=1),
-    "stall_generations": Field("int", 0, lo=0, doc="stop after this many generations "
-                                                     "without improvement (0: never)"),
-    "chunk_size": Field("int", 32, lo=1, doc="spacecraft per dask task"),
-    "nadir_store": Field("str", None, nullable=True, doc="design-fov: take the swarm from "
-                                                          "this design-nadir store"),
-    "objectives": Field("any", ("n", "coverage"),
-                        doc="design-pareto: two or more of n, coverage, "
-                            "worst_failure_coverage, stereo_coverage, mean_resolution"),
-}
-
-MC_SCHEMA = {
-    "samples": Field("int", 64, lo=1),
-    "attitude_dispersion": Field("bool", True, doc="random initial attitude, rates, wheels"),
-    "sigma_c20_pct": Field("float", 0.0, lo=0, doc="1-sigma relative C20 error, %"),
-    "sigma_c22_pct": Field("float", 0.0, lo=0),
-    "sigma_gm_pct": Field("float", 0.0, lo=0),
-    "reflectivity_min": Field("float", 0.6, lo=0, hi=1),
-    "reflectivity_max": Field("float", 0.6, lo=0, hi=1),
-    "sigma_position_m": Field("float", 0.0, lo=0, doc="1-sigma initial position error per axis"),
-    "sigma_velocity_mm_s": Field("float", 0.0, si="sigma_velocity_m_s", to_si=MM, lo=0),
-    "failures_k": Field("int", 0, lo=0, doc="exactly k of N spacecraft lost"),
-    "failure_probability": Field("float", 0.0, lo=0, hi=1, doc="per-spacecraft loss probability"),
-    "sigma_misalignment_deg": Field("float", 0.0, si="sigma_misalignment_rad",
-                                    to_si=DEG, lo=0, hi=90),
 }
 
 RUN = {
@@ -306,6 +262,7 @@ def _cross_checks(c: CampaignConfig) -> None:
                          field="monte_carlo.failures_k")
     check_objectives(d.objectives)
     check_encounter(fb, c.attitude)
+    reliability_checks(c)
     step = fb.dt_s
     img = 1.0 / c.instrument.image_rate_hz
     if abs(img / step - round(img / step)) > 1e-9:

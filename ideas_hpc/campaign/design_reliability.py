@@ -1,0 +1,201 @@
+"""Kind ``design-nadir`` with ``design.success_probability`` (issue 20): the fewest
+spacecraft that map ``target - eps_tol`` with probability >= p.
+
+Orchestration only:
+
+1. the nominal exact design (:func:`~ideas_hpc.campaign.design_exact.design_exact`):
+   the target, the plain minimum ``N0`` and the coverage-versus-N curve;
+2. the scenario bank (:func:`ideas_hpc.montecarlo.scenarios.build_scenario_bank`,
+   ``design.scenarios`` draws of the continuous dispersions);
+3. the proven fewest N with ``P_bank >= p``
+   (:func:`ideas_hpc.design.reliability.min_swarm_reliable`; failures exact);
+4. the validation: the chosen swarm flown through ``design.verify_samples``
+   fresh draws (:func:`ideas_hpc.montecarlo.scenarios.fly_members`, a stream
+   disjoint from the scenarios'), the exact failure-weighted P of each, their
+   mean ``P-hat`` and a lower bound at ``design.confidence``
+   (:func:`ideas_hpc.design.reliability_stats.lower_confidence_bound`);
+   ``design.demonstrate`` steps N up until the bound reaches p;
+5. the reliability curve for N from ``N0`` to where P >= 0.99 (or ``n_max``),
+   with the k-failure-tolerant designs of the nominal bank evaluated on it
+   (:mod:`ideas_hpc.campaign.reliability_vars` assembles the store variables).
+
+With every continuous dispersion off, one scenario and one validation flight
+are exact (no sampling): ``P-hat`` is the exact P and so is its bound.
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..core.reliability import swarm_probabilities
+from ..design import failure_tolerant
+from ..design.bank import grid_size, separation_steps
+from ..design.reliability import ReliabilityDesigner, min_swarm_reliable
+from ..design.reliability_stats import lower_confidence_bound
+from ..errors import InputError
+from ..montecarlo.scenarios import build_scenario_bank, fly_members
+from ..seeds import VALIDATION_STREAM, stream_rng
+from .design_exact import design_exact
+from .reliability_vars import reliability_dataset
+from .schema_design import verify_samples
+
+#: Purpose word of the validation's sampled failures (the histogram only; the
+#: probabilities enumerate failures exactly): ``(VALIDATION_STREAM, m, 3)``.
+STREAM_FAILURES = 3
+#: The curve stops at the first N whose best P on the scenarios reaches this.
+CURVE_TOP = 0.99
+#: Largest k of the k-failure-tolerant designs marked on the curve.
+K_MARKED = 2
+
+
+def _log(msg: str) -> None:
+    print(msg, file=sys.stderr, flush=True)
+
+
+def continuous_off(mc, setup) -> bool:
+    """True when no continuous dispersion draws anything (a scenario is the nominal flight)."""
+    sig = (mc.sigma_c20_pct, mc.sigma_c22_pct, mc.sigma_gm_pct, mc.sigma_position_m,
+           mc.sigma_velocity_m_s, mc.sigma_misalignment_rad)
+    attitude = setup.attitude_mode == "simulated" and mc.attitude_dispersion
+    return all(s == 0 for s in sig) and mc.reflectivity_min == mc.reflectivity_max \
+        and not attitude
+
+
+class Validation:
+    """The chosen swarm flown through fresh samples (module docstring, step 4)."""
+
+    def __init__(self, rows, w, need, p_f, confidence, exact: bool, seed: int):
+        n = rows.shape[1]
+        self.per_sample = swarm_probabilities(np.ascontiguousarray(rows),
+                                              np.arange(n, dtype=np.int64)[None, :],
+                                              w, need, p_f)[0]
+        self.p_hat = float(self.per_sample.mean())
+        self.lower = self.p_hat if exact else lower_confidence_bound(self.per_sample, confidence)
+        cov = np.empty(rows.shape[0])
+        failed = np.empty(rows.shape[0], dtype=np.int32)
+        for k in range(rows.shape[0]):
+            alive = stream_rng(seed, VALIDATION_STREAM, k, STREAM_FAILURES).random(n) >= p_f
+            cov[k] = float(w[rows[k, alive].any(axis=0)].sum()) if alive.any() else 0.0
+            failed[k] = n - int(alive.sum())
+        self.coverage, self.n_failed = cov, failed
+
+
+def _validate(c, setup, theta, need, w, exact, client):
+    d, mc = c.config.design, c.config.monte_carlo
+    m = 1 if exact else verify_samples(d)
+    rows = fly_members(setup, theta, None, mc, seed=c.config.seed, n_samples=m, client=client)
+    return Validation(rows, w, need, mc.failure_probability, d.confidence, exact, c.config.seed)
+
+
+def _tolerant(nominal_bank, rel: ReliabilityDesigner, target, eps, d, sep) -> list:
+    """(k, N_k, P_bank) of the k-failure-tolerant designs on the nominal bank, k = 1..K_MARKED."""
+    out = []
+    for k in range(1, K_MARKED + 1):
+        if k >= d.n_max:
+            break
+        try:
+            r = failure_tolerant(nominal_bank, k, target=target, eps_tol=eps, n_max=d.n_max,
+                                 min_separation=sep, time_limit=min(d.time_limit_s, 30.0))
+        except InputError:
+            break
+        if r.n > 24:
+            break
+        out.append((k, r.n, float(rel.ev([r.indices])[0]), r.indices))
+    return out
+
+
+def scenario_store_path(out) -> str | None:
+    """Where a design store's scenario bank lives: ``NAME-scenarios.zarr`` beside ``NAME.zarr``
+    (reused while the config that shapes it is unchanged, resumed when cut short)."""
+    if out is None:
+        return None
+    out = Path(out)
+    return str(out.with_name(out.name.removesuffix(".zarr") + "-scenarios.zarr"))
+
+
+def design_reliable(c, setup, client, *, bank_store: str | None = None):
+    """The success-probability design of a campaign (module docstring).
+
+    Returns the :class:`~ideas_hpc.campaign.design_exact.ExactDesign` of the
+    chosen swarm (its data holds the nominal design's variables and the
+    reliability ones) and its summary lines.
+    """
+    d, mc = c.config.design, c.config.monte_carlo
+    p, p_f = float(d.success_probability), float(mc.failure_probability)
+    if setup.coverage.require_stereo:
+        raise c.error("is not supported with coverage.require_stereo (stereo pairs are not in "
+                      "the scenario bank)", "design.success_probability")
+    if 1.0 - p_f ** d.n_max < p:
+        raise c.error(f"{p:g} is not reached: even a swarm of design.n_max = {d.n_max} that "
+                      f"always maps the target succeeds with at most 1 - p_f^N = "
+                      f"{1.0 - p_f ** d.n_max:.6g}", "design.success_probability")
+    nominal = design_exact(c, setup, client)
+    _log(nominal.summary.replace("exact design:", "nominal exact design (nothing goes wrong):"))
+    exact = continuous_off(mc, setup)
+    s_n = 1 if exact else d.scenarios
+    t0 = time.perf_counter()
+    fresh = bank_store is not None and not Path(bank_store).exists()
+    bank = build_scenario_bank(setup, d.grid_step_rad, mc, seed=c.config.seed, n_scenarios=s_n,
+                               client=client, store=bank_store)
+    t_bank = time.perf_counter() - t0
+    try:
+        return _design_on_bank(c, setup, client, nominal, bank, t_bank, exact)
+    except InputError:
+        if fresh:    # bad input leaves no store: the bank this run made goes too
+            shutil.rmtree(bank_store, ignore_errors=True)
+        raise
+
+
+def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact):
+    d, mc = c.config.design, c.config.monte_carlo
+    p, p_f = float(d.success_probability), float(mc.failure_probability)
+    eps = d.eps_tol_pct / 100.0
+    target = float(nominal.attrs["target_coverage"])
+    need = target - eps
+    s_n = bank.rows.shape[0]
+    _log(f"scenario bank: {s_n} scenarios x {bank.theta.size} candidates in {t_bank:.1f} s"
+         + (" (continuous dispersions off: one exact scenario)" if exact else ""))
+    n_grid = grid_size(d.grid_step_rad)
+    sep = c.config.swarm.min_separation_m
+    m_sep = separation_steps(2 * math.pi / n_grid, setup.d_sep, sep, n_grid)
+    try:
+        res = min_swarm_reliable(bank.rows, bank.areas, p=p, p_f=p_f, need=need, n_max=d.n_max,
+                                 sep_steps=m_sep, time_limit=d.time_limit_s)
+    except InputError as exc:
+        raise c.error(exc.message, exc.field) from None
+    rel = res.designer
+    w = rel.ev.w
+    val = _validate(c, setup, bank.theta[res.indices], need, w, exact, client)
+    chosen, chosen_val, stepped = res, val, []
+    while d.demonstrate and chosen_val.lower < p and chosen.n < d.n_max:
+        n = chosen.n + 1
+        sw, pb = rel.best_of(n)
+        if sw.size != n:
+            break
+        stepped.append((n, pb))
+        v = _validate(c, setup, bank.theta[sw], need, w, exact, client)
+        chosen = type(res)(indices=sw, n=n, probability=pb,
+                           per_scenario=rel.ev.per_scenario([sw])[0], status="demonstrated",
+                           bound=res.bound, gap=(n - res.bound) / n, solve_time=res.solve_time)
+        chosen_val = v
+    # the reliability curve: N0 .. first N with P >= CURVE_TOP (or n_max)
+    n0 = int(nominal.data["best_swarm_size"])
+    curve = []
+    for n in range(min(n0, chosen.n), d.n_max + 1):
+        sw, pb = (chosen.indices, chosen.probability) if n == chosen.n else rel.best_of(n)
+        if sw.size != n:
+            break
+        v = chosen_val if n == chosen.n else (
+            val if n == res.n else _validate(c, setup, bank.theta[sw], need, w, exact, client))
+        curve.append((n, pb, rel.upper(n), v.p_hat, v.lower, sw))
+        if pb >= CURVE_TOP and n >= chosen.n:
+            break
+    tolerant = _tolerant(nominal.bank, rel, target, eps, d, sep)
+    return reliability_dataset(c, nominal, bank, res, chosen, chosen_val, curve, tolerant,
+                               stepped=stepped, need=need, exact=exact, t_bank=t_bank)

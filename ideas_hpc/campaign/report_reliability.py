@@ -1,0 +1,49 @@
+"""Report lines and figures of the success-probability design (issue 20)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+def reliability_lines(ds) -> list[str]:
+    """The requirement, the design's P on the scenarios, the validation and the curve."""
+    if "success_probability_required" not in ds:
+        return []
+    a = ds.attrs
+    p = float(ds["success_probability_required"])
+    thr = 100 * float(a["reliability_threshold"])
+    conf = 100 * float(a.get("confidence", 0.95))
+    ok = bool(ds["demonstrated"])
+    out = [f"requirement: P(coverage >= {thr:.3f} %) >= {p:g} at {conf:g} % confidence, "
+           f"failures (p_f = {float(a.get('failure_probability', float('nan'))):g} each) "
+           f"enumerated exactly; {a['n_scenarios']} scenarios, "
+           f"{a['verify_samples']} validation samples ({a['continuous_dispersions']})",
+           f"success-probability design: N = {int(ds['best_swarm_size'])} "
+           f"({a['solver_status']}, gap {100 * float(a['optimality_gap']):.1f} %; nominal N = "
+           f"{a['nominal_swarm_size']}), P on the scenarios = "
+           f"{float(ds['reliability_probability']):.4f}",
+           f"validation: P-hat = {float(ds['validation_p_hat']):.4f}, {conf:g} % lower bound "
+           f"{float(ds['validation_lower_bound']):.4f} ({a['confidence_bound']}) -> "
+           + ("requirement DEMONSTRATED" if ok else "requirement NOT demonstrated")]
+    pts = [f"{int(n)}: {float(b):.4f} (<= {float(u):.4f}; validated {float(v):.4f}, "
+           f">= {float(lo):.4f})" for n, b, u, v, lo in zip(
+               ds["reliability_n"].values, ds["reliability_vs_n"].values,
+               ds["reliability_vs_n_upper"].values, ds["reliability_vs_n_validated"].values,
+               ds["reliability_vs_n_lower"].values)]
+    out.append("P of mapping the threshold vs N (scenarios, proven bound; validation): "
+               + "; ".join(pts))
+    if ds.sizes.get("tolerated", 0):
+        out.append("k-failure-tolerant designs on the scenarios: " + ", ".join(
+            f"k = {int(k)}: N = {int(n)}, P = {float(q):.4f}" for k, n, q in zip(
+                ds["tolerated"].values, ds["tolerant_swarm_size"].values,
+                ds["tolerant_probability"].values)))
+    return out
+
+
+def reliability_figures(ds, out: Path) -> list[Path]:
+    from ..plots import reliability
+
+    if "reliability_vs_n" not in ds:
+        return []
+    return [reliability.reliability_curve(ds, out / "design_reliability_curve.png"),
+            reliability.validation_coverage(ds, out / "design_validation_coverage.png")]

@@ -1,0 +1,354 @@
+"""The fewest spacecraft that reach a coverage threshold with probability >= p (issue 20).
+
+On a scenario bank (``rows[s, c, v]``: vertex v seen or mapped by grid
+candidate c in scenario s, S draws of the continuous dispersions), the
+probability of a swarm is the scenario mean of its exact failure-weighted
+success probability (:mod:`ideas_hpc.core.reliability`: independent
+Bernoulli(p_f) failures are enumerated, not sampled)::
+
+    P_bank(swarm) = (1/S) sum_s sum_{T subset swarm} (1-p_f)^|T| p_f^(N-|T|) 1[cov_s(T) >= need]
+
+:func:`min_swarm_reliable` proves the fewest N with ``P_bank >= p``:
+
+* **Infeasibility.** ``U_m``, the largest fraction of scenarios an m-swarm
+  reaches with no failure, has a proven upper bound ``Ubar_m`` from the
+  scenario-indicator programme (:mod:`ideas_hpc.design.scenario_mip`) and
+  the fraction of scenarios whose ring-gap bound allows m (the only one on
+  banks above :data:`MIP_MAX_CELLS`). The
+  survivors of any N-swarm after j failures are an (N-j)-swarm, so every
+  N-swarm has ``P <= UB(N) = sum_j C(N,j) p_f^j (1-p_f)^(N-j) Ubar_{N-j}``
+  (:func:`~ideas_hpc.design.reliability_stats.failure_upper_bound`); N is
+  infeasible when ``UB(N) < p``.
+* **Feasibility.** A swarm of N whose exact ``P_bank >= p``: the programme's
+  swarm and the previous size's best swarm plus its best new member, each
+  improved by a swap search on the exact ``P_bank`` (:func:`improve`). When
+  the number of N-swarms is small (``enumerate_budget``) every one is scored
+  instead, which settles N either way.
+
+Sizes neither proven infeasible nor met are *unresolved*: the proven lower
+bound is the smallest of them, the gap ``(N - bound) / N``, and the status
+``optimal`` (gap 0), ``time_limit`` (a programme stopped at the limit) or
+``feasible``. Separation: candidates closer than ``m`` grid steps never fly
+together (:func:`ideas_hpc.design.bank.conflict_windows`).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core.reliability import swarm_coverages, swarm_probabilities
+from ..errors import InputError
+from .bank import CandidateBank, reduce_problem
+from .reliability_stats import failure_upper_bound
+from .ring_bound import ring_bound
+from .scenario_mip import ScenarioMIP
+
+#: Largest swarm whose 2^N failure subsets are enumerated.
+N_ENUM_MAX = 24
+#: Largest bank (scenarios x candidates) given to the scenario programme: above it
+#: HiGHS does not return within its time limit (eros001708, 5 scenarios x 720
+#: candidates: no incumbent, 100 s for a 20 s limit), and ``Ubar_m`` comes from the
+#: per-scenario ring-gap bounds alone (still proven; the gap says what is left).
+MIP_MAX_CELLS = 5000
+
+
+@dataclass
+class ReliableResult:
+    """Outcome of :func:`min_swarm_reliable` (store variables of issue 20)."""
+
+    indices: np.ndarray
+    n: int
+    probability: float            # P_bank of the chosen swarm
+    per_scenario: np.ndarray      # (S,) exact failure-weighted P in each scenario
+    status: str
+    bound: float                  # proven lower bound on N
+    gap: float
+    solve_time: float
+    upper: dict = field(default_factory=dict)      # N -> UB(N) proven
+    best: dict = field(default_factory=dict)       # N -> (swarm, P_bank) best found
+    u_bar: dict = field(default_factory=dict)      # m -> Ubar_m (fraction)
+    notes: list = field(default_factory=list)
+    designer: object = field(default=None, repr=False, compare=False)
+
+
+def _dist_ok(c_n: int, rest: np.ndarray, m: int) -> np.ndarray:
+    """(C,) bool: candidates more than ``m`` grid steps from every member of ``rest``."""
+    ring = np.arange(c_n)
+    if rest.size == 0:
+        return np.ones(c_n, dtype=bool)
+    d = np.abs(ring[:, None] - rest[None, :])
+    return (np.minimum(d, c_n - d) > m).all(axis=1)
+
+
+class Evaluator:
+    """Exact ``P_bank`` of swarms on one bank (compiled, batched)."""
+
+    def __init__(self, rows, w, need: float, p_f: float):
+        self.rows = np.ascontiguousarray(rows, dtype=np.bool_)
+        self.w = np.ascontiguousarray(w, dtype=np.float64)
+        self.need, self.p_f = float(need), float(p_f)
+
+    def per_scenario(self, swarms) -> np.ndarray:
+        sw = np.ascontiguousarray(np.atleast_2d(np.asarray(swarms, dtype=np.int64)))
+        if sw.shape[1] > N_ENUM_MAX:
+            raise InputError(f"swarms above {N_ENUM_MAX} spacecraft are out of reach of the "
+                             "exact failure enumeration", field="design.n_max")
+        return swarm_probabilities(self.rows, sw, self.w, self.need, self.p_f)
+
+    def __call__(self, swarms) -> np.ndarray:
+        return self.per_scenario(swarms).mean(axis=1)
+
+    def scored(self, swarms) -> np.ndarray:
+        """(K,) order keys: ``P_bank``, ties (e.g. P = 0 below the threshold) broken by
+        the mean coverage, so searches move on the plateaus too."""
+        sw = np.ascontiguousarray(np.atleast_2d(np.asarray(swarms, dtype=np.int64)))
+        p = self(sw)
+        cov = swarm_coverages(self.rows, sw, self.w).mean(axis=1)
+        return np.round(p, 12) + 1e-6 * cov
+
+
+def improve(ev: Evaluator, start, m: int, *, radius: int = 6, rounds: int = 30):
+    """Best-improvement single moves of each member within ``radius`` grid steps
+    (keeping distances > ``m``), maximising the exact ``P_bank``. Returns (swarm, P)."""
+    c_n = ev.rows.shape[1]
+    radius = c_n // 2 if c_n <= 96 else radius
+    sw = np.sort(np.asarray(start, dtype=np.int64))
+    cur = float(ev.scored([sw])[0])
+    for _ in range(rounds):
+        trials = []
+        for p in range(sw.size):
+            rest = np.delete(sw, p)
+            ok = _dist_ok(c_n, rest, m)
+            ok[sw] = False
+            near = (sw[p] + np.arange(-radius, radius + 1)) % c_n
+            trials += [np.sort(np.r_[rest, c]) for c in near if ok[c]]
+        if not trials:
+            break
+        vals = ev.scored(np.array(trials))
+        i = int(np.argmax(vals))
+        if vals[i] <= cur + 1e-13:
+            break
+        sw, cur = trials[i], float(vals[i])
+    return sw, float(ev([sw])[0])
+
+
+def extend(ev: Evaluator, sw, m: int):
+    """The best one-member extension of ``sw`` (exact ``P_bank``), or None."""
+    c_n = ev.rows.shape[1]
+    sw = np.asarray(sw, dtype=np.int64)
+    ok = _dist_ok(c_n, sw, m)
+    ok[sw] = False
+    cand = np.flatnonzero(ok)
+    if cand.size == 0:
+        return None
+    trials = np.sort(np.c_[np.repeat(sw[None, :], cand.size, axis=0), cand], axis=1)
+    vals = ev.scored(trials)
+    return trials[int(np.argmax(vals))]
+
+
+def all_swarms(c_n: int, n: int, m: int):
+    """Every n-subset of the ring grid with circular distances > m, as (K, n) int64."""
+    out = [c for c in itertools.combinations(range(c_n), n)
+           if all(min(abs(a - b), c_n - abs(a - b)) > m
+                  for a, b in itertools.combinations(c, 2))]
+    return np.array(out, dtype=np.int64).reshape(-1, n)
+
+
+class ReliabilityDesigner:
+    """Shared state of one design: the evaluator, the programme and the bounds found so far."""
+
+    def __init__(self, rows, areas, *, need: float, p_f: float, sep_steps: int = 0,
+                 time_limit: float | None = None, enumerate_budget: int = 20000,
+                 bound_solver=None):
+        rows = np.asarray(rows, dtype=bool)
+        w = np.asarray(areas, dtype=np.float64)
+        w = w / w.sum()
+        self.ev = Evaluator(rows, w, need, p_f)
+        self.s_n, self.c_n = rows.shape[0], rows.shape[1]
+        self.m, self.p_f = int(sep_steps), float(p_f)
+        self.t0 = time.perf_counter()
+        self.deadline = None if time_limit is None else self.t0 + float(time_limit)
+        self.budget = int(enumerate_budget)
+        self._mip = None
+        self._solver = bound_solver
+        self.u_bar = {0: 0.0}
+        self.bound_status: dict = {}
+        self.mip_swarm: dict = {}
+        self.best: dict = {}
+        self.exhausted: set = set()
+        self._lows = None
+
+    def ring_lows(self, n_max: int) -> np.ndarray:
+        """(S,) proven lower bound on each scenario's fewest covering spacecraft (ring-gap
+        bound, :mod:`ideas_hpc.design.ring_bound`; ``n_max + 1``: none of ``n_max`` covers)."""
+        if self._lows is None:
+            lows = np.ones(self.s_n, dtype=np.int64)
+            step = 2 * math.pi / self.c_n
+            areas = self.ev.w
+            for s in range(self.s_n):
+                bank = CandidateBank(theta=step * np.arange(self.c_n), masks=self.ev.rows[s],
+                                     areas=areas, step=step, d_sep=1.0)
+                red = reduce_problem(bank.masks, areas, merge_candidates=False)
+                rb = ring_bound(bank, red, self.m, int(n_max), self.ev.need)
+                if rb is not None:
+                    low = rb.n_bound(self.ev.need)
+                    lows[s] = int(n_max) + 1 if low is None else max(1, low)
+            self._lows = lows
+        return self._lows
+
+    def cheap_ubar(self, m: int) -> float:
+        """``U_m <=`` the fraction of scenarios whose ring-gap bound allows m spacecraft."""
+        return float(np.mean(self._lows <= m)) if self._lows is not None else 1.0
+
+    def left(self):
+        return None if self.deadline is None else max(1e-3, self.deadline - time.perf_counter())
+
+    def ubar(self, m: int) -> float:
+        if m not in self.u_bar and self._solver is None and self.s_n * self.c_n > MIP_MAX_CELLS:
+            self.u_bar[m] = self.cheap_ubar(m)
+            self.bound_status[m] = "ring_bound"
+        if m not in self.u_bar:
+            if self._solver is not None:
+                b = self._solver(m, self.left())
+            else:
+                if self._mip is None:
+                    self._mip = ScenarioMIP(self.ev.rows, self.ev.w, self.ev.need, self.m)
+                b = self._mip.solve(m, self.left())
+            self.u_bar[m] = b.upper / self.s_n
+            self.bound_status[m] = b.status
+            if b.swarm is not None and b.swarm.size:
+                self.mip_swarm[m] = b.swarm
+        return self.u_bar[m]
+
+    def upper(self, n: int, p: float | None = None) -> float:
+        """Proven ``UB(n)`` (module docstring). The ring-gap fractions first; the
+        programme refines ``Ubar_m`` from ``m = n`` down only while ``UB(n) >= p``."""
+        u = [0.0] + [min(self.cheap_ubar(k), self.u_bar.get(k, 1.0)) for k in range(1, n + 1)]
+        ub = failure_upper_bound(n, u, self.p_f)
+        for k in range(n, 0, -1):
+            if (p is not None and ub < p - 1e-12) or u[k] == 0.0:
+                break
+            u[k] = min(u[k], self.ubar(k))
+            ub = failure_upper_bound(n, u, self.p_f)
+        return ub
+
+    def best_of(self, n: int, target: float = math.inf):
+        """Best swarm of n found (exhaustive when the count is within the budget)."""
+        if n in self.best:
+            return self.best[n]
+        n_swarms = math.comb(self.c_n, n)
+        if n_swarms <= self.budget:
+            sw = all_swarms(self.c_n, n, self.m)
+            if sw.shape[0] == 0:
+                self.best[n] = (np.zeros(0, np.int64), 0.0)
+            else:
+                vals = self.ev(sw)
+                i = int(np.argmax(vals))
+                self.best[n] = (sw[i], float(vals[i]))
+            self.exhausted.add(n)
+            return self.best[n]
+        starts = []
+        if n in self.mip_swarm:
+            s = self.mip_swarm[n]
+            while s is not None and s.size < n:
+                s = extend(self.ev, s, self.m)
+            if s is not None:
+                starts.append(s)
+        if n - 1 in self.best and self.best[n - 1][0].size == n - 1:
+            s = extend(self.ev, self.best[n - 1][0], self.m) if n > 1 else None
+            if s is not None:
+                starts.append(s)
+        s = np.zeros(0, np.int64)           # greedy from scratch on the exact P
+        for _ in range(n):
+            s = extend(self.ev, s, self.m) if s is not None else None
+        if s is not None:
+            starts.append(s)
+        top = (np.zeros(0, np.int64), -1.0)
+        for s in starts:
+            sw, val = improve(self.ev, s, self.m)
+            if val > top[1]:
+                top = (sw, val)
+        top = (top[0], max(top[1], 0.0))
+        self.best[n] = top
+        return top
+
+
+def min_swarm_reliable(rows, areas, *, p: float, p_f: float, need: float, n_max: int,
+                       sep_steps: int = 0, time_limit: float | None = None,
+                       enumerate_budget: int = 20000, bound_solver=None,
+                       ring_prebound: bool = True) -> ReliableResult:
+    """The fewest grid candidates with ``P_bank >= p`` (module docstring).
+
+    Parameters
+    ----------
+    rows : (S, C, V) bool
+        Scenario bank rows.
+    areas : (V,) m^2
+    p : float
+        Required success probability, 0 < p < 1.
+    p_f : float
+        Per-spacecraft failure probability.
+    need : float
+        Coverage threshold (area fraction, ``target - eps_tol``).
+    n_max : int
+    sep_steps : int
+        Candidates within this many grid steps conflict.
+    time_limit : float, optional
+        Seconds for the whole search (programmes get what is left).
+    enumerate_budget : int
+        Score every swarm of a size when there are at most this many.
+    bound_solver : callable, optional
+        ``(m, seconds) -> BoundResult`` in place of the programme (tests).
+    ring_prebound : bool
+        Bound ``U_m`` first by the per-scenario ring-gap bounds (cheap, no programme).
+
+    Raises
+    ------
+    InputError
+        ``design.success_probability`` when no swarm of at most ``n_max``
+        reaches ``p`` on the bank (the message gives the best P found).
+    """
+    d = ReliabilityDesigner(rows, areas, need=need, p_f=p_f, sep_steps=sep_steps,
+                            time_limit=time_limit, enumerate_budget=enumerate_budget,
+                            bound_solver=bound_solver)
+    upper: dict = {}
+    unresolved: list = []
+    if ring_prebound:
+        d.ring_lows(n_max)
+    for n in range(1, int(n_max) + 1):
+        upper[n] = d.upper(n, p)
+        if upper[n] < p - 1e-12:
+            continue
+        sw, val = d.best_of(n)
+        if val >= p - 1e-12:
+            bound = unresolved[0] if unresolved else n
+            gap = (n - bound) / n
+            timed = any(s == "time_limit" for s in d.bound_status.values())
+            status = "optimal" if gap == 0 else ("time_limit" if timed else "feasible")
+            notes = []
+            if "ring_bound" in d.bound_status.values():
+                notes.append(f"the bank ({d.s_n} scenarios x {d.c_n} candidates) is above "
+                             "the scenario programme's size: U_m bounded by the per-scenario "
+                             "ring-gap bounds only")
+            if unresolved:
+                notes.append(f"sizes {unresolved} are neither proven short of p nor met by a "
+                             "swarm found")
+            return ReliableResult(indices=sw, n=n, probability=val,
+                                  per_scenario=d.ev.per_scenario([sw])[0], status=status,
+                                  bound=float(bound), gap=float(gap),
+                                  solve_time=time.perf_counter() - d.t0, upper=upper,
+                                  best=dict(d.best), u_bar=dict(d.u_bar), notes=notes,
+                                  designer=d)
+        if n not in d.exhausted:
+            unresolved.append(n)
+    best_p = max((v for _, v in d.best.values()), default=0.0)
+    what = ("no swarm" if not unresolved else
+            f"no swarm found (sizes {unresolved} unresolved within design.time_limit_s)")
+    raise InputError(f"{p:g} is not reached: {what} of at most {n_max} spacecraft on the "
+                     f"{d.s_n} scenarios; the best probability found is {best_p:.4f} (proven "
+                     f"upper bound {max(upper.values()):.4f})", field="design.success_probability")

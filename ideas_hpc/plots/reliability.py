@@ -1,0 +1,74 @@
+"""Figures of the success-probability design (issue 20): the reliability curve and the
+validation flights' coverage with sampled failures.
+
+Each function takes an ``xarray.Dataset`` opened from a design store, writes
+one PNG and returns its path (%).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.ticker import MaxNLocator
+
+from .figures import plt, save_png
+
+
+def _threshold_pct(ds) -> float:
+    return 100.0 * float(ds.attrs["reliability_threshold"])
+
+
+def reliability_curve(ds, path) -> "Path":  # noqa: F821
+    """Probability of mapping >= X % against the number of spacecraft.
+
+    The best P of N spacecraft on the scenario bank with the proven upper
+    bound on any N, the validated P-hat of that swarm with its lower
+    confidence bound, the requirement p, and the k-failure-tolerant designs.
+    """
+    n = ds["reliability_n"].values
+    p_bank = 100.0 * ds["reliability_vs_n"].values
+    up = 100.0 * ds["reliability_vs_n_upper"].values
+    ph = 100.0 * ds["reliability_vs_n_validated"].values
+    lo = 100.0 * ds["reliability_vs_n_lower"].values
+    conf = 100.0 * float(ds.attrs.get("confidence", 0.95))
+    fig, ax = plt.subplots(figsize=(6.6, 4.2))
+    ax.plot(n, p_bank, "o-", color="tab:blue", label="best P on the scenarios")
+    ax.plot(n, up, "v", color="tab:blue", mfc="none", label="proven upper bound (any N-swarm)")
+    ax.errorbar(n + 0.08, ph, yerr=[np.maximum(ph - lo, 0.0), np.zeros_like(ph)], fmt="s",
+                color="tab:green", capsize=3,
+                label=f"validated P-hat, {conf:g} % lower bound")
+    p = 100.0 * float(ds["success_probability_required"])
+    ax.axhline(p, color="k", ls=":", lw=1, label=f"required p = {p:g} %")
+    if "tolerant_swarm_size" in ds and ds.sizes.get("tolerated", 0):
+        for k, nk, pk in zip(ds["tolerated"].values, ds["tolerant_swarm_size"].values,
+                             ds["tolerant_probability"].values):
+            ax.plot([nk], [100 * pk], "*", ms=13, color="tab:purple")
+            ax.annotate(f"k = {int(k)} tolerant", (nk, 100 * pk), textcoords="offset points",
+                        xytext=(6, -12), fontsize=8, color="tab:purple")
+    ax.axvline(int(ds["best_swarm_size"]), color="tab:red", ls="--", lw=1,
+               label=f"design: N = {int(ds['best_swarm_size'])}")
+    ax.set_xlabel("number of spacecraft N")
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    ax.set_ylabel(f"P(mapping >= {_threshold_pct(ds):.2f} %), %")
+    ax.set_title(f"probability of mapping >= {_threshold_pct(ds):.2f} % vs number of spacecraft")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="lower right")
+    return save_png(fig, path)
+
+
+def validation_coverage(ds, path) -> "Path":  # noqa: F821
+    """Coverage of the validation flights with failures sampled (histogram)."""
+    cov = 100.0 * ds["validation_coverage"].values
+    failed = ds["validation_n_failed"].values > 0
+    thr = _threshold_pct(ds)
+    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    bins = np.linspace(cov.min(), max(cov.max(), cov.min() + 1e-6), 31)
+    ax.hist([cov[~failed], cov[failed]], bins=bins, stacked=True, edgecolor="k",
+            color=["tab:green", "tab:orange"], label=["no failure", "with a failure"])
+    ax.axvline(thr, color="k", ls=":", label=f"threshold {thr:.2f} %")
+    ax.set_xlabel("area coverage, %")
+    ax.set_ylabel("validation flights")
+    ax.set_title(f"validation: {cov.size} flights, failures sampled "
+                 f"({int(failed.sum())} with a failure)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    return save_png(fig, path)

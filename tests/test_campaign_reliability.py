@@ -1,0 +1,83 @@
+"""design-nadir with design.success_probability through run_file (issue 20), ellipsoid body."""
+
+from __future__ import annotations
+
+import itertools
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from ideas_hpc.campaign.report import write_report
+from ideas_hpc.campaign.run import run_file
+from ideas_hpc.campaign.schema import load
+from ideas_hpc.design import build_bank
+from ideas_hpc.flyby import setup_from_campaign
+
+ROOT = Path(__file__).resolve().parent.parent
+DESIGN = ROOT / "campaigns" / "eros-design.toml"
+BASE = ['body.name="ellipsoid"', "flyby.tf_s=60", "flyby.z_start_km=-3", "flyby.z_stop_km=3",
+        "dynamics.srp=false", "design.angle_step_deg=10", 'attitude.mode="ideal"',
+        "run.workers=0", "design.time_limit_s=60"]
+QUIET = [f"monte_carlo.{k}=0.0" for k in ("sigma_c20_pct", "sigma_c22_pct", "sigma_gm_pct",
+                                          "sigma_position_m", "sigma_velocity_mm_s",
+                                          "sigma_misalignment_deg")] + [
+    "monte_carlo.reflectivity_min=0.6", "monte_carlo.reflectivity_max=0.6"]
+
+
+def exact_p(masks, w, swarm, need, p_f):
+    """Direct enumeration of the survivors (numpy), one scenario."""
+    n = len(swarm)
+    out = 0.0
+    for alive in itertools.product((False, True), repeat=n):
+        mem = [c for c, a in zip(swarm, alive) if a]
+        if mem and w[masks[mem].any(axis=0)].sum() >= need - 1e-12:
+            out += 0.95 ** sum(alive) * 0.05 ** (n - sum(alive))
+    return out
+
+
+def test_sample_free_design_is_exact(tmp_path):
+    """Continuous dispersions off: one exact scenario; P-hat is the exact P, and so is its
+    bound (exact enumeration over the nominal masks, computed here in numpy)."""
+    sets = BASE + QUIET + ["design.success_probability=0.9", "monte_carlo.failure_probability=0.05",
+                           "design.scenarios=100", "design.verify_samples=100"]
+    ds = xr.open_zarr(run_file(DESIGN, out=tmp_path / "r.zarr", overrides=sets))
+    c = load(DESIGN, sets)
+    setup = setup_from_campaign(c)
+    bank = build_bank(setup, c.config.design.grid_step_rad)
+    w = bank.areas / bank.areas.sum()
+    need = ds.attrs["reliability_threshold"]
+    n = int(ds["best_swarm_size"])
+    idx = np.rint(np.asarray(ds["swarm_angle"].values) / bank.step).astype(int) % bank.n_candidates
+    p = exact_p(bank.masks, w, list(idx), need, 0.05)
+    assert float(ds["reliability_probability"]) == pytest.approx(p, abs=1e-12)
+    assert float(ds["validation_p_hat"]) == pytest.approx(p, abs=1e-12)
+    assert float(ds["validation_lower_bound"]) == pytest.approx(p, abs=1e-12)
+    assert bool(ds["demonstrated"]) == (p >= 0.9)
+    assert p >= 0.9
+    # the proven bound: no swarm of n - 1 reaches p (the store's upper bound says so)
+    assert float(ds.attrs["optimality_gap"]) == 0.0 or ds.attrs["solver_status"] != "optimal"
+    assert ds["reliability_vs_n"].attrs["units"] == "1"
+    assert "long_name" in ds["validation_lower_bound"].attrs
+    rep = write_report(tmp_path / "r.zarr", tmp_path / "rep")
+    text = (rep / "summary.txt").read_text() if rep.is_dir() else Path(rep).read_text()
+    assert "requirement DEMONSTRATED" in text or "requirement NOT demonstrated" in text
+
+
+@pytest.mark.slow
+def test_dispersed_design_stores_validation(tmp_path):
+    sets = BASE + ["design.success_probability=0.5", "design.scenarios=20",
+                   "design.verify_samples=24", "monte_carlo.failure_probability=0.05",
+                   "design.demonstrate=true", "design.n_max=8"]
+    ds = xr.open_zarr(run_file(DESIGN, out=tmp_path / "d.zarr", overrides=sets))
+    v = ds["validation_probability"].values
+    assert v.shape == (24,) and np.all((v >= 0) & (v <= 1))
+    assert float(ds["validation_p_hat"]) == pytest.approx(v.mean())
+    assert float(ds["validation_lower_bound"]) <= v.mean()
+    assert bool(ds["demonstrated"]) == (float(ds["validation_lower_bound"]) >= 0.5)
+    assert int(ds["best_swarm_size"]) in ds["reliability_n"].values
+    assert ds.attrs["scenario_stream"] != ds.attrs["validation_stream"]
+    # design.demonstrate: stepped up until the bound reaches p, or n_max
+    assert bool(ds["demonstrated"]) or int(ds["best_swarm_size"]) == 8
+    assert (tmp_path / "d-scenarios.zarr").exists()      # the bank, for reuse
