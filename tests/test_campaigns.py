@@ -21,6 +21,8 @@ SMALL = {
     "eros-design.toml": ["design.scenarios=100", "design.verify_samples=100",
                          "design.angle_step_deg=6.0"],
     "eros-design-nominal.toml": ["design.verify_samples=2", "design.angle_step_deg=3.0"],
+    "eros-fast-encounter.toml": ["design.verify_samples=2", "design.angle_step_deg=6.0"],
+    "eros-fast-encounter-flyby.toml": [],
     "eros-flyby.toml": [],
     "eros-fov-ga.toml": ["design.population=6", "design.generations=2"],
     "eros-monte-carlo.toml": ["monte_carlo.samples=2", "run.chunk_size=1"],

@@ -39,6 +39,7 @@ from ..design.bank import grid_size, separation_steps
 from ..design.reliability import ReliabilityDesigner, min_swarm_reliable
 from ..design.reliability_stats import lower_confidence_bound
 from ..errors import InputError
+from ..engine.job_cluster import phase_client
 from ..montecarlo.scenarios import build_scenario_bank, fly_members
 from ..seeds import VALIDATION_STREAM, stream_rng
 from .design_exact import design_exact
@@ -137,6 +138,7 @@ def design_reliable(c, setup, client, *, bank_store: str | None = None):
                       f"{1.0 - p_f ** d.n_max:.6g}", "design.success_probability")
     nominal = design_exact(c, setup, client)
     _log(nominal.summary.replace("exact design:", "nominal exact design (nothing goes wrong):"))
+    client = phase_client(client)   # the job's one cluster (None: in this process)
     exact = continuous_off(mc, setup)
     s_n = 1 if exact else d.scenarios
     t0 = time.perf_counter()

@@ -97,7 +97,7 @@ def _requirement(ds) -> str:
     a = ds.attrs
     target = float(a.get("target_coverage", 1.0))
     if "threshold_coverage" not in a and "verify_threshold" not in a:
-        return f"reached {100 * float(ds['best_coverage']):.3f} %"
+        return f"target {100 * target:.3f} %, reached {100 * float(ds['best_coverage']):.3f} %"
     thr = float(a.get("threshold_coverage", a.get("verify_threshold")))
     return requirement_line(target, thr, float(ds["best_coverage"]))
 
