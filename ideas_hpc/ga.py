@@ -40,6 +40,7 @@ from typing import Callable
 import numpy as np
 
 from .errors import InputError
+from .seeds import GA_SEEDING, search_rng, search_seed
 
 TWO_PI = 2.0 * math.pi
 
@@ -221,7 +222,7 @@ def _run_pygad(*, num_genes, gene_type, gene_space, population, generations, see
         mutation_by_replacement=True,
         on_generation=on_generation,
         on_start=on_start,
-        random_seed=int(seed) % (2**32),
+        random_seed=search_seed(seed),
         suppress_warnings=True,
     )
     ga.run()
@@ -303,7 +304,7 @@ def run_nadir_ga(evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
     def start(genomes):
         if cover is None:
             return genomes
-        rng = np.random.default_rng([int(seed) % (2**32), 13])
+        rng = search_rng(seed, GA_SEEDING)
         return repair(cover.seed_population(genomes, seed_fraction, rng))
 
     ga, hb, hm = _run_pygad(num_genes=1 + int(n_max), gene_type=gene_type, gene_space=gene_space,
