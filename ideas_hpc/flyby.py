@@ -26,7 +26,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .attitude import Gains, SpacecraftModel, ideal_dcm_BT, initial_conditions, simulate_attitude
+from .attitude import (Gains, Maneuver, SpacecraftModel, campaign_maneuver, ideal_dcm_BT,
+                       initial_conditions, simulate_attitude)
 from .bodies import Body, load_body
 from .core.mrp import dcm_from_mrp, mrp_from_prv
 from .errors import InputError
@@ -58,7 +59,7 @@ class FlybySetup:
     near: float
     far: float
     theta_max: float
-    maneuver: str
+    maneuver: Maneuver
     attitude_mode: str
     decimate: int
     tol: float
@@ -70,10 +71,6 @@ class FlybySetup:
     coverage: CoverageOptions = field(default_factory=CoverageOptions)
     p_min: float = 18.0
     epoch: float = 0.0
-
-    @property
-    def att_mode(self) -> str:
-        return "fov" if self.maneuver == "fov" else "np"
 
     @property
     def image_every(self) -> int:
@@ -98,8 +95,8 @@ class FlybySetup:
 def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
     """Resolve a validated :class:`~ideas_hpc.campaign.schema.Campaign` to a setup.
 
-    ``maneuver`` overrides ``attitude.maneuver`` (the FoV design kind sweeps
-    whatever the file says).
+    ``maneuver`` (a campaign name of :data:`~ideas_hpc.attitude.MANEUVERS`) overrides
+    ``attitude.maneuver`` (the FoV design kind sweeps whatever the file says).
     """
     cfg = c.config
     b = cfg.body
@@ -125,10 +122,10 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
                         ground_resolution=inst.ground_resolution_m,
                         aperture=inst.aperture_m, wavelength=inst.wavelength_m,
                         min_elevation=inst.min_elevation_rad, near=inst.near_field_m)
-    man = maneuver or cfg.attitude.maneuver
+    man = campaign_maneuver(maneuver or cfg.attitude.maneuver)
     eta = inst.half_angle_rad
     if eta is None:
-        eta = sizing.eta_fov if man == "fov" else sizing.eta_nadir
+        eta = man.half_angle(sizing.eta_nadir)
     fb = cfg.flyby
     att = cfg.attitude
     ex = c.extras
@@ -268,7 +265,7 @@ def camera_dcms(setup: FlybySetup, theta, periods=None, *, sigma0=None, omega0=N
     ws = setup.body.params.spin_rate if spin_rate is None else spin_rate
     duration = setup.tf - setup.t0
     img_t = setup.image_times - setup.t0
-    kw = dict(mode=setup.att_mode, periods=periods, theta_max=setup.theta_max, p_min=setup.p_min)
+    kw = dict(mode=setup.maneuver.name, periods=periods, theta_max=setup.theta_max, p_min=setup.p_min)
     if setup.attitude_mode == "ideal":
         return ideal_dcm_BT(th, ws, img_t, **kw), None
     if sigma0 is None:

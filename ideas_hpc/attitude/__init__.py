@@ -44,13 +44,13 @@ paper's Eros NP swarm) reach a worst MRP error of 3.9e-4 after 120 s and
 from ..units import RPM
 from .gains import GAIN_PRESETS, Gains, gains_from_config, validate_gains
 from .maneuvers import (MANEUVERS, P_MIN_DEFAULT, THETA_MAX_DEFAULT, Maneuver,
-                        get_maneuver)
+                        campaign_maneuver, get_maneuver)
 from .simulate import AttitudeResult, ideal_dcm_BT, initial_conditions, simulate_attitude
 from .spacecraft import (SpacecraftModel, default_spacecraft, spacecraft_from_config,
                          validate_spacecraft)
 
 __all__ = ["GAIN_PRESETS", "MANEUVERS", "P_MIN_DEFAULT", "RPM", "THETA_MAX_DEFAULT",
            "AttitudeResult", "Gains", "Maneuver", "SpacecraftModel", "default_spacecraft",
-           "gains_from_config", "get_maneuver", "ideal_dcm_BT", "initial_conditions",
+           "campaign_maneuver", "gains_from_config", "get_maneuver", "ideal_dcm_BT", "initial_conditions",
            "simulate_attitude", "spacecraft_from_config", "validate_gains",
            "validate_spacecraft"]

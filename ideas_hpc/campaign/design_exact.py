@@ -26,9 +26,10 @@ from ..design import build_bank, coverage_curve, failure_tolerant, min_swarm, wo
 from ..design.stereo import min_swarm_stereo, stereo_curve
 from ..design.stereo import scorer as stereo_scorer
 from ..errors import InputError
-from ..flyby import fly
+from ..flyby import fly, setup_from_campaign, target
 from ..montecarlo.verify import verify_swarm
 from . import datasets
+from .kinds import KINDS
 from .vocabulary import requirement_line, verification_verdict
 
 
@@ -189,6 +190,24 @@ def verification_vars(c, setup, theta, threshold: float, client) -> tuple[dict, 
              "verify_probability": v.probability, "verify_wall_s": float(v.wall_s),
              "verify_verdict": verification_verdict(v.probability, m, threshold, required)}
     return data, attrs, v.summary()
+
+
+def checked_setup(c, theta):
+    """The kind's flyby setup (with the maneuver its registry entry flies), checked by
+    targeting swarm ``theta`` once here: a targeting failure is the user's to fix, in
+    one line, rather than a failed task on every worker."""
+    setup = setup_from_campaign(c, maneuver=KINDS[c.kind].maneuver)
+    _log(f"body: {setup.body.note}")
+    target(setup, theta)
+    return setup
+
+
+def run_design_exact(c, out, *, workers=None, scheduler=None, cluster="local",
+                     slurm_config=None, **_) -> xr.Dataset:
+    """Registry entry of kind ``design-nadir``, method ``exact``."""
+    setup = checked_setup(c, np.linspace(0.0, 2 * np.pi, 16, endpoint=False))
+    return run_exact(c, setup, workers=workers, scheduler=scheduler, cluster=cluster,
+                     slurm_config=slurm_config)
 
 
 def run_exact(c, setup, *, workers=None, scheduler=None, cluster="local",

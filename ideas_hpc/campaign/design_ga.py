@@ -20,13 +20,13 @@ import xarray as xr
 
 from ..candidates import candidate_masks
 from ..errors import InputError
-from ..flyby import fly, setup_from_campaign, target
+from ..flyby import fly
 from ..ga_local import GridCover
 from ..swarm_eval import MaskBank, fov_keys, nadir_keys, snap_angle
 from ..progress import bar as progress_bar
 from ..swarm_geometry import min_separation_angle
 from . import datasets
-from .design_exact import ga_gap, run_exact
+from .design_exact import checked_setup, ga_gap
 from .schema import Campaign
 from .vocabulary import requirement_line
 
@@ -215,16 +215,9 @@ def run_design(c: Campaign, out: Path, *, workers=None, scheduler=None, cluster=
     """Kinds ``design-nadir`` and ``design-fov``: GA, then a full flyby of the best swarm."""
     from ..engine.cluster import connect
 
-    setup = setup_from_campaign(c, maneuver="fov" if c.kind == "design-fov" else None)
-    _log(f"body: {setup.body.note}")
-    # A targeting failure is the user's to fix: find it here, in one line, rather
-    # than as a failed task on every worker (the GA targets these same rings).
-    target(setup, np.linspace(0.0, 2 * np.pi, 16, endpoint=False)
-           if c.kind == "design-nadir" else _fov_swarm(c))
+    setup = checked_setup(c, np.linspace(0.0, 2 * np.pi, 16, endpoint=False)
+                          if c.kind == "design-nadir" else _fov_swarm(c))
     t = time.perf_counter()
-    if c.kind == "design-nadir" and c.config.design.method == "exact":
-        return run_exact(c, setup, workers=workers, scheduler=scheduler, cluster=cluster,
-                         slurm_config=slurm_config)
     design = design_nadir if c.kind == "design-nadir" else design_fov
     if workers == 0 and scheduler is None and cluster == "local":
         res, theta, periods = design(c, setup, None)  # in this process, no dask

@@ -91,7 +91,7 @@ def mc_template(setup: FlybySetup, nom: Nominal, n_samples: int) -> xr.Dataset:
 def _prepare(c: Campaign):
     setup = setup_from_campaign(c)
     sw = c.config.swarm
-    periods = np.asarray(sw.sweep_periods_s) if setup.maneuver == "fov" else None
+    periods = setup.maneuver.swarm_periods(sw.sweep_periods_s)
     nom = design_nominal(setup, sw.angles_rad, periods)
     return setup, nom
 

@@ -63,6 +63,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+from ..attitude.maneuvers import CAMPAIGN_NAMES, campaign_maneuver
 from ..config import CampaignSource, load_campaign
 from ..design.objectives import check_objectives
 from ..errors import InputError
@@ -71,7 +72,7 @@ from ..units import CM, DEG, KM, MINUTE, MM, UM
 from ..sizing import INSTRUMENT_DEFAULTS as _CAM
 from .kinds import KINDS as REGISTRY
 
-KINDS = tuple(REGISTRY)
+KINDS = REGISTRY.keys()   # live: a kind registered later is a valid choice
 
 BODY = {
     "name": Field("str", "eros", doc="body name or shape file"),
@@ -129,7 +130,7 @@ SWARM = {
 
 ATTITUDE = {
     "mode": Field("str", "ideal", choices=("ideal", "simulated")),
-    "maneuver": Field("str", "nadir", choices=("nadir", "fov")),
+    "maneuver": Field("str", "nadir", choices=CAMPAIGN_NAMES),
     "decimate": Field("int", 10, lo=1),
     "theta_max_deg": Field("float", None, nullable=True, si="theta_max_rad",
                            to_si=DEG, lo=0, lo_open=True, hi=90),
@@ -294,9 +295,9 @@ def _cross_checks(c: CampaignConfig) -> None:
                 and len(sw.sweep_periods_s) != len(sw.angles_rad)):
             raise InputError(f"has {len(sw.sweep_periods_s)} periods for "
                              f"{len(sw.angles_rad)} spacecraft", field="swarm.sweep_periods_min")
-    if c.attitude.maneuver == "fov" and c.kind in ("flyby", "monte-carlo"):
+    if campaign_maneuver(c.attitude.maneuver).sweeps and c.kind in ("flyby", "monte-carlo"):
         if sw.sweep_periods_s is None:
-            raise InputError("is required for attitude.maneuver = 'fov'",
+            raise InputError(f"is required for attitude.maneuver = {c.attitude.maneuver!r}",
                              field="swarm.sweep_periods_min")
     if mc.failures_k and sw.angles_rad and mc.failures_k > len(sw.angles_rad):
         raise InputError(f"cannot exceed the swarm size {len(sw.angles_rad)}",
@@ -344,7 +345,7 @@ def build_models(raw: dict, config: CampaignConfig) -> dict:
             cov.setdefault(key, inst[key])
     ctrl = _sub_table(raw, "controller")
     if not ctrl:
-        ctrl = {"preset": "fov" if config.attitude.maneuver == "fov" else "np"}
+        ctrl = {"preset": campaign_maneuver(config.attitude.maneuver).gains}
     coverage = coverage_options_from_config(cov, prefix="coverage.")
     if coverage.require_stereo and config.kind.startswith("design"):
         from ..design.stereo import check_campaign
