@@ -39,7 +39,7 @@ import xarray as xr
 from ..design.stereo import check_grid
 from ..design import build_bank, coverage_curve
 from ..design.bank import grid_size, separation_steps
-from ..design.objectives import OBJECTIVES, check_objectives, evaluate
+from ..design.objectives import OBJECTIVES, bank_needs, check_objectives, evaluate
 from ..design.pareto import run_pareto
 from ..errors import InputError
 from ..flyby import setup_from_campaign, target
@@ -134,7 +134,8 @@ def run_design_pareto(c, out, *, workers=None, scheduler=None, cluster="local",
     _log(f"body: {setup.body.note}")
     target(setup, np.linspace(0.0, 2 * np.pi, 16, endpoint=False))
     n_grid = grid_size(d.grid_step_rad)
-    if "stereo_coverage" in names:
+    needs = bank_needs(names)
+    if "pairs" in needs:   # the pair table has one variable per candidate pair
         try:
             check_grid(n_grid)
         except InputError as exc:
@@ -148,10 +149,8 @@ def run_design_pareto(c, out, *, workers=None, scheduler=None, cluster="local",
     with (nullcontext(None) if local else
           connect(cluster=cluster, workers=workers, scheduler=scheduler,
                   slurm_config=slurm_config)) as client:
-        quality = bool({"stereo_coverage", "mean_resolution"} & set(names))
-        # stereo from two spacecraft needs the pair table
         bank = build_bank(setup, d.grid_step_rad, client=client, chunk_size=d.chunk_size,
-                          quality=quality, pairs="stereo_coverage" in names)
+                          quality="quality" in needs, pairs="pairs" in needs)
     t_masks = time.perf_counter() - t0
     _log(f"candidate masks: {bank.n_candidates} grid angles ({math.degrees(bank.step):g} deg) "
          f"in {t_masks:.1f} s")

@@ -25,7 +25,7 @@ import xarray as xr
 
 from ..engine.runner import run_campaign
 from ..flyby import FlybySetup, Perturbation, setup_from_campaign
-from ..montecarlo.dispersions import DISPERSION_ORDER, DISPERSION_VARS, draw_sample
+from ..montecarlo.dispersions import dispersion_order, dispersion_vars, draw_sample
 from ..montecarlo.sample import Nominal, design_nominal, fly_sample
 from ..store_schema import ATTITUDE_SERIES, PER_SAMPLE, QUALITY, VARS
 from . import datasets
@@ -73,7 +73,7 @@ def mc_template(setup: FlybySetup, nom: Nominal, n_samples: int) -> xr.Dataset:
         "targeting_miss": (("spacecraft", "iteration"), nom.miss),
         **datasets.mesh_vars(setup.body.shape),
     })
-    v.update({var.name: per_sample(var) for var in DISPERSION_VARS})
+    v.update({var.name: per_sample(var) for var in dispersion_vars()})
     if setup.coverage.wants_quality:
         v.update({name: per_sample(VARS[name]) for name in QUALITY})
     if nom.periods is not None:
@@ -114,7 +114,7 @@ def run_monte_carlo(c: Campaign, out, *, workers=None, scheduler=None, resume=Fa
     fn = functools.partial(mc_chunk, setup=setup, nominal=nom.for_tasks(), mc=mc,
                            seed=c.config.seed)
     attrs = datasets.base_attrs(c, setup)
-    attrs["dispersion_order"] = list(DISPERSION_ORDER)  # fixes the draw order
+    attrs["dispersion_order"] = list(dispersion_order())  # fixes the draw order
     summary = run_campaign(out, template, fn, config=resolved_config(c),
                            campaign_seed=c.config.seed, chunk_size=c.config.run.chunk_size,
                            attrs=attrs, resume=resume,

@@ -67,7 +67,9 @@ from ..attitude.maneuvers import CAMPAIGN_NAMES, campaign_maneuver
 from ..config import CampaignSource, load_campaign
 from ..design.objectives import check_objectives
 from ..errors import InputError
-from ..schema import Field, to_typed, typed_table, validate, with_defaults
+from ..montecarlo.dispersions import check_dispersions, dispersion_keys
+from ..schema import (Field, LiveTable, live_typed_table, to_typed, typed_table, validate,
+                      with_defaults)
 from ..units import CM, DEG, KM, MINUTE, MM, UM
 from ..sizing import INSTRUMENT_DEFAULTS as _CAM
 from .kinds import KINDS as REGISTRY
@@ -167,21 +169,9 @@ DESIGN = {
                             "worst_failure_coverage, stereo_coverage, mean_resolution"),
 }
 
-MC_SCHEMA = {
-    "samples": Field("int", 64, lo=1),
-    "attitude_dispersion": Field("bool", True, doc="random initial attitude, rates, wheels"),
-    "sigma_c20_pct": Field("float", 0.0, lo=0, doc="1-sigma relative C20 error, %"),
-    "sigma_c22_pct": Field("float", 0.0, lo=0),
-    "sigma_gm_pct": Field("float", 0.0, lo=0),
-    "reflectivity_min": Field("float", 0.6, lo=0, hi=1),
-    "reflectivity_max": Field("float", 0.6, lo=0, hi=1),
-    "sigma_position_m": Field("float", 0.0, lo=0, doc="1-sigma initial position error per axis"),
-    "sigma_velocity_mm_s": Field("float", 0.0, si="sigma_velocity_m_s", to_si=MM, lo=0),
-    "failures_k": Field("int", 0, lo=0, doc="exactly k of N spacecraft lost"),
-    "failure_probability": Field("float", 0.0, lo=0, hi=1, doc="per-spacecraft loss probability"),
-    "sigma_misalignment_deg": Field("float", 0.0, si="sigma_misalignment_rad",
-                                    to_si=DEG, lo=0, hi=90),
-}
+#: ``[monte_carlo]``: ``samples`` and the keys each dispersion declares
+#: (:data:`~ideas_hpc.montecarlo.dispersions.DISPERSIONS`), read live.
+MC_SCHEMA = LiveTable(lambda: {"samples": Field("int", 64, lo=1), **dispersion_keys()})
 
 RUN = {
     "chunk_size": Field("int", 8, lo=1, doc="samples per dask task"),
@@ -241,7 +231,8 @@ class CampaignConfig:
 
 def typed_config(values: dict) -> CampaignConfig:
     """:class:`CampaignConfig` from :func:`~ideas_hpc.schema.validate`'s output."""
-    tables = {k: to_typed(cls, values[k], SCHEMA[k]) for k, cls in TABLES.items()}
+    tables = {k: to_typed(live_typed_table(cls, SCHEMA[k], __name__), values[k], SCHEMA[k])
+              for k, cls in TABLES.items()}
     return CampaignConfig(kind=values["kind"], seed=values["seed"],
                           description=values["description"], **tables)
 
@@ -282,9 +273,10 @@ def _cross_checks(c: CampaignConfig) -> None:
     if d.p_min_s >= d.p_max_s:
         raise InputError(f"must be > design.p_min_min ({d.p_min_s / MINUTE:g} min)",
                          field="design.p_max_min")
-    if mc.reflectivity_min > mc.reflectivity_max:
-        raise InputError("must be >= monte_carlo.reflectivity_min",
-                         field="monte_carlo.reflectivity_max")
+    try:
+        check_dispersions(mc)
+    except InputError as exc:
+        raise InputError(exc.message, field=f"monte_carlo.{exc.field}") from None
     if d.failures_tolerated >= d.n_max:
         raise InputError(f"must be < design.n_max ({d.n_max}): {d.failures_tolerated} "
                          "failures would leave no spacecraft", field="design.failures_tolerated")
