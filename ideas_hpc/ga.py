@@ -65,9 +65,9 @@ class GAResult:
 
 def _check_ga(population: int, generations: int) -> None:
     if int(population) < 2:
-        raise InputError(f"must be >= 2, got {population}", field="design.population")
+        raise InputError(f"must be >= 2, got {population}", field="population")
     if int(generations) < 1:
-        raise InputError(f"must be >= 1, got {generations}", field="design.generations")
+        raise InputError(f"must be >= 1, got {generations}", field="generations")
 
 
 def nadir_fitness(cov: np.ndarray, n: np.ndarray, n_max: int, target: float,
@@ -262,7 +262,7 @@ def run_nadir_ga(evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
     """
     _check_ga(population, generations)
     if int(n_max) < 1:
-        raise InputError(f"must be >= 1, got {n_max}", field="design.n_max")
+        raise InputError(f"must be >= 1, got {n_max}", field="n_max")
     ang = {"low": 0.0, "high": TWO_PI}
     if angle_step > 0:
         ang["step"] = float(angle_step)
@@ -334,7 +334,7 @@ def run_fov_ga(evaluate: Callable[[np.ndarray], np.ndarray], *, n_spacecraft: in
     _check_ga(population, generations)
     if not (p_min > 0 and p_max > p_min):
         raise InputError(f"P_min ({p_min / 60:g} min) must be below P_max ({p_max / 60:g} min)",
-                         field="design.p_min_min")
+                         field="p_min")
     space = {"low": float(p_min), "high": float(p_max)}
     if period_step > 0:
         space["step"] = float(period_step)

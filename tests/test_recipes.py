@@ -164,3 +164,39 @@ def test_recipe_kind(tmp_path, monkeypatch):
     assert toy.attrs["kind"] == "toy-first" and toy.sizes["spacecraft"] == 1
     assert np.array_equal(toy["observed"].values, one["observed"].values)
     assert math.isclose(float(toy["coverage"]), float(one["coverage"]), rel_tol=0, abs_tol=0)
+
+
+# --- One angle step for every designer (issue 21 item 2)
+
+def test_one_angle_step_key_keeps_each_default_and_the_alias_warns_once(monkeypatch):
+    from ideas_hpc.campaign import design_table
+
+    monkeypatch.setattr(design_table, "_warned", [])
+    exact = load(CAMPAIGNS / "eros-design.toml", ['body.name="ellipsoid"']).config.design
+    ga = load(CAMPAIGNS / "eros-nadir-ga.toml", ['body.name="ellipsoid"']).config.design
+    assert exact.grid_step_rad == 0.5 * math.pi / 180 and ga.angle_step_rad == 0.01
+    set_ = load(CAMPAIGNS / "eros-nadir-ga.toml", ["design.angle_step_deg=2.0"]).config.design
+    assert set_.angle_step_rad == pytest.approx(math.radians(2.0), rel=1e-15)
+    assert set_.grid_step_rad == set_.angle_step_rad
+    with pytest.warns(FutureWarning, match="angle_step_deg"):
+        old = load(CAMPAIGNS / "eros-nadir-ga.toml", ["design.angle_step_rad=0.2"]).config.design
+    assert old.angle_step_rad == 0.2
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")       # once: the second use is silent
+        load(CAMPAIGNS / "eros-nadir-ga.toml", ["design.angle_step_rad=0.2"])
+
+
+def test_designers_name_their_own_parameters():
+    from ideas_hpc.errors import config_fields
+    from ideas_hpc.ga import run_fov_ga
+    from ideas_hpc.campaign.design_ga import GA_FIELDS
+
+    kw = dict(n_spacecraft=2, p_min=60.0, p_max=30.0, period_step=0.0, population=4,
+              generations=1, seed=1)
+    with pytest.raises(InputError) as err:
+        run_fov_ga(lambda g: np.zeros(len(g)), **kw)
+    assert err.value.field == "p_min"
+    with pytest.raises(InputError) as err, config_fields(GA_FIELDS):
+        run_fov_ga(lambda g: np.zeros(len(g)), **kw)
+    assert err.value.field == "design.p_min_min"

@@ -19,7 +19,7 @@ import numpy as np
 import xarray as xr
 
 from ..candidates import candidate_masks
-from ..errors import InputError
+from ..errors import InputError, config_fields
 from ..flyby import fly
 from ..ga_local import GridCover
 from ..swarm_eval import MaskBank, fov_keys, nadir_keys, snap_angle
@@ -29,6 +29,11 @@ from . import datasets
 from .design_exact import checked_setup, ga_gap
 from .schema import Campaign
 from .vocabulary import requirement_line
+
+
+#: The GA's parameter names -> the campaign file's keys.
+GA_FIELDS = {"population": "design.population", "generations": "design.generations",
+             "n_max": "design.n_max", "p_min": "design.p_min_min"}
 
 
 def _log(msg: str) -> None:
@@ -219,12 +224,13 @@ def run_design(c: Campaign, out: Path, *, workers=None, scheduler=None, cluster=
                           if c.kind == "design-nadir" else _fov_swarm(c))
     t = time.perf_counter()
     design = design_nadir if c.kind == "design-nadir" else design_fov
-    if workers == 0 and scheduler is None and cluster == "local":
-        res, theta, periods = design(c, setup, None)  # in this process, no dask
-    else:
-        with connect(cluster=cluster, workers=workers, scheduler=scheduler,
-                     slurm_config=slurm_config) as client:
-            res, theta, periods = design(c, setup, client)
+    with config_fields(GA_FIELDS):
+        if workers == 0 and scheduler is None and cluster == "local":
+            res, theta, periods = design(c, setup, None)  # in this process, no dask
+        else:
+            with connect(cluster=cluster, workers=workers, scheduler=scheduler,
+                         slurm_config=slurm_config) as client:
+                res, theta, periods = design(c, setup, client)
     wall = time.perf_counter() - t
     nadir = c.kind == "design-nadir"
     threshold = res.target_coverage - c.config.design.eps_tol_pct / 100.0

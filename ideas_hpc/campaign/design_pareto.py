@@ -44,6 +44,7 @@ from ..design.pareto import run_pareto
 from ..errors import InputError
 from ..flyby import setup_from_campaign, target
 from . import datasets
+from .design_table import STEP_KEY
 
 #: A front point matches the exact curve when their coverages differ by at most this.
 MATCH_TOL = 1e-12
@@ -137,7 +138,7 @@ def run_design_pareto(c, out, *, workers=None, scheduler=None, cluster="local",
     needs = bank_needs(names)
     if "pairs" in needs:   # the pair table has one variable per candidate pair
         try:
-            check_grid(n_grid)
+            check_grid(n_grid, STEP_KEY)
         except InputError as exc:
             raise c.error(exc.message, exc.field) from None
     try:  # a separation no two grid points satisfy fails before any mask is computed

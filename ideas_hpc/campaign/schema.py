@@ -72,6 +72,7 @@ from ..schema import (Field, LiveTable, live_typed_table, to_typed, typed_table,
                       with_defaults)
 from ..units import CM, DEG, KM, MINUTE, MM, UM
 from ..sizing import INSTRUMENT_DEFAULTS as _CAM
+from .design_table import check_stereo_design, resolve_angle_step
 from .kinds import KINDS as REGISTRY
 
 KINDS = REGISTRY.keys()   # live: a kind registered later is a valid choice
@@ -141,8 +142,9 @@ ATTITUDE = {
 DESIGN = {
     "method": Field("str", "exact", choices=("exact", "ga"),
                     doc="design-nadir: exact integer programme or the paper's GA"),
-    "angle_step_deg": Field("float", 0.5, si="grid_step_rad", to_si=DEG, lo=0, lo_open=True, hi=90,
-                            doc="exact designer's grid of candidate swarm angles"),
+    "angle_step_deg": Field("float", None, nullable=True, si="grid_step_rad", to_si=DEG, lo=0,
+                            hi=90, doc="grid of candidate swarm angles of every designer "
+                            "(default: exact and Pareto 0.5 deg, GA 0.01 rad; GA: 0 continuous)"),
     "time_limit_s": Field("float", 60.0, lo=0, lo_open=True,
                           doc="exact designer: return the best design so far with its gap"),
     "failures_tolerated": Field("int", 0, lo=0, doc="k: coverage must survive any k failures"),
@@ -152,7 +154,8 @@ DESIGN = {
     "generations": Field("int", 115, lo=1),
     "n_max": Field("int", 20, lo=1, hi=200),
     "eps_tol_pct": Field("float", 0.1, lo=0, hi=100),
-    "angle_step_rad": Field("float", 0.01, lo=0, hi=1.0),
+    "angle_step_rad": Field("float", None, nullable=True, lo=0, hi=1.0,
+                            doc="deprecated alias of angle_step_deg, in rad"),
     "p_min_min": Field("float", 0.3, si="p_min_s", to_si=MINUTE, lo=0, lo_open=True),
     "p_max_min": Field("float", 10.0, si="p_max_s", to_si=MINUTE, lo=0, lo_open=True),
     "period_step_min": Field("float", 0.1, si="period_step_s", to_si=MINUTE, lo=0),
@@ -309,7 +312,7 @@ def validate_campaign(source: CampaignSource) -> Campaign:
     """Validate a loaded source; every error carries the field, file and line."""
     try:
         values = validate(source.data, SCHEMA)
-        config = typed_config(values)
+        config = resolve_angle_step(typed_config(values))
         _cross_checks(config)
         extras = build_models(source.data, config)
     except InputError as exc:
@@ -340,11 +343,7 @@ def build_models(raw: dict, config: CampaignConfig) -> dict:
         ctrl = {"preset": campaign_maneuver(config.attitude.maneuver).gains}
     coverage = coverage_options_from_config(cov, prefix="coverage.")
     if coverage.require_stereo and config.kind.startswith("design"):
-        from ..design.stereo import check_campaign
-
-        d = config.design
-        check_campaign(config.kind, d.method, d.failures_tolerated, d.grid_step_rad,
-                       d.angle_step_rad)
+        check_stereo_design(config, raw.get("design"))
     return {
         "force_model": force_model_from_config(_sub_table(raw, "dynamics"), prefix="dynamics."),
         "spacecraft": spacecraft_from_config(_sub_table(raw, "spacecraft"), prefix="spacecraft."),
