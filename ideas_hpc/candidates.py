@@ -36,7 +36,7 @@ def _views(setup: FlybySetup, keys):
                                                                     / setup.dt)))),
                              th, periods, sigma0=s0, omega0=w0, wheel0=W0)
     else:
-        dcm, _ = camera_dcms(setup, th, periods)
+        dcm, _ = camera_dcms(setup, th, periods, r_img_T=r_img)
     sun = setup.sun_T() if setup.coverage.needs_sun else None
     return r_img, dcm, sun
 

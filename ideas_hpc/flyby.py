@@ -30,6 +30,8 @@ from .attitude import (Gains, Maneuver, SpacecraftModel, campaign_maneuver, idea
                        initial_conditions, simulate_attitude)
 from .bodies import Body, load_body
 from .core.mrp import dcm_from_mrp, mrp_from_prv
+from .encounter import (Encounter, approach_angles, camera_dcms_encounter, endpoints_encounter,
+                        target_encounter, track_dcms, window_s)
 from .errors import InputError
 from .mapping import CoverageOptions, CoverageResult, compute_coverage
 from .sizing import Sizing, size_flyby
@@ -71,6 +73,7 @@ class FlybySetup:
     coverage: CoverageOptions = field(default_factory=CoverageOptions)
     p_min: float = 18.0
     epoch: float = 0.0
+    encounter: Encounter | None = None   # None: the paper's geometry (ideas_hpc.encounter)
 
     @property
     def image_every(self) -> int:
@@ -89,6 +92,8 @@ class FlybySetup:
         return sun_direction_T(self.body.params, e + t)
 
     def with_(self, **kw) -> "FlybySetup":
+        if isinstance(kw.get("maneuver"), str):      # a campaign name
+            kw["maneuver"] = campaign_maneuver(kw["maneuver"], field="maneuver")
         return replace(self, **kw)
 
 
@@ -136,8 +141,11 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
             check_separation(sw.angles_rad, d_sep, sw.min_separation_m)
         except InputError as exc:
             raise c.source.locate(exc) from None
+    t0, tf, enc = fb.t0_s, fb.tf_s, None
+    if fb.geometry == "encounter":
+        t0, tf, enc = _encounter_window(c, body, inst)
     return FlybySetup(
-        body=body, sizing=sizing, t0=fb.t0_s, tf=fb.tf_s, dt=fb.dt_s,
+        body=body, sizing=sizing, t0=t0, tf=tf, dt=fb.dt_s,
         image_dt=1.0 / inst.image_rate_hz,
         d_sep=d_sep,
         z_start=fb.z_start_m, z_stop=fb.z_stop_m, configuration=fb.configuration,
@@ -147,12 +155,29 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
         tol=fb.tolerance_m, max_iter=fb.max_iterations, seed=cfg.seed,
         force_model=ex["force_model"], spacecraft=ex["spacecraft"],
         gains=ex["gains"], coverage=ex["coverage"], p_min=cfg.design.p_min_s,
-        epoch=fb.epoch_s)
+        epoch=fb.epoch_s, encounter=enc)
+
+
+def _encounter_window(c, body, inst):
+    """``(t0, tf, Encounter)`` of ``flyby.geometry = "encounter"`` (SPEC section 7c)."""
+    fb = c.config.flyby
+    img = 1.0 / inst.image_rate_hz
+    try:
+        before, after = window_s(fb, img)
+        t_ca = fb.t0_s + before
+        sun = sun_direction_T(body.params, [fb.epoch_s + t_ca])[0]
+        speed, ra, dec = approach_angles(fb, sun)
+    except InputError as exc:
+        raise c.source.locate(exc) from None
+    return fb.t0_s, t_ca + after, Encounter(speed, ra, dec, t_ca)
 
 
 def endpoints(setup: FlybySetup, theta) -> tuple[np.ndarray, np.ndarray]:
-    """Start and target positions (N, 3) in T for swarm angles ``theta`` (rad)."""
+    """Start and target positions (N, 3) in T for swarm angles ``theta`` (rad); on an
+    encounter the start and the ring point at closest approach."""
     th = np.asarray(theta, dtype=np.float64).ravel()
+    if setup.encounter is not None:
+        return endpoints_encounter(setup, th)
     rise = 0.0
     if setup.configuration == "helix":
         rise = setup.helix_rise * (np.mod(th, TWO_PI) / TWO_PI)
@@ -166,8 +191,10 @@ def target(setup: FlybySetup, theta, *, raise_on_failure: bool = True) -> Target
     naming the campaign field to change (:func:`targeting_input_error`).
     """
     th = np.asarray(theta, dtype=np.float64).ravel()
-    r0, rt = endpoints(setup, th)
     try:
+        if setup.encounter is not None:
+            return target_encounter(setup, th, raise_on_failure=raise_on_failure)
+        r0, rt = endpoints(setup, th)
         return target_swarm(setup.body, r0, rt, setup.t0, setup.tf,
                             force_model=setup.force_model, dt_sample=setup.dt, tol=setup.tol,
                             max_iter=setup.max_iter, raise_on_failure=raise_on_failure)
@@ -256,23 +283,37 @@ class FlybyOutcome:
 
 
 def camera_dcms(setup: FlybySetup, theta, periods=None, *, sigma0=None, omega0=None,
-                wheel0=None, spin_rate=None):
+                wheel0=None, spin_rate=None, r_img_T=None):
     """Camera DCMs at the image times, and the attitude result when simulated.
 
+    ``r_img_T`` (N, n_img, 3): the flown positions, for body tracking.
     Returns ``(dcm_BT (N, n_img, 3, 3), AttitudeResult or None)``.
     """
     th = np.asarray(theta, dtype=np.float64)
+    if setup.maneuver.tracks_body:
+        return track_dcms(setup, r_img_T)[0], None
     ws = setup.body.params.spin_rate if spin_rate is None else spin_rate
     duration = setup.tf - setup.t0
     img_t = setup.image_times - setup.t0
     kw = dict(mode=setup.maneuver.name, periods=periods, theta_max=setup.theta_max, p_min=setup.p_min)
+    if setup.encounter is not None:
+        if sigma0 is None and setup.attitude_mode == "simulated":
+            sigma0, omega0, wheel0 = initial_conditions(setup.seed, 0, th.size)
+        bt, att, _ = camera_dcms_encounter(
+            setup, th, periods, lambda w, ns: ideal_dcm_BT(th, w, img_t, dcm_TS=ns, **kw),
+            lambda w, ns: _simulate(setup, th, w, duration, sigma0, omega0, wheel0, ns, kw))
+        return bt, att
     if setup.attitude_mode == "ideal":
         return ideal_dcm_BT(th, ws, img_t, **kw), None
     if sigma0 is None:
         sigma0, omega0, wheel0 = initial_conditions(setup.seed, 0, th.size)
+    return _simulate(setup, th, ws, duration, sigma0, omega0, wheel0, None, kw)
+
+
+def _simulate(setup, th, ws, duration, sigma0, omega0, wheel0, dcm_TS, kw):
     res = simulate_attitude(th, ws, duration, gains=setup.gains, spacecraft=setup.spacecraft,
                             dt=setup.dt, image_dt=setup.image_dt, sigma0=sigma0, omega0=omega0,
-                            wheel0=wheel0, decimate=setup.decimate, **kw)
+                            wheel0=wheel0, decimate=setup.decimate, dcm_TS=dcm_TS, **kw)
     return np.ascontiguousarray(res.dcm_BT[0]), res
 
 
@@ -336,7 +377,7 @@ def fly_open_loop(setup: FlybySetup, theta, periods, r0_T, v0_T,
 def _image(setup: FlybySetup, th, periods, r_img, ics, misalignment, active, counts):
     """Attitude at the images, camera misalignment, Sun, coverage: the common tail of a flyby."""
     s0, w0, W0 = ics if ics is not None else (None, None, None)
-    dcm, att = camera_dcms(setup, th, periods, sigma0=s0, omega0=w0, wheel0=W0)
+    dcm, att = camera_dcms(setup, th, periods, sigma0=s0, omega0=w0, wheel0=W0, r_img_T=r_img)
     if misalignment is not None:
         dcm = np.ascontiguousarray(np.matmul(misalignment[:, None], dcm))  # [CB][BT]
     img_t = setup.image_times

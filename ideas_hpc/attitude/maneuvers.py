@@ -88,6 +88,10 @@ class Maneuver:
     fov_factor : float
         Camera half-angle over the nadir half cone ``eta_N`` of the sizing
         (SPEC section 2; FoV sweeping images with half the cone).
+    tracks_body : bool
+        The camera follows the body centre along the flown positions (no
+        reference kernel, ``code`` -1): encounter geometry and ideal attitude
+        only (:func:`ideas_hpc.encounter.track_dcms`).
     figures : tuple of (str, int)
         The paper's figure numbers of its report figures (``"pyramids"``: camera
         pyramids, ``"attitude"``: first of the four attitude series); others are
@@ -102,6 +106,7 @@ class Maneuver:
     key: str = ""
     sweeps: bool = False
     fov_factor: float = 1.0
+    tracks_body: bool = False
     figures: tuple = ()
 
     def figure(self, what: str, default: int) -> int:
@@ -130,6 +135,9 @@ MANEUVERS = {m.name: m for m in (
     Maneuver("fov", FOV_MODE, "fov", _sweep_params,
              "FoV Sweeping: theta_max sin(2 pi t / P_i) about the ring x axis",
              sweeps=True, fov_factor=0.5, figures=(("pyramids", 33), ("attitude", 34))),
+    Maneuver("track", -1, "np", _no_params,
+             "Body tracking: boresight on the body centre along the flown track (encounters)",
+             tracks_body=True),
 )}
 
 
@@ -174,5 +182,8 @@ def get_maneuver(mode) -> Maneuver:
 def maneuver_args(mode, n, periods, theta_max, p_min):
     """``(maneuver, periods (n,) s, theta_max rad)`` for the kernels, checked."""
     m = get_maneuver(mode)
+    if m.code < 0:
+        raise InputError(f"maneuver {mode!r} has no reference kernel: it is flown from the "
+                         "trajectory (ideal attitude)", field="mode")
     p, tm = m.params(n, periods, theta_max, p_min)
     return m, p, tm

@@ -1,4 +1,5 @@
-"""``ideas-hpc run``, ``ideas-hpc report`` (SPEC section 9) and ``ideas-hpc scan-arrival``."""
+"""``ideas-hpc run``, ``ideas-hpc report`` (SPEC section 9) and ``ideas-hpc scan-arrival``,
+``ideas-hpc scan-encounter``."""
 
 from __future__ import annotations
 
@@ -26,6 +27,15 @@ def _cmd_scan(args) -> int:
     from .scan import scan_file
 
     scan_file(args.campaign, args.set, n=args.n, span_h=args.span_h, out=args.out)
+    return 0
+
+
+def _cmd_scan_encounter(args) -> int:
+    from .scan_encounter import scan_encounter_file
+
+    scan_encounter_file(args.campaign, args.set, decs_deg=args.dec_deg,
+                        phases_deg=args.phase_deg, step_deg=args.step_deg, out=args.out,
+                        plot=args.plot)
     return 0
 
 
@@ -85,3 +95,19 @@ def add_commands(sub) -> None:
                    help="override a campaign field (TOML value), repeatable")
     s.add_argument("--out", default=None, help="write the scan to this netCDF file")
     s.set_defaults(handler=_cmd_scan)
+
+    e = sub.add_parser("scan-encounter", help="coverage versus approach declination and phase",
+                       description="Fly an encounter campaign's ring (and swarm) for a grid of "
+                                   "approach declinations and phase angles.")
+    e.add_argument("campaign", help="campaign TOML file with flyby.geometry = \"encounter\"")
+    e.add_argument("--dec-deg", type=float, nargs="+", default=None,
+                   help="approach declinations from the equator (default -60 -30 0 30 60 90)")
+    e.add_argument("--phase-deg", type=float, nargs="+", default=None,
+                   help="phase angles (default 30 60 90 120)")
+    e.add_argument("--step-deg", type=float, default=10.0,
+                   help="swarm-angle step of the ring's candidates (default 10)")
+    e.add_argument("--set", action="append", default=[], metavar="dotted.key=value",
+                   help="override a campaign field (TOML value), repeatable")
+    e.add_argument("--out", default=None, help="write the scan to this netCDF file")
+    e.add_argument("--plot", default=None, help="write the coverage map to this PNG")
+    e.set_defaults(handler=_cmd_scan_encounter)

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
+from ..encounter import encounter_attrs
 from ..mapping import QUALITY_VARS, quality_arrays  # noqa: F401  (store layout)
 from ..store_schema import with_attrs  # noqa: F401  (used by the kinds)
 
@@ -82,6 +83,7 @@ def setup_attrs(setup) -> dict:
         "theta_max_rad": float(setup.theta_max), "maneuver": setup.maneuver.campaign_name,
         "attitude_mode": setup.attitude_mode, "coverage_mode": setup.coverage.mode,
         "targeting_tolerance_m": float(setup.tol), "configuration": setup.configuration,
+        **encounter_attrs(setup),
     }
 
 

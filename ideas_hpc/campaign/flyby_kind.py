@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from ..encounter import pointing_profile
 from ..flyby import fly, setup_from_campaign
 from . import datasets
 from .schema import Campaign
@@ -31,4 +32,8 @@ def run_flyby(c: Campaign, out: Path, **_) -> xr.Dataset:
          f"{time.perf_counter() - t:.1f} s")
     ds = datasets.flyby_dataset(setup, res)
     ds.attrs.update(datasets.base_attrs(c, setup))
-    return ds
+    point = pointing_profile(setup, sw.angles_rad, periods, res.r_img_T)
+    _log(point.pop("summary"))
+    for name, v in point.items():
+        ds[name] = (("spacecraft",), v)
+    return datasets.with_attrs(ds)

@@ -33,6 +33,19 @@ def _summary(ds, figs) -> str:
                      f"{a['half_angle_rad'] / DEG:.4f} deg, far field {a['far_m'] / KM:.3f} km, "
                      f"maneuver {a.get('maneuver')}, attitude {a.get('attitude_mode')}, "
                      f"coverage mode {a.get('coverage_mode')}")
+    if a.get("geometry") == "encounter":
+        lines.append(f"encounter: {a['speed_m_s'] / KM:g} km/s, approach declination "
+                     f"{a['approach_dec_rad'] / DEG:.1f} deg, right ascension "
+                     f"{a['approach_ra_rad'] / DEG:.1f} deg, phase angle "
+                     f"{a['phase_angle_rad'] / DEG:.1f} deg, closest approach at t = "
+                     f"{a['t_ca_s']:g} s")
+    if "pointing_feasible" in ds:
+        lines.append(f"pointing: peak rate {float(ds['pointing_rate'].max()) / DEG:.3g} deg/s, "
+                     f"torque {float(ds['pointing_torque'].max()) * 1e3:.3g} mN m, momentum "
+                     f"{float(ds['pointing_momentum'].max()) * 1e3:.3g} mN m s; "
+                     + ("the wheels can follow" if bool(ds["pointing_feasible"].all()) else
+                        "WARNING: the wheels cannot follow for spacecraft "
+                        f"{np.where(~ds['pointing_feasible'].values)[0].tolist()}"))
     if "swarm_angle" in ds and "sample" not in ds["swarm_angle"].dims:
         ang = " ".join(f"{x:.2f}" for x in ds["swarm_angle"].values)
         lines.append(f"swarm: N = {ds.sizes['spacecraft']}, angles (rad) {ang}")

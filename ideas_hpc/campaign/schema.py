@@ -24,15 +24,16 @@ pass's ground sample).
 turn of swarm angle), ``d_sep_km`` (default from the sizing), ``tolerance_m``,
 ``max_iterations``, ``dt_s`` (attitude step and trajectory sampling),
 ``epoch_s`` (arrival epoch after the body's element epoch: the Sun direction at
-flyby time ``t`` is the ephemeris at ``epoch_s + t``).
+flyby time ``t`` is the ephemeris at ``epoch_s + t``); ``geometry = "encounter"`` and its
+keys: :mod:`ideas_hpc.campaign.encounter_schema`.
 
 ``[swarm]`` ``angles_rad`` and ``sweep_periods_min`` (flyby and Monte Carlo),
 ``min_separation_km`` (closest allowed distance between two spacecraft on the
 ring, default 1 km; checked once ``d_sep`` is known, see
 :func:`ideas_hpc.swarm_geometry.check_separation`).
 
-``[attitude]`` ``mode`` (``ideal`` or ``simulated``), ``maneuver`` (``nadir``
-or ``fov``), ``decimate`` (keep every k-th attitude step in the store),
+``[attitude]`` ``mode`` (``ideal`` or ``simulated``), ``maneuver`` (``nadir``,
+``fov``, or ``track``: the body centre, encounters in ideal mode), ``decimate`` (keep every k-th attitude step in the store),
 ``theta_max_deg`` (default eta_N / 2).
 
 ``[dynamics]``, ``[spacecraft]``, ``[controller]``, ``[coverage]``: passed to
@@ -73,6 +74,7 @@ from ..schema import (Field, LiveTable, live_typed_table, to_typed, typed_table,
 from ..units import CM, DEG, KM, MINUTE, MM, UM
 from ..sizing import INSTRUMENT_DEFAULTS as _CAM
 from .design_table import check_stereo_design, resolve_angle_step
+from .encounter_schema import ENCOUNTER, check_encounter
 from .kinds import KINDS as REGISTRY
 
 KINDS = REGISTRY.keys()   # live: a kind registered later is a valid choice
@@ -120,6 +122,7 @@ FLYBY = {
     "epoch_s": Field("float", 0.0, doc="arrival epoch: flyby time 0 is this many seconds "
                                        "after the body's element epoch (sets the Sun "
                                        "direction and the body's rotation phase)"),
+    **ENCOUNTER,
 }
 
 SWARM = {
@@ -298,6 +301,7 @@ def _cross_checks(c: CampaignConfig) -> None:
         raise InputError(f"cannot exceed the swarm size {len(sw.angles_rad)}",
                          field="monte_carlo.failures_k")
     check_objectives(d.objectives)
+    check_encounter(fb, c.attitude)
     step = fb.dt_s
     img = 1.0 / c.instrument.image_rate_hz
     if abs(img / step - round(img / step)) > 1e-9:
