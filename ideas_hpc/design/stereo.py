@@ -37,7 +37,7 @@ from ..core.stereo_pairs import pair_index
 from ..core.union import population_coverage
 from ..errors import InputError
 from ..progress import steps
-from .bank import (CandidateBank, conflict_windows, grid_size, reduce_problem,
+from .bank import (CandidateBank, conflict_windows, reduce_problem,
                    separation_steps)
 from .exact import (FEAS_TOL, ExactResult, check_time_limit, coverage_result, heavy_groups,
                     n_max_too_small, solve)
