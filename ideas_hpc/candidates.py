@@ -28,7 +28,7 @@ def _views(setup: FlybySetup, keys):
     per = np.array([k[1] for k in keys], dtype=np.float64)
     tgt = target(setup, th)
     r_img = np.ascontiguousarray(tgt.position_T[:, ::setup.image_every])
-    periods = per if setup.att_mode == "fov" else None
+    periods = per if setup.maneuver.sweeps else None
     if setup.attitude_mode == "simulated":
         draws = [initial_conditions(setup.seed, int(k[2]), 1) for k in keys]
         s0, w0, W0 = (np.ascontiguousarray(np.concatenate([d[j] for d in draws])) for j in range(3))

@@ -236,10 +236,10 @@ def pointing_profile(setup, theta, periods=None, r_img_T=None) -> dict:
     """
     th = np.asarray(theta, dtype=np.float64).ravel()
     sc = setup.spacecraft or default_spacecraft()
-    if setup.maneuver == "track":
+    if setup.maneuver.tracks_body:
         return pointing_check(track_dcms(setup, r_img_T)[1], setup.image_dt, sc)
     img_t = setup.image_times - setup.t0
-    kw = dict(mode=setup.att_mode, periods=periods, theta_max=setup.theta_max, p_min=setup.p_min)
+    kw = dict(mode=setup.maneuver.name, periods=periods, theta_max=setup.theta_max, p_min=setup.p_min)
     if setup.encounter is not None:
         bn = ideal_dcm_BT(th, 0.0, img_t, dcm_TS=setup.encounter.dcm_NS, **kw)
     else:

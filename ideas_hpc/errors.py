@@ -7,6 +7,7 @@ exits with status 2, without a traceback.
 
 from __future__ import annotations
 
+import contextlib
 import math
 
 
@@ -59,3 +60,19 @@ def positive_number(value, field: str) -> float:
     if not math.isfinite(x) or x <= 0.0:
         raise InputError(f"must be > 0, got {value!r}", field=field)
     return x
+
+
+@contextlib.contextmanager
+def config_fields(names: dict | None = None, prefix: str = ""):
+    """Re-raise a model's or designer's :class:`InputError` under the file's key.
+
+    The layer below names its own parameters (``p_min``, ``sh_degree``); the
+    campaign layer maps them: ``names[field]`` when listed, else ``prefix + field``.
+    """
+    try:
+        yield
+    except InputError as e:
+        if e.field is None or not (prefix or (names and e.field in names)):
+            raise
+        key = (names or {}).get(e.field, prefix + e.field)
+        raise InputError(e.message, field=key, file=e.file, line=e.line) from None

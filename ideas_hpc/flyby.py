@@ -26,7 +26,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .attitude import Gains, SpacecraftModel, ideal_dcm_BT, initial_conditions, simulate_attitude
+from .attitude import (Gains, Maneuver, SpacecraftModel, campaign_maneuver, ideal_dcm_BT,
+                       initial_conditions, simulate_attitude)
 from .bodies import Body, load_body
 from .core.mrp import dcm_from_mrp, mrp_from_prv
 from .encounter import (Encounter, approach_angles, camera_dcms_encounter, endpoints_encounter,
@@ -60,7 +61,7 @@ class FlybySetup:
     near: float
     far: float
     theta_max: float
-    maneuver: str
+    maneuver: Maneuver
     attitude_mode: str
     decimate: int
     tol: float
@@ -73,10 +74,6 @@ class FlybySetup:
     p_min: float = 18.0
     epoch: float = 0.0
     encounter: Encounter | None = None   # None: the paper's geometry (ideas_hpc.encounter)
-
-    @property
-    def att_mode(self) -> str:
-        return "fov" if self.maneuver == "fov" else "np"
 
     @property
     def image_every(self) -> int:
@@ -95,14 +92,16 @@ class FlybySetup:
         return sun_direction_T(self.body.params, e + t)
 
     def with_(self, **kw) -> "FlybySetup":
+        if isinstance(kw.get("maneuver"), str):      # a campaign name
+            kw["maneuver"] = campaign_maneuver(kw["maneuver"], field="maneuver")
         return replace(self, **kw)
 
 
 def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
     """Resolve a validated :class:`~ideas_hpc.campaign.schema.Campaign` to a setup.
 
-    ``maneuver`` overrides ``attitude.maneuver`` (the FoV design kind sweeps
-    whatever the file says).
+    ``maneuver`` (a campaign name of :data:`~ideas_hpc.attitude.MANEUVERS`) overrides
+    ``attitude.maneuver`` (the FoV design kind sweeps whatever the file says).
     """
     cfg = c.config
     b = cfg.body
@@ -128,10 +127,10 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
                         ground_resolution=inst.ground_resolution_m,
                         aperture=inst.aperture_m, wavelength=inst.wavelength_m,
                         min_elevation=inst.min_elevation_rad, near=inst.near_field_m)
-    man = maneuver or cfg.attitude.maneuver
+    man = campaign_maneuver(maneuver or cfg.attitude.maneuver)
     eta = inst.half_angle_rad
     if eta is None:
-        eta = sizing.eta_fov if man == "fov" else sizing.eta_nadir
+        eta = man.half_angle(sizing.eta_nadir)
     fb = cfg.flyby
     att = cfg.attitude
     ex = c.extras
@@ -291,12 +290,12 @@ def camera_dcms(setup: FlybySetup, theta, periods=None, *, sigma0=None, omega0=N
     Returns ``(dcm_BT (N, n_img, 3, 3), AttitudeResult or None)``.
     """
     th = np.asarray(theta, dtype=np.float64)
-    if setup.maneuver == "track":
+    if setup.maneuver.tracks_body:
         return track_dcms(setup, r_img_T)[0], None
     ws = setup.body.params.spin_rate if spin_rate is None else spin_rate
     duration = setup.tf - setup.t0
     img_t = setup.image_times - setup.t0
-    kw = dict(mode=setup.att_mode, periods=periods, theta_max=setup.theta_max, p_min=setup.p_min)
+    kw = dict(mode=setup.maneuver.name, periods=periods, theta_max=setup.theta_max, p_min=setup.p_min)
     if setup.encounter is not None:
         if sigma0 is None and setup.attitude_mode == "simulated":
             sigma0, omega0, wheel0 = initial_conditions(setup.seed, 0, th.size)

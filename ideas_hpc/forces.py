@@ -28,7 +28,6 @@ and :meth:`ForceModel.terms` its list of settings; validating a
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import math
 from dataclasses import dataclass
@@ -40,7 +39,7 @@ from .constants import AU, G, MU_SUN, P_SUN_1AU
 from .core import forces as _cf
 from .core.gravity import polyhedron_precompute
 from .core.harmonics import sh_derivative_tables, sh_unnormalise
-from .errors import InputError
+from .errors import InputError, config_fields
 from .schema import number
 from .params import PhysicalParams
 
@@ -53,15 +52,9 @@ def _number(v, field, lo=-math.inf, hi=math.inf, lo_open=False):
            lo_open=lo_open)
 
 
-@contextlib.contextmanager
 def _prefixed(prefix: str):
     """Re-raise a settings object's InputError with ``prefix`` on the field name."""
-    try:
-        yield
-    except InputError as e:
-        if not prefix or e.field is None:
-            raise
-        raise InputError(e.message, field=prefix + e.field, file=e.file, line=e.line) from None
+    return config_fields(prefix=prefix)
 
 
 # -------------------------------------------------------------- settings
@@ -245,7 +238,7 @@ def _sh_field(sh_file: str, sh_degree: int):
     fld = _SH_CACHE[sh_file]
     if sh_degree > fld.degree:
         raise InputError(f"sh_degree {sh_degree} above the table's degree {fld.degree}",
-                         field="dynamics.sh_degree")
+                         field="sh_degree")
     return fld.truncated(sh_degree)
 
 
@@ -340,6 +333,9 @@ def force_model_from_config(table: dict | None, prefix: str = "dynamics.") -> Fo
     for f in dataclasses.fields(ForceModel):
         object.__setattr__(fm, f.name, kw.get(f.name, f.default))
     fm._settings(prefix)
+    if fm.gravity == "spherical_harmonics":   # the table's degree bounds sh_degree
+        with _prefixed(prefix):
+            _sh_field(fm.sh_file, fm.sh_degree)
     return fm
 
 

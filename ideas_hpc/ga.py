@@ -40,6 +40,7 @@ from typing import Callable
 import numpy as np
 
 from .errors import InputError
+from .seeds import GA_SEEDING, search_rng, search_seed
 
 TWO_PI = 2.0 * math.pi
 
@@ -64,9 +65,9 @@ class GAResult:
 
 def _check_ga(population: int, generations: int) -> None:
     if int(population) < 2:
-        raise InputError(f"must be >= 2, got {population}", field="design.population")
+        raise InputError(f"must be >= 2, got {population}", field="population")
     if int(generations) < 1:
-        raise InputError(f"must be >= 1, got {generations}", field="design.generations")
+        raise InputError(f"must be >= 1, got {generations}", field="generations")
 
 
 def nadir_fitness(cov: np.ndarray, n: np.ndarray, n_max: int, target: float,
@@ -221,7 +222,7 @@ def _run_pygad(*, num_genes, gene_type, gene_space, population, generations, see
         mutation_by_replacement=True,
         on_generation=on_generation,
         on_start=on_start,
-        random_seed=int(seed) % (2**32),
+        random_seed=search_seed(seed),
         suppress_warnings=True,
     )
     ga.run()
@@ -261,7 +262,7 @@ def run_nadir_ga(evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
     """
     _check_ga(population, generations)
     if int(n_max) < 1:
-        raise InputError(f"must be >= 1, got {n_max}", field="design.n_max")
+        raise InputError(f"must be >= 1, got {n_max}", field="n_max")
     ang = {"low": 0.0, "high": TWO_PI}
     if angle_step > 0:
         ang["step"] = float(angle_step)
@@ -303,7 +304,7 @@ def run_nadir_ga(evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
     def start(genomes):
         if cover is None:
             return genomes
-        rng = np.random.default_rng([int(seed) % (2**32), 13])
+        rng = search_rng(seed, GA_SEEDING)
         return repair(cover.seed_population(genomes, seed_fraction, rng))
 
     ga, hb, hm = _run_pygad(num_genes=1 + int(n_max), gene_type=gene_type, gene_space=gene_space,
@@ -333,7 +334,7 @@ def run_fov_ga(evaluate: Callable[[np.ndarray], np.ndarray], *, n_spacecraft: in
     _check_ga(population, generations)
     if not (p_min > 0 and p_max > p_min):
         raise InputError(f"P_min ({p_min / 60:g} min) must be below P_max ({p_max / 60:g} min)",
-                         field="design.p_min_min")
+                         field="p_min")
     space = {"low": float(p_min), "high": float(p_max)}
     if period_step > 0:
         space["step"] = float(period_step)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, make_dataclass
+from dataclasses import fields as dc_fields
 from typing import Any
 
 import numpy as np
@@ -208,3 +209,52 @@ def typed_table(cls_name: str, schema: dict, module: str, doc: str = "") -> type
 def to_typed(cls: type, values: dict, schema: dict):
     """An instance of ``cls`` (:func:`typed_table`) from :func:`validate`'s output."""
     return cls(**{f.si_name(k): values[k] for k, f in schema.items() if isinstance(f, Field)})
+
+
+class LiveTable(dict):
+    """A table schema rebuilt from a registry on every read (``build() -> {key: Field}``).
+
+    A table whose keys are declared by registry entries (the ``[monte_carlo]``
+    keys by the dispersions) stays a ``dict`` for :func:`validate`, yet follows
+    entries registered after import.
+    """
+
+    def __init__(self, build):
+        super().__init__()
+        self._build = build
+
+    def _now(self) -> dict:
+        return self._build()
+
+    def __iter__(self):
+        return iter(self._now())
+
+    def __contains__(self, key) -> bool:
+        return key in self._now()
+
+    def __getitem__(self, key):
+        return self._now()[key]
+
+    def __len__(self) -> int:
+        return len(self._now())
+
+    def keys(self):
+        return self._now().keys()
+
+    def items(self):
+        return self._now().items()
+
+    def values(self):
+        return self._now().values()
+
+    def get(self, key, default=None):
+        return self._now().get(key, default)
+
+
+def live_typed_table(cls: type, schema: dict, module: str) -> type:
+    """``cls`` (:func:`typed_table` of ``schema`` at import) while the live ``schema``
+    has the same fields; else a fresh table class with the registered fields."""
+    names = tuple(f.si_name(k) for k, f in schema.items() if isinstance(f, Field))
+    if names == tuple(f.name for f in dc_fields(cls)):
+        return cls
+    return typed_table(cls.__name__, dict(schema.items()), module)

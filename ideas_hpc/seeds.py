@@ -27,6 +27,14 @@ words differ, so the scenario and validation families share no sequence
 
 Stores keep ``s`` in their attrs and, per sample, the first :data:`SEED_WORDS`
 words of the sample's sequence state (:func:`seeds_for`), which identify it.
+
+The designers' searches are one-piece runs, not samples, and keep the streams
+they have always drawn (so designs stay bit-identical): pygad seeds its own
+generator from :func:`search_seed` (``seed mod 2**32``) and each designer's own
+draws come from :func:`search_rng` with its purpose word (:data:`GA_SEEDING`,
+:data:`PARETO_SEARCH`), ``default_rng([seed mod 2**32, purpose])``. Figures that
+jitter points for legibility draw from :func:`plot_rng`, a fixed stream, so the
+same store always gives the same picture.
 """
 
 from __future__ import annotations
@@ -37,6 +45,13 @@ from .errors import InputError
 
 #: Words of a sample's SeedSequence state kept in stores (``sample_seed``).
 SEED_WORDS = 4
+
+#: Purpose word of the nadir GA's set-cover seeding of its first population.
+GA_SEEDING = 13
+#: Purpose word of the NSGA-II (design-pareto) search's own draws.
+PARETO_SEARCH = 14
+#: Seed of the figures' jitter stream.
+PLOT_SEED = 0
 
 
 def sample_seed_sequence(campaign_seed: int, k: int, *child: int) -> np.random.SeedSequence:
@@ -88,3 +103,22 @@ def stream_seed_sequence(campaign_seed: int, stream: int, k: int,
 def stream_rng(campaign_seed: int, stream: int, k: int, purpose: int) -> np.random.Generator:
     """Generator of :func:`stream_seed_sequence`."""
     return np.random.default_rng(stream_seed_sequence(campaign_seed, stream, k, purpose))
+
+
+def search_seed(seed: int) -> int:
+    """The seed handed to pygad (``random_seed``): ``seed mod 2**32``, a valid numpy seed."""
+    return int(seed) % (2**32)
+
+
+def search_rng(seed: int, purpose: int) -> np.random.Generator:
+    """A designer's own stream: ``default_rng([seed mod 2**32, purpose])``.
+
+    ``purpose`` is one of the module's purpose words (:data:`GA_SEEDING`,
+    :data:`PARETO_SEARCH`); distinct words give independent streams for one seed.
+    """
+    return np.random.default_rng([search_seed(seed), int(purpose)])
+
+
+def plot_rng() -> np.random.Generator:
+    """The figures' jitter stream, ``default_rng(PLOT_SEED)``: fixed, so figures repeat."""
+    return np.random.default_rng(PLOT_SEED)

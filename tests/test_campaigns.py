@@ -27,7 +27,7 @@ SMALL = {
     "eros-fov-ga.toml": ["design.population=6", "design.generations=2"],
     "eros-monte-carlo.toml": ["monte_carlo.samples=2", "run.chunk_size=1"],
     "eros-nadir-ga.toml": ["design.population=8", "design.generations=3",
-                           "design.angle_step_rad=0.1"],
+                           "design.angle_step_deg=5.0"],
     "eros-nadir.toml": ["design.verify_samples=2", "design.angle_step_deg=3.0"],
     "eros-pareto.toml": ["design.population=8", "design.generations=3",
                          "design.angle_step_deg=5.0"],

@@ -263,9 +263,9 @@ def test_design_campaigns_take_a_requirement_and_refuse_stereo_they_cannot_score
     load(path, ["body.name=\"ellipsoid\"", "coverage.require_lit=true"])   # unions: fine
     with pytest.raises(InputError) as ei:   # the GA's 0.01 rad grid: too many pairs
         load(path, ["body.name=\"ellipsoid\"", "coverage.require_stereo=true"])
-    assert ei.value.field == "design.angle_step_rad"
+    assert ei.value.field == "design.angle_step_deg"   # one key for every designer's grid
     load(path, ["body.name=\"ellipsoid\"", "coverage.require_stereo=true",
-                "design.angle_step_rad=0.07", "design.angle_step_deg=4"])
+                "design.angle_step_deg=4"])
     with pytest.raises(InputError) as ei:
         load(ROOT_CAMPAIGNS / "eros-fov-ga.toml", ["body.name=\"ellipsoid\"",
                                                   "coverage.require_stereo=true"])

@@ -44,7 +44,7 @@ paper's Eros NP swarm) reach a worst MRP error of 3.9e-4 after 120 s and
 from ..units import RPM
 from .gains import GAIN_PRESETS, Gains, gains_from_config, validate_gains
 from .maneuvers import (MANEUVERS, P_MIN_DEFAULT, THETA_MAX_DEFAULT, Maneuver,
-                        get_maneuver)
+                        campaign_maneuver, get_maneuver)
 from .simulate import (AttitudeResult, draw_initial_conditions, ideal_dcm_BT, initial_conditions,
                        simulate_attitude)
 from .spacecraft import (SpacecraftModel, default_spacecraft, spacecraft_from_config,
@@ -52,7 +52,7 @@ from .spacecraft import (SpacecraftModel, default_spacecraft, spacecraft_from_co
 
 __all__ = ["GAIN_PRESETS", "MANEUVERS", "P_MIN_DEFAULT", "RPM", "THETA_MAX_DEFAULT",
            "AttitudeResult", "Gains", "Maneuver", "SpacecraftModel", "default_spacecraft",
-           "draw_initial_conditions", "gains_from_config", "get_maneuver", "ideal_dcm_BT",
-           "initial_conditions",
+           "campaign_maneuver", "draw_initial_conditions", "gains_from_config", "get_maneuver",
+           "ideal_dcm_BT", "initial_conditions",
            "simulate_attitude", "spacecraft_from_config", "validate_gains",
            "validate_spacecraft"]

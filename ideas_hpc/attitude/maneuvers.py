@@ -8,10 +8,18 @@ take the same two parameters for every maneuver: one period per spacecraft
 (s) and one amplitude for the swarm (rad); a maneuver without them gets ones
 and zero.
 
+An entry also declares what a campaign needs to fly it: its name in campaign
+files and stores (``key``: ``attitude.maneuver`` and the store's ``maneuver``
+attr), whether it needs one sweep period per spacecraft (``sweeps``) and its
+camera half-angle as a fraction of the nadir half cone (``fov_factor``). The
+flyby setup carries the :class:`Maneuver` itself, so no layer above compares
+maneuver names.
+
 Adding a maneuver (CONTRIBUTING.md, "A new attitude maneuver"): write its
-kernels in ``core/maneuvers.py`` and add one :class:`Maneuver` to
-:data:`MANEUVERS` below. The orchestration (:func:`~ideas_hpc.attitude.simulate_attitude`,
-:func:`~ideas_hpc.attitude.ideal_dcm_BT`) reads only this table.
+kernels in ``core/maneuvers.py`` (unless it reuses a mode code) and add one
+:class:`Maneuver` to :data:`MANEUVERS` below. The orchestration
+(:func:`~ideas_hpc.attitude.simulate_attitude`,
+:func:`~ideas_hpc.attitude.ideal_dcm_BT`) and the campaign schema read only this table.
 """
 
 from __future__ import annotations
@@ -72,6 +80,22 @@ class Maneuver:
         checks the maneuver's parameters (``InputError`` naming the field) and
         packs them for the kernels.
     description : str
+    key : str
+        Name in campaign files (``attitude.maneuver``) and in the store's
+        ``maneuver`` attr; ``""``: ``name``.
+    sweeps : bool
+        Needs one sweep period per spacecraft (``swarm.sweep_periods_min``).
+    fov_factor : float
+        Camera half-angle over the nadir half cone ``eta_N`` of the sizing
+        (SPEC section 2; FoV sweeping images with half the cone).
+    tracks_body : bool
+        The camera follows the body centre along the flown positions (no
+        reference kernel, ``code`` -1): encounter geometry and ideal attitude
+        only (:func:`ideas_hpc.encounter.track_dcms`).
+    figures : tuple of (str, int)
+        The paper's figure numbers of its report figures (``"pyramids"``: camera
+        pyramids, ``"attitude"``: first of the four attitude series); others are
+        numbered as nadir pointing's.
     """
 
     name: str
@@ -79,15 +103,72 @@ class Maneuver:
     gains: str
     params: Callable
     description: str = ""
+    key: str = ""
+    sweeps: bool = False
+    fov_factor: float = 1.0
+    tracks_body: bool = False
+    figures: tuple = ()
+
+    def figure(self, what: str, default: int) -> int:
+        """The paper's number of report figure ``what``, or ``default``."""
+        return dict(self.figures).get(what, default)
+
+    @property
+    def campaign_name(self) -> str:
+        """The name in campaign files and stores."""
+        return self.key or self.name
+
+    def half_angle(self, eta_nadir: float) -> float:
+        """Camera half-angle (rad) for the nadir half cone ``eta_nadir`` (rad)."""
+        return self.fov_factor * eta_nadir
+
+    def swarm_periods(self, sweep_periods_s):
+        """The sweep periods (s) to fly, ``(N,)`` array, or ``None`` when it does not sweep."""
+        return np.asarray(sweep_periods_s) if self.sweeps else None
 
 
 #: The maneuvers, by name. Paper: Nadir Pointing (Table 5 gains) and FoV Sweeping
 #: (eqs. 20-24, Table 6 gains).
 MANEUVERS = {m.name: m for m in (
-    Maneuver("np", NP_MODE, "np", _no_params, "Nadir Pointing: camera along the ring -z axis"),
+    Maneuver("np", NP_MODE, "np", _no_params, "Nadir Pointing: camera along the ring -z axis",
+             key="nadir", figures=(("pyramids", 24), ("attitude", 26))),
     Maneuver("fov", FOV_MODE, "fov", _sweep_params,
-             "FoV Sweeping: theta_max sin(2 pi t / P_i) about the ring x axis"),
+             "FoV Sweeping: theta_max sin(2 pi t / P_i) about the ring x axis",
+             sweeps=True, fov_factor=0.5, figures=(("pyramids", 33), ("attitude", 34))),
+    Maneuver("track", -1, "np", _no_params,
+             "Body tracking: boresight on the body centre along the flown track (encounters)",
+             tracks_body=True),
 )}
+
+
+class _CampaignNames:
+    """The campaign names of :data:`MANEUVERS`, read live (schema choices)."""
+
+    def __contains__(self, key) -> bool:
+        return any(m.campaign_name == key for m in MANEUVERS.values())
+
+    def __iter__(self):
+        return iter([m.campaign_name for m in MANEUVERS.values()])
+
+
+#: ``attitude.maneuver`` choices: follows :data:`MANEUVERS`, including entries added later.
+CAMPAIGN_NAMES = _CampaignNames()
+
+
+def store_figure(maneuver_attr, what: str, default: int) -> int:
+    """Report figure number ``what`` for a store whose ``maneuver`` attr is ``maneuver_attr``."""
+    for m in MANEUVERS.values():
+        if m.campaign_name == maneuver_attr:
+            return m.figure(what, default)
+    return default
+
+
+def campaign_maneuver(key: str, field: str = "attitude.maneuver") -> Maneuver:
+    """The :class:`Maneuver` whose campaign name is ``key``; ``InputError`` naming ``field``."""
+    for m in MANEUVERS.values():
+        if m.campaign_name == key:
+            return m
+    raise InputError(f"must be one of {', '.join(CAMPAIGN_NAMES)}; got {key!r}", field=field)
 
 
 def get_maneuver(mode) -> Maneuver:
@@ -101,5 +182,8 @@ def get_maneuver(mode) -> Maneuver:
 def maneuver_args(mode, n, periods, theta_max, p_min):
     """``(maneuver, periods (n,) s, theta_max rad)`` for the kernels, checked."""
     m = get_maneuver(mode)
+    if m.code < 0:
+        raise InputError(f"maneuver {mode!r} has no reference kernel: it is flown from the "
+                         "trajectory (ideal attitude)", field="mode")
     p, tm = m.params(n, periods, theta_max, p_min)
     return m, p, tm

@@ -80,7 +80,7 @@ def setup_attrs(setup) -> dict:
         "half_angle_rad": float(setup.eta), "near_m": float(setup.near),
         "far_m": float(setup.far), "d_sep_m": float(setup.d_sep),
         "altitude_m": float(s.altitude), "eta_nadir_rad": float(s.eta_nadir),
-        "theta_max_rad": float(setup.theta_max), "maneuver": setup.maneuver,
+        "theta_max_rad": float(setup.theta_max), "maneuver": setup.maneuver.campaign_name,
         "attitude_mode": setup.attitude_mode, "coverage_mode": setup.coverage.mode,
         "targeting_tolerance_m": float(setup.tol), "configuration": setup.configuration,
         **encounter_attrs(setup),

@@ -28,10 +28,11 @@ from ..design.stereo import scorer as stereo_scorer
 from ..engine.job_cluster import JobCluster, phase_client, visibility_tests
 from ..errors import InputError
 from ..candidates import candidate_masks
-from ..flyby import fly
+from ..flyby import fly, setup_from_campaign, target
 from .. import precompile
 from ..montecarlo.verify import verify_swarm
 from . import datasets
+from .kinds import KINDS
 from .vocabulary import requirement_line, verification_verdict
 from .schema_design import verify_samples
 
@@ -206,6 +207,31 @@ def verification_vars(c, setup, theta, threshold: float, client) -> tuple[dict, 
              "verify_passed": int(verdict.startswith("verification PASSED")),
              "verify_verdict": verdict}
     return data, attrs, v.summary()
+
+
+def checked_setup(c, theta):
+    """The kind's flyby setup (with the maneuver its registry entry flies), checked by
+    targeting swarm ``theta`` once here: a targeting failure is the user's to fix, in
+    one line, rather than a failed task on every worker."""
+    setup = setup_from_campaign(c, maneuver=KINDS[c.kind].maneuver)
+    _log(f"body: {setup.body.note}")
+    target(setup, theta)
+    return setup
+
+
+def run_design_exact(c, out, *, workers=None, scheduler=None, cluster="local",
+                     slurm_config=None, **_) -> xr.Dataset:
+    """Registry entry of kind ``design-nadir``, method ``exact``; with
+    ``design.success_probability`` the success-probability designer
+    (:mod:`ideas_hpc.campaign.design_reliability`, which builds on this module)."""
+    from .design_reliability import design_reliable, scenario_store_path
+
+    setup = checked_setup(c, np.linspace(0.0, 2 * np.pi, 16, endpoint=False))
+    designer = None
+    if c.config.design.success_probability is not None:
+        designer = functools.partial(design_reliable, bank_store=scenario_store_path(out))
+    return run_exact(c, setup, workers=workers, scheduler=scheduler, cluster=cluster,
+                     slurm_config=slurm_config, designer=designer)
 
 
 def run_exact(c, setup, *, workers=None, scheduler=None, cluster="local",

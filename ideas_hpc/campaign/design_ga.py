@@ -22,17 +22,21 @@ import xarray as xr
 from ..candidates import candidate_masks
 from ..design.bank import grid_size
 from ..engine.job_cluster import JobCluster, visibility_tests
-from ..errors import InputError
-from ..flyby import fly, setup_from_campaign, target
+from ..errors import InputError, config_fields
+from ..flyby import fly
 from ..ga_local import GridCover
 from ..swarm_eval import MaskBank, fov_keys, nadir_keys, snap_angle
 from ..progress import bar as progress_bar
 from ..swarm_geometry import min_separation_angle
 from . import datasets
-from .design_exact import ga_gap, run_exact
-from .design_reliability import design_reliable, scenario_store_path
+from .design_exact import checked_setup, ga_gap
 from .schema import Campaign
 from .vocabulary import requirement_line
+
+
+#: The GA's parameter names -> the campaign file's keys.
+GA_FIELDS = {"population": "design.population", "generations": "design.generations",
+             "n_max": "design.n_max", "p_min": "design.p_min_min"}
 
 
 def _log(msg: str) -> None:
@@ -217,19 +221,9 @@ def design_fov(c: Campaign, setup, client):
 def run_design(c: Campaign, out: Path, *, workers=None, scheduler=None, cluster="local",
                slurm_config=None, **_) -> xr.Dataset:
     """Kinds ``design-nadir`` and ``design-fov``: GA, then a full flyby of the best swarm."""
-    setup = setup_from_campaign(c, maneuver="fov" if c.kind == "design-fov" else None)
-    _log(f"body: {setup.body.note}")
-    # A targeting failure is the user's to fix: find it here, in one line, rather
-    # than as a failed task on every worker (the GA targets these same rings).
-    target(setup, np.linspace(0.0, 2 * np.pi, 16, endpoint=False)
-           if c.kind == "design-nadir" else _fov_swarm(c))
+    setup = checked_setup(c, np.linspace(0.0, 2 * np.pi, 16, endpoint=False)
+                          if c.kind == "design-nadir" else _fov_swarm(c))
     t = time.perf_counter()
-    if c.kind == "design-nadir" and c.config.design.method == "exact":
-        reliable = c.config.design.success_probability is not None
-        return run_exact(c, setup, workers=workers, scheduler=scheduler, cluster=cluster,
-                         slurm_config=slurm_config,
-                         designer=partial(design_reliable, bank_store=scenario_store_path(out))
-                         if reliable else None)
     design = design_nadir if c.kind == "design-nadir" else design_fov
     d = c.config.design
     # distinct candidate flights the GA can ask for: at most every grid angle
@@ -238,8 +232,9 @@ def run_design(c: Campaign, out: Path, *, workers=None, scheduler=None, cluster=
     if c.kind == "design-nadir" and d.angle_step_rad > 0:
         n_flights = min(n_flights, grid_size(d.angle_step_rad))
     work = visibility_tests(n_flights, 1, setup.image_times.size, setup.body.shape.n_vertices)
-    with JobCluster(workers=workers, scheduler=scheduler, cluster=cluster,
-                    slurm_config=slurm_config, work=work) as job:
+    with config_fields(GA_FIELDS), JobCluster(workers=workers, scheduler=scheduler,
+                                              cluster=cluster, slurm_config=slurm_config,
+                                              work=work) as job:
         res, theta, periods = design(c, setup, job.client())
     wall = time.perf_counter() - t
     nadir = c.kind == "design-nadir"

@@ -38,12 +38,13 @@ import xarray as xr
 from ..design.stereo import check_grid
 from ..design import build_bank, coverage_curve
 from ..design.bank import grid_size, separation_steps
-from ..design.objectives import OBJECTIVES, check_objectives, evaluate
+from ..design.objectives import OBJECTIVES, bank_needs, check_objectives, evaluate
 from ..design.pareto import run_pareto
 from ..engine.job_cluster import JobCluster, visibility_tests
 from ..errors import InputError
 from ..flyby import setup_from_campaign, target
 from . import datasets
+from .design_table import STEP_KEY
 
 #: A front point matches the exact curve when their coverages differ by at most this.
 MATCH_TOL = 1e-12
@@ -132,9 +133,10 @@ def run_design_pareto(c, out, *, workers=None, scheduler=None, cluster="local",
     _log(f"body: {setup.body.note}")
     target(setup, np.linspace(0.0, 2 * np.pi, 16, endpoint=False))
     n_grid = grid_size(d.grid_step_rad)
-    if "stereo_coverage" in names:
+    needs = bank_needs(names)
+    if "pairs" in needs:   # the pair table has one variable per candidate pair
         try:
-            check_grid(n_grid)
+            check_grid(n_grid, STEP_KEY)
         except InputError as exc:
             raise c.error(exc.message, exc.field) from None
     try:  # a separation no two grid points satisfy fails before any mask is computed
@@ -145,11 +147,11 @@ def run_design_pareto(c, out, *, workers=None, scheduler=None, cluster="local",
     work = visibility_tests(n_grid, 1, setup.image_times.size, setup.body.shape.n_vertices)
     with JobCluster(workers=workers, scheduler=scheduler, cluster=cluster,
                     slurm_config=slurm_config, work=work) as job:
-        quality = bool({"stereo_coverage", "mean_resolution"} & set(names))
         # stereo from two spacecraft needs the pair table (one pass, no cluster)
-        pairs = "stereo_coverage" in names
-        bank = build_bank(setup, d.grid_step_rad, client=None if pairs else job.client(),
-                          chunk_size=d.chunk_size, quality=quality, pairs=pairs)
+        bank = build_bank(setup, d.grid_step_rad,
+                          client=None if "pairs" in needs else job.client(),
+                          chunk_size=d.chunk_size, quality="quality" in needs,
+                          pairs="pairs" in needs)
     t_masks = time.perf_counter() - t0
     _log(f"candidate masks: {bank.n_candidates} grid angles ({math.degrees(bank.step):g} deg) "
          f"in {t_masks:.1f} s")

@@ -18,6 +18,7 @@ flyby time ``t0_s + before``; ``epoch_s`` sets the Sun and rotation phase as bef
 
 from __future__ import annotations
 
+from ..attitude.maneuvers import campaign_maneuver
 from ..errors import InputError
 from ..schema import Field
 from ..units import DEG, KM
@@ -50,13 +51,13 @@ _ANGLE_KEYS = (("speed_m_s", "speed_km_s"), ("approach_dec_rad", "approach_dec_d
 
 def check_encounter(fb, attitude) -> None:
     """Cross-checks of the encounter keys (one :class:`InputError` naming the field)."""
-    if attitude.maneuver == "track":
+    if campaign_maneuver(attitude.maneuver).tracks_body:
         if fb.geometry != "encounter":
             raise InputError('body tracking needs flyby.geometry = "encounter"',
                              field="attitude.maneuver")
         if attitude.mode != "ideal":
-            raise InputError('"track" is flown in attitude.mode = "ideal" only (its demand on '
-                             "the wheels is reported)", field="attitude.mode")
+            raise InputError(f"{attitude.maneuver!r} is flown in attitude.mode = \"ideal\" only "
+                             "(its demand on the wheels is reported)", field="attitude.mode")
     given = [key for si, key in _ANGLE_KEYS if getattr(fb, si) is not None]
     if fb.geometry != "encounter":
         extra = given + [k for k in ("v_inf_km_s", "before_km", "after_km", "before_s",

@@ -6,7 +6,6 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
 import xarray as xr
 
 from ..encounter import pointing_profile
@@ -24,7 +23,7 @@ def run_flyby(c: Campaign, out: Path, **_) -> xr.Dataset:
     setup = setup_from_campaign(c)
     _log(f"body: {setup.body.note}")
     sw = c.config.swarm
-    periods = np.asarray(sw.sweep_periods_s) if setup.maneuver == "fov" else None
+    periods = setup.maneuver.swarm_periods(sw.sweep_periods_s)
     t = time.perf_counter()
     res = fly(setup, sw.angles_rad, periods)
     _log(f"flyby: {len(sw.angles_rad)} spacecraft, coverage {100 * res.coverage.coverage:.3f} % "

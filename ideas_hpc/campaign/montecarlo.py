@@ -27,7 +27,7 @@ import xarray as xr
 from ..engine.job_cluster import JobCluster, visibility_tests
 from ..engine.runner import run_campaign
 from ..flyby import FlybySetup, Perturbation, setup_from_campaign
-from ..montecarlo.dispersions import DISPERSION_ORDER, DISPERSION_VARS, draw_sample
+from ..montecarlo.dispersions import dispersion_order, dispersion_vars, draw_sample
 from ..montecarlo.sample import Nominal, design_nominal, fly_sample
 from ..store_schema import ATTITUDE_SERIES, PER_SAMPLE, QUALITY, VARS
 from . import datasets
@@ -75,7 +75,7 @@ def mc_template(setup: FlybySetup, nom: Nominal, n_samples: int) -> xr.Dataset:
         "targeting_miss": (("spacecraft", "iteration"), nom.miss),
         **datasets.mesh_vars(setup.body.shape),
     })
-    v.update({var.name: per_sample(var) for var in DISPERSION_VARS})
+    v.update({var.name: per_sample(var) for var in dispersion_vars()})
     if setup.coverage.wants_quality:
         v.update({name: per_sample(VARS[name]) for name in QUALITY})
     if nom.periods is not None:
@@ -93,7 +93,7 @@ def mc_template(setup: FlybySetup, nom: Nominal, n_samples: int) -> xr.Dataset:
 def _prepare(c: Campaign):
     setup = setup_from_campaign(c)
     sw = c.config.swarm
-    periods = np.asarray(sw.sweep_periods_s) if setup.maneuver == "fov" else None
+    periods = setup.maneuver.swarm_periods(sw.sweep_periods_s)
     nom = design_nominal(setup, sw.angles_rad, periods)
     return setup, nom
 
@@ -116,7 +116,7 @@ def run_monte_carlo(c: Campaign, out, *, workers=None, scheduler=None, resume=Fa
     fn = functools.partial(mc_chunk, setup=setup, nominal=nom.for_tasks(), mc=mc,
                            seed=c.config.seed)
     attrs = datasets.base_attrs(c, setup)
-    attrs["dispersion_order"] = list(DISPERSION_ORDER)  # fixes the draw order
+    attrs["dispersion_order"] = list(dispersion_order())  # fixes the draw order
     work = visibility_tests(n, nom.theta.size, setup.image_times.size,
                             setup.body.shape.n_vertices)
     logs = Path(out).absolute().parent / f"{Path(out).name}.slurm-logs"

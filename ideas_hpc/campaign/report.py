@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from ..attitude.maneuvers import store_figure
 from ..errors import InputError
 from ..plots import figures
 from ..units import DEG, KM
@@ -279,7 +280,7 @@ def write_report(store, out=None, *, html: bool = False) -> Path:
         snap_t = ds["snapshot_time"].values
         j = len(snap_t) // 2
         k = int(np.argmin(np.abs(ds["time"].values - snap_t[j])))
-        n = "33" if ds.attrs.get("maneuver") == "fov" else "24"
+        n = store_figure(ds.attrs.get("maneuver"), "pyramids", 24)
         figs.append(figures.fov_pyramids(out / f"fig{n}_fov_pyramids.png",
                                          ds["position"].values[:, k],
                                          ds["camera_dcm_BT"].values[:, j],
@@ -303,8 +304,7 @@ def write_report(store, out=None, *, html: bool = False) -> Path:
                                             kind="first_seen"))
     if "best_resolution" in ds and shape is not None:
         figs += _quality_maps(ds, shape, out)
-    fov = ds.attrs.get("maneuver") == "fov"
-    base = 34 if fov else 26
+    base = store_figure(ds.attrs.get("maneuver"), "attitude", 26)
     for i, (var, label, scale) in enumerate((("sigma_error", "MRP error", 1.0),
                                              ("omega_error", "rate error, rad/s", 1.0),
                                              ("wheel_speed", "wheel speed, rpm", figures.RPM),

@@ -69,7 +69,7 @@ def _run(c: Campaign, *, out, workers, scheduler, resume, cluster, slurm_config,
     workers = workers if workers is not None else c.config.run.workers
     kind = KINDS[c.kind]
     _check_execution(out, workers, w_field, kind, scheduler)
-    run = kind.runner()
+    run = kind.runner(c.config.design.method)
     exec_kw = dict(workers=workers, scheduler=scheduler, cluster=cluster,
                    slurm_config=slurm_config)
     if kind.chunked:

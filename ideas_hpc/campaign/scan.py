@@ -101,7 +101,7 @@ def scan_file(path, overrides=None, *, n: int = 24, span_h: float | None = None,
         raise InputError(f"must be > 0, got {span_h}", field="--span-h")
     epochs = setup.epoch + span * np.arange(n) / n
     sw = c.config.swarm
-    periods = np.asarray(sw.sweep_periods_s) if setup.maneuver == "fov" else None
+    periods = setup.maneuver.swarm_periods(sw.sweep_periods_s)
     ds = arrival_scan(setup, sw.angles_rad, periods, epochs)
     print(f"{'epoch h':>8} {'sun lon deg':>11} {'coverage %':>10} {'seen %':>7} {'lit %':>6} "
           f"{'stereo %':>8}")

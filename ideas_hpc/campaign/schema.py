@@ -66,17 +66,21 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+from ..attitude.maneuvers import CAMPAIGN_NAMES, campaign_maneuver
 from ..config import CampaignSource, load_campaign
 from ..design.objectives import check_objectives
 from ..errors import InputError
-from ..schema import Field, to_typed, typed_table, validate, with_defaults
+from ..montecarlo.dispersions import check_dispersions, dispersion_keys
+from ..schema import (Field, LiveTable, live_typed_table, to_typed, typed_table, validate,
+                      with_defaults)
 from ..units import CM, DEG, KM, MINUTE, MM, UM
 from ..sizing import INSTRUMENT_DEFAULTS as _CAM
+from .design_table import check_stereo_design, resolve_angle_step
 from .encounter_schema import ENCOUNTER, check_encounter
 from .kinds import KINDS as REGISTRY
 from .schema_design import DESIGN, MC_SCHEMA, reliability_checks  # noqa: F401
 
-KINDS = tuple(REGISTRY)
+KINDS = REGISTRY.keys()   # live: a kind registered later is a valid choice
 
 BODY = {
     "name": Field("str", "eros", doc="body name or shape file"),
@@ -135,7 +139,7 @@ SWARM = {
 
 ATTITUDE = {
     "mode": Field("str", "ideal", choices=("ideal", "simulated")),
-    "maneuver": Field("str", "nadir", choices=("nadir", "fov", "track")),
+    "maneuver": Field("str", "nadir", choices=CAMPAIGN_NAMES),
     "decimate": Field("int", 10, lo=1),
     "theta_max_deg": Field("float", None, nullable=True, si="theta_max_rad",
                            to_si=DEG, lo=0, lo_open=True, hi=90),
@@ -199,7 +203,8 @@ class CampaignConfig:
 
 def typed_config(values: dict) -> CampaignConfig:
     """:class:`CampaignConfig` from :func:`~ideas_hpc.schema.validate`'s output."""
-    tables = {k: to_typed(cls, values[k], SCHEMA[k]) for k, cls in TABLES.items()}
+    tables = {k: to_typed(live_typed_table(cls, SCHEMA[k], __name__), values[k], SCHEMA[k])
+              for k, cls in TABLES.items()}
     return CampaignConfig(kind=values["kind"], seed=values["seed"],
                           description=values["description"], **tables)
 
@@ -240,9 +245,10 @@ def _cross_checks(c: CampaignConfig) -> None:
     if d.p_min_s >= d.p_max_s:
         raise InputError(f"must be > design.p_min_min ({d.p_min_s / MINUTE:g} min)",
                          field="design.p_max_min")
-    if mc.reflectivity_min > mc.reflectivity_max:
-        raise InputError("must be >= monte_carlo.reflectivity_min",
-                         field="monte_carlo.reflectivity_max")
+    try:
+        check_dispersions(mc)
+    except InputError as exc:
+        raise InputError(exc.message, field=f"monte_carlo.{exc.field}") from None
     if d.failures_tolerated >= d.n_max:
         raise InputError(f"must be < design.n_max ({d.n_max}): {d.failures_tolerated} "
                          "failures would leave no spacecraft", field="design.failures_tolerated")
@@ -253,9 +259,9 @@ def _cross_checks(c: CampaignConfig) -> None:
                 and len(sw.sweep_periods_s) != len(sw.angles_rad)):
             raise InputError(f"has {len(sw.sweep_periods_s)} periods for "
                              f"{len(sw.angles_rad)} spacecraft", field="swarm.sweep_periods_min")
-    if c.attitude.maneuver == "fov" and c.kind in ("flyby", "monte-carlo"):
+    if campaign_maneuver(c.attitude.maneuver).sweeps and c.kind in ("flyby", "monte-carlo"):
         if sw.sweep_periods_s is None:
-            raise InputError("is required for attitude.maneuver = 'fov'",
+            raise InputError(f"is required for attitude.maneuver = {c.attitude.maneuver!r}",
                              field="swarm.sweep_periods_min")
     if mc.failures_k and sw.angles_rad and mc.failures_k > len(sw.angles_rad):
         raise InputError(f"cannot exceed the swarm size {len(sw.angles_rad)}",
@@ -277,7 +283,7 @@ def validate_campaign(source: CampaignSource) -> Campaign:
     """Validate a loaded source; every error carries the field, file and line."""
     try:
         values = validate(source.data, SCHEMA)
-        config = typed_config(values)
+        config = resolve_angle_step(typed_config(values))
         _cross_checks(config)
         extras = build_models(source.data, config)
     except InputError as exc:
@@ -305,14 +311,10 @@ def build_models(raw: dict, config: CampaignConfig) -> dict:
             cov.setdefault(key, inst[key])
     ctrl = _sub_table(raw, "controller")
     if not ctrl:
-        ctrl = {"preset": "fov" if config.attitude.maneuver == "fov" else "np"}
+        ctrl = {"preset": campaign_maneuver(config.attitude.maneuver).gains}
     coverage = coverage_options_from_config(cov, prefix="coverage.")
     if coverage.require_stereo and config.kind.startswith("design"):
-        from ..design.stereo import check_campaign
-
-        d = config.design
-        check_campaign(config.kind, d.method, d.failures_tolerated, d.grid_step_rad,
-                       d.angle_step_rad)
+        check_stereo_design(config, raw.get("design"))
     return {
         "force_model": force_model_from_config(_sub_table(raw, "dynamics"), prefix="dynamics."),
         "spacecraft": spacecraft_from_config(_sub_table(raw, "spacecraft"), prefix="spacecraft."),

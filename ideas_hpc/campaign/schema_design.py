@@ -13,8 +13,9 @@ from __future__ import annotations
 import math
 
 from ..errors import InputError
-from ..schema import Field
-from ..units import DEG, MINUTE, MM
+from ..montecarlo.dispersions import dispersion_keys
+from ..schema import Field, LiveTable
+from ..units import DEG, MINUTE
 
 #: Validation samples when ``design.verify_samples`` is not given.
 VERIFY_DEFAULT, VERIFY_DEFAULT_RELIABILITY = 64, 256
@@ -22,8 +23,9 @@ VERIFY_DEFAULT, VERIFY_DEFAULT_RELIABILITY = 64, 256
 DESIGN = {
     "method": Field("str", "exact", choices=("exact", "ga"),
                     doc="design-nadir: exact integer programme or the paper's GA"),
-    "angle_step_deg": Field("float", 0.5, si="grid_step_rad", to_si=DEG, lo=0, lo_open=True, hi=90,
-                            doc="exact designer's grid of candidate swarm angles"),
+    "angle_step_deg": Field("float", None, nullable=True, si="grid_step_rad", to_si=DEG, lo=0,
+                            hi=90, doc="grid of candidate swarm angles of every designer "
+                            "(default: exact and Pareto 0.5 deg, GA 0.01 rad; GA: 0 continuous)"),
     "time_limit_s": Field("float", 60.0, lo=0, lo_open=True,
                           doc="exact designer: return the best design so far with its gap"),
     "failures_tolerated": Field("int", 0, lo=0, doc="k: coverage must survive any k failures"),
@@ -42,7 +44,8 @@ DESIGN = {
     "generations": Field("int", 115, lo=1),
     "n_max": Field("int", 20, lo=1, hi=200),
     "eps_tol_pct": Field("float", 0.1, lo=0, hi=100),
-    "angle_step_rad": Field("float", 0.01, lo=0, hi=1.0),
+    "angle_step_rad": Field("float", None, nullable=True, lo=0, hi=1.0,
+                            doc="deprecated alias of angle_step_deg, in rad"),
     "p_min_min": Field("float", 0.3, si="p_min_s", to_si=MINUTE, lo=0, lo_open=True),
     "p_max_min": Field("float", 10.0, si="p_max_s", to_si=MINUTE, lo=0, lo_open=True),
     "period_step_min": Field("float", 0.1, si="period_step_s", to_si=MINUTE, lo=0),
@@ -59,21 +62,9 @@ DESIGN = {
                             "worst_failure_coverage, stereo_coverage, mean_resolution"),
 }
 
-MC_SCHEMA = {
-    "samples": Field("int", 64, lo=1),
-    "attitude_dispersion": Field("bool", True, doc="random initial attitude, rates, wheels"),
-    "sigma_c20_pct": Field("float", 0.0, lo=0, doc="1-sigma relative C20 error, %"),
-    "sigma_c22_pct": Field("float", 0.0, lo=0),
-    "sigma_gm_pct": Field("float", 0.0, lo=0),
-    "reflectivity_min": Field("float", 0.6, lo=0, hi=1),
-    "reflectivity_max": Field("float", 0.6, lo=0, hi=1),
-    "sigma_position_m": Field("float", 0.0, lo=0, doc="1-sigma initial position error per axis"),
-    "sigma_velocity_mm_s": Field("float", 0.0, si="sigma_velocity_m_s", to_si=MM, lo=0),
-    "failures_k": Field("int", 0, lo=0, doc="exactly k of N spacecraft lost"),
-    "failure_probability": Field("float", 0.0, lo=0, hi=1, doc="per-spacecraft loss probability"),
-    "sigma_misalignment_deg": Field("float", 0.0, si="sigma_misalignment_rad",
-                                    to_si=DEG, lo=0, hi=90),
-}
+#: ``[monte_carlo]``: ``samples`` and the keys each dispersion declares
+#: (:data:`~ideas_hpc.montecarlo.dispersions.DISPERSIONS`), read live.
+MC_SCHEMA = LiveTable(lambda: {"samples": Field("int", 64, lo=1), **dispersion_keys()})
 
 
 def verify_samples(d) -> int:

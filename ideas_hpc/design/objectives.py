@@ -39,13 +39,16 @@ NO_RESOLUTION = 1e12
 @dataclass(frozen=True)
 class Objective:
     """One objective: ``evaluate(bank, members (P, n_max) int64, -1 padded) -> (P,)``
-    natural values; ``sense`` +1 minimised, -1 maximised."""
+    natural values; ``sense`` +1 minimised, -1 maximised. ``needs`` names the bank
+    data beyond the seen masks it reads: ``"quality"`` (per-candidate mapping and
+    resolution rows, :data:`BANK_DATA`) and ``"pairs"`` (the stereo pair table)."""
 
     name: str
     sense: int
     units: str
     long_name: str
     evaluate: Callable[[CandidateBank, np.ndarray], np.ndarray]
+    needs: frozenset = frozenset()
 
 
 def _union(masks: np.ndarray, areas: np.ndarray, members: np.ndarray) -> np.ndarray:
@@ -115,10 +118,19 @@ OBJECTIVES: dict[str, Objective] = {o.name: o for o in (
     Objective("coverage", -1, "1", "area coverage (with the [coverage] requirement)", _coverage),
     Objective("worst_failure_coverage", -1, "1", "lowest coverage after any single failure",
               _worst_failure),
-    Objective("stereo_coverage", -1, "1", "area fraction mapped in stereo", _stereo),
+    Objective("stereo_coverage", -1, "1", "area fraction mapped in stereo", _stereo,
+              frozenset({"quality", "pairs"})),
     Objective("mean_resolution", 1, "m", "area-weighted mean best resolution of the mapped "
-              "vertices", _mean_resolution),
+              "vertices", _mean_resolution, frozenset({"quality"})),
 )}
+
+#: What an objective may need from the bank (:attr:`Objective.needs`).
+BANK_DATA = ("quality", "pairs")
+
+
+def bank_needs(names) -> frozenset:
+    """The bank data (:data:`BANK_DATA`) objectives ``names`` need together."""
+    return frozenset().union(*(OBJECTIVES[x].needs for x in names))
 
 
 def check_objectives(names) -> tuple[str, ...]:

@@ -39,6 +39,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..seeds import PARETO_SEARCH, search_rng, search_seed
 from .bank import CandidateBank, separation_steps
 from .exact import greedy_swarm
 from .objectives import OBJECTIVES, check_objectives, evaluate, minimised
@@ -209,7 +210,7 @@ def run_pareto(bank: CandidateBank, objectives, *, n_max: int, population: int,
     m = separation_steps(bank.step, bank.d_sep, min_separation, k)
     t0 = time.perf_counter()
     arch = _Archive(bank, names)
-    rng = np.random.default_rng([int(seed) % (2**32), 14])
+    rng = search_rng(seed, PARETO_SEARCH)
     ascent = "coverage" in names
 
     def fitness_func(ga, solutions, idx):
@@ -277,7 +278,7 @@ def run_pareto(bank: CandidateBank, objectives, *, n_max: int, population: int,
         crossover_type="uniform", mutation_type="random",
         mutation_probability=float(mutation_probability), mutation_by_replacement=True,
         on_start=on_start, on_generation=on_generation,
-        random_seed=int(seed) % (2**32), suppress_warnings=True)
+        random_seed=search_seed(seed), suppress_warnings=True)
     ga.run()
     keys = arch.front_keys
     vals = np.array([arch.memo[x] for x in keys]).reshape(len(keys), len(names))

@@ -37,7 +37,7 @@ from ..core.stereo_pairs import pair_index
 from ..core.union import population_coverage
 from ..errors import InputError
 from ..progress import steps
-from .bank import (CandidateBank, conflict_windows, grid_size, reduce_problem,
+from .bank import (CandidateBank, conflict_windows, reduce_problem,
                    separation_steps)
 from .exact import (FEAS_TOL, ExactResult, check_time_limit, coverage_result, heavy_groups,
                     n_max_too_small, solve)
@@ -48,34 +48,15 @@ MAX_CANDIDATES = 180
 TWO_PI = 2.0 * math.pi
 
 
-def check_grid(n_candidates: int, field: str = "design.angle_step_deg") -> None:
-    """At most :data:`MAX_CANDIDATES` grid angles (``field`` names the step key)."""
+def check_grid(n_candidates: int, field: str = "angle_step_deg") -> None:
+    """At most :data:`MAX_CANDIDATES` grid angles (``field`` names the step; the campaign
+    passes its file key)."""
     if n_candidates > MAX_CANDIDATES:
         least = (f"{360.0 / MAX_CANDIDATES:g}" if field.endswith("_deg")
                  else f"{TWO_PI / MAX_CANDIDATES:.4f}")
         raise InputError(f"stereo from two spacecraft needs a pair variable per candidate pair; "
                          f"{n_candidates} grid angles are too many (at most {MAX_CANDIDATES}): "
                          f"use {field} >= {least} with coverage.require_stereo", field=field)
-
-
-def check_campaign(kind: str, method: str, failures_tolerated: int, step: float,
-                   ga_step: float) -> None:
-    """A design campaign with ``require_stereo``: the NP designers score pairs (the
-    exact one on ``design.angle_step_deg``, the GA on ``design.angle_step_rad``)."""
-    if kind != "design-nadir":
-        raise InputError(f"stereo from two spacecraft is a condition on pairs, which kind "
-                         f"{kind!r} cannot score; use kind design-nadir",
-                         field="coverage.require_stereo")
-    if method == "ga":
-        if not ga_step > 0:
-            raise InputError("the GA scores stereo pairs on its angle grid: set "
-                             "design.angle_step_rad > 0", field="design.angle_step_rad")
-        check_grid(grid_size(ga_step, "design.angle_step_rad"), "design.angle_step_rad")
-    check_grid(grid_size(step))
-    if failures_tolerated:
-        raise InputError("failure tolerance with stereo from two spacecraft is not solved yet; "
-                         "set design.failures_tolerated = 0 (the Monte Carlo verification "
-                         "still flies failures)", field="design.failures_tolerated")
 
 
 @dataclass

@@ -2,10 +2,12 @@
 
 Each entry of :data:`DISPERSIONS` says what one dispersion draws, how it turns
 into a :class:`~ideas_hpc.flyby.Perturbation` of the flyby, and which store
-variables record it (name, dims, units). The Monte Carlo kind builds its store
-layout, its per-sample draws and its perturbations from this list and nothing
-else, so a new dispersion is one entry here (plus, if it perturbs something
-the flyby cannot perturb yet, one field of ``Perturbation``).
+variables record it (name, dims, units), and which ``[monte_carlo]`` keys it
+reads (``keys``: :class:`~ideas_hpc.schema.Field` s, with its cross-check
+``check``). The campaign's ``[monte_carlo]`` table, the Monte Carlo kind's store
+layout, its per-sample draws and its perturbations are built from this list and
+nothing else, so a new dispersion is one entry here (plus, if it perturbs
+something the flyby cannot perturb yet, one field of ``Perturbation``).
 
 Streams and order
 -----------------
@@ -30,8 +32,11 @@ import numpy as np
 from ..attitude import initial_conditions
 from ..core.frames import dcm_RT
 from ..core.mrp import mrp_from_dcm
+from ..errors import InputError
+from ..schema import Field
 from ..seeds import sample_rng
 from ..store_schema import StoreVar
+from ..units import DEG, MM
 
 DISPERSION_CHILD = 1  # spawn_key suffix of the child stream
 
@@ -43,7 +48,10 @@ class Dispersion:
     ``draw(rng, n, mc, setup, theta)`` (``mc``: the typed ``[monte_carlo]`` table) returns the sample's values of
     ``variables`` (SI, per spacecraft where the dims say so) from generator
     ``rng``; ``perturb(values)`` returns the
-    :class:`~ideas_hpc.flyby.Perturbation` fields it sets.
+    :class:`~ideas_hpc.flyby.Perturbation` fields it sets. ``keys`` are its
+    ``[monte_carlo]`` keys, ``((key, Field), ...)`` (the draw reads them by SI name
+    from ``mc``); ``check(mc)`` cross-checks them, raising ``InputError`` naming
+    its own key (the campaign prefixes ``monte_carlo.``).
     """
 
     name: str
@@ -51,6 +59,8 @@ class Dispersion:
     perturb: Callable[[dict], dict]
     variables: tuple[StoreVar, ...]
     stream: str = "child"
+    keys: tuple = ()
+    check: Callable | None = None
 
 
 def _attitude(rng, n, mc, setup, theta, *, seed, k):
@@ -81,6 +91,11 @@ def _gravity(rng, n, mc, setup, theta):
     return {"c20": p.c20 * (1.0 + mc.sigma_c20_pct / 100.0 * z[0]),
             "c22": p.c22 * (1.0 + mc.sigma_c22_pct / 100.0 * z[1]),
             "mu": p.mu * (1.0 + mc.sigma_gm_pct / 100.0 * z[2])}
+
+
+def _check_reflectivity(mc):
+    if mc.reflectivity_min > mc.reflectivity_max:
+        raise InputError("must be >= monte_carlo.reflectivity_min", field="reflectivity_max")
 
 
 def _reflectivity(rng, n, mc, setup, theta):
@@ -121,33 +136,73 @@ DISPERSIONS: tuple[Dispersion, ...] = (
                 StoreVar("omega0", SC3, np.float64, "rad/s", "initial omega_BN_B"),
                 StoreVar("wheel0", ("spacecraft", "wheel"), np.float64, "rad/s",
                          "initial wheel speeds")),
-               stream="sample"),
+               stream="sample",
+               keys=(("attitude_dispersion",
+                      Field("bool", True, doc="random initial attitude, rates, wheels")),)),
     Dispersion("gravity", _gravity,
                lambda v: {"params_override": {"mu": v["mu"], "c20": v["c20"], "c22": v["c22"]}},
                (StoreVar("c20", (), np.float64, "m^2", "C20 (dispersed)"),
                 StoreVar("c22", (), np.float64, "m^2", "C22 (dispersed)"),
-                StoreVar("mu", (), np.float64, "m^3/s^2", "GM (dispersed)"))),
+                StoreVar("mu", (), np.float64, "m^3/s^2", "GM (dispersed)")),
+               keys=(("sigma_c20_pct", Field("float", 0.0, lo=0, doc="1-sigma relative C20 "
+                                                                   "error, %")),
+                     ("sigma_c22_pct", Field("float", 0.0, lo=0)),
+                     ("sigma_gm_pct", Field("float", 0.0, lo=0)))),
     Dispersion("reflectivity", _reflectivity,
                lambda v: {"params_override": {"reflectivity": v["reflectivity"]}},
-               (StoreVar("reflectivity", (), np.float64, "1", "SRP reflectivity (dispersed)"),)),
+               (StoreVar("reflectivity", (), np.float64, "1", "SRP reflectivity (dispersed)"),),
+               keys=(("reflectivity_min", Field("float", 0.6, lo=0, hi=1)),
+                     ("reflectivity_max", Field("float", 0.6, lo=0, hi=1))),
+               check=_check_reflectivity),
     Dispersion("initial_state", _state,
                lambda v: {"position_error_T": v["position_error"],
                           "velocity_error_T": v["velocity_error"]},
                (StoreVar("position_error", SC3, np.float64, "m",
                          "initial position error, frame T"),
                 StoreVar("velocity_error", SC3, np.float64, "m/s",
-                         "initial velocity error, frame T"))),
+                         "initial velocity error, frame T")),
+               keys=(("sigma_position_m", Field("float", 0.0, lo=0, doc="1-sigma initial "
+                                                                        "position error per axis")),
+                     ("sigma_velocity_mm_s", Field("float", 0.0, si="sigma_velocity_m_s",
+                                                   to_si=MM, lo=0)))),
     Dispersion("failures", _failures, lambda v: {"active": v["active"]},
                (StoreVar("active", ("spacecraft",), bool, "1",
                          "spacecraft working (False: failed)"),
-                StoreVar("n_failed", (), np.int32, "1", "failed spacecraft"))),
+                StoreVar("n_failed", (), np.int32, "1", "failed spacecraft")),
+               keys=(("failures_k", Field("int", 0, lo=0, doc="exactly k of N spacecraft lost")),
+                     ("failure_probability", Field("float", 0.0, lo=0, hi=1,
+                                                   doc="per-spacecraft loss probability")))),
     Dispersion("misalignment", _misalignment,
                lambda v: {"misalignment_prv": v["misalignment_prv"]},
                (StoreVar("misalignment_prv", SC3, np.float64, "rad",
-                         "camera misalignment (PRV)"),)),
+                         "camera misalignment (PRV)"),),
+               keys=(("sigma_misalignment_deg", Field("float", 0.0, si="sigma_misalignment_rad",
+                                                      to_si=DEG, lo=0, hi=90)),)),
 )
 DISPERSION_ORDER = tuple(d.name for d in DISPERSIONS)
 DISPERSION_VARS: tuple[StoreVar, ...] = tuple(v for d in DISPERSIONS for v in d.variables)
+
+
+def dispersion_order() -> tuple[str, ...]:
+    """The names of :data:`DISPERSIONS` in draw order (read live)."""
+    return tuple(d.name for d in DISPERSIONS)
+
+
+def dispersion_vars() -> tuple[StoreVar, ...]:
+    """Every store variable the dispersions declare, in draw order (read live)."""
+    return tuple(v for d in DISPERSIONS for v in d.variables)
+
+
+def dispersion_keys() -> dict:
+    """Every dispersion's ``[monte_carlo]`` keys, ``{key: Field}``, in draw order (read live)."""
+    return {k: f for d in DISPERSIONS for k, f in d.keys}
+
+
+def check_dispersions(mc) -> None:
+    """Every dispersion's cross-check of the typed ``[monte_carlo]`` table."""
+    for d in DISPERSIONS:
+        if d.check is not None:
+            d.check(mc)
 
 
 def draw_sample(mc, seed: int, k: int, theta: np.ndarray, setup) -> tuple[dict, dict]:

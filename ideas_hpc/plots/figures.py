@@ -16,6 +16,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.ticker import MaxNLocator  # noqa: E402
+from ..seeds import plot_rng  # noqa: E402
 
 RPM = 60.0 / (2.0 * np.pi)
 
@@ -241,7 +242,7 @@ def mc_coverage(ds, path) -> Path:
     axes[0].set_title(f"coverage of {cov.size} samples")
     if "n_failed" in ds:
         nf = ds["n_failed"].values
-        axes[1].scatter(nf + np.random.default_rng(0).uniform(-0.1, 0.1, nf.size), cov, s=8)
+        axes[1].scatter(nf + plot_rng().uniform(-0.1, 0.1, nf.size), cov, s=8)
         axes[1].set_xlabel("failed spacecraft")
         axes[1].xaxis.set_major_locator(MaxNLocator(integer=True))
         axes[1].set_ylabel("area coverage, %")

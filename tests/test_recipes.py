@@ -1,0 +1,202 @@
+"""The CONTRIBUTING recipes are true (issue 21): each registers a toy entry from
+this module alone, by patching the registry the recipe names and nothing else,
+and runs it end to end on the built-in ellipsoid through ``run_file``.
+
+Each toy is checked against an independent path: a built-in campaign that must
+give the same numbers, or a NumPy recomputation from the stored arrays.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from ideas_hpc.attitude import maneuvers
+from ideas_hpc.campaign import kinds
+from ideas_hpc.campaign.run import run_file
+from ideas_hpc.campaign.schema import load
+from ideas_hpc.core.maneuvers import FOV_MODE
+from ideas_hpc.design import objectives
+from ideas_hpc.errors import InputError
+from ideas_hpc.montecarlo import dispersions
+from ideas_hpc.schema import Field
+from ideas_hpc.store_schema import StoreVar
+
+CAMPAIGNS = Path(__file__).resolve().parent.parent / "campaigns"
+FLYBY = CAMPAIGNS / "eros-flyby.toml"
+SHORT = ['body.name="ellipsoid"', "flyby.tf_s=60", "flyby.z_start_km=-3", "flyby.z_stop_km=3",
+         'attitude.mode="ideal"', "swarm.angles_rad=[0.2, 2.4, 4.1]"]
+PERIODS = "swarm.sweep_periods_min=[0.5, 0.7, 0.9]"
+
+
+def _flyby(tmp_path, name, sets, path=FLYBY):
+    store = run_file(path, out=tmp_path / f"{name}.zarr", overrides=SHORT + sets, workers=0,
+                     progress=False)
+    return xr.open_zarr(store)
+
+
+# --- A new attitude maneuver: one Maneuver entry (it reuses the FoV kernels' mode code)
+
+def test_recipe_maneuver(tmp_path, monkeypatch):
+    toy = maneuvers.Maneuver("toy", FOV_MODE, "fov", maneuvers._sweep_params,
+                             "toy: the FoV sweep under another name", key="toy-sweep",
+                             sweeps=True, fov_factor=0.5)
+    monkeypatch.setitem(maneuvers.MANEUVERS, "toy", toy)
+    with pytest.raises(InputError) as err:   # it declares sweep periods: the schema asks
+        load(FLYBY, SHORT + ['attitude.maneuver="toy-sweep"'])
+    assert err.value.field == "swarm.sweep_periods_min"
+    a = _flyby(tmp_path, "toy", ['attitude.maneuver="toy-sweep"', PERIODS])
+    fov = _flyby(tmp_path, "fov", ['attitude.maneuver="fov"', PERIODS])
+    nadir = _flyby(tmp_path, "nadir", ['attitude.maneuver="nadir"'])
+    assert a.attrs["maneuver"] == "toy-sweep"
+    assert a.attrs["half_angle_rad"] == pytest.approx(0.5 * a.attrs["eta_nadir_rad"], rel=1e-15)
+    # the same motion as the built-in FoV sweep, not silently nadir pointing
+    assert np.array_equal(a["camera_dcm_BT"].values, fov["camera_dcm_BT"].values)
+    assert np.array_equal(a["observed"].values, fov["observed"].values)
+    assert not np.allclose(a["camera_dcm_BT"].values, nadir["camera_dcm_BT"].values)
+
+
+# --- A new Monte Carlo dispersion: one Dispersion entry appended to DISPERSIONS
+
+def _toy_gm(rng, n, mc, setup, theta):
+    u = rng.uniform(-1.0, 1.0)
+    return {"toy_mu": setup.body.params.mu * (1.0 + mc.toy_gm_pct / 100.0 * u), "toy_u": u}
+
+
+def _toy_check(mc):
+    if mc.toy_gm_pct > 50.0:
+        raise InputError("must be <= 50 %", field="toy_gm_pct")
+
+
+TOY_DISPERSION = dispersions.Dispersion(
+    "toy_gm", _toy_gm, lambda v: {"params_override": {"mu": v["toy_mu"]}},
+    (StoreVar("toy_mu", (), np.float64, "m^3/s^2", "GM (toy dispersion)"),
+     StoreVar("toy_u", (), np.float64, "1", "toy uniform draw")),
+    keys=(("toy_gm_pct", Field("float", 0.0, lo=0, doc="toy GM error, %")),),
+    check=_toy_check)
+MC = ['body.name="ellipsoid"', "flyby.tf_s=60", "flyby.z_start_km=-3", "flyby.z_stop_km=3",
+      'attitude.mode="ideal"', "monte_carlo.samples=3", "run.chunk_size=3",
+      "monte_carlo.attitude_dispersion=false", "monte_carlo.sigma_gm_pct=0.0"]
+
+
+def _mc(tmp_path, name, sets):
+    from distributed import Client, LocalCluster
+
+    # threads in this process: the workers see the patched registry
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
+                      dashboard_address=":0") as cluster, Client(cluster):
+        store = run_file(CAMPAIGNS / "eros-monte-carlo.toml", out=tmp_path / f"{name}.zarr",
+                         overrides=MC + sets, scheduler=cluster.scheduler_address,
+                         progress=False)
+    return xr.open_zarr(store)
+
+
+def test_recipe_dispersion(tmp_path, monkeypatch):
+    base = _mc(tmp_path, "base", [])
+    with pytest.raises(InputError) as err:     # the key exists only with its entry
+        load(CAMPAIGNS / "eros-monte-carlo.toml", MC + ["monte_carlo.toy_gm_pct=5.0"])
+    assert err.value.field == "monte_carlo.toy_gm_pct"
+    monkeypatch.setattr(dispersions, "DISPERSIONS", dispersions.DISPERSIONS + (TOY_DISPERSION,))
+    with pytest.raises(InputError) as err:     # its cross-check, named in the file's terms
+        load(CAMPAIGNS / "eros-monte-carlo.toml", MC + ["monte_carlo.toy_gm_pct=80.0"])
+    assert err.value.field == "monte_carlo.toy_gm_pct"
+    toy = _mc(tmp_path, "toy", ["monte_carlo.toy_gm_pct=20.0"])
+    assert list(toy.attrs["dispersion_order"]) == list(base.attrs["dispersion_order"]) + ["toy_gm"]
+    # appended last: every earlier draw is unchanged
+    for v in ("c20", "reflectivity", "position_error", "velocity_error", "active",
+              "misalignment_prv"):
+        assert np.array_equal(toy[v].values, base[v].values), v
+    # stored values follow from its draws; the flight saw the dispersed GM
+    mu0 = base["mu"].values
+    assert np.allclose(toy["toy_mu"].values, mu0 * (1 + 0.2 * toy["toy_u"].values), rtol=1e-15)
+    assert toy["toy_mu"].attrs["units"] == "m^3/s^2"
+    assert not np.allclose(toy["arrival_error"].values, base["arrival_error"].values)
+
+
+# --- A new design objective: one Objective entry in OBJECTIVES
+
+def _angle_sum(bank, members):
+    th = np.where(members >= 0, bank.theta[np.maximum(members, 0)], 0.0)
+    return th.sum(axis=1)
+
+
+def test_recipe_objective(tmp_path, monkeypatch):
+    monkeypatch.setitem(objectives.OBJECTIVES, "angle_sum", objectives.Objective(
+        "angle_sum", -1, "rad", "sum of the swarm angles (toy)", _angle_sum))
+    store = run_file(CAMPAIGNS / "eros-pareto.toml", out=tmp_path / "p.zarr", workers=0,
+                     progress=False,
+                     overrides=['body.name="ellipsoid"', "flyby.tf_s=60", "flyby.z_start_km=-3",
+                                "flyby.z_stop_km=3", "design.population=8",
+                                "design.generations=3", "design.angle_step_deg=10.0",
+                                'design.objectives=["n", "angle_sum"]'])
+    ds = xr.open_zarr(store)
+    got = ds["pareto_angle_sum"].values
+    assert ds["pareto_angle_sum"].attrs["units"] == "rad" and got.size >= 1
+    assert np.allclose(got, np.nansum(ds["pareto_swarm"].values, axis=1), rtol=1e-12)
+    n = ds["pareto_n"].values        # non-dominated: more spacecraft, larger sum
+    for i in range(n.size):
+        assert not np.any((n <= n[i]) & (got >= got[i]) & ((n < n[i]) | (got > got[i])))
+
+
+# --- A new campaign kind: a run function (here, in this module) and one Kind entry
+
+def run_toy(c, out, **_):
+    """Toy kind: a flyby of the first spacecraft of ``swarm.angles_rad`` only."""
+    from ideas_hpc.campaign import datasets
+    from ideas_hpc.flyby import fly, setup_from_campaign
+
+    setup = setup_from_campaign(c)
+    res = fly(setup, c.config.swarm.angles_rad[:1])
+    ds = datasets.flyby_dataset(setup, res)
+    ds.attrs.update(datasets.base_attrs(c, setup))
+    return ds
+
+
+def test_recipe_kind(tmp_path, monkeypatch):
+    monkeypatch.setitem(kinds.KINDS, "toy-first", kinds.Kind(
+        "toy-first", __name__, "run_toy", False, "a flyby of the first spacecraft"))
+    toy = _flyby(tmp_path, "toy", ['kind="toy-first"'])
+    one = _flyby(tmp_path, "one", ["swarm.angles_rad=[0.2]"])
+    assert toy.attrs["kind"] == "toy-first" and toy.sizes["spacecraft"] == 1
+    assert np.array_equal(toy["observed"].values, one["observed"].values)
+    assert math.isclose(float(toy["coverage"]), float(one["coverage"]), rel_tol=0, abs_tol=0)
+
+
+# --- One angle step for every designer (issue 21 item 2)
+
+def test_one_angle_step_key_keeps_each_default_and_the_alias_warns_once(monkeypatch):
+    from ideas_hpc.campaign import design_table
+
+    monkeypatch.setattr(design_table, "_warned", [])
+    exact = load(CAMPAIGNS / "eros-design.toml", ['body.name="ellipsoid"']).config.design
+    ga = load(CAMPAIGNS / "eros-nadir-ga.toml", ['body.name="ellipsoid"']).config.design
+    assert exact.grid_step_rad == 0.5 * math.pi / 180 and ga.angle_step_rad == 0.01
+    set_ = load(CAMPAIGNS / "eros-nadir-ga.toml", ["design.angle_step_deg=2.0"]).config.design
+    assert set_.angle_step_rad == pytest.approx(math.radians(2.0), rel=1e-15)
+    assert set_.grid_step_rad == set_.angle_step_rad
+    with pytest.warns(FutureWarning, match="angle_step_deg"):
+        old = load(CAMPAIGNS / "eros-nadir-ga.toml", ["design.angle_step_rad=0.2"]).config.design
+    assert old.angle_step_rad == 0.2
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")       # once: the second use is silent
+        load(CAMPAIGNS / "eros-nadir-ga.toml", ["design.angle_step_rad=0.2"])
+
+
+def test_designers_name_their_own_parameters():
+    from ideas_hpc.errors import config_fields
+    from ideas_hpc.ga import run_fov_ga
+    from ideas_hpc.campaign.design_ga import GA_FIELDS
+
+    kw = dict(n_spacecraft=2, p_min=60.0, p_max=30.0, period_step=0.0, population=4,
+              generations=1, seed=1)
+    with pytest.raises(InputError) as err:
+        run_fov_ga(lambda g: np.zeros(len(g)), **kw)
+    assert err.value.field == "p_min"
+    with pytest.raises(InputError) as err, config_fields(GA_FIELDS):
+        run_fov_ga(lambda g: np.zeros(len(g)), **kw)
+    assert err.value.field == "design.p_min_min"
