@@ -19,7 +19,8 @@ from __future__ import annotations
 import numpy as np
 
 from .attitude import initial_conditions
-from .flyby import FlybySetup, camera_dcms, target
+from .flyby import FlybySetup, target
+from .flyby_camera import camera_dcms
 from .mapping import observed_per_spacecraft, quality_per_spacecraft, stereo_pair_table
 
 

@@ -26,13 +26,12 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .attitude import (Gains, Maneuver, SpacecraftModel, campaign_maneuver, ideal_dcm_BT,
-                       initial_conditions, simulate_attitude)
+from .attitude import Gains, Maneuver, SpacecraftModel, campaign_maneuver, initial_conditions
 from .bodies import Body, load_body
-from .core.mrp import dcm_from_mrp, mrp_from_prv
-from .encounter import (Encounter, approach_angles, camera_dcms_encounter, endpoints_encounter,
-                        target_encounter, track_dcms, window_s)
+from .encounter import (Encounter, approach_angles, endpoints_encounter, target_encounter,
+                        window_s)
 from .errors import InputError
+from .flyby_camera import camera_at_images, misaligned, misalignment_dcms
 from .mapping import CoverageOptions, CoverageResult, compute_coverage
 from .sizing import Sizing, size_flyby
 from .swarm_geometry import check_separation
@@ -244,12 +243,6 @@ def targeting_input_error(exc: TargetingError, setup: FlybySetup, theta) -> Inpu
                       field="flyby.max_iterations")
 
 
-def misalignment_dcms(prv) -> np.ndarray:
-    """Fixed camera misalignments ``[C B]`` (N, 3, 3) from principal rotation vectors (N, 3), rad."""
-    prv = np.asarray(prv, dtype=np.float64).reshape(-1, 3)
-    return np.stack([dcm_from_mrp(mrp_from_prv(np.ascontiguousarray(v))) for v in prv])
-
-
 @dataclass(frozen=True)
 class Perturbation:
     """How one flyby departs from the nominal one (SI, frame T); None: nominal.
@@ -280,41 +273,6 @@ class FlybyOutcome:
     attitude: object | None = None      # AttitudeResult for 'simulated'
     extras: dict = field(default_factory=dict)
     position_T: np.ndarray | None = None  # (N, T, 3) m, the flown trajectory (open loop)
-
-
-def camera_dcms(setup: FlybySetup, theta, periods=None, *, sigma0=None, omega0=None,
-                wheel0=None, spin_rate=None, r_img_T=None):
-    """Camera DCMs at the image times, and the attitude result when simulated.
-
-    ``r_img_T`` (N, n_img, 3): the flown positions, for body tracking.
-    Returns ``(dcm_BT (N, n_img, 3, 3), AttitudeResult or None)``.
-    """
-    th = np.asarray(theta, dtype=np.float64)
-    if setup.maneuver.tracks_body:
-        return track_dcms(setup, r_img_T)[0], None
-    ws = setup.body.params.spin_rate if spin_rate is None else spin_rate
-    duration = setup.tf - setup.t0
-    img_t = setup.image_times - setup.t0
-    kw = dict(mode=setup.maneuver.name, periods=periods, theta_max=setup.theta_max, p_min=setup.p_min)
-    if setup.encounter is not None:
-        if sigma0 is None and setup.attitude_mode == "simulated":
-            sigma0, omega0, wheel0 = initial_conditions(setup.seed, 0, th.size)
-        bt, att, _ = camera_dcms_encounter(
-            setup, th, periods, lambda w, ns: ideal_dcm_BT(th, w, img_t, dcm_TS=ns, **kw),
-            lambda w, ns: _simulate(setup, th, w, duration, sigma0, omega0, wheel0, ns, kw))
-        return bt, att
-    if setup.attitude_mode == "ideal":
-        return ideal_dcm_BT(th, ws, img_t, **kw), None
-    if sigma0 is None:
-        sigma0, omega0, wheel0 = initial_conditions(setup.seed, 0, th.size)
-    return _simulate(setup, th, ws, duration, sigma0, omega0, wheel0, None, kw)
-
-
-def _simulate(setup, th, ws, duration, sigma0, omega0, wheel0, dcm_TS, kw):
-    res = simulate_attitude(th, ws, duration, gains=setup.gains, spacecraft=setup.spacecraft,
-                            dt=setup.dt, image_dt=setup.image_dt, sigma0=sigma0, omega0=omega0,
-                            wheel0=wheel0, decimate=setup.decimate, dcm_TS=dcm_TS, **kw)
-    return np.ascontiguousarray(res.dcm_BT[0]), res
 
 
 def fly(setup: FlybySetup, theta, periods=None, *, sample: int = 0, ics=None,
@@ -387,29 +345,16 @@ def open_loop_views(setup: FlybySetup, theta, periods, r0_T, v0_T,
     r_img = np.ascontiguousarray(pos[:, ::setup.image_every])
     mis = None if p.misalignment_prv is None else misalignment_dcms(p.misalignment_prv)
     # body tracking points at the flown positions, so its DCMs move with the perturbation
-    if ideal_dcm_BT is not None and setup.attitude_mode == "ideal" and setup.maneuver != "track":
-        dcm, att = _misaligned(ideal_dcm_BT, mis), None
+    if ideal_dcm_BT is not None and setup.attitude_mode == "ideal" and not setup.maneuver.tracks_body:
+        dcm, att = misaligned(ideal_dcm_BT, mis), None
     else:
-        dcm, att = _camera(setup, th, periods, p.ics, mis, r_img)
+        dcm, att = camera_at_images(setup, th, periods, p.ics, mis, r_img)
     return r_img, dcm, att, pos
-
-
-def _camera(setup: FlybySetup, th, periods, ics, misalignment, r_img):
-    """Camera DCMs at the images (attitude, then the camera misalignment)."""
-    s0, w0, W0 = ics if ics is not None else (None, None, None)
-    dcm, att = camera_dcms(setup, th, periods, sigma0=s0, omega0=w0, wheel0=W0, r_img_T=r_img)
-    return _misaligned(dcm, misalignment), att
-
-
-def _misaligned(dcm, misalignment):
-    if misalignment is None:
-        return dcm
-    return np.ascontiguousarray(np.matmul(misalignment[:, None], dcm))  # [CB][BT]
 
 
 def _image(setup: FlybySetup, th, periods, r_img, ics, misalignment, active, counts):
     """Attitude at the images, camera misalignment, Sun, coverage: the common tail of a flyby."""
-    dcm, att = _camera(setup, th, periods, ics, misalignment, r_img)
+    dcm, att = camera_at_images(setup, th, periods, ics, misalignment, r_img)
     return dcm, att, _coverage(setup, r_img, dcm, active, counts)
 
 

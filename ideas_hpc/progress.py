@@ -25,6 +25,11 @@ def enabled(on: bool):
         _STATE["on"] = old
 
 
+def on() -> bool:
+    """Whether bars are shown (``run --no-progress`` turns them off)."""
+    return _STATE["on"]
+
+
 def bar(total: int, desc: str | None, unit: str = "chunk"):
     """A tqdm bar on stderr; none under ``enabled(False)``, without ``desc`` or for one step."""
     from tqdm.auto import tqdm

@@ -224,7 +224,7 @@ def test_misalignment_dcms_match_scipy():
     """[CB] from principal rotation vectors equals scipy's passive rotation (transpose)."""
     from scipy.spatial.transform import Rotation
 
-    from ideas_hpc.flyby import misalignment_dcms
+    from ideas_hpc.flyby_camera import misalignment_dcms
 
     prv = np.random.default_rng(5).normal(0, 0.01, (6, 3))
     expect = Rotation.from_rotvec(prv).as_matrix().transpose(0, 2, 1)

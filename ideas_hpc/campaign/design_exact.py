@@ -219,21 +219,6 @@ def checked_setup(c, theta):
     return setup
 
 
-def run_design_exact(c, out, *, workers=None, scheduler=None, cluster="local",
-                     slurm_config=None, **_) -> xr.Dataset:
-    """Registry entry of kind ``design-nadir``, method ``exact``; with
-    ``design.success_probability`` the success-probability designer
-    (:mod:`ideas_hpc.campaign.design_reliability`, which builds on this module)."""
-    from .design_reliability import design_reliable, scenario_store_path
-
-    setup = checked_setup(c, np.linspace(0.0, 2 * np.pi, 16, endpoint=False))
-    designer = None
-    if c.config.design.success_probability is not None:
-        designer = functools.partial(design_reliable, bank_store=scenario_store_path(out))
-    return run_exact(c, setup, workers=workers, scheduler=scheduler, cluster=cluster,
-                     slurm_config=slurm_config, designer=designer)
-
-
 def run_exact(c, setup, *, workers=None, scheduler=None, cluster="local",
               slurm_config=None, designer=None) -> xr.Dataset:
     """Kind ``design-nadir``, method ``exact``: certified design, its Monte Carlo

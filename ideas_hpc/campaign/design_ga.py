@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import functools
 import json
-from functools import partial
 import math
 import sys
 import time

@@ -39,6 +39,7 @@ from ..design.bank import grid_size, separation_steps
 from ..design.reliability import ReliabilityDesigner, min_swarm_reliable
 from ..design.reliability_stats import lower_confidence_bound
 from ..errors import InputError
+from .. import progress
 from ..engine.job_cluster import phase_client
 from ..montecarlo.scenarios import build_scenario_bank, fly_members
 from ..seeds import VALIDATION_STREAM, stream_rng
@@ -90,7 +91,8 @@ class Validation:
 def _validate(c, setup, theta, need, w, exact, client):
     d, mc = c.config.design, c.config.monte_carlo
     m = 1 if exact else verify_samples(d)
-    rows = fly_members(setup, theta, None, mc, seed=c.config.seed, n_samples=m, client=client)
+    rows = fly_members(setup, theta, None, mc, seed=c.config.seed, n_samples=m, client=client,
+                       progress=progress.on())
     return Validation(rows, w, need, mc.failure_probability, d.confidence, exact, c.config.seed)
 
 
@@ -144,7 +146,7 @@ def design_reliable(c, setup, client, *, bank_store: str | None = None):
     t0 = time.perf_counter()
     fresh = bank_store is not None and not Path(bank_store).exists()
     bank = build_scenario_bank(setup, d.grid_step_rad, mc, seed=c.config.seed, n_scenarios=s_n,
-                               client=client, store=bank_store)
+                               client=client, store=bank_store, progress=progress.on())
     t_bank = time.perf_counter() - t0
     try:
         return _design_on_bank(c, setup, client, nominal, bank, t_bank, exact)

@@ -54,7 +54,7 @@ KINDS: dict[str, Kind] = {k.name: k for k in (
          "one flyby of swarm.angles_rad"),
     Kind("design-nadir", "ideas_hpc.campaign.design_ga", "run_design", False,
          "fewest spacecraft for the coverage target (exact integer programme or GA)",
-         methods=(("exact", "ideas_hpc.campaign.design_exact", "run_design_exact"),)),
+         methods=(("exact", "ideas_hpc.campaign.design_nadir", "run_design_exact"),)),
     Kind("design-fov", "ideas_hpc.campaign.design_ga", "run_design", False,
          "sweep periods of a swarm with half the field of view (GA)", maneuver="fov"),
     Kind("design-pareto", "ideas_hpc.campaign.design_pareto", "run_design_pareto", False,

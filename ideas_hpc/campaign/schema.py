@@ -70,8 +70,8 @@ from ..attitude.maneuvers import CAMPAIGN_NAMES, campaign_maneuver
 from ..config import CampaignSource, load_campaign
 from ..design.objectives import check_objectives
 from ..errors import InputError
-from ..montecarlo.dispersions import check_dispersions, dispersion_keys
-from ..schema import (Field, LiveTable, live_typed_table, to_typed, typed_table, validate,
+from ..montecarlo.dispersions import check_dispersions
+from ..schema import (Field, live_typed_table, to_typed, typed_table, validate,
                       with_defaults)
 from ..units import CM, DEG, KM, MINUTE, MM, UM
 from ..sizing import INSTRUMENT_DEFAULTS as _CAM
