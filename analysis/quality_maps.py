@@ -2,7 +2,7 @@
 
 A Monte Carlo store written with a ``[coverage]`` requirement, or with
 ``coverage.quality = true``, holds the quality variables of
-:data:`ideas_hpc.store_schema.QUALITY` with a leading ``sample`` dim
+:data:`ideas_hpc.engine.variables.QUALITY` with a leading ``sample`` dim
 (``lit``, ``best_resolution``, ``emission_at_best``, ``incidence_at_best``,
 ``phase_at_best``, ``n_spacecraft_seen``, ``stereo``, ``mapped``).
 :func:`vertex_probabilities` turns them into the probability, over the
@@ -23,7 +23,7 @@ the fraction of the surface area whose probability is at least ``p``.
 
 The marginal probabilities ``p_resolution``, ``p_emission`` ... are judged at
 the best-resolution image only; ``mapped`` asks that one image meet every
-limit at once (:mod:`ideas_hpc.coverage_options`), so ``p_mapped`` is not
+limit at once (:mod:`ideas_hpc.mapping.options`), so ``p_mapped`` is not
 their product.
 """
 
@@ -40,7 +40,7 @@ import xarray as xr  # noqa: E402
 
 from ideas_hpc.plots.coverage_map import render_coverage_map  # noqa: E402
 from ideas_hpc.plots.figures import save_png  # noqa: E402
-from ideas_hpc.store_schema import QUALITY  # noqa: E402
+from ideas_hpc.engine.variables import QUALITY  # noqa: E402
 from plotting import store_config  # noqa: E402  (analysis/plotting.py)
 
 HOW_TO_GET = ("write the store with the quality pass: `ideas-hpc run CAMPAIGN --out STORE "
@@ -278,7 +278,7 @@ def probability_histograms_figure(probs: xr.Dataset, path) -> Path:
 
 def store_shape(ds):
     """The body mesh stored in ``ds`` (``vertex_position``, ``face_vertices``)."""
-    from ideas_hpc.shape import build_shape
+    from ideas_hpc.body.shape import build_shape
 
     return build_shape(ds["vertex_position"].values, ds["face_vertices"].values.astype(np.int64),
                        name=str(ds.attrs.get("shape_model", "body")), source="store")

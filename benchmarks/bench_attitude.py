@@ -19,8 +19,8 @@ import numba
 import numpy as np
 
 from ideas_hpc.attitude import GAIN_PRESETS, default_spacecraft, initial_conditions
-from ideas_hpc.core.attitude_batch import simulate_batch
-from ideas_hpc.core.frames import dcm_RT
+from ideas_hpc.core.attitude.batch import simulate_batch
+from ideas_hpc.core.dynamics.frames import dcm_RT
 
 W = 2 * math.pi / (5.270 * 3600)
 THETA = np.array([0.2, 1.7, 2.4, 2.9, 3.3, 3.5, 5.6, 6.0])

@@ -30,12 +30,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ideas_hpc.analytic import eros_ellipsoid
-from ideas_hpc.bodies import load_body
-from ideas_hpc.core import bvh as cbvh
-from ideas_hpc.core import coverage as ccov
-from ideas_hpc.datapath import have_data_file
-from ideas_hpc.mapping import CoverageOptions, compute_coverage, observed_per_spacecraft
+from ideas_hpc.body.analytic import eros_ellipsoid
+from ideas_hpc.body.bodies import load_body
+from ideas_hpc.core.mapping import bvh as cbvh
+from ideas_hpc.core.mapping import coverage as ccov
+from ideas_hpc.body.datapath import have_data_file
+from ideas_hpc.mapping.coverage import CoverageOptions, compute_coverage, observed_per_spacecraft
 
 # the tiled kernel is a test oracle kept in tests/, not part of the package
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))

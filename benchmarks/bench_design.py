@@ -24,13 +24,13 @@ os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 import numpy as np  # noqa: E402
 
-from ideas_hpc.campaign.schema import load  # noqa: E402
+from ideas_hpc.config.campaign_tables import load  # noqa: E402
 from ideas_hpc.design import (build_bank, coverage_curve, failure_tolerant,  # noqa: E402
                               min_swarm)
-from ideas_hpc.candidates import candidate_masks  # noqa: E402
-from ideas_hpc.flyby import setup_from_campaign  # noqa: E402
-from ideas_hpc.ga import run_nadir_ga  # noqa: E402
-from ideas_hpc.swarm_eval import nadir_keys  # noqa: E402
+from ideas_hpc.design.candidates import candidate_masks  # noqa: E402
+from ideas_hpc.flyby.flight import setup_from_campaign  # noqa: E402
+from ideas_hpc.design.ga.genetic import run_nadir_ga  # noqa: E402
+from ideas_hpc.design.ga.swarm_eval import nadir_keys  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 CAMPAIGN = ROOT / "campaigns" / "eros-nadir.toml"

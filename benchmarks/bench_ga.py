@@ -6,7 +6,7 @@ population evaluation, the final flyby of the best swarm, the store) twice:
 with ``ideal`` attitude and with ``simulated`` (closed-loop) attitude.
 
 For scale it also times the honest naive evaluation: one full flyby
-(:func:`ideas_hpc.flyby.fly`, compiled kernels, ideal attitude) per
+(:func:`ideas_hpc.flyby.flight.fly`, compiled kernels, ideal attitude) per
 individual, as a GA without the per-spacecraft mask bank would do, and
 extrapolates it to the same number of evaluations.
 
@@ -28,8 +28,8 @@ import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 
 from ideas_hpc.campaign.run import run_file  # noqa: E402
-from ideas_hpc.campaign.schema import load  # noqa: E402
-from ideas_hpc.flyby import fly, setup_from_campaign  # noqa: E402
+from ideas_hpc.config.campaign_tables import load  # noqa: E402
+from ideas_hpc.flyby.flight import fly, setup_from_campaign  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 CAMPAIGN = ROOT / "campaigns" / "eros-nadir-ga.toml"

@@ -9,7 +9,7 @@ elevation), 0.5 deg grid = 720 candidates, the ``[monte_carlo]`` dispersions of
 Baseline: full recomputation with the flyby pipeline, what the bank would do
 without the shortcuts: each scenario's perturbed flight (open-loop propagation
 of every candidate, camera attitude and misalignment) and every candidate's row
-from :func:`ideas_hpc.candidates.rows_from_views`
+from :func:`ideas_hpc.design.candidates.rows_from_views`
 (:func:`ideas_hpc.montecarlo.scenario_rows.full_rows`). Fast path: the same
 flight, rows by :class:`~ideas_hpc.montecarlo.scenario_rows.RowEngine`
 (nominal witnesses, budget windows, whole-node occlusion proofs). Both are
@@ -28,9 +28,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ideas_hpc.campaign.schema import load
-from ideas_hpc.datapath import have_data_file
-from ideas_hpc.flyby import Perturbation, setup_from_campaign
+from ideas_hpc.config.campaign_tables import load
+from ideas_hpc.body.datapath import have_data_file
+from ideas_hpc.flyby.flight import Perturbation, setup_from_campaign
 from ideas_hpc.montecarlo.scenario_rows import full_rows
 from ideas_hpc.montecarlo.scenarios import draw_world, grid_theta, row_engine
 from ideas_hpc.seeds import SCENARIO_STREAM

@@ -18,7 +18,7 @@ include other users' load (say so when reporting). Last line
 
 ``--helper`` adds a third run, cold again on another empty cache with the
 opt-in precompile helper on (``IDEAS_HPC_PRECOMPILE=1``,
-:mod:`ideas_hpc.precompile`), to show what it saves or costs.
+:mod:`ideas_hpc.campaign.precompile`), to show what it saves or costs.
 
 Usage: ``python benchmarks/bench_startup.py [--campaign campaigns/eros-design-nominal.toml]
 [--set KEY=VALUE ...] [--workers N] [--helper]``.

@@ -11,7 +11,7 @@ from the eq. 4 guess to 1 cm, then the converged trajectory sampled every
   NumPy right-hand side (matrix products for the STM, closed-form degree-2
   gradient, NumPy Kepler solve for the Sun), one spacecraft after another.
 * second reference: the same SciPy loop with the project's own compiled
-  right-hand side (``@njit`` wrapper of :func:`ideas_hpc.core.propagate.rhs`,
+  right-hand side (``@njit`` wrapper of :func:`ideas_hpc.core.dynamics.propagate.rhs`,
   the function the kernels integrate), so what remains is SciPy's stepper
   overhead. ``solve_ivp`` takes a Python callable only (``LowLevelCallable``
   is for ``quad``), so a jitted function called from Python is the closest
@@ -36,11 +36,11 @@ import numpy as np
 from numba import njit
 from scipy.integrate import solve_ivp
 
-from ideas_hpc.bodies import load_body
+from ideas_hpc.body.bodies import load_body
 from ideas_hpc.constants import MU_SUN
-from ideas_hpc.core import propagate as P
-from ideas_hpc.core.forces import K_SRP
-from ideas_hpc.trajectory import ForceModel, pack_force_model, ring_states, target_swarm
+from ideas_hpc.core.dynamics import propagate as P
+from ideas_hpc.core.dynamics.forces import K_SRP
+from ideas_hpc.dynamics.trajectory import ForceModel, pack_force_model, ring_states, target_swarm
 
 ANGLES = [0.2, 1.7, 2.4, 2.9, 3.3, 3.5, 5.6, 6.0]
 D_SEP = 155.901e3

@@ -1,6 +1,6 @@
 """ideas_hpc: design spacecraft swarms that map a small body in one flyby.
 
-Public entry points: :func:`load_body`, :func:`ideas_hpc.sizing.size_flyby`,
+Public entry points: :func:`load_body`, :func:`ideas_hpc.flyby.sizing.size_flyby`,
 and the ``ideas-hpc`` command line (``size``, ``run``, ``report``).
 """
 
@@ -13,8 +13,8 @@ import os as _os
 # benchmarks/bench_targeting.py). Must be set before numba loads its runtime.
 _os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
-from ._version import __version__
-from .bodies import Body, load_body
-from .errors import InputError
+from ideas_hpc._version import __version__
+from ideas_hpc.body.bodies import Body, load_body
+from ideas_hpc.errors import InputError
 
 __all__ = ["Body", "InputError", "__version__", "load_body"]

@@ -9,9 +9,9 @@ from __future__ import annotations
 import argparse
 import sys
 
-from . import __version__
-from .errors import InputError
-from .units import CM, DEG, KM, UM
+from ideas_hpc import __version__
+from ideas_hpc.errors import InputError
+from ideas_hpc.units import CM, DEG, KM, UM
 
 
 
@@ -26,7 +26,7 @@ def _add_size(sub) -> None:
     g.add_argument("--r-av", type=float, metavar="KM", help="given mean radius, km")
     g.add_argument("--paper", action="store_true",
                    help="use the paper's R_max/R_min (17.670/3.222 km) to reproduce its tables")
-    from .sizing import INSTRUMENT_DEFAULTS as cam
+    from ideas_hpc.flyby.sizing import INSTRUMENT_DEFAULTS as cam
 
     p.add_argument("--resolution", type=float, default=cam["ground_resolution_m"], metavar="M",
                    help=f"ground resolution X, m (default {cam['ground_resolution_m']:g})")
@@ -41,8 +41,8 @@ def _add_size(sub) -> None:
 
 
 def _cmd_size(args) -> int:
-    from .bodies import load_body
-    from .sizing import PAPER_R_MAX, PAPER_R_MIN, format_table, size_flyby
+    from ideas_hpc.body.bodies import load_body
+    from ideas_hpc.flyby.sizing import PAPER_R_MAX, PAPER_R_MIN, format_table, size_flyby
 
     inst = dict(ground_resolution=args.resolution, aperture=args.aperture * CM,
                 wavelength=args.wavelength * UM, min_elevation=args.elevation * DEG)
@@ -74,7 +74,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     _add_size(sub)
     try:
-        from .campaign.cli import add_commands  # run / report, when present
+        from ideas_hpc.campaign.cli import add_commands  # run / report, when present
     except ImportError:
         add_commands = None
     if add_commands is not None:

@@ -24,8 +24,8 @@ if _TESTS not in os.environ.get("PYTHONPATH", "").split(os.pathsep):
 @pytest.fixture(scope="session")
 def eros1708():
     """The real eros001708 body, or skip when the data path does not have it."""
-    from ideas_hpc.bodies import load_body
-    from ideas_hpc.datapath import have_data_file
+    from ideas_hpc.body.bodies import load_body
+    from ideas_hpc.body.datapath import have_data_file
 
     if not have_data_file("eros001708.tab"):
         pytest.skip("eros001708.tab not on IDEAS_HPC_DATA")

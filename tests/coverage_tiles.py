@@ -1,7 +1,7 @@
 """Test oracle: the previous tiled coverage kernel (spatial vertex tiles only).
 
 An independent second implementation of
-:func:`ideas_hpc.core.coverage.coverage_counts` (same arguments, same
+:func:`ideas_hpc.core.mapping.coverage.coverage_counts` (same arguments, same
 results) that uses no time coherence: vertices are grouped into compact tiles
 and whole tiles are rejected per image with conservative bounding-sphere and
 normal-cone tests. Used by ``tests/test_coverage.py`` and
@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from ideas_hpc.core.coverage import coverage_counts, coverage_fractions  # noqa: F401
+from ideas_hpc.core.mapping.coverage import coverage_counts, coverage_fractions  # noqa: F401
 
 #: Vertices per tile of the tiled counting kernel.
 BLOCK = 32

@@ -18,11 +18,11 @@ from scipy.spatial.transform import Rotation
 from ideas_hpc.attitude import (GAIN_PRESETS, Gains, SpacecraftModel, default_spacecraft,
                                 gains_from_config, ideal_dcm_BT, initial_conditions,
                                 simulate_attitude, spacecraft_from_config)
-from ideas_hpc.core import mrp
-from ideas_hpc.core.attitude import angular_momentum_N, kinetic_energy, rk4_step
-from ideas_hpc.core.attitude_batch import closed_loop_step
-from ideas_hpc.core.frames import dcm_RT
-from ideas_hpc.core.maneuvers import reference
+from ideas_hpc.core.attitude import mrp
+from ideas_hpc.core.attitude.rigid_body import angular_momentum_N, kinetic_energy, rk4_step
+from ideas_hpc.core.attitude.batch import closed_loop_step
+from ideas_hpc.core.dynamics.frames import dcm_RT
+from ideas_hpc.core.attitude.maneuvers import reference
 from ideas_hpc.errors import InputError
 
 W_EROS = 2.0 * math.pi / (5.270 * 3600.0)  # Eros spin, rad/s (SPEC section 1)
@@ -376,7 +376,7 @@ def test_bad_input_names_field(call, field):
 
 
 def test_wheel_limits():
-    from ideas_hpc.core.attitude import wheel_limits_into
+    from ideas_hpc.core.attitude.rigid_body import wheel_limits_into
     J = SC.J_s
     out = np.empty(3)
     om = np.array([0.05 / J[0], -0.05 / J[1], 0.0])  # wheel 0 at +h_max, wheel 1 at -h_max

@@ -43,7 +43,7 @@ def test_params_eros_table1():
 
 
 def test_user_params_from_toml_errors():
-    from ideas_hpc.params import params_from_mapping
+    from ideas_hpc.body.params import params_from_mapping
     with pytest.raises(InputError, match="body.params.spin_period_h"):
         params_from_mapping({"mass_kg": 1e15, "a_au": 1.0, "e": 0.1}, prefix="body.params.")
     with pytest.raises(InputError, match="body.params.e"):

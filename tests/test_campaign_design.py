@@ -12,11 +12,11 @@ import pytest
 import xarray as xr
 
 from ideas_hpc.campaign.run import run_file
-from ideas_hpc.campaign.schema import load
-from ideas_hpc.core.union import population_coverage
+from ideas_hpc.config.campaign_tables import load
+from ideas_hpc.core.design.union import population_coverage
 from ideas_hpc.errors import InputError
-from ideas_hpc.candidates import candidate_masks
-from ideas_hpc.flyby import fly, setup_from_campaign
+from ideas_hpc.design.candidates import candidate_masks
+from ideas_hpc.flyby.flight import fly, setup_from_campaign
 
 ROOT = Path(__file__).resolve().parent.parent
 CAMPAIGNS = ROOT / "campaigns"
@@ -177,7 +177,7 @@ def test_bad_key_in_file_names_file_and_line(tmp_path):
 
 def test_helix_configuration(tmp_path):
     """Helical swarm: z_start (and z_stop) grow linearly with the swarm angle."""
-    from ideas_hpc.flyby import endpoints
+    from ideas_hpc.flyby.flight import endpoints
 
     sets = ['body.name="ellipsoid"', 'flyby.configuration="helix"', "flyby.helix_rise_km=12.0",
             'attitude.mode="ideal"', "flyby.tf_s=60", "flyby.z_start_km=-3", "flyby.z_stop_km=3"]
@@ -224,7 +224,7 @@ def test_misalignment_dcms_match_scipy():
     """[CB] from principal rotation vectors equals scipy's passive rotation (transpose)."""
     from scipy.spatial.transform import Rotation
 
-    from ideas_hpc.flyby_camera import misalignment_dcms
+    from ideas_hpc.flyby.camera import misalignment_dcms
 
     prv = np.random.default_rng(5).normal(0, 0.01, (6, 3))
     expect = Rotation.from_rotvec(prv).as_matrix().transpose(0, 2, 1)

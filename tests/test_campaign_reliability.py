@@ -11,9 +11,9 @@ import xarray as xr
 
 from ideas_hpc.campaign.report import write_report
 from ideas_hpc.campaign.run import run_file
-from ideas_hpc.campaign.schema import load
+from ideas_hpc.config.campaign_tables import load
 from ideas_hpc.design import build_bank
-from ideas_hpc.flyby import setup_from_campaign
+from ideas_hpc.flyby.flight import setup_from_campaign
 
 ROOT = Path(__file__).resolve().parent.parent
 DESIGN = ROOT / "campaigns" / "eros-design.toml"

@@ -10,12 +10,12 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from ideas_hpc.analytic import ellipsoid_mesh, sphere_mesh
-from ideas_hpc.core import bvh as cbvh
-from ideas_hpc.core import coverage as ccov
+from ideas_hpc.body.analytic import ellipsoid_mesh, sphere_mesh
+from ideas_hpc.core.mapping import bvh as cbvh
+from ideas_hpc.core.mapping import coverage as ccov
 from coverage_tiles import coverage_counts_tiles
 from ideas_hpc.errors import InputError
-from ideas_hpc.mapping import (CoverageOptions, compute_coverage,
+from ideas_hpc.mapping.coverage import (CoverageOptions, compute_coverage,
                                coverage_options_from_config, observed_per_spacecraft)
 
 R_SPHERE = 1000.0
@@ -624,7 +624,7 @@ def test_render_coverage_map(tmp_path, small_body):
 # ---------------------------------------------------------------- time-coherence tree
 #
 # The kernels skip or accept whole runs of images with bounds on how far the
-# camera moves (ideas_hpc.core.coverage.time_tree). The truth here is the
+# camera moves (ideas_hpc.core.mapping.coverage.time_tree). The truth here is the
 # un-pruned evaluation of every (spacecraft, image, vertex) triple in NumPy
 # with the same floating-point expressions in the same order, so results must
 # agree bit for bit even for vertices placed on a boundary to the last ulp.

@@ -14,12 +14,12 @@ import pytest
 import xarray as xr
 
 from design_oracle import (best_triple, min_tolerant_size, pair_coverage, subset_coverage)
-from ideas_hpc.campaign.schema import load
+from ideas_hpc.config.campaign_tables import load
 from ideas_hpc.design import (CandidateBank, build_bank, coverage_curve, failure_tolerant,
                               max_coverage, min_swarm, worst_failure)
 from ideas_hpc.errors import InputError
-from ideas_hpc.flyby import setup_from_campaign
-from ideas_hpc.ga import separate_angles
+from ideas_hpc.flyby.flight import setup_from_campaign
+from ideas_hpc.design.ga.genetic import separate_angles
 
 ROOT = Path(__file__).resolve().parent.parent
 CAMPAIGN = ROOT / "campaigns" / "eros-nadir.toml"

@@ -12,7 +12,7 @@ import itertools
 import numpy as np
 import pytest
 
-from ideas_hpc.core.stereo_pairs import pair_index
+from ideas_hpc.core.mapping.stereo_pairs import pair_index
 from ideas_hpc.design import CandidateBank
 from ideas_hpc.design.stereo import (StereoBank, greedy_stereo, max_coverage_stereo,
                                      min_swarm_stereo, stereo_curve)
@@ -149,7 +149,7 @@ def test_stereo_ga_campaign_scores_pairs_and_states_its_gap(tmp_path, eros1708):
 def test_pareto_stereo_objective_counts_pairs_of_spacecraft():
     from dataclasses import replace
 
-    from ideas_hpc.design.objectives import OBJECTIVES
+    from ideas_hpc.design.pareto.objectives import OBJECTIVES
 
     sb = _bank(4)
     bank = replace(sb.bank, stereo=sb.bank.masks, pairs=sb.pairs,

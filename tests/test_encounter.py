@@ -12,11 +12,11 @@ import pytest
 from scipy.integrate import quad
 from scipy.spatial.transform import Rotation
 
-from ideas_hpc.campaign.schema import load
-from ideas_hpc.core.encounter import dcm_NS, pointing_demand
-from ideas_hpc.encounter import phase_angle
+from ideas_hpc.config.campaign_tables import load
+from ideas_hpc.core.dynamics.encounter import dcm_NS, pointing_demand
+from ideas_hpc.flyby.encounter import phase_angle
 from ideas_hpc.errors import InputError
-from ideas_hpc.flyby import fly, setup_from_campaign, target
+from ideas_hpc.flyby.flight import fly, setup_from_campaign, target
 
 BASE = """
 kind = "flyby"
@@ -239,7 +239,7 @@ def test_scan_encounter_ring_and_reachability(tmp_path):
 
 def test_pointing_the_wheels_cannot_follow_is_reported():
     from ideas_hpc.attitude import SpacecraftModel
-    from ideas_hpc.encounter import pointing_check
+    from ideas_hpc.flyby.encounter import pointing_check
 
     t = np.arange(0.0, 20.0, 0.1)
     bn = Rotation.from_rotvec(np.outer(0.2 * np.sin(t), [0.0, 1.0, 0.0])).as_matrix()
@@ -275,7 +275,7 @@ def test_body_tracking_demand_matches_the_straight_pass(tmp_path):
     y_B at v d / (d^2 + v^2 tau^2), peak v / d, peak acceleration (3 sqrt 3 / 8) v^2 / d^2
     (at tau = d / (sqrt 3 v)); 15 km/s at 20 km asks more torque than the wheels have."""
     from ideas_hpc.attitude import default_spacecraft
-    from ideas_hpc.encounter import pointing_profile
+    from ideas_hpc.flyby.encounter import pointing_profile
 
     s = _setup(tmp_path, "speed_km_s = 15.0\napproach_dec_deg = 20.0\napproach_ra_deg = 10.0\n"
                "d_sep_km = 20.0", rate=50.0, dt=0.02, mu=0.0, spin_period=1e15)
@@ -305,8 +305,8 @@ def test_exact_design_over_the_encounter_ring_is_minimal(tmp_path):
     import xarray as xr
 
     from ideas_hpc.campaign.run import run_file
-    from ideas_hpc.candidates import candidate_masks
-    from ideas_hpc.core.union import population_coverage
+    from ideas_hpc.design.candidates import candidate_masks
+    from ideas_hpc.core.design.union import population_coverage
 
     text = BASE.format(res=3, rate=5.0, dt=0.1, flyby="approach_dec_deg = 30.0\n"
                        "approach_ra_deg = 50.0").replace(

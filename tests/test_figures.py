@@ -126,7 +126,7 @@ def test_verification_resolves_the_threshold_region(tmp_path):
 
 
 def test_coverage_map_unseen_faces_red_and_area_title(tmp_path):
-    from ideas_hpc.bodies import load_body
+    from ideas_hpc.body.bodies import load_body
     from ideas_hpc.plots.coverage_map import render_coverage_map
 
     shape = load_body("ellipsoid", resolution=2).shape

@@ -10,11 +10,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ideas_hpc.bodies import load_body
-from ideas_hpc.core import forces as F
-from ideas_hpc.core import gravity as gk
+from ideas_hpc.body.bodies import load_body
+from ideas_hpc.core.dynamics import forces as F
+from ideas_hpc.core.dynamics import gravity as gk
 from ideas_hpc.errors import InputError
-from ideas_hpc.forces import (CannonballSRP, Degree2, ForceModel, PointMass, Polyhedron,
+from ideas_hpc.dynamics.forces import (CannonballSRP, Degree2, ForceModel, PointMass, Polyhedron,
                               SphericalHarmonics, pack_force_model, pack_forces)
 
 BODY = load_body("eros-ellipsoid", resolution=1)

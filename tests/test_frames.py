@@ -2,7 +2,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from ideas_hpc.core.frames import dcm_RS, dcm_RT, dcm_TS, ring_positions_T
+from ideas_hpc.core.dynamics.frames import dcm_RS, dcm_RT, dcm_TS, ring_positions_T
 
 angles = st.floats(0.0, 2 * np.pi, allow_nan=False)
 

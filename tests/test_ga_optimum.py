@@ -19,11 +19,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ideas_hpc.campaign.schema import load
+from ideas_hpc.config.campaign_tables import load
 from ideas_hpc.design import min_swarm
 from ideas_hpc.design.bank import build_bank
-from ideas_hpc.flyby import setup_from_campaign
-from ideas_hpc.ga_local import GridCover
+from ideas_hpc.flyby.flight import setup_from_campaign
+from ideas_hpc.design.ga.local_search import GridCover
 
 CAMPAIGN = Path(__file__).resolve().parent.parent / "campaigns" / "eros-nadir-ga.toml"
 STRICT = ['coverage.mode="exact"', "coverage.occlusion=true", "coverage.min_elevation_deg=5.0"]
@@ -140,7 +140,7 @@ def test_campaign_ga_with_min_separation(eros1708, tmp_path):
     import xarray as xr
 
     from ideas_hpc.campaign.run import run_file
-    from ideas_hpc.swarm_geometry import min_separation_angle
+    from ideas_hpc.flyby.swarm_geometry import min_separation_angle
 
     sets = [f"design.angle_step_rad={2 * np.pi / 40!r}", "design.population=20",
             "design.generations=10", "design.n_max=6", "run.workers=0",

@@ -15,11 +15,11 @@ import numpy as np
 import pytest
 from scipy.special import lpmv
 
-from ideas_hpc.core import gravity as gk
-from ideas_hpc.datapath import have_data_file
+from ideas_hpc.core.dynamics import gravity as gk
+from ideas_hpc.body.datapath import have_data_file
 from ideas_hpc.errors import InputError
-from ideas_hpc.gravity_field import load_sh_field, sh_from_degree2
-from ideas_hpc.params import get_params
+from ideas_hpc.body.gravity_field import load_sh_field, sh_from_degree2
+from ideas_hpc.body.params import get_params
 
 EROS = get_params("eros")
 R_REF = 16.0e3

@@ -7,7 +7,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from ideas_hpc.core import mrp
+from ideas_hpc.core.attitude import mrp
 
 comp = st.floats(-3.0, 3.0, allow_nan=False)
 vec = st.tuples(comp, comp, comp).map(lambda t: np.array(t, dtype=np.float64))

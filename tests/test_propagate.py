@@ -14,12 +14,12 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from ideas_hpc.bodies import load_body
+from ideas_hpc.body.bodies import load_body
 from ideas_hpc.constants import AU, MU_SUN, P_SUN_1AU
-from ideas_hpc.core import propagate as P
-from ideas_hpc.core.forces import K_SRP
-from ideas_hpc.core.ephemeris import body_position_N
-from ideas_hpc.trajectory import BOX_AREA, ForceModel, pack_force_model, sun_direction_T
+from ideas_hpc.core.dynamics import propagate as P
+from ideas_hpc.core.dynamics.forces import K_SRP
+from ideas_hpc.core.dynamics.ephemeris import body_position_N
+from ideas_hpc.dynamics.trajectory import BOX_AREA, ForceModel, pack_force_model, sun_direction_T
 
 BODY = load_body("eros-ellipsoid", resolution=1)
 PAR = BODY.params
@@ -176,7 +176,7 @@ def test_fast_ephemeris_matches_reference_path():
     """The propagator's precomputed Sun direction equals the element-by-element one."""
     import dataclasses
 
-    from ideas_hpc.core.ephemeris import ephemeris_precompute, sun_T, sun_T_fast
+    from ideas_hpc.core.dynamics.ephemeris import ephemeris_precompute, sun_T, sun_T_fast
     for par in (PAR, dataclasses.replace(PAR, pole_ra=0.4, pole_dec=1.1, prime_meridian=2.0)):
         el = np.array([par.orbit_a, par.orbit_e, par.orbit_i, par.orbit_raan, par.orbit_argp,
                        par.orbit_nu])

@@ -10,11 +10,11 @@ import math
 import numpy as np
 import pytest
 
-from ideas_hpc.analytic import sphere_mesh
-from ideas_hpc.core import quality as cq
-from ideas_hpc.coverage_options import coverage_options_from_config
+from ideas_hpc.body.analytic import sphere_mesh
+from ideas_hpc.core.mapping import quality as cq
+from ideas_hpc.mapping.options import coverage_options_from_config
 from ideas_hpc.errors import InputError
-from ideas_hpc.mapping import CoverageOptions, compute_coverage
+from ideas_hpc.mapping.coverage import CoverageOptions, compute_coverage
 from test_coverage import look_at
 
 DEG = math.pi / 180.0
@@ -257,7 +257,7 @@ ROOT_CAMPAIGNS = __import__("pathlib").Path(__file__).resolve().parent.parent / 
 
 
 def test_design_campaigns_take_a_requirement_and_refuse_stereo_they_cannot_score():
-    from ideas_hpc.campaign.schema import load
+    from ideas_hpc.config.campaign_tables import load
 
     path = ROOT_CAMPAIGNS / "eros-nadir-ga.toml"
     load(path, ["body.name=\"ellipsoid\"", "coverage.require_lit=true"])   # unions: fine
@@ -282,8 +282,8 @@ def test_design_campaigns_take_a_requirement_and_refuse_stereo_they_cannot_score
 
 def test_arrival_scan_matches_flybys_at_each_epoch():
     from ideas_hpc.campaign.scan import arrival_scan
-    from ideas_hpc.campaign.schema import load
-    from ideas_hpc.flyby import fly, setup_from_campaign
+    from ideas_hpc.config.campaign_tables import load
+    from ideas_hpc.flyby.flight import fly, setup_from_campaign
 
     sets = ["body.name=\"ellipsoid\"", "flyby.tf_s=60", "flyby.z_start_km=-3",
             "flyby.z_stop_km=3", "coverage.mode=\"exact\"", "coverage.require_lit=true",

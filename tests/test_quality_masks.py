@@ -1,4 +1,4 @@
-"""Per-spacecraft quality rows (ideas_hpc.core.quality_masks) against the NumPy
+"""Per-spacecraft quality rows (ideas_hpc.core.mapping.quality_masks) against the NumPy
 brute force of tests/test_quality_eros.py, flown one spacecraft at a time."""
 
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ideas_hpc.mapping import CoverageOptions, quality_per_spacecraft
+from ideas_hpc.mapping.coverage import CoverageOptions, quality_per_spacecraft
 from test_quality_eros import CASES, DEG, eros_views, quality_oracle
 
 
@@ -42,8 +42,8 @@ def test_swarm_stereo_is_own_tracks_plus_pairs_on_every_subset(eros1708, case):
     or one pair of members does. Checked against the quality pass of every subset."""
     import itertools
 
-    from ideas_hpc.core.stereo_pairs import pair_index
-    from ideas_hpc.mapping import compute_coverage, stereo_pair_table
+    from ideas_hpc.core.mapping.stereo_pairs import pair_index
+    from ideas_hpc.mapping.coverage import compute_coverage, stereo_pair_table
 
     shape = eros1708.shape
     r, C, t, sun = eros_views()

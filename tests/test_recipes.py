@@ -18,13 +18,13 @@ import xarray as xr
 from ideas_hpc.attitude import maneuvers
 from ideas_hpc.campaign import kinds
 from ideas_hpc.campaign.run import run_file
-from ideas_hpc.campaign.schema import load
-from ideas_hpc.core.maneuvers import FOV_MODE
-from ideas_hpc.design import objectives
+from ideas_hpc.config.campaign_tables import load
+from ideas_hpc.core.attitude.maneuvers import FOV_MODE
+from ideas_hpc.design.pareto import objectives
 from ideas_hpc.errors import InputError
 from ideas_hpc.montecarlo import dispersions
-from ideas_hpc.schema import Field
-from ideas_hpc.store_schema import StoreVar
+from ideas_hpc.config.fields import Field
+from ideas_hpc.engine.variables import StoreVar
 
 CAMPAIGNS = Path(__file__).resolve().parent.parent / "campaigns"
 FLYBY = CAMPAIGNS / "eros-flyby.toml"
@@ -147,7 +147,7 @@ def test_recipe_objective(tmp_path, monkeypatch):
 def run_toy(c, out, **_):
     """Toy kind: a flyby of the first spacecraft of ``swarm.angles_rad`` only."""
     from ideas_hpc.campaign import datasets
-    from ideas_hpc.flyby import fly, setup_from_campaign
+    from ideas_hpc.flyby.flight import fly, setup_from_campaign
 
     setup = setup_from_campaign(c)
     res = fly(setup, c.config.swarm.angles_rad[:1])
@@ -169,7 +169,7 @@ def test_recipe_kind(tmp_path, monkeypatch):
 # --- One angle step for every designer (issue 21 item 2)
 
 def test_one_angle_step_key_keeps_each_default_and_the_alias_warns_once(monkeypatch):
-    from ideas_hpc.campaign import design_table
+    from ideas_hpc.config import design_checks as design_table
 
     monkeypatch.setattr(design_table, "_warned", [])
     exact = load(CAMPAIGNS / "eros-design.toml", ['body.name="ellipsoid"']).config.design
@@ -189,7 +189,7 @@ def test_one_angle_step_key_keeps_each_default_and_the_alias_warns_once(monkeypa
 
 def test_designers_name_their_own_parameters():
     from ideas_hpc.errors import config_fields
-    from ideas_hpc.ga import run_fov_ga
+    from ideas_hpc.design.ga.genetic import run_fov_ga
     from ideas_hpc.campaign.design_ga import GA_FIELDS
 
     kw = dict(n_spacecraft=2, p_min=60.0, p_max=30.0, period_step=0.0, population=4,

@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from ideas_hpc.core.reliability import swarm_probabilities
+from ideas_hpc.core.design.reliability import swarm_probabilities
 from ideas_hpc.design.reliability import min_swarm_reliable
 from ideas_hpc.errors import InputError
 from ideas_hpc.design.reliability_stats import (failure_upper_bound, hoeffding_lower_bound,

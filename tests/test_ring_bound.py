@@ -1,4 +1,4 @@
-"""Ring-gap bound (ideas_hpc.core.ring_gaps, ideas_hpc.design.ring_bound) against brute force.
+"""Ring-gap bound (ideas_hpc.core.design.ring_gaps, ideas_hpc.design.ring_bound) against brute force.
 
 The bound must (1) equal its own definition, the least weight of groups lying
 inside one gap over every N-subset, computed by enumeration; (2) never exceed

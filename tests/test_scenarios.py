@@ -7,9 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ideas_hpc.campaign.schema import load
+from ideas_hpc.config.campaign_tables import load
 from ideas_hpc.design.bank import build_bank
-from ideas_hpc.flyby import Perturbation, fly_open_loop, setup_from_campaign
+from ideas_hpc.flyby.flight import Perturbation, fly_open_loop, setup_from_campaign
 from ideas_hpc.montecarlo.scenarios import (build_scenario_bank, draw_world, fly_members,
                                             nominal_start)
 from ideas_hpc.seeds import SCENARIO_STREAM, VALIDATION_STREAM
@@ -161,7 +161,7 @@ def test_closed_loop_rows_include_the_convergence(eros1708):
     eng = row_engine(setup, theta, mc, 13, SCENARIO_STREAM)
     pert = Perturbation(**draw_world(mc, setup, theta, 13, SCENARIO_STREAM, 1))
     r_img, dcm = eng.flight(pert)
-    from ideas_hpc.core.scenario_rows import deviation_start
+    from ideas_hpc.core.mapping.scenario_rows import deviation_start
     r_nom, dcm_nom = eng.nominal()
     i_ok, _ = deviation_start(r_nom, dcm_nom, r_img, dcm, *eng.budget)
     assert np.all(i_ok > 0)                     # converging: outside the budget at first

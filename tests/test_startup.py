@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from ideas_hpc.campaign.schema import load
-from ideas_hpc.flyby import setup_from_campaign
+from ideas_hpc.config.campaign_tables import load
+from ideas_hpc.flyby.flight import setup_from_campaign
 from test_campaign_mc import MC, SHORT
 
 
@@ -34,7 +34,7 @@ def test_job_cluster_rule_and_one_shared_cluster():
 
 
 def test_precompile_helper_warms_the_kernels_the_job_calls(monkeypatch):
-    from ideas_hpc import precompile
+    from ideas_hpc.campaign import precompile
 
     setup = setup_from_campaign(load(MC, SHORT + ['coverage.mode="exact"',
                                                   "coverage.occlusion=true"]))
@@ -50,7 +50,7 @@ def test_precompile_helper_warms_the_kernels_the_job_calls(monkeypatch):
     monkeypatch.setattr(precompile.subprocess, "Popen",
                         lambda cmd, **kw: calls.append(cmd) or _Done())
     h = precompile.start(setup)
-    assert calls and calls[0][1:3] == ["-m", "ideas_hpc.precompile"]
+    assert calls and calls[0][1:3] == ["-m", "ideas_hpc.campaign.precompile"]
     h.close()  # waits for the helper and removes its setup file
     assert not __import__("os").path.exists(calls[0][3])
 

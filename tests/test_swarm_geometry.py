@@ -1,4 +1,4 @@
-"""Swarm spacing (:mod:`ideas_hpc.swarm_geometry`) against a brute-force oracle."""
+"""Swarm spacing (:mod:`ideas_hpc.flyby.swarm_geometry`) against a brute-force oracle."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from ideas_hpc.errors import InputError
-from ideas_hpc.swarm_geometry import check_separation, closest_pair
+from ideas_hpc.flyby.swarm_geometry import check_separation, closest_pair
 
 
 def _brute(theta, d_sep):

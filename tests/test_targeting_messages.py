@@ -1,6 +1,6 @@
 """Targeting failures become one line naming the spacecraft, its miss and the field to change.
 
-The cause is read off the miss history (:func:`ideas_hpc.flyby.targeting_input_error`);
+The cause is read off the miss history (:func:`ideas_hpc.flyby.flight.targeting_input_error`);
 these histories are made up so each branch is checked deterministically (the
 end-to-end cases are in ``tests/bad_inputs/cases.toml``).
 """
@@ -12,8 +12,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from ideas_hpc.flyby import targeting_input_error
-from ideas_hpc.trajectory import TargetingError, TargetingResult
+from ideas_hpc.flyby.flight import targeting_input_error
+from ideas_hpc.dynamics.trajectory import TargetingError, TargetingResult
 
 R_MAX = 17.0e3
 

@@ -11,8 +11,8 @@ from ideas_hpc.design import build_bank
 
 from ideas_hpc.campaign.montecarlo import run_sample
 from ideas_hpc.campaign.run import run_file
-from ideas_hpc.campaign.schema import load
-from ideas_hpc.flyby import setup_from_campaign
+from ideas_hpc.config.campaign_tables import load
+from ideas_hpc.flyby.flight import setup_from_campaign
 from ideas_hpc.montecarlo.verify import verify_swarm
 from test_campaign_mc import MC, ROOT, SHORT
 
@@ -70,7 +70,7 @@ def test_design_store_holds_the_verification(tmp_path):
 
 def _counted_vs_uncounted(c, ks):
     """Fly samples ``ks`` both ways; the counted path is the oracle (full scan)."""
-    from ideas_hpc.flyby import Perturbation
+    from ideas_hpc.flyby.flight import Perturbation
     from ideas_hpc.montecarlo.dispersions import draw_sample
     from ideas_hpc.montecarlo.sample import design_nominal, fly_sample
 

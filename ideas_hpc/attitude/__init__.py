@@ -1,6 +1,6 @@
 """Attitude: spacecraft model, controller gains, maneuvers, initial conditions and
 the batched closed-loop simulation (SPEC section 5). Boundary and orchestration
-only; the physics is in ``ideas_hpc.core.attitude``, ``core.maneuvers``,
+only; the physics is in ``ideas_hpc.core.attitude.rigid_body``, ``core.maneuvers``,
 ``core.control`` and ``core.attitude_batch``.
 
 Modules: :mod:`.spacecraft` (:class:`SpacecraftModel`), :mod:`.gains`
@@ -41,13 +41,13 @@ paper's Eros NP swarm) reach a worst MRP error of 3.9e-4 after 120 s and
 (``tests/test_attitude.py``, slow test).
 """
 
-from ..units import RPM
-from .gains import GAIN_PRESETS, Gains, gains_from_config, validate_gains
-from .maneuvers import (MANEUVERS, P_MIN_DEFAULT, THETA_MAX_DEFAULT, Maneuver,
+from ideas_hpc.units import RPM
+from ideas_hpc.attitude.gains import GAIN_PRESETS, Gains, gains_from_config, validate_gains
+from ideas_hpc.attitude.maneuvers import (MANEUVERS, P_MIN_DEFAULT, THETA_MAX_DEFAULT, Maneuver,
                         campaign_maneuver, get_maneuver)
-from .simulate import (AttitudeResult, draw_initial_conditions, ideal_dcm_BT, initial_conditions,
+from ideas_hpc.attitude.simulate import (AttitudeResult, draw_initial_conditions, ideal_dcm_BT, initial_conditions,
                        simulate_attitude)
-from .spacecraft import (SpacecraftModel, default_spacecraft, spacecraft_from_config,
+from ideas_hpc.attitude.spacecraft import (SpacecraftModel, default_spacecraft, spacecraft_from_config,
                          validate_spacecraft)
 
 __all__ = ["GAIN_PRESETS", "MANEUVERS", "P_MIN_DEFAULT", "RPM", "THETA_MAX_DEFAULT",

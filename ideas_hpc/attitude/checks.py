@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InputError
-from ..schema import number
+from ideas_hpc.errors import InputError
+from ideas_hpc.config.fields import number
 
 
 def pos_float(value, name, *, allow_zero=False):

@@ -11,9 +11,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..errors import InputError
-from ..schema import Field, validate
-from .checks import vec3 as _vec3
+from ideas_hpc.errors import InputError
+from ideas_hpc.config.fields import Field, validate
+from ideas_hpc.attitude.checks import vec3 as _vec3
 
 #: The ``[controller]`` table: a preset and overrides; ranges are checked by
 #: :func:`validate_gains` (vectors: a number or 3 numbers).

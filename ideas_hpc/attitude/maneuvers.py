@@ -1,7 +1,7 @@
 """Registry of attitude maneuvers (SPEC section 5).
 
 A maneuver is a reference attitude the controller tracks. Each entry names
-the compiled kernels' mode code (:mod:`ideas_hpc.core.maneuvers`), the
+the compiled kernels' mode code (:mod:`ideas_hpc.core.attitude.maneuvers`), the
 controller gains preset it uses by default (:data:`~ideas_hpc.attitude.gains.GAIN_PRESETS`)
 and how its parameters are checked and packed for the kernels. The kernels
 take the same two parameters for every maneuver: one period per spacecraft
@@ -30,10 +30,10 @@ from typing import Callable
 
 import numpy as np
 
-from ..core.maneuvers import FOV_MODE, NP_MODE
-from ..errors import InputError
-from ..units import MINUTE
-from .checks import pos_float as _pos_float
+from ideas_hpc.core.attitude.maneuvers import FOV_MODE, NP_MODE
+from ideas_hpc.errors import InputError
+from ideas_hpc.units import MINUTE
+from ideas_hpc.attitude.checks import pos_float as _pos_float
 
 P_MIN_DEFAULT = 0.3 * MINUTE  #: paper: P_min = 0.3 min/sweep, s
 THETA_MAX_DEFAULT = math.radians(1.9138)  #: SPEC section 2 / Table 6, rad
@@ -72,7 +72,7 @@ class Maneuver:
     name : str
         Name used by ``simulate_attitude(mode=...)`` and the ``mode`` attr of results.
     code : int
-        Mode code of its kernels in :mod:`ideas_hpc.core.maneuvers`.
+        Mode code of its kernels in :mod:`ideas_hpc.core.attitude.maneuvers`.
     gains : str
         Default gains preset (key of ``GAIN_PRESETS``).
     params : callable
@@ -91,7 +91,7 @@ class Maneuver:
     tracks_body : bool
         The camera follows the body centre along the flown positions (no
         reference kernel, ``code`` -1): encounter geometry and ideal attitude
-        only (:func:`ideas_hpc.encounter.track_dcms`).
+        only (:func:`ideas_hpc.flyby.encounter.track_dcms`).
     figures : tuple of (str, int)
         The paper's figure numbers of its report figures (``"pyramids"``: camera
         pyramids, ``"attitude"``: first of the four attitude series); others are

@@ -9,16 +9,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.attitude_batch import simulate_batch
-from ..core.frames import dcm_RT as _dcm_RT
-from ..core.maneuvers import reference_dcm_BT
-from ..errors import InputError
-from ..seeds import sample_rng
-from ..units import RPM
-from .checks import check_theta, init_array, pos_float, steps
-from .gains import gains_from_config
-from .maneuvers import P_MIN_DEFAULT, maneuver_args
-from .spacecraft import default_spacecraft, validate_spacecraft
+from ideas_hpc.core.attitude.batch import simulate_batch
+from ideas_hpc.core.dynamics.frames import dcm_RT as _dcm_RT
+from ideas_hpc.core.attitude.maneuvers import reference_dcm_BT
+from ideas_hpc.errors import InputError
+from ideas_hpc.seeds import sample_rng
+from ideas_hpc.units import RPM
+from ideas_hpc.attitude.checks import check_theta, init_array, pos_float, steps
+from ideas_hpc.attitude.gains import gains_from_config
+from ideas_hpc.attitude.maneuvers import P_MIN_DEFAULT, maneuver_args
+from ideas_hpc.attitude.spacecraft import default_spacecraft, validate_spacecraft
 
 
 def initial_conditions(seed: int, sample: int, n_spacecraft: int):

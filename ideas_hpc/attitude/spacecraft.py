@@ -6,9 +6,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError
-from ..schema import Field, validate
-from .checks import pos_float as _pos_float
+from ideas_hpc.errors import InputError
+from ideas_hpc.config.fields import Field, validate
+from ideas_hpc.attitude.checks import pos_float as _pos_float
 
 def _opt(kind: str, doc: str, **kw) -> Field:
     # None: not given, the SpacecraftModel default applies (defaults live there only)

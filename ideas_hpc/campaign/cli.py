@@ -5,7 +5,7 @@ from __future__ import annotations
 
 
 def _cmd_run(args) -> int:
-    from .run import run_file
+    from ideas_hpc.campaign.run import run_file
 
     run_file(args.campaign, out=args.out, overrides=args.set, workers=args.workers,
              scheduler=args.scheduler, resume=args.resume, cluster=args.cluster,
@@ -14,7 +14,7 @@ def _cmd_run(args) -> int:
 
 
 def _cmd_report(args) -> int:
-    from .report import write_report
+    from ideas_hpc.campaign.report import write_report
 
     out = write_report(args.store, args.out, html=args.html)
     print(out.read_text() if out.suffix == ".txt" else out)
@@ -24,14 +24,14 @@ def _cmd_report(args) -> int:
 
 
 def _cmd_scan(args) -> int:
-    from .scan import scan_file
+    from ideas_hpc.campaign.scan import scan_file
 
     scan_file(args.campaign, args.set, n=args.n, span_h=args.span_h, out=args.out)
     return 0
 
 
 def _cmd_scan_encounter(args) -> int:
-    from .scan_encounter import scan_encounter_file
+    from ideas_hpc.campaign.scan_encounter import scan_encounter_file
 
     scan_encounter_file(args.campaign, args.set, decs_deg=args.dec_deg,
                         phases_deg=args.phase_deg, step_deg=args.step_deg, out=args.out,
@@ -43,7 +43,7 @@ def add_commands(sub) -> None:
     import argparse
     import textwrap
 
-    from .kinds import KINDS
+    from ideas_hpc.campaign.kinds import KINDS
 
     kinds = "\n".join(textwrap.fill(f"{k.name:<14} {k.doc}", 78, initial_indent="  ",
                                      subsequent_indent=" " * 17) for k in KINDS.values())

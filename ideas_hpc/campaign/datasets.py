@@ -1,14 +1,14 @@
 """xarray datasets of campaign results; names, dims and units come from
-:mod:`ideas_hpc.store_schema` (SPEC section 9)."""
+:mod:`ideas_hpc.engine.variables` (SPEC section 9)."""
 
 from __future__ import annotations
 
 import numpy as np
 import xarray as xr
 
-from ..encounter import encounter_attrs
-from ..mapping import QUALITY_VARS, quality_arrays  # noqa: F401  (store layout)
-from ..store_schema import with_attrs  # noqa: F401  (used by the kinds)
+from ideas_hpc.flyby.encounter import encounter_attrs
+from ideas_hpc.mapping.coverage import QUALITY_VARS, quality_arrays  # noqa: F401  (store layout)
+from ideas_hpc.engine.variables import with_attrs  # noqa: F401  (used by the kinds)
 
 AXES = ["x", "y", "z"]
 WHEELS = ["1", "2", "3"]
@@ -28,7 +28,7 @@ def snapshot_indices(n_images: int, n: int = N_SNAPSHOTS) -> np.ndarray:
 
 
 def flyby_dataset(setup, out) -> xr.Dataset:
-    """One flyby (:class:`~ideas_hpc.flyby.FlybyOutcome`) as a dataset without ``sample``."""
+    """One flyby (:class:`~ideas_hpc.flyby.flight.FlybyOutcome`) as a dataset without ``sample``."""
     dec = setup.decimate
     tg = out.targeting
     pos = tg.position_T[:, ::dec]
@@ -91,8 +91,8 @@ def base_attrs(c, setup) -> dict:
     """Global attrs of every campaign store besides the engine's provenance (resolved
     config and hash, code version, seed, creation time): kind, execution settings
     (not hashed), the campaign file and the setup's sizing."""
-    from ..engine.store import config_json
-    from .schema import EXECUTION_KNOBS
+    from ideas_hpc.engine.store import config_json
+    from ideas_hpc.config.campaign_tables import EXECUTION_KNOBS
 
     knobs = {k: getattr(getattr(c.config, k.split(".")[0]), k.split(".")[1])
              for k in EXECUTION_KNOBS}

@@ -21,20 +21,20 @@ from dataclasses import dataclass, field
 import numpy as np
 import xarray as xr
 
-from ..design.bank import grid_size, separation_steps
-from ..design import build_bank, coverage_curve, failure_tolerant, min_swarm, worst_failure
-from ..design.stereo import min_swarm_stereo, stereo_curve
-from ..design.stereo import scorer as stereo_scorer
-from ..engine.job_cluster import JobCluster, phase_client, visibility_tests
-from ..errors import InputError
-from ..candidates import candidate_masks
-from ..flyby import fly, setup_from_campaign, target
-from .. import precompile
-from ..montecarlo.verify import verify_swarm
-from . import datasets
-from .kinds import KINDS
-from .vocabulary import requirement_line, verification_verdict
-from .schema_design import verify_samples
+from ideas_hpc.design.bank import grid_size, separation_steps
+from ideas_hpc.design import build_bank, coverage_curve, failure_tolerant, min_swarm, worst_failure
+from ideas_hpc.design.stereo import min_swarm_stereo, stereo_curve
+from ideas_hpc.design.stereo import scorer as stereo_scorer
+from ideas_hpc.engine.job_cluster import JobCluster, phase_client, visibility_tests
+from ideas_hpc.errors import InputError
+from ideas_hpc.design.candidates import candidate_masks
+from ideas_hpc.flyby.flight import fly, setup_from_campaign, target
+from ideas_hpc.campaign import precompile
+from ideas_hpc.montecarlo.verify import verify_swarm
+from ideas_hpc.campaign import datasets
+from ideas_hpc.campaign.kinds import KINDS
+from ideas_hpc.campaign.vocabulary import requirement_line, verification_verdict
+from ideas_hpc.config.design_table import verify_samples
 
 
 def _log(msg: str) -> None:

@@ -18,19 +18,19 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from ..candidates import candidate_masks
-from ..design.bank import grid_size
-from ..engine.job_cluster import JobCluster, visibility_tests
-from ..errors import InputError, config_fields
-from ..flyby import fly
-from ..ga_local import GridCover
-from ..swarm_eval import MaskBank, fov_keys, nadir_keys, snap_angle
-from ..progress import bar as progress_bar
-from ..swarm_geometry import min_separation_angle
-from . import datasets
-from .design_exact import checked_setup, ga_gap
-from .schema import Campaign
-from .vocabulary import requirement_line
+from ideas_hpc.design.candidates import candidate_masks
+from ideas_hpc.design.bank import grid_size
+from ideas_hpc.engine.job_cluster import JobCluster, visibility_tests
+from ideas_hpc.errors import InputError, config_fields
+from ideas_hpc.flyby.flight import fly
+from ideas_hpc.design.ga.local_search import GridCover
+from ideas_hpc.design.ga.swarm_eval import MaskBank, fov_keys, nadir_keys, snap_angle
+from ideas_hpc.progress import bar as progress_bar
+from ideas_hpc.flyby.swarm_geometry import min_separation_angle
+from ideas_hpc.campaign import datasets
+from ideas_hpc.campaign.design_exact import checked_setup, ga_gap
+from ideas_hpc.config.campaign_tables import Campaign
+from ideas_hpc.campaign.vocabulary import requirement_line
 
 
 #: The GA's parameter names -> the campaign file's keys.
@@ -74,9 +74,9 @@ def _fill_grid(bank: MaskBank, setup, step: float) -> tuple[float, np.ndarray]:
 def _stereo_ga(c: Campaign, setup, client):
     """The NP GA scoring stereo from two spacecraft with the pair model
     (:class:`~ideas_hpc.design.stereo.StereoBank` on the GA's own angle grid)."""
-    from ..design import build_bank
-    from ..design.stereo import min_swarm_stereo, scorer
-    from ..ga import run_nadir_ga
+    from ideas_hpc.design import build_bank
+    from ideas_hpc.design.stereo import min_swarm_stereo, scorer
+    from ideas_hpc.design.ga.genetic import run_nadir_ga
 
     d = c.config.design
     step = d.angle_step_rad
@@ -125,7 +125,7 @@ def _stereo_ga(c: Campaign, setup, client):
 
 def design_nadir(c: Campaign, setup, client):
     """NP swarm-size GA (SPEC section 7). Returns (GAResult, bank)."""
-    from ..ga import run_nadir_ga
+    from ideas_hpc.design.ga.genetic import run_nadir_ga
 
     if setup.coverage.require_stereo:
         return _stereo_ga(c, setup, client)
@@ -194,7 +194,7 @@ def _fov_swarm(c: Campaign) -> np.ndarray:
 
 def design_fov(c: Campaign, setup, client):
     """FoV sweep-period GA (SPEC section 7). Returns (GAResult, angles, periods)."""
-    from ..ga import run_fov_ga
+    from ideas_hpc.design.ga.genetic import run_fov_ga
 
     d = c.config.design
     theta = _fov_swarm(c)

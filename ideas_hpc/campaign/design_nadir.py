@@ -15,8 +15,8 @@ import functools
 import numpy as np
 import xarray as xr
 
-from .design_exact import checked_setup, run_exact
-from .design_reliability import design_reliable, scenario_store_path
+from ideas_hpc.campaign.design_exact import checked_setup, run_exact
+from ideas_hpc.campaign.design_reliability import design_reliable, scenario_store_path
 
 
 def run_design_exact(c, out, *, workers=None, scheduler=None, cluster="local",

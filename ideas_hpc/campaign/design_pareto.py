@@ -2,7 +2,7 @@
 
 Orchestration only: the candidate bank (:func:`~ideas_hpc.design.build_bank`,
 the masks of every grid angle), NSGA-II over it
-(:func:`~ideas_hpc.design.pareto.run_pareto`, objectives from
+(:func:`~ideas_hpc.design.pareto.nsga2.run_pareto`, objectives from
 ``design.objectives``), and the store variables with dim ``pareto`` (one row
 per non-dominated swarm, ordered by the objectives in the order given):
 
@@ -35,16 +35,16 @@ import time
 import numpy as np
 import xarray as xr
 
-from ..design.stereo import check_grid
-from ..design import build_bank, coverage_curve
-from ..design.bank import grid_size, separation_steps
-from ..design.objectives import OBJECTIVES, bank_needs, check_objectives, evaluate
-from ..design.pareto import run_pareto
-from ..engine.job_cluster import JobCluster, visibility_tests
-from ..errors import InputError
-from ..flyby import setup_from_campaign, target
-from . import datasets
-from .design_table import STEP_KEY
+from ideas_hpc.design.stereo import check_grid
+from ideas_hpc.design import build_bank, coverage_curve
+from ideas_hpc.design.bank import grid_size, separation_steps
+from ideas_hpc.design.pareto.objectives import OBJECTIVES, bank_needs, check_objectives, evaluate
+from ideas_hpc.design.pareto.nsga2 import run_pareto
+from ideas_hpc.engine.job_cluster import JobCluster, visibility_tests
+from ideas_hpc.errors import InputError
+from ideas_hpc.flyby.flight import setup_from_campaign, target
+from ideas_hpc.campaign import datasets
+from ideas_hpc.config.design_checks import STEP_KEY
 
 #: A front point matches the exact curve when their coverages differ by at most this.
 MATCH_TOL = 1e-12
@@ -55,7 +55,7 @@ def _log(msg: str) -> None:
 
 
 def _progress(total: int):
-    from ..progress import bar as progress_bar
+    from ideas_hpc.progress import bar as progress_bar
 
     bar = progress_bar(total, "NSGA-II", unit="gen")
 

@@ -33,19 +33,19 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.reliability import swarm_probabilities
-from ..design import failure_tolerant
-from ..design.bank import grid_size, separation_steps
-from ..design.reliability import ReliabilityDesigner, min_swarm_reliable
-from ..design.reliability_stats import lower_confidence_bound
-from ..errors import InputError
-from .. import progress
-from ..engine.job_cluster import phase_client
-from ..montecarlo.scenarios import build_scenario_bank, fly_members
-from ..seeds import VALIDATION_STREAM, stream_rng
-from .design_exact import design_exact
-from .reliability_vars import reliability_dataset
-from .schema_design import verify_samples
+from ideas_hpc.core.design.reliability import swarm_probabilities
+from ideas_hpc.design import failure_tolerant
+from ideas_hpc.design.bank import grid_size, separation_steps
+from ideas_hpc.design.reliability import ReliabilityDesigner, min_swarm_reliable
+from ideas_hpc.design.reliability_stats import lower_confidence_bound
+from ideas_hpc.errors import InputError
+from ideas_hpc import progress
+from ideas_hpc.engine.job_cluster import phase_client
+from ideas_hpc.montecarlo.scenarios import build_scenario_bank, fly_members
+from ideas_hpc.seeds import VALIDATION_STREAM, stream_rng
+from ideas_hpc.campaign.design_exact import design_exact
+from ideas_hpc.campaign.reliability_vars import reliability_dataset
+from ideas_hpc.config.design_table import verify_samples
 
 #: Purpose word of the validation's sampled failures (the histogram only; the
 #: probabilities enumerate failures exactly): ``(VALIDATION_STREAM, m, 3)``.

@@ -8,10 +8,10 @@ from pathlib import Path
 
 import xarray as xr
 
-from ..encounter import pointing_profile
-from ..flyby import fly, setup_from_campaign
-from . import datasets
-from .schema import Campaign
+from ideas_hpc.flyby.encounter import pointing_profile
+from ideas_hpc.flyby.flight import fly, setup_from_campaign
+from ideas_hpc.campaign import datasets
+from ideas_hpc.config.campaign_tables import Campaign
 
 
 def _log(msg: str) -> None:

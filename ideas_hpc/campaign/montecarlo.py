@@ -24,14 +24,14 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from ..engine.job_cluster import JobCluster, visibility_tests
-from ..engine.runner import run_campaign
-from ..flyby import FlybySetup, Perturbation, setup_from_campaign
-from ..montecarlo.dispersions import dispersion_order, dispersion_vars, draw_sample
-from ..montecarlo.sample import Nominal, design_nominal, fly_sample
-from ..store_schema import ATTITUDE_SERIES, PER_SAMPLE, QUALITY, VARS
-from . import datasets
-from .schema import Campaign, resolved_config
+from ideas_hpc.engine.job_cluster import JobCluster, visibility_tests
+from ideas_hpc.engine.runner import run_campaign
+from ideas_hpc.flyby.flight import FlybySetup, Perturbation, setup_from_campaign
+from ideas_hpc.montecarlo.dispersions import dispersion_order, dispersion_vars, draw_sample
+from ideas_hpc.montecarlo.sample import Nominal, design_nominal, fly_sample
+from ideas_hpc.engine.variables import ATTITUDE_SERIES, PER_SAMPLE, QUALITY, VARS
+from ideas_hpc.campaign import datasets
+from ideas_hpc.config.campaign_tables import Campaign, resolved_config
 
 
 def mc_chunk(chunk_id: int, start: int, stop: int, *, setup: FlybySetup, nominal: Nominal,

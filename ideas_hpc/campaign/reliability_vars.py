@@ -26,8 +26,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from ..seeds import SCENARIO_STREAM, VALIDATION_STREAM
-from .design_exact import ExactDesign
+from ideas_hpc.seeds import SCENARIO_STREAM, VALIDATION_STREAM
+from ideas_hpc.campaign.design_exact import ExactDesign
 
 BOUND_METHOD = "Waudby-Smith & Ramdas betting (predictable plug-in), one-sided"
 

@@ -9,17 +9,17 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from ..attitude.maneuvers import store_figure
-from ..errors import InputError
-from ..plots import figures
-from ..units import DEG, KM
-from .report_reliability import reliability_figures, reliability_lines
-from .vocabulary import requirement_line, verification_verdict
+from ideas_hpc.attitude.maneuvers import store_figure
+from ideas_hpc.errors import InputError
+from ideas_hpc.plots import figures
+from ideas_hpc.units import DEG, KM
+from ideas_hpc.campaign.report_reliability import reliability_figures, reliability_lines
+from ideas_hpc.campaign.vocabulary import requirement_line, verification_verdict
 
 
 
 def _shape(ds):
-    from ..shape import build_shape
+    from ideas_hpc.body.shape import build_shape
 
     return build_shape(ds["vertex_position"].values, ds["face_vertices"].values.astype(np.int64),
                        name=str(ds.attrs.get("shape_model", "body")), source="store")
@@ -173,7 +173,7 @@ def _pareto_lines(ds) -> list[str]:
 
 
 def _design_figures(ds, out: Path) -> list[Path]:
-    from ..plots import design
+    from ideas_hpc.plots import design
 
     figs = []
     if "design_method" in ds and "swarm_angle" in ds and "d_sep_m" in ds.attrs:
@@ -191,8 +191,8 @@ def _design_figures(ds, out: Path) -> list[Path]:
 def _quality_maps(ds, shape, out):
     """Maps of the quality variables (issue 14) and area histograms. Monte Carlo:
     the per-vertex probability of the booleans and the median of the others."""
-    from ..plots import figures
-    from ..plots.coverage_map import render_coverage_map
+    from ideas_hpc.plots import figures
+    from ideas_hpc.plots.coverage_map import render_coverage_map
 
     mc = ds["best_resolution"].ndim == 2
     deg = 180.0 / np.pi
@@ -288,7 +288,7 @@ def write_report(store, out=None, *, html: bool = False) -> Path:
                                          vertices=shape.vertices_T, faces=shape.faces,
                                          body=shape.name))
     if "observed" in ds and shape is not None:
-        from ..plots.coverage_map import render_coverage_map
+        from ideas_hpc.plots.coverage_map import render_coverage_map
 
         obs = ds["observed"].values
         fs = ds["first_seen"].values
@@ -317,7 +317,7 @@ def write_report(store, out=None, *, html: bool = False) -> Path:
     summary = out / "summary.txt"
     summary.write_text(_summary(ds, figs))
     if html:
-        from .report_html import write_html
+        from ideas_hpc.campaign.report_html import write_html
 
         write_html(ds, summary.read_text(), out / "report.html")
     return summary

@@ -93,7 +93,7 @@ def body_figure(ds):
 
 
 def _title(ds, text: str) -> str:
-    from ..plots.figures import body_name
+    from ideas_hpc.plots.figures import body_name
 
     return f"{text} ({body_name(ds)})"
 
@@ -213,7 +213,7 @@ def write_html(ds, summary: str, path) -> Path:
     for k, fig in enumerate(figures_of(ds)):
         parts.append(fig.to_html(full_html=False, include_plotlyjs=k == 0,
                                  div_id=f"figure-{k}", config={"displaylogo": False}))
-    from ..plots.figures import body_name
+    from ideas_hpc.plots.figures import body_name
 
     page = (f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
             f"<title>ideas_hpc report: {html.escape(body_name(ds))}</title>"

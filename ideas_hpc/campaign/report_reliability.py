@@ -41,7 +41,7 @@ def reliability_lines(ds) -> list[str]:
 
 
 def reliability_figures(ds, out: Path) -> list[Path]:
-    from ..plots import reliability
+    from ideas_hpc.plots import reliability
 
     if "reliability_vs_n" not in ds:
         return []

@@ -15,12 +15,12 @@ import sys
 import tempfile
 from pathlib import Path
 
-from ..engine.lock import StoreLock
-from ..engine.single import check_existing, write_complete
-from ..errors import InputError
-from ..progress import enabled as progress_enabled
-from .kinds import KINDS
-from .schema import SCHEMA, Campaign, load, resolved_config
+from ideas_hpc.engine.lock import StoreLock
+from ideas_hpc.engine.single import check_existing, write_complete
+from ideas_hpc.errors import InputError
+from ideas_hpc.progress import enabled as progress_enabled
+from ideas_hpc.campaign.kinds import KINDS
+from ideas_hpc.config.campaign_tables import SCHEMA, Campaign, load, resolved_config
 
 
 def _log(msg: str) -> None:

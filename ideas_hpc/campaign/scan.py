@@ -3,7 +3,7 @@
 The swarm is targeted and its attitude computed once (the trajectory in the
 body frame T does not depend on where the Sun is); the quality pass then runs
 for each arrival epoch ``e`` with the Sun of the ephemeris at ``e + t``
-(:meth:`ideas_hpc.flyby.FlybySetup.sun_T`). Over one rotation period this
+(:meth:`ideas_hpc.flyby.flight.FlybySetup.sun_T`). Over one rotation period this
 scans the body's rotation phase relative to the Sun, i.e. which side is lit
 while the swarm passes.
 
@@ -18,8 +18,8 @@ from dataclasses import replace
 import numpy as np
 import xarray as xr
 
-from ..flyby import fly, setup_from_campaign
-from ..mapping import compute_coverage
+from ideas_hpc.flyby.flight import fly, setup_from_campaign
+from ideas_hpc.mapping.coverage import compute_coverage
 
 SCAN_ATTRS = {
     "coverage": {"units": "1", "long_name": "area fraction meeting the [coverage] requirement "
@@ -37,7 +37,7 @@ def arrival_scan(setup, theta, periods=None, epochs=None) -> xr.Dataset:
 
     Parameters
     ----------
-    setup : ideas_hpc.flyby.FlybySetup
+    setup : ideas_hpc.flyby.flight.FlybySetup
     theta : (N,) rad
         Swarm angles.
     periods : (N,) s, optional
@@ -86,8 +86,8 @@ def scan_file(path, overrides=None, *, n: int = 24, span_h: float | None = None,
               out=None) -> xr.Dataset:
     """Scan ``n`` arrival epochs over ``span_h`` hours (default: one rotation period)
     from the campaign's ``flyby.epoch_s``; print a table, optionally write ``out``."""
-    from ..errors import InputError
-    from .schema import load
+    from ideas_hpc.errors import InputError
+    from ideas_hpc.config.campaign_tables import load
 
     c = load(path, overrides or [])
     if c.kind not in ("flyby", "monte-carlo"):

@@ -3,7 +3,7 @@
 For each ``(dec, phase)`` of a grid, the campaign's encounter (speed, window,
 epoch, ``d_sep``, ``[coverage]`` requirement) is flown with that approach:
 ``v_inf`` at declination ``dec`` from the pole and right ascension set by the
-phase angle (:func:`ideas_hpc.encounter.approach_angles`). Two numbers per
+phase angle (:func:`ideas_hpc.flyby.encounter.approach_angles`). Two numbers per
 point: ``ring_coverage``, what the whole ring can map (the union of candidate
 spacecraft every ``--step-deg`` of swarm angle: what any swarm on that ring
 reaches at that grid step), and ``swarm_coverage``, what the campaign's own
@@ -22,11 +22,11 @@ from dataclasses import replace
 import numpy as np
 import xarray as xr
 
-from ..candidates import candidate_masks
-from ..encounter import Encounter, approach_angles
-from ..errors import InputError
-from ..flyby import fly, setup_from_campaign
-from ..units import DEG
+from ideas_hpc.design.candidates import candidate_masks
+from ideas_hpc.flyby.encounter import Encounter, approach_angles
+from ideas_hpc.errors import InputError
+from ideas_hpc.flyby.flight import fly, setup_from_campaign
+from ideas_hpc.units import DEG
 
 SCAN_ATTRS = {
     "ring_coverage": {"units": "1", "long_name": "area fraction the ring's candidates map "
@@ -54,7 +54,7 @@ def encounter_scan(setup, fb, decs_rad, phases_rad, *, step_rad: float = 10 * DE
                    theta=None, eps: float = 1e-3) -> xr.Dataset:
     """Coverage on a grid of approach declinations and phase angles (rad).
 
-    ``setup`` is an encounter :class:`~ideas_hpc.flyby.FlybySetup`, ``fb`` its
+    ``setup`` is an encounter :class:`~ideas_hpc.flyby.flight.FlybySetup`, ``fb`` its
     validated ``[flyby]`` table (speed and window are kept).
     """
     if setup.encounter is None:
@@ -97,7 +97,7 @@ def encounter_scan(setup, fb, decs_rad, phases_rad, *, step_rad: float = 10 * DE
 def scan_encounter_file(path, overrides=None, *, decs_deg=None, phases_deg=None,
                         step_deg: float = 10.0, out=None, plot=None) -> xr.Dataset:
     """Scan a campaign's encounter over ``decs_deg`` x ``phases_deg``; print a table."""
-    from .schema import load
+    from ideas_hpc.config.campaign_tables import load
 
     c = load(path, overrides or [])
     setup = setup_from_campaign(c)
@@ -125,7 +125,7 @@ def scan_encounter_file(path, overrides=None, *, decs_deg=None, phases_deg=None,
     if out is not None:
         ds.to_netcdf(out)
     if plot is not None:
-        from ..plots.encounter import scan_map
+        from ideas_hpc.plots.encounter import scan_map
 
         print(f"figure: {scan_map(ds, plot)}")
     return ds

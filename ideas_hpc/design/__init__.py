@@ -7,10 +7,10 @@ the best coverage for each swarm size (:mod:`.coverage_vs_n`) and the fewest
 spacecraft that survive any ``k`` failures (:mod:`.failures`).
 """
 
-from .bank import CandidateBank, build_bank, separation_steps
-from .coverage_vs_n import CoverageCurve, coverage_curve
-from .exact import ExactResult, max_coverage, min_swarm
-from .failures import failure_tolerant, worst_failure
+from ideas_hpc.design.bank import CandidateBank, build_bank, separation_steps
+from ideas_hpc.design.coverage_vs_n import CoverageCurve, coverage_curve
+from ideas_hpc.design.exact import ExactResult, max_coverage, min_swarm
+from ideas_hpc.design.failures import failure_tolerant, worst_failure
 
 __all__ = ["CandidateBank", "build_bank", "separation_steps", "ExactResult", "min_swarm",
            "max_coverage", "CoverageCurve", "coverage_curve", "failure_tolerant",

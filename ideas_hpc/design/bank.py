@@ -4,8 +4,8 @@ The ring (or helix) is discretised into ``K = round(360 / angle_step_deg)``
 swarm angles ``theta_k = k * step``. Spacecraft do not interact, so a swarm's
 observed set is the union of its members' masks (paper eq. 26) and the masks
 are computed once per candidate with the same code the GA uses
-(:func:`ideas_hpc.candidates.candidate_masks` through
-:class:`ideas_hpc.swarm_eval.MaskBank`, keys ``(theta_k, 0, k)``).
+(:func:`ideas_hpc.design.candidates.candidate_masks` through
+:class:`ideas_hpc.design.ga.swarm_eval.MaskBank`, keys ``(theta_k, 0, k)``).
 
 Before any integer programme, :func:`reduce_problem` drops vertices no
 candidate sees (no swarm can change them) and merges vertices seen by exactly
@@ -22,10 +22,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.union import population_coverage
-from ..errors import InputError
-from ..progress import map_chunks
-from ..swarm_geometry import min_separation_angle
+from ideas_hpc.core.design.union import population_coverage
+from ideas_hpc.errors import InputError
+from ideas_hpc.progress import map_chunks
+from ideas_hpc.flyby.swarm_geometry import min_separation_angle
 
 TWO_PI = 2.0 * math.pi
 
@@ -49,13 +49,13 @@ class CandidateBank:
     usable, stereo : (K, V) bool, optional
         With a ``[coverage]`` requirement and ``build_bank(quality=True)``: a
         usable observation, a stereo pair from the candidate's own track
-        (:mod:`ideas_hpc.core.quality_masks`); ``masks`` is then what the
+        (:mod:`ideas_hpc.core.mapping.quality_masks`); ``masks`` is then what the
         candidate maps alone.
     resolution : (K, V) float64, optional
         Best effective ground sample per candidate, m (inf: unobserved).
     pairs : (K (K - 1) / 2, V) bool, optional
         Candidate pairs that map a vertex in stereo (two spacecraft,
-        :mod:`ideas_hpc.core.stereo_pairs`), when a design asks for it.
+        :mod:`ideas_hpc.core.mapping.stereo_pairs`), when a design asks for it.
     """
 
     theta: np.ndarray
@@ -105,15 +105,15 @@ def build_bank(setup, step: float, *, client=None, chunk_size: int = 32,
 
     ``snap`` makes the step divide the circle (``2 pi / round(2 pi / step)``);
     without it the GA's own keys ``(k step, 0, k)`` are used. ``mask_bank`` (a
-    :class:`~ideas_hpc.swarm_eval.MaskBank`) is reused when given, so a GA run
+    :class:`~ideas_hpc.design.ga.swarm_eval.MaskBank`) is reused when given, so a GA run
     and its exact reference share the computed masks. ``quality`` also fills
     ``usable``, ``stereo`` and ``resolution`` (one quality pass per candidate
-    chunk, :func:`ideas_hpc.candidates.candidate_quality`); ``pairs`` (implies
+    chunk, :func:`ideas_hpc.design.candidates.candidate_quality`); ``pairs`` (implies
     ``quality``) also the stereo table of candidate pairs, from one pass over all
     candidates (a pair spans chunks).
     """
-    from ..candidates import candidate_masks, candidate_quality
-    from ..swarm_eval import MaskBank
+    from ideas_hpc.design.candidates import candidate_masks, candidate_quality
+    from ideas_hpc.design.ga.swarm_eval import MaskBank
 
     n = grid_size(step)
     step = TWO_PI / n if snap else float(step)
@@ -144,7 +144,7 @@ def separation_steps(step: float, d_sep: float, min_separation: float, n: int) -
     """Largest grid distance ``m`` whose chord ``2 d_sep sin(m step / 2)`` is below ``min_separation``.
 
     The distance is the straight line between the two tracks, as
-    :func:`ideas_hpc.swarm_geometry.check_separation` measures it, so a design
+    :func:`ideas_hpc.flyby.swarm_geometry.check_separation` measures it, so a design
     the solver accepts passes the campaign's check when it is flown. Two
     candidates ``i, j`` conflict when their circular grid distance is
     ``1 .. m``. Raises when no two grid points are far enough apart.

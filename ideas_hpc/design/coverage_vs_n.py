@@ -30,10 +30,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..progress import steps
-from .bank import CandidateBank
-from .exact import greedy_swarm, max_coverage, prepare
-from .ring_bound import ring_bound, swap_search
+from ideas_hpc.progress import steps
+from ideas_hpc.design.bank import CandidateBank
+from ideas_hpc.design.exact import greedy_swarm, max_coverage, prepare
+from ideas_hpc.design.ring_bound import ring_bound, swap_search
 
 REACH_TOL = 1e-12
 

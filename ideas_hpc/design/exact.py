@@ -46,9 +46,9 @@ import numpy as np
 from scipy import sparse
 from scipy.optimize import Bounds, LinearConstraint, milp
 
-from ..errors import InputError
-from .bank import CandidateBank, Reduced, conflict_windows, reduce_problem, separation_steps
-from .ring_bound import redundancy_polish, ring_bound, swap_search
+from ideas_hpc.errors import InputError
+from ideas_hpc.design.bank import CandidateBank, Reduced, conflict_windows, reduce_problem, separation_steps
+from ideas_hpc.design.ring_bound import redundancy_polish, ring_bound, swap_search
 
 #: Coverage tolerance of the solver's constraints (fractions); the true union
 #: coverage of every returned swarm is recomputed from the masks.

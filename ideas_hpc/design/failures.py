@@ -38,9 +38,9 @@ import numpy as np
 from scipy import sparse
 from scipy.optimize import LinearConstraint
 
-from ..errors import InputError
-from .bank import CandidateBank
-from .exact import (FEAS_TOL, ExactResult, _separation_rows, check_time_limit, heavy_groups,
+from ideas_hpc.errors import InputError
+from ideas_hpc.design.bank import CandidateBank
+from ideas_hpc.design.exact import (FEAS_TOL, ExactResult, _separation_rows, check_time_limit, heavy_groups,
                     min_swarm, prepare, solve)
 
 #: Grid shifts of each violated failure set added with it (valid rows, fewer rounds).

@@ -3,7 +3,7 @@
 On a scenario bank (``rows[s, c, v]``: vertex v seen or mapped by grid
 candidate c in scenario s, S draws of the continuous dispersions), the
 probability of a swarm is the scenario mean of its exact failure-weighted
-success probability (:mod:`ideas_hpc.core.reliability`: independent
+success probability (:mod:`ideas_hpc.core.design.reliability`: independent
 Bernoulli(p_f) failures are enumerated, not sampled)::
 
     P_bank(swarm) = (1/S) sum_s sum_{T subset swarm} (1-p_f)^|T| p_f^(N-|T|) 1[cov_s(T) >= need]
@@ -41,12 +41,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..core.reliability import swarm_coverages, swarm_probabilities
-from ..errors import InputError
-from .bank import CandidateBank, reduce_problem
-from .reliability_stats import failure_upper_bound
-from .ring_bound import ring_bound
-from .scenario_mip import ScenarioMIP
+from ideas_hpc.core.design.reliability import swarm_coverages, swarm_probabilities
+from ideas_hpc.errors import InputError
+from ideas_hpc.design.bank import CandidateBank, reduce_problem
+from ideas_hpc.design.reliability_stats import failure_upper_bound
+from ideas_hpc.design.ring_bound import ring_bound
+from ideas_hpc.design.scenario_mip import ScenarioMIP
 
 #: Largest swarm whose 2^N failure subsets are enumerated.
 N_ENUM_MAX = 24

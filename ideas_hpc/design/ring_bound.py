@@ -7,7 +7,7 @@ seen by one arc of 120 or more consecutive grid angles, the rest by two arcs.
 grid candidates (for every N at once). A group whose candidates all lie in
 one gap between consecutive swarm members is certainly missed, and that miss
 is additive over gaps, so the least such miss is a shortest path over sorted
-angles (:mod:`ideas_hpc.core.ring_gaps`).
+angles (:mod:`ideas_hpc.core.design.ring_gaps`).
 
 ``M[i, d]`` is the weight of the groups inside the open arc ``(i, i + d)``.
 A group's candidate set lies in an arc exactly when the arc contains the
@@ -30,8 +30,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.ring_gaps import ring_gap_bound, ring_gap_swarm
-from .bank import CandidateBank, Reduced
+from ideas_hpc.core.design.ring_gaps import ring_gap_bound, ring_gap_swarm
+from ideas_hpc.design.bank import CandidateBank, Reduced
 
 #: Largest grid on which the O(N K^3) bound is computed (0.25 deg).
 MAX_GRID = 1440

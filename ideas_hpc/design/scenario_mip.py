@@ -17,7 +17,7 @@ A group is *heavy* when its area exceeds the slack ``1 - need``: a swarm that
 misses it cannot reach the threshold, so with ``z_s = 1`` it must be covered
 (as :func:`ideas_hpc.design.exact.heavy_groups` argues). A heavy row is implied
 by the row of any subset of its candidates in the same scenario, so only the
-subset-minimal ones are kept (:func:`ideas_hpc.core.reliability.minimal_sets`).
+subset-minimal ones are kept (:func:`ideas_hpc.core.design.reliability.minimal_sets`).
 A scenario with an unseen heavy group, or whose light groups cannot make up
 the rest, is unreachable and its ``z_s`` is fixed to 0.
 
@@ -36,8 +36,8 @@ import numpy as np
 from scipy import sparse
 from scipy.optimize import Bounds, LinearConstraint, milp
 
-from ..core.reliability import minimal_sets
-from .bank import conflict_windows
+from ideas_hpc.core.design.reliability import minimal_sets
+from ideas_hpc.design.bank import conflict_windows
 
 
 @dataclass

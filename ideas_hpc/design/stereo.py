@@ -1,8 +1,8 @@
 """Exact swarm design with stereo from two spacecraft (issue 14 item 4).
 
 A swarm maps vertex ``v`` in stereo when one member's own track gives a
-stereo pair (``own[a, v]``, :mod:`ideas_hpc.core.quality_masks`) or one pair
-of members does (``pairs[ab, v]``, :mod:`ideas_hpc.core.stereo_pairs`); the
+stereo pair (``own[a, v]``, :mod:`ideas_hpc.core.mapping.quality_masks`) or one pair
+of members does (``pairs[ab, v]``, :mod:`ideas_hpc.core.mapping.stereo_pairs`); the
 test suite checks this model against the quality pass of every subset. That
 is not a union of per-spacecraft rows, so the set cover gets a variable per
 pair. With ``x_a`` in {0, 1} (candidate a flies), ``z_ab`` in [0, 1] (both
@@ -33,15 +33,15 @@ import numpy as np
 from scipy import sparse
 from scipy.optimize import LinearConstraint
 
-from ..core.stereo_pairs import pair_index
-from ..core.union import population_coverage
-from ..errors import InputError
-from ..progress import steps
-from .bank import (CandidateBank, conflict_windows, reduce_problem,
+from ideas_hpc.core.mapping.stereo_pairs import pair_index
+from ideas_hpc.core.design.union import population_coverage
+from ideas_hpc.errors import InputError
+from ideas_hpc.progress import steps
+from ideas_hpc.design.bank import (CandidateBank, conflict_windows, reduce_problem,
                    separation_steps)
-from .exact import (FEAS_TOL, ExactResult, check_time_limit, coverage_result, heavy_groups,
+from ideas_hpc.design.exact import (FEAS_TOL, ExactResult, check_time_limit, coverage_result, heavy_groups,
                     n_max_too_small, solve)
-from .ring_bound import swap_search
+from ideas_hpc.design.ring_bound import swap_search
 
 #: Largest candidate grid of the pair formulation (K (K - 1) / 2 pair rows).
 MAX_CANDIDATES = 180
@@ -303,7 +303,7 @@ def stereo_curve(sb: StereoBank, n_max: int, *, min_separation: float = 0.0,
     """Coverage-versus-N with stereo: a :class:`~ideas_hpc.design.coverage_vs_n.CoverageCurve`."""
     import time
 
-    from .coverage_vs_n import CoverageCurve
+    from ideas_hpc.design.coverage_vs_n import CoverageCurve
 
     t0 = time.perf_counter()
     out = []

@@ -21,10 +21,10 @@ Campaign kinds plug in a template and a chunk function::
 
 from __future__ import annotations
 
-from .cluster import connect, load_slurm_config, local_cluster, slurm_cluster
-from .lock import StoreLock, StoreLockedError
-from .runner import CampaignError, RunSummary, run_campaign, run_chunks
-from .store import (CHUNK_DIM, DONE_VAR, SAMPLE_DIM, SEED_VAR, ChunkPlan, config_hash,
+from ideas_hpc.engine.cluster import connect, load_slurm_config, local_cluster, slurm_cluster
+from ideas_hpc.engine.lock import StoreLock, StoreLockedError
+from ideas_hpc.engine.runner import CampaignError, RunSummary, run_campaign, run_chunks
+from ideas_hpc.engine.store import (CHUNK_DIM, DONE_VAR, SAMPLE_DIM, SEED_VAR, ChunkPlan, config_hash,
                     create_store, done_mask, is_store, sample_rng, sample_seed_sequence,
                     seeds_for, store_attrs, store_plan, write_chunk_region)
 

@@ -10,8 +10,8 @@ from typing import Mapping
 
 import numpy as np
 
-from ..errors import InputError
-from .store_meta import DONE_VAR, ChunkPlan, store_attrs
+from ideas_hpc.errors import InputError
+from ideas_hpc.engine.store_meta import DONE_VAR, ChunkPlan, store_attrs
 
 
 # One entry per worker process: the store last written, keyed by its path and
@@ -91,7 +91,7 @@ def _open_handles(path: str, names: list[str], chunk_size: int) -> dict:
     import zarr.api.asynchronous as za
     from zarr.core.sync import sync
 
-    from .chunk_files import whole_chunk_writer
+    from ideas_hpc.engine.chunk_files import whole_chunk_writer
 
     async def run():
         group = await za.open_group(store=path, mode="r+")

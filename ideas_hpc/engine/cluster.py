@@ -24,7 +24,7 @@ import os
 from pathlib import Path
 from typing import Any, Iterator
 
-from ..errors import InputError
+from ideas_hpc.errors import InputError
 
 #: Threads each chunk task may use, read in the task by
 #: :func:`ideas_hpc.engine.runner.limit_task_threads`.

@@ -94,7 +94,7 @@ class JobCluster:
         if warm is not None:
             warm()
         if self._client is None:
-            from .cluster import connect
+            from ideas_hpc.engine.cluster import connect
 
             self._client = self._stack.enter_context(connect(**self._kw))
             self.started += 1

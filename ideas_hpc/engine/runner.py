@@ -23,11 +23,11 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
-from ..errors import InputError
-from .cluster import TASK_THREADS_ENV, connect
-from .gate import gate_from_env, pass_gate
-from .lock import StoreLock
-from .store import ChunkPlan, create_store, done_mask, store_plan, write_chunk_region
+from ideas_hpc.errors import InputError
+from ideas_hpc.engine.cluster import TASK_THREADS_ENV, connect
+from ideas_hpc.engine.gate import gate_from_env, pass_gate
+from ideas_hpc.engine.lock import StoreLock
+from ideas_hpc.engine.store import ChunkPlan, create_store, done_mask, store_plan, write_chunk_region
 
 ChunkFn = Callable[[int, int, int], Mapping[str, np.ndarray]]
 

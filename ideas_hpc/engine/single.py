@@ -19,10 +19,10 @@ from typing import Mapping
 
 import numpy as np
 
-from ..errors import InputError
-from .lock import StoreLock
-from .store import config_problems, create_store, done_mask, store_attrs, write_chunk_region
-from .store_meta import SAMPLE_DIM
+from ideas_hpc.errors import InputError
+from ideas_hpc.engine.lock import StoreLock
+from ideas_hpc.engine.store import config_problems, create_store, done_mask, store_attrs, write_chunk_region
+from ideas_hpc.engine.store_meta import SAMPLE_DIM
 
 
 def check_existing(path: str | os.PathLike, *, config: Mapping, campaign_seed: int,
@@ -50,7 +50,7 @@ def check_existing(path: str | os.PathLike, *, config: Mapping, campaign_seed: i
     if problems:
         raise InputError(f"store {path} was written by an incompatible config ("
                          + "; ".join(problems) + ")", field="--resume")
-    from .._version import warn_code_version
+    from ideas_hpc._version import warn_code_version
 
     warn_code_version(path, attrs)
     return bool(done_mask(path).all())

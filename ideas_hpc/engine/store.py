@@ -45,12 +45,12 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from ..errors import InputError
-from ..store_schema import describe
+from ideas_hpc.errors import InputError
+from ideas_hpc.engine.variables import describe
 # re-exported: the engine's public seed helpers are those of ideas_hpc.seeds
-from ..seeds import SEED_WORDS, sample_rng, sample_seed_sequence, seeds_for  # noqa: F401
-from .chunk_write import done_mask, write_chunk_region  # noqa: F401
-from .store_meta import (CHUNK_DIM, DONE_VAR, ENGINE_TAG, SAMPLE_DIM, SEED_VAR,  # noqa: F401
+from ideas_hpc.seeds import SEED_WORDS, sample_rng, sample_seed_sequence, seeds_for  # noqa: F401
+from ideas_hpc.engine.chunk_write import done_mask, write_chunk_region  # noqa: F401
+from ideas_hpc.engine.store_meta import (CHUNK_DIM, DONE_VAR, ENGINE_TAG, SAMPLE_DIM, SEED_VAR,  # noqa: F401
                          _jsonable,
                          ChunkPlan, config_diff, config_hash, config_json,
                          is_store, store_attrs, store_plan)
@@ -72,7 +72,7 @@ def _partial_dirs(path: Path) -> list[Path]:
 
 def _remove_dead_partials(path: Path) -> None:
     """Delete hidden creation dirs left by killed processes on this host."""
-    from .lock import _pid_alive
+    from ideas_hpc.engine.lock import _pid_alive
 
     host = socket.gethostname()
     for d in _partial_dirs(path):
@@ -161,7 +161,7 @@ def create_store(path: str | os.PathLike, template, *, config: Mapping, campaign
         _check_compatible(path, config, plan, layout, int(campaign_seed))
         return False
 
-    from .._version import code_version
+    from ideas_hpc._version import code_version
 
     path.parent.mkdir(parents=True, exist_ok=True)
     _remove_dead_partials(path)
@@ -280,6 +280,6 @@ def _check_compatible(path: Path, config: Mapping, plan: ChunkPlan,
     if problems:
         raise InputError(f"cannot resume store {path}: it was written by an incompatible "
                          "config: " + "; ".join(problems), field="out")
-    from .._version import warn_code_version
+    from ideas_hpc._version import warn_code_version
 
     warn_code_version(path, attrs)

@@ -1,9 +1,9 @@
 """The Monte Carlo dispersions, declared once (SPEC section 8).
 
 Each entry of :data:`DISPERSIONS` says what one dispersion draws, how it turns
-into a :class:`~ideas_hpc.flyby.Perturbation` of the flyby, and which store
+into a :class:`~ideas_hpc.flyby.flight.Perturbation` of the flyby, and which store
 variables record it (name, dims, units), and which ``[monte_carlo]`` keys it
-reads (``keys``: :class:`~ideas_hpc.schema.Field` s, with its cross-check
+reads (``keys``: :class:`~ideas_hpc.config.fields.Field` s, with its cross-check
 ``check``). The campaign's ``[monte_carlo]`` table, the Monte Carlo kind's store
 layout, its per-sample draws and its perturbations are built from this list and
 nothing else, so a new dispersion is one entry here (plus, if it perturbs
@@ -29,14 +29,14 @@ from typing import Callable
 
 import numpy as np
 
-from ..attitude import initial_conditions
-from ..core.frames import dcm_RT
-from ..core.mrp import mrp_from_dcm
-from ..errors import InputError
-from ..schema import Field
-from ..seeds import sample_rng
-from ..store_schema import StoreVar
-from ..units import DEG, MM
+from ideas_hpc.attitude import initial_conditions
+from ideas_hpc.core.dynamics.frames import dcm_RT
+from ideas_hpc.core.attitude.mrp import mrp_from_dcm
+from ideas_hpc.errors import InputError
+from ideas_hpc.config.fields import Field
+from ideas_hpc.seeds import sample_rng
+from ideas_hpc.engine.variables import StoreVar
+from ideas_hpc.units import DEG, MM
 
 DISPERSION_CHILD = 1  # spawn_key suffix of the child stream
 
@@ -48,7 +48,7 @@ class Dispersion:
     ``draw(rng, n, mc, setup, theta)`` (``mc``: the typed ``[monte_carlo]`` table) returns the sample's values of
     ``variables`` (SI, per spacecraft where the dims say so) from generator
     ``rng``; ``perturb(values)`` returns the
-    :class:`~ideas_hpc.flyby.Perturbation` fields it sets. ``keys`` are its
+    :class:`~ideas_hpc.flyby.flight.Perturbation` fields it sets. ``keys`` are its
     ``[monte_carlo]`` keys, ``((key, Field), ...)`` (the draw reads them by SI name
     from ``mc``); ``check(mc)`` cross-checks them, raising ``InputError`` naming
     its own key (the campaign prefixes ``monte_carlo.``).
@@ -209,14 +209,14 @@ def draw_sample(mc, seed: int, k: int, theta: np.ndarray, setup) -> tuple[dict, 
     """Every dispersion of sample ``k``, in declared order.
 
     ``mc`` is the validated ``[monte_carlo]`` table
-    (:class:`~ideas_hpc.campaign.schema.MonteCarlo`: SI values under SI names).
+    (:class:`~ideas_hpc.config.campaign_tables.MonteCarlo`: SI values under SI names).
 
     Returns
     -------
     values : dict
         Store variable -> this sample's value (SI).
     perturbation : dict
-        Keyword arguments of :class:`~ideas_hpc.flyby.Perturbation`.
+        Keyword arguments of :class:`~ideas_hpc.flyby.flight.Perturbation`.
     """
     n = theta.size
     child = sample_rng(seed, k, DISPERSION_CHILD)

@@ -6,8 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..flyby import FlybySetup, Perturbation, endpoints, fly_open_loop, target
-from ..mapping import quality_arrays
+from ideas_hpc.flyby.flight import FlybySetup, Perturbation, endpoints, fly_open_loop, target
+from ideas_hpc.mapping.coverage import quality_arrays
 
 
 @dataclass(frozen=True)

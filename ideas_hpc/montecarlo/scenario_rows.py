@@ -1,11 +1,11 @@
 """Fast exact scenario rows: the nominal flight once, then only what a deviation can change.
 
-Boundary of :mod:`ideas_hpc.core.scenario_rows`. :class:`RowEngine` flies the
+Boundary of :mod:`ideas_hpc.core.mapping.scenario_rows`. :class:`RowEngine` flies the
 candidates once on the nominal model with ideal attitude, records each
 (candidate, vertex)'s first seeing image and whether any camera within a
 deviation *budget* could see it, and then turns any perturbed flight
 (positions and camera DCMs at the images) into rows identical to
-:func:`ideas_hpc.candidates.rows_from_views` on that flight. The budget only
+:func:`ideas_hpc.design.candidates.rows_from_views` on that flight. The budget only
 decides speed, never the rows; it is taken from a pilot scenario (the
 deviations of scenario 0, with head room). Rows with a ``[coverage]``
 requirement (quality masks) take the full recomputation.
@@ -18,10 +18,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..candidates import rows_from_views
-from ..core import scenario_rows as _k
-from ..flyby import FlybySetup, Perturbation, open_loop_views
-from ..mapping import _check_geometry, _mesh, _strict_args
+from ideas_hpc.design.candidates import rows_from_views
+from ideas_hpc.core.mapping import scenario_rows as _k
+from ideas_hpc.flyby.flight import FlybySetup, Perturbation, open_loop_views
+from ideas_hpc.mapping.coverage import _check_geometry, _mesh, _strict_args
 
 #: Head room on the pilot's deviations (speed only).
 HEADROOM = 1.5

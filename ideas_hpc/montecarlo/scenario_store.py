@@ -28,10 +28,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..engine.lock import StoreLock
-from ..engine.runner import _run_chunk, run_campaign
-from ..engine.store import create_store, done_mask
-from ..engine.store_meta import config_hash, is_store, store_attrs, store_plan
+from ideas_hpc.engine.lock import StoreLock
+from ideas_hpc.engine.runner import _run_chunk, run_campaign
+from ideas_hpc.engine.store import create_store, done_mask
+from ideas_hpc.engine.store_meta import config_hash, is_store, store_attrs, store_plan
 
 KIND = "scenario-bank"
 
@@ -105,7 +105,7 @@ def _run_serial(path: Path, template, chunk_fn, config, seed, chunk_size, attrs,
     """The engine's chunk tasks, one after the other in this process (resumable)."""
     from tqdm.auto import tqdm
 
-    from ..engine.gate import gate_from_env
+    from ideas_hpc.engine.gate import gate_from_env
 
     path.absolute().parent.mkdir(parents=True, exist_ok=True)
     with StoreLock(path):

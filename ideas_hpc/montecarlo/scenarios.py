@@ -11,8 +11,8 @@ the whole candidate grid:
 
 Failures are not drawn: the designer handles them exactly. Every candidate is
 targeted once on the nominal model and flown open loop through each scenario
-(:func:`ideas_hpc.flyby.open_loop_views`); its row is what it sees, or with a
-``[coverage]`` requirement what it maps (:func:`ideas_hpc.candidates.rows_from_views`).
+(:func:`ideas_hpc.flyby.flight.open_loop_views`); its row is what it sees, or with a
+``[coverage]`` requirement what it maps (:func:`ideas_hpc.design.candidates.rows_from_views`).
 Members fly independently, so a swarm's coverage in scenario ``s`` is the union
 of its members' rows ``rows[s, members]``.
 
@@ -31,14 +31,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..attitude import draw_initial_conditions
-from ..engine.store_meta import config_hash
-from ..flyby import FlybySetup, Perturbation, endpoints, target
-from ..seeds import (SCENARIO_STREAM, STREAM_ATTITUDE, STREAM_BODY, STREAM_SPACECRAFT,
+from ideas_hpc.attitude import draw_initial_conditions
+from ideas_hpc.engine.store_meta import config_hash
+from ideas_hpc.flyby.flight import FlybySetup, Perturbation, endpoints, target
+from ideas_hpc.seeds import (SCENARIO_STREAM, STREAM_ATTITUDE, STREAM_BODY, STREAM_SPACECRAFT,
                      VALIDATION_STREAM, stream_rng)
-from .dispersions import DISPERSIONS, reference_start
-from .scenario_rows import RowEngine
-from .scenario_store import build_into_store, chunk_task
+from ideas_hpc.montecarlo.dispersions import DISPERSIONS, reference_start
+from ideas_hpc.montecarlo.scenario_rows import RowEngine
+from ideas_hpc.montecarlo.scenario_store import build_into_store, chunk_task
 
 TWO_PI = 2.0 * math.pi
 #: Dispersions drawn once per scenario and shared by all spacecraft.
@@ -157,7 +157,7 @@ def _run_chunks(ks, fn, client, chunk_size, progress, label):
 
 def grid_theta(step_rad: float) -> np.ndarray:
     """The snapped design grid ``k 2 pi / C`` (as :func:`ideas_hpc.design.bank.build_bank`)."""
-    from ..design.bank import grid_size
+    from ideas_hpc.design.bank import grid_size
     n = grid_size(step_rad)
     return (TWO_PI / n) * np.arange(n)
 

@@ -17,10 +17,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..flyby import FlybySetup, Perturbation
-from ..progress import map_chunks
-from .dispersions import draw_sample
-from .sample import Nominal, design_nominal, fly_sample
+from ideas_hpc.flyby.flight import FlybySetup, Perturbation
+from ideas_hpc.progress import map_chunks
+from ideas_hpc.montecarlo.dispersions import draw_sample
+from ideas_hpc.montecarlo.sample import Nominal, design_nominal, fly_sample
 
 
 @dataclass(frozen=True)
@@ -68,7 +68,7 @@ def verify_swarm(setup: FlybySetup, theta, periods, *, mc, seed: int, n_samples:
     periods : (N,) s or None
         Sweep periods (FoV sweeping).
     mc : MonteCarlo
-        The validated ``[monte_carlo]`` table (:class:`~ideas_hpc.campaign.schema.MonteCarlo`, SI).
+        The validated ``[monte_carlo]`` table (:class:`~ideas_hpc.config.campaign_tables.MonteCarlo`, SI).
     seed : int
         Campaign seed; sample ``k`` draws from ``SeedSequence(seed, spawn_key=(k,))``.
     n_samples : int

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ideas_hpc.errors import InputError
 
 _KINDS = ("observed", "first_seen", "fraction", "value")
 
@@ -27,7 +27,7 @@ def render_coverage_map(shape, values, path, *, kind: str = "observed", title=No
 
     Parameters
     ----------
-    shape : ideas_hpc.shape.Shape
+    shape : ideas_hpc.body.shape.Shape
     values : (V,) array
         bool observed mask (``kind='observed'``) or first-seen times in s with
         NaN for never seen (``kind='first_seen'``).
@@ -53,7 +53,7 @@ def render_coverage_map(shape, values, path, *, kind: str = "observed", title=No
     from matplotlib import cm, colors
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
-    from .figures import close
+    from ideas_hpc.plots.figures import close
 
     if kind not in _KINDS:
         raise InputError(f"must be one of {_KINDS}, got {kind!r}", field="kind")

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.ticker import MaxNLocator
 
-from .figures import body_name, plt, save_png
+from ideas_hpc.plots.figures import body_name, plt, save_png
 
 KM = 1e3
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .figures import plt, save_png
+from ideas_hpc.plots.figures import plt, save_png
 
 
 def scan_map(ds, path) -> "Path":  # noqa: F821

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.ticker import MaxNLocator
 
-from .figures import plt, save_png
+from ideas_hpc.plots.figures import plt, save_png
 
 
 def _threshold_pct(ds) -> float:

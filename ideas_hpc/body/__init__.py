@@ -1,0 +1,1 @@
+"""Models of the small body: shape (polyhedron or analytic), parameters, gravity field, data path."""

@@ -1,0 +1,1 @@
+"""Configuration: the field mechanism, TOML campaign files, and the campaign tables."""

@@ -1,0 +1,356 @@
+"""The campaign file schema (SPEC sections 7-9), validated once at load.
+
+One mechanism (:class:`ideas_hpc.config.fields.Field`) validates every table once
+into a frozen dataclass with SI values under SI names (:class:`CampaignConfig`:
+``c.config.instrument.aperture_m``, ``c.config.design.p_min_s``); the file
+keys keep their user units (``aperture_cm``) and errors name them with the
+file and line. Tables and their keys, in the file's units (converted to SI here):
+
+``kind`` (``flyby``, ``design-nadir``, ``design-fov``, ``design-pareto``,
+``monte-carlo``), ``seed``.
+
+``[body]`` ``name`` (name or path), ``params`` (preset name or a table of
+:func:`ideas_hpc.body.params.params_from_mapping` keys), ``resolution`` (analytic
+bodies), ``data_path``.
+
+``[instrument]`` ``ground_resolution_m``, ``aperture_cm``, ``wavelength_um``,
+``min_elevation_deg``, ``near_field_mm``, ``image_rate_hz``, ``half_angle_deg``
+(default: the sizing's eta_N for nadir pointing, eta_N/2 for FoV sweeping),
+``pixel_pitch_um`` and ``focal_length_mm`` (optional detector, for the quality
+pass's ground sample).
+
+``[flyby]`` ``configuration`` (``ring`` or ``helix``), ``t0_s``, ``tf_s``,
+``z_start_km``, ``z_stop_km``, ``helix_rise_km`` (helix: extra z_start per full
+turn of swarm angle), ``d_sep_km`` (default from the sizing), ``tolerance_m``,
+``max_iterations``, ``dt_s`` (attitude step and trajectory sampling),
+``epoch_s`` (arrival epoch after the body's element epoch: the Sun direction at
+flyby time ``t`` is the ephemeris at ``epoch_s + t``); ``geometry = "encounter"`` and its
+keys: :mod:`ideas_hpc.config.encounter_table`.
+
+``[swarm]`` ``angles_rad`` and ``sweep_periods_min`` (flyby and Monte Carlo),
+``min_separation_km`` (closest allowed distance between two spacecraft on the
+ring, default 1 km; checked once ``d_sep`` is known, see
+:func:`ideas_hpc.flyby.swarm_geometry.check_separation`).
+
+``[attitude]`` ``mode`` (``ideal`` or ``simulated``), ``maneuver`` (``nadir``,
+``fov``, or ``track``: the body centre, encounters in ideal mode), ``decimate`` (keep every k-th attitude step in the store),
+``theta_max_deg`` (default eta_N / 2).
+
+``[dynamics]``, ``[spacecraft]``, ``[controller]``, ``[coverage]``: passed to
+the owning modules' ``*_from_config`` (see their docstrings).
+
+``[design]`` ``method`` (``exact``, the default, or ``ga`` for design-nadir),
+``angle_step_deg``, ``time_limit_s``, ``failures_tolerated``, ``verify_samples``
+(Monte Carlo verification of the design with the ``[monte_carlo]`` dispersions)
+(exact designer); ``success_probability``, ``confidence``, ``scenarios``,
+``demonstrate`` (the success-probability designer, issue 20; tables and checks
+in :mod:`ideas_hpc.config.design_table`);
+(GA) ``population``, ``generations``, ``n_max``, ``eps_tol_pct``,
+``angle_step_rad``, ``p_min_min``, ``p_max_min``, ``period_step_min``,
+``parents``, ``elitism``, ``mutation_probability``, ``stall_generations``;
+(design-pareto) ``objectives`` (two or more names of
+:data:`ideas_hpc.design.pareto.objectives.OBJECTIVES`) with ``population``,
+``generations``, ``n_max``, ``angle_step_deg``, ``parents``,
+``mutation_probability`` and ``time_limit_s`` (the exact reference curve).
+
+``[monte_carlo]`` ``samples`` and the dispersions (see :data:`MC_SCHEMA`).
+
+``[run]`` ``chunk_size``, ``workers``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+from ideas_hpc.attitude.maneuvers import CAMPAIGN_NAMES, campaign_maneuver
+from ideas_hpc.config.toml_file import CampaignSource, load_campaign
+from ideas_hpc.design.pareto.objectives import check_objectives
+from ideas_hpc.errors import InputError
+from ideas_hpc.montecarlo.dispersions import check_dispersions
+from ideas_hpc.config.fields import (Field, live_typed_table, to_typed, typed_table, validate,
+                      with_defaults)
+from ideas_hpc.units import CM, DEG, KM, MINUTE, MM, UM
+from ideas_hpc.flyby.sizing import INSTRUMENT_DEFAULTS as _CAM
+from ideas_hpc.config.design_checks import check_stereo_design, resolve_angle_step
+from ideas_hpc.config.encounter_table import ENCOUNTER, check_encounter
+from ideas_hpc.campaign.kinds import KINDS as REGISTRY
+from ideas_hpc.config.design_table import DESIGN, MC_SCHEMA, reliability_checks  # noqa: F401
+
+KINDS = REGISTRY.keys()   # live: a kind registered later is a valid choice
+
+BODY = {
+    "name": Field("str", "eros", doc="body name or shape file"),
+    "params": Field("any", None, nullable=True, doc="preset name or table"),
+    "resolution": Field("int", 3, lo=1, hi=7),
+    "data_path": Field("str", None, nullable=True),
+}
+
+INSTRUMENT = {
+    "ground_resolution_m": Field("float", _CAM["ground_resolution_m"], lo=0, lo_open=True),
+    "aperture_cm": Field("float", _CAM["aperture_cm"], si="aperture_m",
+                         to_si=CM, lo=0, lo_open=True),
+    "wavelength_um": Field("float", _CAM["wavelength_um"], si="wavelength_m",
+                           to_si=UM, lo=0, lo_open=True),
+    "min_elevation_deg": Field("float", _CAM["min_elevation_deg"], si="min_elevation_rad",
+                               to_si=DEG, lo=0, hi=90, hi_open=True),
+    "near_field_mm": Field("float", _CAM["near_field_mm"], si="near_field_m",
+                           to_si=MM, lo=0, lo_open=True),
+    "image_rate_hz": Field("float", 5.0, lo=0, lo_open=True),
+    "half_angle_deg": Field("float", None, nullable=True, si="half_angle_rad",
+                            to_si=DEG, lo=0, hi=90,
+                            lo_open=True, hi_open=True),
+    "pixel_pitch_um": Field("float", None, nullable=True, si="pixel_pitch_m",
+                            to_si=UM, lo=0, lo_open=True,
+                            doc="detector pixel pitch (with focal_length_mm: the quality "
+                                "pass uses pitch/focal length instead of lambda/D)"),
+    "focal_length_mm": Field("float", None, nullable=True, si="focal_length_m",
+                             to_si=MM, lo=0, lo_open=True),
+}
+
+FLYBY = {
+    "configuration": Field("str", "ring", choices=("ring", "helix")),
+    "t0_s": Field("float", 0.0),
+    "tf_s": Field("float", 600.0),
+    "z_start_km": Field("float", -30.0, si="z_start_m", to_si=KM),
+    "z_stop_km": Field("float", 30.0, si="z_stop_m", to_si=KM),
+    "helix_rise_km": Field("float", 0.0, si="helix_rise_m", to_si=KM),
+    "d_sep_km": Field("float", None, nullable=True, si="d_sep_m", to_si=KM, lo=0, lo_open=True),
+    "tolerance_m": Field("float", 0.01, lo=0, lo_open=True),
+    "max_iterations": Field("int", 25, lo=1),
+    "dt_s": Field("float", 0.1, lo=0, lo_open=True),
+    "epoch_s": Field("float", 0.0, doc="arrival epoch: flyby time 0 is this many seconds "
+                                       "after the body's element epoch (sets the Sun "
+                                       "direction and the body's rotation phase)"),
+    **ENCOUNTER,
+}
+
+SWARM = {
+    "angles_rad": Field("floats", None, nullable=True, lo=0.0, hi=2 * math.pi, hi_open=True,
+                        doc="ring angle of each spacecraft, in [0, 2 pi)"),
+    "sweep_periods_min": Field("floats", None, nullable=True, si="sweep_periods_s",
+                               to_si=MINUTE, lo=0, lo_open=True),
+    "min_separation_km": Field("float", 1.0, si="min_separation_m", to_si=KM, lo=0, lo_open=True,
+                               doc="closest allowed distance between two spacecraft"),
+}
+
+ATTITUDE = {
+    "mode": Field("str", "ideal", choices=("ideal", "simulated")),
+    "maneuver": Field("str", "nadir", choices=CAMPAIGN_NAMES),
+    "decimate": Field("int", 10, lo=1),
+    "theta_max_deg": Field("float", None, nullable=True, si="theta_max_rad",
+                           to_si=DEG, lo=0, lo_open=True, hi=90),
+}
+
+RUN = {
+    "chunk_size": Field("int", 8, lo=1, doc="samples per dask task"),
+    "workers": Field("int", None, nullable=True, lo=0),
+}
+
+SCHEMA = {
+    "kind": Field("str", choices=KINDS, doc="campaign kind"),
+    "seed": Field("int", 2026, lo=0),
+    "description": Field("str", ""),
+    "body": BODY,
+    "instrument": INSTRUMENT,
+    "flyby": FLYBY,
+    "swarm": SWARM,
+    "attitude": ATTITUDE,
+    "dynamics": Field("any", None, nullable=True),
+    "spacecraft": Field("any", None, nullable=True),
+    "controller": Field("any", None, nullable=True),
+    "coverage": Field("any", None, nullable=True),
+    "design": DESIGN,
+    "monte_carlo": MC_SCHEMA,
+    "run": RUN,
+}
+
+
+Body = typed_table("Body", BODY, __name__)
+Instrument = typed_table("Instrument", INSTRUMENT, __name__)
+Flyby = typed_table("Flyby", FLYBY, __name__)
+Swarm = typed_table("Swarm", SWARM, __name__)
+Attitude = typed_table("Attitude", ATTITUDE, __name__)
+Design = typed_table("Design", DESIGN, __name__)
+MonteCarlo = typed_table("MonteCarlo", MC_SCHEMA, __name__)
+Run = typed_table("Run", RUN, __name__)
+TABLES = {"body": Body, "instrument": Instrument, "flyby": Flyby, "swarm": Swarm,
+          "attitude": Attitude, "design": Design, "monte_carlo": MonteCarlo, "run": Run}
+
+
+@dataclass(frozen=True)
+class CampaignConfig:
+    """The validated campaign: one frozen table per ``[table]``, SI values under SI names
+    (``config.instrument.aperture_m``, ``config.design.p_min_s``). The model tables
+    (``[dynamics]``, ``[spacecraft]``, ``[controller]``, ``[coverage]``) are built
+    by their modules into :attr:`Campaign.extras`."""
+
+    kind: str
+    seed: int
+    description: str
+    body: Any
+    instrument: Any
+    flyby: Any
+    swarm: Any
+    attitude: Any
+    design: Any
+    monte_carlo: Any
+    run: Any
+
+
+def typed_config(values: dict) -> CampaignConfig:
+    """:class:`CampaignConfig` from :func:`~ideas_hpc.config.fields.validate`'s output."""
+    tables = {k: to_typed(live_typed_table(cls, SCHEMA[k], __name__), values[k], SCHEMA[k])
+              for k, cls in TABLES.items()}
+    return CampaignConfig(kind=values["kind"], seed=values["seed"],
+                          description=values["description"], **tables)
+
+
+@dataclass
+class Campaign:
+    """A validated campaign: its typed config, the raw data and its source."""
+
+    config: CampaignConfig
+    raw: dict
+    source: CampaignSource
+    extras: dict = field(default_factory=dict)
+
+    @property
+    def kind(self) -> str:
+        return self.config.kind
+
+    def error(self, message: str, dotted: str) -> InputError:
+        return self.source.error(message, dotted)
+
+
+def _sub_table(cfg: dict, key: str) -> dict:
+    v = cfg.get(key)
+    if v is None:
+        return {}
+    if not isinstance(v, dict):
+        raise InputError(f"must be a table, got {v!r}", field=key)
+    return v
+
+
+def _cross_checks(c: CampaignConfig) -> None:
+    fb, d, mc, sw = c.flyby, c.design, c.monte_carlo, c.swarm
+    if fb.tf_s <= fb.t0_s:
+        raise InputError(f"must be > flyby.t0_s ({fb.t0_s:g} s)", field="flyby.tf_s")
+    if fb.z_start_m == fb.z_stop_m:
+        raise InputError(f"equals flyby.z_start_km ({fb.z_start_m / KM:g} km): the flyby "
+                         "would start and end at the same point", field="flyby.z_stop_km")
+    if d.p_min_s >= d.p_max_s:
+        raise InputError(f"must be > design.p_min_min ({d.p_min_s / MINUTE:g} min)",
+                         field="design.p_max_min")
+    try:
+        check_dispersions(mc)
+    except InputError as exc:
+        raise InputError(exc.message, field=f"monte_carlo.{exc.field}") from None
+    if d.failures_tolerated >= d.n_max:
+        raise InputError(f"must be < design.n_max ({d.n_max}): {d.failures_tolerated} "
+                         "failures would leave no spacecraft", field="design.failures_tolerated")
+    if c.kind in ("flyby", "monte-carlo", "design-fov"):
+        if not sw.angles_rad and not (c.kind == "design-fov" and d.nadir_store):
+            raise InputError(f"is required for kind {c.kind!r}", field="swarm.angles_rad")
+        if (sw.sweep_periods_s is not None and sw.angles_rad is not None
+                and len(sw.sweep_periods_s) != len(sw.angles_rad)):
+            raise InputError(f"has {len(sw.sweep_periods_s)} periods for "
+                             f"{len(sw.angles_rad)} spacecraft", field="swarm.sweep_periods_min")
+    if campaign_maneuver(c.attitude.maneuver).sweeps and c.kind in ("flyby", "monte-carlo"):
+        if sw.sweep_periods_s is None:
+            raise InputError(f"is required for attitude.maneuver = {c.attitude.maneuver!r}",
+                             field="swarm.sweep_periods_min")
+    if mc.failures_k and sw.angles_rad and mc.failures_k > len(sw.angles_rad):
+        raise InputError(f"cannot exceed the swarm size {len(sw.angles_rad)}",
+                         field="monte_carlo.failures_k")
+    check_objectives(d.objectives)
+    check_encounter(fb, c.attitude)
+    reliability_checks(c)
+    step = fb.dt_s
+    img = 1.0 / c.instrument.image_rate_hz
+    if abs(img / step - round(img / step)) > 1e-9:
+        raise InputError(f"attitude step {step:g} s does not divide the image period {img:g} s",
+                         field="flyby.dt_s")
+    span = (fb.tf_s - fb.t0_s) / step
+    if abs(span - round(span)) > 1e-6:
+        raise InputError(f"step {step:g} s does not divide the flyby duration", field="flyby.dt_s")
+
+
+def validate_campaign(source: CampaignSource) -> Campaign:
+    """Validate a loaded source; every error carries the field, file and line."""
+    try:
+        values = validate(source.data, SCHEMA)
+        config = resolve_angle_step(typed_config(values))
+        _cross_checks(config)
+        extras = build_models(source.data, config)
+    except InputError as exc:
+        raise source.locate(exc) from None
+    return Campaign(config=config, raw=source.data, source=source, extras=extras)
+
+
+def build_models(raw: dict, config: CampaignConfig) -> dict:
+    """Build the sub-models whose schemas live with their modules.
+
+    The ``[dynamics]``, ``[spacecraft]``, ``[controller]`` and ``[coverage]``
+    tables are validated by the modules that own them, so a field is checked
+    in one place only. They are read in the file's units, as written.
+    """
+    from ideas_hpc.attitude import gains_from_config, spacecraft_from_config
+    from ideas_hpc.mapping.coverage import coverage_options_from_config
+    from ideas_hpc.dynamics.trajectory import force_model_from_config
+
+    cov = dict(_sub_table(raw, "coverage"))
+    # The ground-resolution test and the quality pass use the instrument's camera
+    # unless the coverage table says otherwise (one source of truth for the camera).
+    inst = with_defaults(raw.get("instrument"), INSTRUMENT)
+    for key in ("wavelength_um", "aperture_cm", "pixel_pitch_um", "focal_length_mm"):
+        if inst.get(key) is not None:
+            cov.setdefault(key, inst[key])
+    ctrl = _sub_table(raw, "controller")
+    if not ctrl:
+        ctrl = {"preset": campaign_maneuver(config.attitude.maneuver).gains}
+    coverage = coverage_options_from_config(cov, prefix="coverage.")
+    if coverage.require_stereo and config.kind.startswith("design"):
+        check_stereo_design(config, raw.get("design"))
+    return {
+        "force_model": force_model_from_config(_sub_table(raw, "dynamics"), prefix="dynamics."),
+        "spacecraft": spacecraft_from_config(_sub_table(raw, "spacecraft"), prefix="spacecraft."),
+        "gains": gains_from_config(ctrl, prefix="controller."),
+        "coverage": coverage,
+    }
+
+
+def load(path, overrides: list[str] | None = None) -> Campaign:
+    """Load, override and validate a campaign file."""
+    return validate_campaign(load_campaign(path, overrides))
+
+
+# Settings that change how a run is executed but not its numbers: kept out of
+# the resolved config (and so out of its hash), so a resume may change them.
+EXECUTION_KNOBS = ("run.workers", "run.chunk_size", "design.chunk_size")
+
+
+def resolved_config(c: Campaign) -> dict[str, Any]:
+    """The campaign as run, with nothing implicit: what a store records and hashes.
+
+    Every schema key with its value or default in the file's units
+    (:func:`ideas_hpc.config.fields.with_defaults`), and under ``models`` the
+    resolved sub-models of ``[dynamics]``, ``[spacecraft]``, ``[controller]``
+    and ``[coverage]`` (SI, every default of their modules written out). So a
+    changed default changes the hash, and ``--resume`` names the field. The
+    :data:`EXECUTION_KNOBS` are left out: they do not change the numbers.
+    Every store writer (flyby, designs, Monte Carlo) uses this one function.
+    """
+    from ideas_hpc.engine.store import config_json  # the engine's canonical JSON, for one hash
+
+    out = json.loads(config_json(with_defaults(c.raw, SCHEMA)))
+    out["models"] = json.loads(config_json({k: dataclasses.asdict(v) if
+                                            dataclasses.is_dataclass(v) else v
+                                            for k, v in c.extras.items()}))
+    for dotted in EXECUTION_KNOBS:
+        table, _, key = dotted.partition(".")
+        out.get(table, {}).pop(key, None)
+    return out

@@ -1,0 +1,102 @@
+"""The ``[design]`` and ``[monte_carlo]`` tables and their cross-checks (split from
+:mod:`ideas_hpc.config.campaign_tables`).
+
+The success-probability designer (issue 20) reads ``design.success_probability``
+(p, 0 < p < 1), ``design.confidence`` (of the validation's lower bound, in
+(0.5, 1)), ``design.scenarios`` (S, the scenario bank) and ``design.demonstrate``;
+``design.verify_samples`` (M) defaults to 64, or 256 with p set
+(:func:`verify_samples`). S and M must resolve p: at least ``10 / (1 - p)``.
+"""
+
+from __future__ import annotations
+
+import math
+
+from ideas_hpc.errors import InputError
+from ideas_hpc.montecarlo.dispersions import dispersion_keys
+from ideas_hpc.config.fields import Field, LiveTable
+from ideas_hpc.units import DEG, MINUTE
+
+#: Validation samples when ``design.verify_samples`` is not given.
+VERIFY_DEFAULT, VERIFY_DEFAULT_RELIABILITY = 64, 256
+
+DESIGN = {
+    "method": Field("str", "exact", choices=("exact", "ga"),
+                    doc="design-nadir: exact integer programme or the paper's GA"),
+    "angle_step_deg": Field("float", None, nullable=True, si="grid_step_rad", to_si=DEG, lo=0,
+                            hi=90, doc="grid of candidate swarm angles of every designer "
+                            "(default: exact and Pareto 0.5 deg, GA 0.01 rad; GA: 0 continuous)"),
+    "time_limit_s": Field("float", 60.0, lo=0, lo_open=True,
+                          doc="exact designer: return the best design so far with its gap"),
+    "failures_tolerated": Field("int", 0, lo=0, doc="k: coverage must survive any k failures"),
+    "verify_samples": Field("int", None, nullable=True, lo=0, hi=100000,
+                            doc="Monte Carlo samples that verify the exact design (0: off; "
+                                "default 64, 256 with success_probability)"),
+    "success_probability": Field("float", None, nullable=True, lo=0, hi=1, lo_open=True,
+                                 hi_open=True, doc="p: design for P(coverage >= target - "
+                                 "eps_tol) >= p under the [monte_carlo] dispersions"),
+    "confidence": Field("float", 0.95, lo=0.5, hi=1, lo_open=True, hi_open=True,
+                        doc="confidence of the validation's lower bound on P"),
+    "scenarios": Field("int", 256, lo=1, hi=100000,
+                       doc="S: scenarios of the continuous dispersions in the design's bank"),
+    "demonstrate": Field("bool", False, doc="step N up until validation demonstrates p"),
+    "population": Field("int", 100, lo=2, doc="GA population size"),
+    "generations": Field("int", 115, lo=1),
+    "n_max": Field("int", 20, lo=1, hi=200),
+    "eps_tol_pct": Field("float", 0.1, lo=0, hi=100),
+    "angle_step_rad": Field("float", None, nullable=True, lo=0, hi=1.0,
+                            doc="deprecated alias of angle_step_deg, in rad"),
+    "p_min_min": Field("float", 0.3, si="p_min_s", to_si=MINUTE, lo=0, lo_open=True),
+    "p_max_min": Field("float", 10.0, si="p_max_s", to_si=MINUTE, lo=0, lo_open=True),
+    "period_step_min": Field("float", 0.1, si="period_step_s", to_si=MINUTE, lo=0),
+    "parents": Field("int", None, nullable=True, lo=2),
+    "elitism": Field("int", 2, lo=0),
+    "mutation_probability": Field("float", 0.1, lo=0, hi=1),
+    "stall_generations": Field("int", 0, lo=0, doc="stop after this many generations "
+                                                     "without improvement (0: never)"),
+    "chunk_size": Field("int", 32, lo=1, doc="spacecraft per dask task"),
+    "nadir_store": Field("str", None, nullable=True, doc="design-fov: take the swarm from "
+                                                          "this design-nadir store"),
+    "objectives": Field("any", ("n", "coverage"),
+                        doc="design-pareto: two or more of n, coverage, "
+                            "worst_failure_coverage, stereo_coverage, mean_resolution"),
+}
+
+#: ``[monte_carlo]``: ``samples`` and the keys each dispersion declares
+#: (:data:`~ideas_hpc.montecarlo.dispersions.DISPERSIONS`), read live.
+MC_SCHEMA = LiveTable(lambda: {"samples": Field("int", 64, lo=1), **dispersion_keys()})
+
+
+def verify_samples(d) -> int:
+    """M: ``design.verify_samples``, or its default (256 with p set, else 64)."""
+    if d.verify_samples is not None:
+        return int(d.verify_samples)
+    return VERIFY_DEFAULT_RELIABILITY if d.success_probability is not None else VERIFY_DEFAULT
+
+
+def reliability_checks(c) -> None:
+    """Cross-checks of the success-probability keys (bad inputs of issue 20)."""
+    d = c.design
+    p = d.success_probability
+    if p is None:
+        if d.demonstrate:
+            raise InputError("needs design.success_probability", field="design.demonstrate")
+        return
+    if c.kind != "design-nadir":
+        raise InputError(f"is for kind 'design-nadir', not {c.kind!r}",
+                         field="design.success_probability")
+    if d.method != "exact":
+        raise InputError("is supported by the exact designer only (design.method = 'exact'), "
+                         f"not {d.method!r}", field="design.success_probability")
+    if d.failures_tolerated:
+        raise InputError("replaces design.failures_tolerated (failures enter the probability "
+                         "exactly through monte_carlo.failure_probability): set it to 0",
+                         field="design.success_probability")
+    least = math.ceil(10.0 / (1.0 - p) - 1e-9)
+    if d.scenarios < least:
+        raise InputError(f"{d.scenarios} scenarios cannot resolve p = {p:g}: at least "
+                         f"10 / (1 - p) = {least} are needed", field="design.scenarios")
+    m = verify_samples(d)
+    if m < least:
+        raise InputError(f"{m} validation samples cannot resolve p = {p:g}: at least "
+                         f"10 / (1 - p) = {least} are needed", field="design.verify_samples")

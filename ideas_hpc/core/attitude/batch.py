@@ -1,0 +1,220 @@
+"""Batched closed-loop attitude simulation: S samples x N spacecraft in one call.
+
+Each (sample, spacecraft) pair is independent; ``prange`` runs over the
+flattened ``S * N`` index. Per step ``k`` (``t_k = k dt``):
+
+1. reference at ``t_k`` (``core.maneuvers``),
+2. sliding-mode torques from the state at ``t_k`` (``core.control``), held
+   over ``[t_k, t_k + dt]``,
+3. one RK4 step (``core.attitude.rk4_step_into``) with the MRP shadow switch,
+4. ``z_{k+1} = z_k + ds_k dt`` (the controller's integral state, forward
+   Euler as a sampled controller would do).
+
+SPEC section 5; store variables of SPEC section 9.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+from ideas_hpc.core.attitude.rigid_body import rk4_step_into
+from ideas_hpc.core.attitude.control import sliding_mode_into
+from ideas_hpc.core.attitude.mrp import mrp_from_dcm
+from ideas_hpc.core.attitude.maneuvers import reference_into
+
+
+@njit(cache=True, error_model="numpy")
+def _dcm_BT(x, spin_rate, t, out, a, b, c_):
+    """``[B T] = [B N][T N]^T`` with ``[T N] = R3(w_s t)``; writes ``out[a, b, c_]`` (3, 3).
+
+    (Indices instead of a view: creating array views in the hot loop costs
+    more than the whole step.)"""
+    s1 = x[0]
+    s2 = x[1]
+    s3 = x[2]
+    ss = s1 * s1 + s2 * s2 + s3 * s3
+    d = 1.0 / ((1.0 + ss) * (1.0 + ss))
+    q = 1.0 - ss
+    # [BN] (S&J 3.153, written out)
+    b00 = (4.0 * (s1 * s1 - s2 * s2 - s3 * s3) + q * q) * d
+    b01 = (8.0 * s1 * s2 + 4.0 * s3 * q) * d
+    b02 = (8.0 * s1 * s3 - 4.0 * s2 * q) * d
+    b10 = (8.0 * s2 * s1 - 4.0 * s3 * q) * d
+    b11 = (4.0 * (-s1 * s1 + s2 * s2 - s3 * s3) + q * q) * d
+    b12 = (8.0 * s2 * s3 + 4.0 * s1 * q) * d
+    b20 = (8.0 * s3 * s1 + 4.0 * s2 * q) * d
+    b21 = (8.0 * s3 * s2 - 4.0 * s1 * q) * d
+    b22 = (4.0 * (-s1 * s1 - s2 * s2 + s3 * s3) + q * q) * d
+    c = np.cos(spin_rate * t)
+    s = np.sin(spin_rate * t)
+    # [TN]^T = [[c, -s, 0], [s, c, 0], [0, 0, 1]]
+    out[a, b, c_, 0, 0] = b00 * c + b01 * s
+    out[a, b, c_, 0, 1] = -b00 * s + b01 * c
+    out[a, b, c_, 0, 2] = b02
+    out[a, b, c_, 1, 0] = b10 * c + b11 * s
+    out[a, b, c_, 1, 1] = -b10 * s + b11 * c
+    out[a, b, c_, 1, 2] = b12
+    out[a, b, c_, 2, 0] = b20 * c + b21 * s
+    out[a, b, c_, 2, 1] = -b20 * s + b21 * c
+    out[a, b, c_, 2, 2] = b22
+
+
+@njit(cache=True, error_model="numpy")
+def closed_loop_step(mode, t, x, z, sigma_RT, dcm_RT, spin_rate, theta_max, period,
+                     k_p, k_i, eta, phi, int_limit, I_rw, J_s, L_ext, u_max, h_max, dt,
+                     ref, u, err, work):
+    """One closed-loop step in place: reference, control, RK4, integral update.
+
+    ``x`` (9,) and ``z`` (3,) are advanced from ``t`` to ``t + dt``; ``u`` (3,)
+    receives the held torques (N m) and ``err`` (6,) the errors ``[ds, dw]``
+    at ``t``. ``ref`` (9,) and ``work`` (5, 9) are scratch. Other arguments as
+    in :func:`simulate_batch`.
+    """
+    reference_into(mode, t, spin_rate, sigma_RT, dcm_RT, theta_max, period, ref)
+    sliding_mode_into(x, z, ref, k_p, k_i, eta, phi, I_rw, J_s, L_ext, u_max, h_max, u, err)
+    rk4_step_into(x, u, L_ext, I_rw, J_s, dt, work, x)
+    # conditional integration (anti-windup, see core.control): only near the goal
+    if err[0] * err[0] + err[1] * err[1] + err[2] * err[2] < int_limit * int_limit:
+        z[0] += err[0] * dt
+        z[1] += err[1] * dt
+        z[2] += err[2] * dt
+
+
+@njit(cache=True, parallel=True, error_model="numpy")
+def simulate_batch(mode, dcm_RT_all, spin_rate, periods, theta_max,
+                   k_p, k_i, eta, phi, int_limit, I_rw, J_s, u_max, h_max,
+                   dt, n_steps, decimate, img_every, sigma0, omega0, wheel0):
+    """Closed-loop attitude of ``S x N`` spacecraft over ``n_steps`` steps of ``dt``.
+
+    Parameters
+    ----------
+    mode : int
+        0 Nadir Pointing, 1 FoV Sweeping (``core.maneuvers``).
+    dcm_RT_all : (N, 3, 3) float64
+        Ring frames ``[R_i T]`` (``core.frames.dcm_RT``).
+    spin_rate : float
+        Target spin rate, rad/s.
+    periods : (N,) float64
+        FoV sweep periods ``P_i``, s (unused for NP but must be > 0).
+    theta_max : float
+        FoV sweep amplitude, rad.
+    k_p, k_i, eta, phi : (3,) float64
+        Controller gains (``core.control``), ``phi`` already capped.
+    int_limit : float
+        The MRP error integral ``z`` only accumulates while ``|ds| < int_limit``
+        (conditional integration; ``inf`` integrates always, as SPEC writes it).
+    I_rw, J_s : (3,) float64
+        Inertias, kg m^2.
+    u_max, h_max : float
+        Torque (N m) and wheel momentum (N m s) limits.
+    dt : float
+        Step, s.
+    n_steps : int
+        Number of steps; final time ``n_steps dt``.
+    decimate : int
+        Record every ``decimate``-th step (``k = 0, decimate, ...``).
+    img_every : int
+        Steps per image; camera DCMs at ``k = 0, img_every, ...``.
+    sigma0, omega0, wheel0 : (S, N, 3) float64
+        Initial ``sigma_BN``, ``omega_BN_B`` (rad/s), wheel speeds (rad/s).
+
+    Returns
+    -------
+    sigma_error, omega_error : (S, N, T, 3) float64
+        ``sigma_B/R`` and ``omega_B/R`` (rad/s, B components) at recorded times.
+    wheel_speed : (S, N, T, 3) float64
+        rad/s.
+    wheel_torque : (S, N, T, 3) float64
+        N m, the torque applied from each recorded time on.
+    dcm_BT : (S, N, n_img, 3, 3) float64
+        Camera DCM (body <- target frame) at image times.
+    max_torque, max_momentum : (S, N) float64
+        ``max |u_s|`` (N m) and ``max |J_s Omega|`` (N m s) over all steps.
+    """
+    n_s = sigma0.shape[0]
+    n_sc = sigma0.shape[1]
+    n_rec = n_steps // decimate + 1
+    n_img = n_steps // img_every + 1
+    sig_err = np.empty((n_s, n_sc, n_rec, 3))
+    om_err = np.empty((n_s, n_sc, n_rec, 3))
+    wheel = np.empty((n_s, n_sc, n_rec, 3))
+    torque = np.empty((n_s, n_sc, n_rec, 3))
+    dcm_BT = np.empty((n_s, n_sc, n_img, 3, 3))
+    max_u = np.zeros((n_s, n_sc))
+    max_h = np.zeros((n_s, n_sc))
+    sigma_RT_all = np.empty((n_sc, 3))
+    for i in range(n_sc):
+        sigma_RT_all[i] = mrp_from_dcm(np.ascontiguousarray(dcm_RT_all[i]))
+    L_ext = np.zeros(3)
+    for job in prange(n_s * n_sc):
+        smp = job // n_sc
+        i = job % n_sc
+        x = np.empty(9)
+        z = np.zeros(3)
+        ref = np.empty(9)
+        u = np.empty(3)
+        err = np.empty(6)
+        work = np.empty((5, 9))
+        sigma_RT = sigma_RT_all[i]
+        dcm_RT = dcm_RT_all[i]
+        period = periods[i]
+        for j in range(3):
+            x[j] = sigma0[smp, i, j]
+            x[3 + j] = omega0[smp, i, j]
+            x[6 + j] = wheel0[smp, i, j]
+        ss = x[0] * x[0] + x[1] * x[1] + x[2] * x[2]
+        if ss > 1.0:
+            for j in range(3):
+                x[j] = -x[j] / ss
+        mu = 0.0
+        mh = 0.0
+        # counters instead of k % n: integer division is a visible share of a step
+        c_img = 0
+        n_img_done = 0
+        c_rec = 0
+        r = 0
+        for k in range(n_steps + 1):
+            t = k * dt
+            if c_img == 0:
+                _dcm_BT(x, spin_rate, t, dcm_BT, smp, i, n_img_done)
+                n_img_done += 1
+            c_img += 1
+            if c_img == img_every:
+                c_img = 0
+            for j in range(3):
+                h = abs(J_s[j] * x[6 + j])
+                if h > mh:
+                    mh = h
+            rec = c_rec == 0
+            if rec:
+                for j in range(3):
+                    wheel[smp, i, r, j] = x[6 + j]
+            # closed_loop_step written out (a call with this many array
+            # arguments is not inlined and costs more than the step itself);
+            # at the final time only the errors and the next torque are formed
+            reference_into(mode, t, spin_rate, sigma_RT, dcm_RT, theta_max, period, ref)
+            sliding_mode_into(x, z, ref, k_p, k_i, eta, phi, I_rw, J_s, L_ext,
+                              u_max, h_max, u, err)
+            if k < n_steps:
+                rk4_step_into(x, u, L_ext, I_rw, J_s, dt, work, x)
+                if err[0] * err[0] + err[1] * err[1] + err[2] * err[2] < int_limit * int_limit:
+                    z[0] += err[0] * dt
+                    z[1] += err[1] * dt
+                    z[2] += err[2] * dt
+            for j in range(3):
+                a = abs(u[j])
+                if a > mu:
+                    mu = a
+            if rec:
+                for j in range(3):
+                    sig_err[smp, i, r, j] = err[j]
+                    om_err[smp, i, r, j] = err[3 + j]
+                    torque[smp, i, r, j] = u[j]
+                r += 1
+            c_rec += 1
+            if c_rec == decimate:
+                c_rec = 0
+        max_u[smp, i] = mu
+        max_h[smp, i] = mh
+    return sig_err, om_err, wheel, torque, dcm_BT, max_u, max_h

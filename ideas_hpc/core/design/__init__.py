@@ -1,0 +1,1 @@
+"""Design kernels: swarm unions over candidate masks, the ring-gap bound."""

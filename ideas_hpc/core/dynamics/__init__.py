@@ -1,0 +1,1 @@
+"""Dynamics kernels: propagation (DOP853), force model record, gravity, targeting, ephemeris, frames."""

@@ -1,0 +1,1 @@
+"""Mapping kernels: BVH, per-image visibility, time tree, coverage, observation quality, stereo pairs."""

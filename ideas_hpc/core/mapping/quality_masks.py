@@ -1,0 +1,80 @@
+"""Per-spacecraft observation quality: what each candidate alone contributes (issue 14).
+
+The designers score swarms as unions of per-candidate rows, so they need,
+for every candidate spacecraft ``k`` and vertex ``j``, with the definitions
+of :mod:`ideas_hpc.core.mapping.quality` restricted to ``k``'s own images:
+
+* ``usable[k, j]``: one of ``k``'s observations meets every per-image limit;
+* ``stereo[k, j]``: two of ``k``'s usable observations form a stereo pair
+  (convergence angle in ``[s_min, s_max]``), from its own track;
+* ``resolution[k, j]``: ``k``'s best effective ground sample (m), ``inf``
+  when ``k`` never observes ``j``.
+
+A swarm's usable set and best resolution are exactly the union and the
+minimum of its members' rows. Its stereo set contains the union of the
+``stereo`` rows and may be larger (a pair from two spacecraft), which the
+designers account for (:mod:`ideas_hpc.design.requirement`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+from ideas_hpc.core.mapping.observations import L_SMAX, L_SMIN, _scan, scan_setup
+from ideas_hpc.core.mapping.quality import _CHUNK, _stereo
+
+
+@njit(parallel=True, cache=True)
+def quality_by_spacecraft(vertices, normals, r_T, dcm_BT, image_times, tan_eta, near, far,
+                          exact, sin_min_elev, max_range, occlusion, illumination, sun_T,
+                          node_bounds, node_info, tri, tri_vid, rho, limits, require_lit):
+    """Per-spacecraft usable, own-track stereo and best resolution (module docstring).
+
+    Parameters
+    ----------
+    All as in :func:`ideas_hpc.core.mapping.quality.quality_vertices` (``r_T`` is
+    (K, n_img, 3) m for K candidate spacecraft, every one active).
+
+    Returns
+    -------
+    usable, stereo : (K, V) bool
+    resolution : (K, V) float64
+        m; ``inf`` where the spacecraft never observes the vertex.
+    """
+    nv = vertices.shape[0]
+    nsc = r_T.shape[0]
+    nimg = r_T.shape[1]
+    NF, NI, sec_eta, check_ang, c_emi, c_inc, c_pha = scan_setup(r_T, dcm_BT, tan_eta, limits)
+    usable = np.zeros((nsc, nv), dtype=np.bool_)
+    stereo = np.zeros((nsc, nv), dtype=np.bool_)
+    resolution = np.full((nsc, nv), np.inf)
+    nchunk = (nv + _CHUNK - 1) // _CHUNK
+    for ch in prange(nchunk):
+        stack = np.empty(128, dtype=np.int64)
+        lc = np.zeros(nimg, dtype=np.int8)
+        U = np.empty((nimg, 3))
+        cap = np.empty(nimg, dtype=np.int64)
+        capc = np.empty((nimg, 3))
+        caprad = np.empty(nimg)
+        capn = np.empty(nimg, dtype=np.int64)
+        capstart = np.empty(nimg + 1, dtype=np.int64)
+        order = np.empty(nimg, dtype=np.int64)
+        fill = np.empty(nimg, dtype=np.int64)
+        for j in range(ch * _CHUNK, min(nv, (ch + 1) * _CHUNK)):
+            lc[:] = 0       # lighting per image: shared by every spacecraft of this vertex
+            for k in range(nsc):
+                # vlit = True: the per-vertex 'lit' output is not needed here, so
+                # shadow rays are cast only for the illumination filter and require_lit
+                m, _, _, _, bres, _, _, _, usable_k = _scan(
+                    j, k, NF, NI, stack, lc, vertices,
+                    normals, r_T, dcm_BT, image_times, tan_eta, sec_eta, near, far, exact,
+                    sin_min_elev, max_range, occlusion, illumination, sun_T, node_bounds,
+                    node_info, tri, tri_vid, rho, limits, check_ang, c_emi, c_inc, c_pha,
+                    require_lit, U, 0, True, 0, np.inf, np.inf, -1, -1)
+                usable[k, j] = usable_k
+                resolution[k, j] = bres
+                if m >= 2:
+                    stereo[k, j] = _stereo(U, m, limits[L_SMIN], limits[L_SMAX], cap, capc,
+                                           caprad, capn, capstart, order, fill)
+    return usable, stereo, resolution

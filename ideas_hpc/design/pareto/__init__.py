@@ -1,0 +1,1 @@
+"""Multi-objective design (NSGA-II) over the objective registry."""

@@ -1,0 +1,1 @@
+"""Translational dynamics models: force model settings and trajectories (boundary of ``core.dynamics``)."""

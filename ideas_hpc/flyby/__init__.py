@@ -1,0 +1,1 @@
+"""The flyby simulation: sizing, swarm geometry, targeting and the flight of a swarm."""

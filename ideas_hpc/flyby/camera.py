@@ -1,0 +1,69 @@
+"""Camera pointing of a flyby: the camera DCMs at the image times (SPEC section 5).
+
+Ideal tracking of the maneuver's reference, the closed-loop reaction-wheel
+attitude (:func:`ideas_hpc.attitude.simulate_attitude`), body tracking on
+encounters, and the fixed camera misalignment ``[C B]`` of a Monte Carlo
+sample. ``setup`` is a :class:`ideas_hpc.flyby.flight.FlybySetup`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ideas_hpc.attitude import ideal_dcm_BT, initial_conditions, simulate_attitude
+from ideas_hpc.core.attitude.mrp import dcm_from_mrp, mrp_from_prv
+from ideas_hpc.flyby.encounter import camera_dcms_encounter, track_dcms
+
+
+def misalignment_dcms(prv) -> np.ndarray:
+    """Fixed camera misalignments ``[C B]`` (N, 3, 3) from principal rotation vectors (N, 3), rad."""
+    prv = np.asarray(prv, dtype=np.float64).reshape(-1, 3)
+    return np.stack([dcm_from_mrp(mrp_from_prv(np.ascontiguousarray(v))) for v in prv])
+
+
+def camera_dcms(setup, theta, periods=None, *, sigma0=None, omega0=None,
+                wheel0=None, spin_rate=None, r_img_T=None):
+    """Camera DCMs at the image times, and the attitude result when simulated.
+
+    ``r_img_T`` (N, n_img, 3): the flown positions, for body tracking.
+    Returns ``(dcm_BT (N, n_img, 3, 3), AttitudeResult or None)``.
+    """
+    th = np.asarray(theta, dtype=np.float64)
+    if setup.maneuver.tracks_body:
+        return track_dcms(setup, r_img_T)[0], None
+    ws = setup.body.params.spin_rate if spin_rate is None else spin_rate
+    duration = setup.tf - setup.t0
+    img_t = setup.image_times - setup.t0
+    kw = dict(mode=setup.maneuver.name, periods=periods, theta_max=setup.theta_max, p_min=setup.p_min)
+    if setup.encounter is not None:
+        if sigma0 is None and setup.attitude_mode == "simulated":
+            sigma0, omega0, wheel0 = initial_conditions(setup.seed, 0, th.size)
+        bt, att, _ = camera_dcms_encounter(
+            setup, th, periods, lambda w, ns: ideal_dcm_BT(th, w, img_t, dcm_TS=ns, **kw),
+            lambda w, ns: _simulate(setup, th, w, duration, sigma0, omega0, wheel0, ns, kw))
+        return bt, att
+    if setup.attitude_mode == "ideal":
+        return ideal_dcm_BT(th, ws, img_t, **kw), None
+    if sigma0 is None:
+        sigma0, omega0, wheel0 = initial_conditions(setup.seed, 0, th.size)
+    return _simulate(setup, th, ws, duration, sigma0, omega0, wheel0, None, kw)
+
+
+def _simulate(setup, th, ws, duration, sigma0, omega0, wheel0, dcm_TS, kw):
+    res = simulate_attitude(th, ws, duration, gains=setup.gains, spacecraft=setup.spacecraft,
+                            dt=setup.dt, image_dt=setup.image_dt, sigma0=sigma0, omega0=omega0,
+                            wheel0=wheel0, decimate=setup.decimate, dcm_TS=dcm_TS, **kw)
+    return np.ascontiguousarray(res.dcm_BT[0]), res
+
+
+def camera_at_images(setup, th, periods, ics, misalignment, r_img):
+    """Camera DCMs at the images (attitude, then the camera misalignment)."""
+    s0, w0, W0 = ics if ics is not None else (None, None, None)
+    dcm, att = camera_dcms(setup, th, periods, sigma0=s0, omega0=w0, wheel0=W0, r_img_T=r_img)
+    return misaligned(dcm, misalignment), att
+
+
+def misaligned(dcm, misalignment):
+    if misalignment is None:
+        return dcm
+    return np.ascontiguousarray(np.matmul(misalignment[:, None], dcm))  # [CB][BT]

@@ -1,0 +1,259 @@
+"""Real encounters: any approach direction and speed, the body turning underneath
+(SPEC section 7c; issue 24). Boundary and orchestration for :mod:`ideas_hpc.core.dynamics.encounter`.
+
+The paper's geometry (:mod:`ideas_hpc.flyby.flight`, ``flyby.geometry = "paper"``)
+holds each spacecraft at fixed ``x, y`` in the rotating body frame. An
+encounter instead flies ballistic trajectories: spacecraft ``i`` starts on the
+straight track through its ring point (radius ``d_sep`` in the plane through the
+body centre normal to ``v_inf``, swarm angle ``theta_i``) at flyby time ``t0``,
+is Newton-targeted (the existing STM solver, :func:`ideas_hpc.dynamics.trajectory.target_swarm`)
+to pass that ring point at closest approach ``t_ca`` under the full force model
+(gravity, SRP) in the rotating frame T, and is then propagated to ``tf``.
+
+The swarm and ring frames follow from ``v_inf`` (paper eqs. 7-14 with ``v_SC``
+along the mean velocity; for a ring symmetric about the track the mean velocity
+at closest approach is ``v_inf`` to first order in the bending, about 1e-7 rad
+for Eros at 10 km/s): they are fixed in the inertial frame N (= T at ``t_ca``),
+so the camera frames are the paper's maneuvers in N, turned into T by the
+spin (:func:`camera_dcms_encounter`).
+
+The start point lies on the straight track and the pass through the ring point
+at ``t_ca`` is exact (to the targeting tolerance); with gravity the speed and
+direction far from the body then equal ``v_inf`` to first order in
+``mu / (d v_inf^2)`` (1e-8 for Eros at 10 km/s and 156 km).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ideas_hpc.attitude import default_spacecraft, ideal_dcm_BT
+from ideas_hpc.core.dynamics.encounter import (dcm_BT_from_BN, dcm_NS, pointing_demand, straight_tracks_T,
+                             track_dcm_BN)
+from ideas_hpc.errors import InputError
+from ideas_hpc.dynamics.trajectory import TargetingResult, propagate_swarm, target_swarm
+
+DEFAULT_SPEED_M_S = 10e3
+DEFAULT_WINDOW_M = 30e3
+
+
+@dataclass(frozen=True)
+class Encounter:
+    """A ballistic encounter, SI: approach direction in T at closest approach, speed,
+    flyby time of closest approach."""
+
+    speed_m_s: float
+    ra_rad: float
+    dec_rad: float
+    t_ca_s: float
+
+    @property
+    def dcm_NS(self) -> np.ndarray:
+        """Swarm frame ``[N S]`` (columns in N = T at closest approach)."""
+        return dcm_NS(self.ra_rad, self.dec_rad)
+
+    @property
+    def v_inf_T(self) -> np.ndarray:
+        """Asymptotic relative velocity in T at closest approach, m/s."""
+        return self.speed_m_s * self.dcm_NS[:, 2]
+
+
+def approach_angles(fb, sun_T_ca=None) -> tuple[float, float, float]:
+    """``(speed m/s, ra rad, dec rad)`` from the ``[flyby]`` encounter keys (SI table).
+
+    ``phase_angle`` (the Sun-body-spacecraft angle on approach, between the Sun
+    direction ``s`` and ``-v_inf``) fixes the right ascension for the given
+    declination: ``-u . s = cos(alpha)`` with ``u = (cos d cos a, cos d sin a, sin d)``
+    gives ``cos d rho cos(a - psi) = -cos(alpha) - sin d s_z`` (``rho, psi``: the
+    polar form of ``s_x, s_y``); of the two roots the one east of the Sun's
+    meridian, ``a = psi + acos(...)``, is taken.
+    """
+    if fb.v_inf_m_s is not None:
+        v = np.asarray(fb.v_inf_m_s, dtype=np.float64)
+        speed = float(np.linalg.norm(v))
+        if speed <= 0.0:
+            raise InputError("must not be the zero vector", field="flyby.v_inf_km_s")
+        return speed, math.atan2(v[1], v[0]), math.asin(max(-1.0, min(1.0, v[2] / speed)))
+    speed = fb.speed_m_s if fb.speed_m_s is not None else DEFAULT_SPEED_M_S
+    dec = fb.approach_dec_rad if fb.approach_dec_rad is not None else 0.5 * math.pi
+    if fb.phase_angle_rad is None:
+        return speed, fb.approach_ra_rad or 0.0, dec
+    s = np.asarray(sun_T_ca, dtype=np.float64)
+    rho = math.hypot(s[0], s[1])
+    rhs = -math.cos(fb.phase_angle_rad) - math.sin(dec) * s[2]
+    lim = math.cos(dec) * rho
+    if abs(rhs) > lim * (1 + 1e-12) or lim == 0.0:
+        lo = math.degrees(math.acos(min(1.0, -math.sin(dec) * s[2] + lim)))
+        hi = math.degrees(math.acos(max(-1.0, -math.sin(dec) * s[2] - lim)))
+        raise InputError(f"{math.degrees(fb.phase_angle_rad):g} deg cannot be reached at "
+                         f"declination {math.degrees(dec):g} deg with the Sun at this epoch "
+                         f"(reachable: {lo:.1f} to {hi:.1f} deg)", field="flyby.phase_angle_deg")
+    a = math.atan2(s[1], s[0]) + math.acos(max(-1.0, min(1.0, rhs / lim)))
+    return speed, math.remainder(a, 2 * math.pi), dec
+
+
+def approach_speed(fb) -> float:
+    """``|v_inf|`` (m/s) from the ``[flyby]`` table (SI)."""
+    if fb.v_inf_m_s is not None:
+        return float(np.linalg.norm(fb.v_inf_m_s))
+    return fb.speed_m_s if fb.speed_m_s is not None else DEFAULT_SPEED_M_S
+
+
+def window_s(fb, image_dt: float) -> tuple[float, float]:
+    """``(before, after)`` closest approach, s, on the image grid (at least one image period).
+
+    From ``before_s``/``after_s`` or, by default, ``before_km``/``after_km`` at
+    the approach speed (30 km each).
+    """
+    speed = approach_speed(fb)
+    out = []
+    for side in ("before", "after"):
+        t = getattr(fb, f"{side}_s")
+        if t is None:
+            d = getattr(fb, f"{side}_m")
+            t = (d if d is not None else DEFAULT_WINDOW_M) / speed
+        out.append(max(1, round(t / image_dt)) * image_dt)
+    return out[0], out[1]
+
+
+def phase_angle(enc: Encounter, sun_T_ca) -> float:
+    """Sun-body-spacecraft angle on approach, rad: between the Sun and ``-v_inf``."""
+    s = np.asarray(sun_T_ca, dtype=np.float64)
+    u = enc.dcm_NS[:, 2]
+    return math.acos(max(-1.0, min(1.0, float(-u @ s) / float(np.linalg.norm(s)))))
+
+
+def tracks_T(setup, theta, times) -> np.ndarray:
+    """Gravity-free straight tracks (N, T, 3) of the swarm ``theta`` in T, m."""
+    enc = setup.encounter
+    th = np.ascontiguousarray(np.asarray(theta, dtype=np.float64).ravel())
+    t = np.ascontiguousarray(np.atleast_1d(np.asarray(times, dtype=np.float64)))
+    return straight_tracks_T(th, np.ascontiguousarray(enc.dcm_NS), float(setup.d_sep),
+                             enc.speed_m_s, enc.t_ca_s, setup.body.params.spin_rate, t)
+
+
+def endpoints_encounter(setup, theta) -> tuple[np.ndarray, np.ndarray]:
+    """Start points at ``t0`` and ring points at ``t_ca`` (N, 3), m, frame T."""
+    r = tracks_T(setup, theta, [setup.t0, setup.encounter.t_ca_s])
+    return np.ascontiguousarray(r[:, 0]), np.ascontiguousarray(r[:, 1])
+
+
+def target_encounter(setup, theta, *, raise_on_failure: bool = True) -> TargetingResult:
+    """Target every spacecraft to its ring point at ``t_ca``, then fly the whole window.
+
+    Returns the :class:`~ideas_hpc.dynamics.trajectory.TargetingResult` of the arc
+    ``t0 -> t_ca`` (``v0_T``, miss history) with the trajectory sampled every
+    ``setup.dt`` over ``[t0, tf]``.
+    """
+    r0, r_ca = endpoints_encounter(setup, theta)
+    t_ca = setup.encounter.t_ca_s
+    try:
+        arc = target_swarm(setup.body, r0, r_ca, setup.t0, t_ca, force_model=setup.force_model,
+                           dt_sample=t_ca - setup.t0, tol=setup.tol, max_iter=setup.max_iter,
+                           raise_on_failure=raise_on_failure)
+    except InputError as exc:
+        if exc.field == "r0_T":
+            raise InputError(f"{exc.message}: the imaging window starts inside the body's "
+                             "bounding sphere; start it further out (flyby.before_km or before_s) "
+                             "with the ring outside R_max (flyby.d_sep_km)",
+                             field="flyby.before_km") from None
+        if exc.field == "r_target_T":
+            raise InputError(f"{exc.message}: the ring passes inside the body's bounding "
+                             f"sphere; increase flyby.d_sep_km (now {setup.d_sep / 1e3:.4g} km)",
+                             field="flyby.d_sep_km") from None
+        raise
+    v0 = np.where(np.isfinite(arc.v0_T), arc.v0_T, 0.0)
+    times, pos, vel = propagate_swarm(setup.body, r0, v0, setup.t0, setup.tf,
+                                      force_model=setup.force_model, dt_sample=setup.dt)
+    return TargetingResult(v0_T=arc.v0_T, miss=arc.miss, n_iter=arc.n_iter,
+                           converged=arc.converged, times=times, position_T=pos,
+                           velocity_T=vel, nfev=arc.nfev)
+
+
+def camera_dcms_encounter(setup, theta, periods, ideal, simulate, *, sigma0=None, omega0=None,
+                          wheel0=None):
+    """Camera DCMs ``[B T]`` at the image times on an encounter, and the attitude result.
+
+    The maneuvers run unchanged with the ring frames fixed in N (spin 0 and
+    ``dcm_TS = [N S]``), so ``ideal``/``simulate`` return ``[B N]``; the spin then
+    turns them into T (:func:`ideas_hpc.core.dynamics.encounter.dcm_BT_from_BN`).
+    ``ideal(spin, dcm_TS)`` and ``simulate(spin, dcm_TS)`` are the flyby's two
+    attitude paths with everything else bound.
+    """
+    enc = setup.encounter
+    ns = np.ascontiguousarray(enc.dcm_NS)
+    if setup.attitude_mode == "ideal":
+        bn, att = ideal(0.0, ns), None
+    else:
+        bn, att = simulate(0.0, ns)
+    bt = dcm_BT_from_BN(np.ascontiguousarray(bn), setup.body.params.spin_rate,
+                        np.ascontiguousarray(setup.image_times), enc.t_ca_s)
+    return bt, att, bn
+
+
+def track_dcms(setup, r_img_T) -> tuple[np.ndarray, np.ndarray]:
+    """``([B T], [B N])`` (N, n_img, 3, 3) of the body-tracking camera (``attitude.maneuver =
+    "track"``) along the flown positions ``r_img_T`` at the image times."""
+    enc = setup.encounter
+    t = np.ascontiguousarray(setup.image_times)
+    w = setup.body.params.spin_rate
+    bn = track_dcm_BN(np.ascontiguousarray(r_img_T, dtype=np.float64), t, enc.t_ca_s, w,
+                      np.ascontiguousarray(enc.dcm_NS[:, 2]))
+    return dcm_BT_from_BN(bn, w, t, enc.t_ca_s), bn
+
+
+def pointing_check(dcm_BN, dt: float, spacecraft) -> dict:
+    """Peak rate, torque and momentum the pointing profile asks for, against the wheels.
+
+    Returns a dict of (N,) arrays ``pointing_rate`` (rad/s), ``pointing_torque``
+    (N m), ``pointing_momentum`` (N m s), ``pointing_feasible`` (bool: torque
+    <= ``u_max`` and momentum <= ``h_max``) and the one-line ``summary``.
+    """
+    rate, tq, h = pointing_demand(np.ascontiguousarray(dcm_BN, dtype=np.float64), float(dt),
+                                  np.ascontiguousarray(spacecraft.inertia_rw))
+    ok = (tq <= spacecraft.u_max) & (h <= spacecraft.h_max)
+    head = (f"pointing: peak rate {math.degrees(rate.max()):.3g} deg/s, torque "
+            f"{tq.max() * 1e3:.3g} mN m (wheel limit {spacecraft.u_max * 1e3:g}), momentum "
+            f"{h.max() * 1e3:.3g} mN m s (limit {spacecraft.h_max * 1e3:g})")
+    if ok.all():
+        summary = head + ": the wheels can follow"
+    else:
+        bad = np.where(~ok)[0].tolist()
+        summary = (f"WARNING {head}: spacecraft {bad} cannot follow this pointing profile "
+                   "(slower encounter, larger d_sep or stronger wheels)")
+    return {"pointing_rate": rate, "pointing_torque": tq, "pointing_momentum": h,
+            "pointing_feasible": ok, "summary": summary}
+
+
+def pointing_profile(setup, theta, periods=None, r_img_T=None) -> dict:
+    """:func:`pointing_check` of the swarm's reference attitude at the image times.
+
+    Paper geometry: ``[B N] = [B T] R3(w t)``; encounter: the maneuver in N;
+    body tracking: along the flown positions ``r_img_T``.
+    """
+    th = np.asarray(theta, dtype=np.float64).ravel()
+    sc = setup.spacecraft or default_spacecraft()
+    if setup.maneuver.tracks_body:
+        return pointing_check(track_dcms(setup, r_img_T)[1], setup.image_dt, sc)
+    img_t = setup.image_times - setup.t0
+    kw = dict(mode=setup.maneuver.name, periods=periods, theta_max=setup.theta_max, p_min=setup.p_min)
+    if setup.encounter is not None:
+        bn = ideal_dcm_BT(th, 0.0, img_t, dcm_TS=setup.encounter.dcm_NS, **kw)
+    else:
+        ws = setup.body.params.spin_rate
+        bn = dcm_BT_from_BN(ideal_dcm_BT(th, ws, img_t, **kw), -ws, img_t, 0.0)
+    return pointing_check(bn, setup.image_dt, sc)
+
+
+def encounter_attrs(setup) -> dict:
+    """Store attrs of an encounter (SI): speed, approach angles, closest approach, phase."""
+    enc = setup.encounter
+    if enc is None:
+        return {"geometry": "paper"}
+    sun = setup.sun_T([enc.t_ca_s])[0]
+    return {"geometry": "encounter", "speed_m_s": enc.speed_m_s, "approach_ra_rad": enc.ra_rad,
+            "approach_dec_rad": enc.dec_rad, "t_ca_s": enc.t_ca_s,
+            "phase_angle_rad": phase_angle(enc, sun), "v_inf_T_m_s": enc.v_inf_T.tolist()}

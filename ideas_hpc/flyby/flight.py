@@ -1,0 +1,368 @@
+"""One flyby simulation: sizing -> targeting -> attitude -> coverage (SPEC sections 2-6).
+
+Orchestration only: every step is a compiled kernel behind its boundary
+module (:mod:`ideas_hpc.flyby.sizing`, :mod:`ideas_hpc.dynamics.trajectory`,
+:mod:`ideas_hpc.attitude`, :mod:`ideas_hpc.mapping.coverage`). Two attitude options:
+
+``ideal``
+    perfect tracking: the camera frame is the reference frame at every image
+    (fast, deterministic);
+``simulated``
+    closed-loop reaction-wheel attitude with the sliding-mode controller, from
+    seeded random initial conditions (SPEC section 5).
+
+Geometry choices (SPEC section 3): the ring swarm flies at radius ``d_sep`` in
+the body's xy-plane from ``z_start`` to ``z_stop``. The helical configuration
+raises each spacecraft's start and stop by ``helix_rise * theta_i / (2 pi)``;
+its ring frame keeps z horizontal toward the spin axis (``[TS] = I``), so each
+spacecraft's pointing depends on its own angle only and swarms stay unions of
+independent spacecraft (which the GA relies on).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ideas_hpc.attitude import Gains, Maneuver, SpacecraftModel, campaign_maneuver, initial_conditions
+from ideas_hpc.body.bodies import Body, load_body
+from ideas_hpc.flyby.encounter import (Encounter, approach_angles, endpoints_encounter, target_encounter,
+                        window_s)
+from ideas_hpc.errors import InputError
+from ideas_hpc.flyby.camera import camera_at_images, misaligned, misalignment_dcms
+from ideas_hpc.mapping.coverage import CoverageOptions, CoverageResult, compute_coverage
+from ideas_hpc.flyby.sizing import Sizing, size_flyby
+from ideas_hpc.flyby.swarm_geometry import check_separation
+from ideas_hpc.dynamics.trajectory import (ForceModel, TargetingError, TargetingResult, propagate_swarm,
+                         ring_states, sun_direction_T, target_swarm)
+
+TWO_PI = 2.0 * math.pi
+
+
+@dataclass(frozen=True)
+class FlybySetup:
+    """Everything a flyby needs, resolved to SI once (picklable, sent to workers)."""
+
+    body: Body
+    sizing: Sizing
+    t0: float
+    tf: float
+    dt: float
+    image_dt: float
+    d_sep: float
+    z_start: float
+    z_stop: float
+    configuration: str
+    helix_rise: float
+    eta: float
+    near: float
+    far: float
+    theta_max: float
+    maneuver: Maneuver
+    attitude_mode: str
+    decimate: int
+    tol: float
+    max_iter: int
+    seed: int
+    force_model: ForceModel = field(default_factory=ForceModel)
+    spacecraft: SpacecraftModel | None = None
+    gains: Gains | None = None
+    coverage: CoverageOptions = field(default_factory=CoverageOptions)
+    p_min: float = 18.0
+    epoch: float = 0.0
+    encounter: Encounter | None = None   # None: the paper's geometry (ideas_hpc.flyby.encounter)
+
+    @property
+    def image_every(self) -> int:
+        return int(round(self.image_dt / self.dt))
+
+    @property
+    def image_times(self) -> np.ndarray:
+        n = int(round((self.tf - self.t0) / self.image_dt))
+        return self.t0 + self.image_dt * np.arange(n + 1)
+
+    def sun_T(self, times=None, epoch=None) -> np.ndarray:
+        """Unit body -> Sun directions (n, 3) in T at flyby ``times`` (default: the
+        image times), from the ephemeris at ``epoch + times`` (arrival epoch, s)."""
+        t = self.image_times if times is None else np.asarray(times, dtype=np.float64)
+        e = self.epoch if epoch is None else float(epoch)
+        return sun_direction_T(self.body.params, e + t)
+
+    def with_(self, **kw) -> "FlybySetup":
+        if isinstance(kw.get("maneuver"), str):      # a campaign name
+            kw["maneuver"] = campaign_maneuver(kw["maneuver"], field="maneuver")
+        return replace(self, **kw)
+
+
+def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
+    """Resolve a validated :class:`~ideas_hpc.config.campaign_tables.Campaign` to a setup.
+
+    ``maneuver`` (a campaign name of :data:`~ideas_hpc.attitude.MANEUVERS`) overrides
+    ``attitude.maneuver`` (the FoV design kind sweeps whatever the file says).
+    """
+    cfg = c.config
+    b = cfg.body
+    params = b.params
+    if isinstance(params, dict):
+        from ideas_hpc.body.params import params_from_mapping
+        try:
+            params = params_from_mapping(params, prefix="body.params.")
+        except InputError as exc:
+            raise c.source.locate(exc) from None
+    try:
+        body = load_body(b.name, data_path=b.data_path, resolution=b.resolution,
+                         params=params)
+        body.require_params()
+    except InputError as exc:
+        if exc.field in (None, "body", "body.params", "data_path"):
+            f = {"data_path": "body.data_path", None: "body.name"}.get(exc.field, exc.field)
+            msg = f"{exc.message}: {exc.file}" if exc.file else exc.message
+            raise c.error(msg, "body.name" if f == "body" else f) from None
+        raise c.source.locate(exc) from None
+    inst = cfg.instrument
+    sizing = size_flyby(r_max=body.shape.r_max, r_min=body.shape.r_min,
+                        ground_resolution=inst.ground_resolution_m,
+                        aperture=inst.aperture_m, wavelength=inst.wavelength_m,
+                        min_elevation=inst.min_elevation_rad, near=inst.near_field_m)
+    man = campaign_maneuver(maneuver or cfg.attitude.maneuver)
+    eta = inst.half_angle_rad
+    if eta is None:
+        eta = man.half_angle(sizing.eta_nadir)
+    fb = cfg.flyby
+    att = cfg.attitude
+    ex = c.extras
+    d_sep = fb.d_sep_m if fb.d_sep_m is not None else sizing.d_sep
+    sw = cfg.swarm
+    if sw.angles_rad and fb.configuration == "ring":
+        try:
+            check_separation(sw.angles_rad, d_sep, sw.min_separation_m)
+        except InputError as exc:
+            raise c.source.locate(exc) from None
+    t0, tf, enc = fb.t0_s, fb.tf_s, None
+    if fb.geometry == "encounter":
+        t0, tf, enc = _encounter_window(c, body, inst)
+    return FlybySetup(
+        body=body, sizing=sizing, t0=t0, tf=tf, dt=fb.dt_s,
+        image_dt=1.0 / inst.image_rate_hz,
+        d_sep=d_sep,
+        z_start=fb.z_start_m, z_stop=fb.z_stop_m, configuration=fb.configuration,
+        helix_rise=fb.helix_rise_m, eta=eta, near=sizing.near, far=sizing.far,
+        theta_max=att.theta_max_rad if att.theta_max_rad is not None else sizing.theta_max,
+        maneuver=man, attitude_mode=att.mode, decimate=att.decimate,
+        tol=fb.tolerance_m, max_iter=fb.max_iterations, seed=cfg.seed,
+        force_model=ex["force_model"], spacecraft=ex["spacecraft"],
+        gains=ex["gains"], coverage=ex["coverage"], p_min=cfg.design.p_min_s,
+        epoch=fb.epoch_s, encounter=enc)
+
+
+def _encounter_window(c, body, inst):
+    """``(t0, tf, Encounter)`` of ``flyby.geometry = "encounter"`` (SPEC section 7c)."""
+    fb = c.config.flyby
+    img = 1.0 / inst.image_rate_hz
+    try:
+        before, after = window_s(fb, img)
+        t_ca = fb.t0_s + before
+        sun = sun_direction_T(body.params, [fb.epoch_s + t_ca])[0]
+        speed, ra, dec = approach_angles(fb, sun)
+    except InputError as exc:
+        raise c.source.locate(exc) from None
+    return fb.t0_s, t_ca + after, Encounter(speed, ra, dec, t_ca)
+
+
+def endpoints(setup: FlybySetup, theta) -> tuple[np.ndarray, np.ndarray]:
+    """Start and target positions (N, 3) in T for swarm angles ``theta`` (rad); on an
+    encounter the start and the ring point at closest approach."""
+    th = np.asarray(theta, dtype=np.float64).ravel()
+    if setup.encounter is not None:
+        return endpoints_encounter(setup, th)
+    rise = 0.0
+    if setup.configuration == "helix":
+        rise = setup.helix_rise * (np.mod(th, TWO_PI) / TWO_PI)
+    return ring_states(setup.body, th, setup.d_sep, setup.z_start + rise, setup.z_stop + rise)
+
+
+def target(setup: FlybySetup, theta, *, raise_on_failure: bool = True) -> TargetingResult:
+    """Target the swarm ``theta`` (rad) from its start to its arrival point.
+
+    A failure the user can fix becomes an :class:`~ideas_hpc.errors.InputError`
+    naming the campaign field to change (:func:`targeting_input_error`).
+    """
+    th = np.asarray(theta, dtype=np.float64).ravel()
+    try:
+        if setup.encounter is not None:
+            return target_encounter(setup, th, raise_on_failure=raise_on_failure)
+        r0, rt = endpoints(setup, th)
+        return target_swarm(setup.body, r0, rt, setup.t0, setup.tf,
+                            force_model=setup.force_model, dt_sample=setup.dt, tol=setup.tol,
+                            max_iter=setup.max_iter, raise_on_failure=raise_on_failure)
+    except TargetingError as exc:
+        raise targeting_input_error(exc, setup, th) from None
+    except InputError as exc:
+        if exc.field not in ("r0_T", "r_target_T"):
+            raise
+        raise InputError(f"{exc.message}: the flyby starts or ends too close to the body; "
+                         "move flyby.z_start_km / flyby.z_stop_km further out",
+                         field="flyby.z_start_km" if exc.field == "r0_T"
+                         else "flyby.z_stop_km") from None
+
+
+def targeting_input_error(exc: TargetingError, setup: FlybySetup, theta) -> InputError:
+    """One line for a failed targeting: the worst spacecraft, its miss, the field to change.
+
+    The cause is read off the failed spacecraft's last trajectory and miss history:
+
+    * it came within ``R_max`` of the body's centre (or the integrator gave up):
+      the flyby is too close, ``flyby.d_sep_km``;
+    * it used every iteration but the miss stopped shrinking over the last
+      three (Newton converges quadratically until integration noise): the
+      tolerance is tighter than the integration allows, ``flyby.tolerance_m``;
+    * otherwise it ran out of iterations, ``flyby.max_iterations``.
+    """
+    res = exc.result
+    failed = np.asarray(exc.failed, dtype=int)
+    fm = res.final_miss
+    worst = int(failed[np.argmax(np.where(np.isfinite(fm[failed]), fm[failed], np.inf))])
+    n = int(res.n_iter[worst])
+    hist = res.miss[worst, :n + 1]
+    closest = float(np.min(np.linalg.norm(res.position_T[worst], axis=1)))
+    r_max = setup.body.shape.r_max
+    others = f" (and {failed.size - 1} more)" if failed.size > 1 else ""
+    head = (f"targeting did not converge for spacecraft {worst}{others} at swarm angle "
+            f"{theta[worst]:.4g} rad: miss {fm[worst]:.3g} m after {n} iterations, tolerance "
+            f"{setup.tol:g} m; ")
+    if closest <= r_max or not np.all(np.isfinite(hist)) or n < setup.max_iter:
+        return InputError(head + f"its path comes within {closest / 1e3:.3g} km of the body's "
+                          f"centre (R_max {r_max / 1e3:.3g} km): increase flyby.d_sep_km "
+                          f"(now {setup.d_sep / 1e3:.4g} km)", field="flyby.d_sep_km")
+    if n >= 4 and np.min(hist[-3:]) >= 0.5 * np.min(hist[:-3]):
+        return InputError(head + f"the miss stalls near {np.min(hist):.3g} m: loosen "
+                          "flyby.tolerance_m", field="flyby.tolerance_m")
+    return InputError(head + f"raise flyby.max_iterations (now {setup.max_iter})",
+                      field="flyby.max_iterations")
+
+
+@dataclass(frozen=True)
+class Perturbation:
+    """How one flyby departs from the nominal one (SI, frame T); None: nominal.
+
+    The Monte Carlo dispersions (:mod:`ideas_hpc.montecarlo.dispersions`) are
+    turned into one of these per sample and flown by :func:`fly_open_loop`.
+    """
+
+    ics: tuple | None = None                  # (sigma0, omega0, wheel0), each (N, 3)
+    params_override: dict | None = None       # mu, c20, c22, reflectivity
+    position_error_T: np.ndarray | None = None  # (N, 3) m
+    velocity_error_T: np.ndarray | None = None  # (N, 3) m/s
+    active: np.ndarray | None = None          # (N,) bool, False: failed
+    misalignment_prv: np.ndarray | None = None  # (N, 3) rad, camera [CB] as a PRV
+
+
+@dataclass
+class FlybyOutcome:
+    """What one flyby produced (arrays in SI, frame T)."""
+
+    theta: np.ndarray
+    periods: np.ndarray | None
+    targeting: TargetingResult | None
+    image_times: np.ndarray
+    r_img_T: np.ndarray                 # (N, n_img, 3)
+    dcm_BT: np.ndarray                  # (N, n_img, 3, 3) camera frame at images
+    coverage: CoverageResult
+    attitude: object | None = None      # AttitudeResult for 'simulated'
+    extras: dict = field(default_factory=dict)
+    position_T: np.ndarray | None = None  # (N, T, 3) m, the flown trajectory (open loop)
+
+
+def fly(setup: FlybySetup, theta, periods=None, *, sample: int = 0, ics=None,
+        counts: bool = True, raise_on_failure: bool = True) -> FlybyOutcome:
+    """Target a swarm on the nominal model, fly it and compute what it imaged.
+
+    A perturbed flyby of a designed swarm is :func:`fly_open_loop`.
+
+    Parameters
+    ----------
+    theta : (N,) rad
+        Swarm angles.
+    periods : (N,) s, optional
+        Sweep periods (FoV sweeping).
+    sample : int
+        Sample index whose seeded initial attitude is used (``simulated``).
+    ics : tuple of (N, 3) arrays, optional
+        Explicit ``(sigma0, omega0, wheel0)``.
+    counts : bool
+        Also count images per vertex (``times_seen``).
+    """
+    th = np.asarray(theta, dtype=np.float64).ravel()
+    if th.size == 0:
+        raise InputError("needs at least one spacecraft", field="swarm.angles_rad")
+    tgt = target(setup, th, raise_on_failure=raise_on_failure)
+    r_img = np.ascontiguousarray(tgt.position_T[:, ::setup.image_every])
+    if ics is None and setup.attitude_mode == "simulated":
+        ics = initial_conditions(setup.seed, sample, th.size)
+    dcm, att, cov = _image(setup, th, periods, r_img, ics, None, None, counts)
+    return FlybyOutcome(theta=th, periods=None if periods is None else np.asarray(periods),
+                        targeting=tgt, image_times=setup.image_times, r_img_T=r_img, dcm_BT=dcm,
+                        coverage=cov, attitude=att)
+
+
+def fly_open_loop(setup: FlybySetup, theta, periods, r0_T, v0_T,
+                  perturbation: Perturbation = Perturbation(), *,
+                  counts: bool = True) -> FlybyOutcome:
+    """Fly a designed swarm open loop (no retargeting) through a perturbed world.
+
+    The Monte Carlo sample: the start states ``r0_T``, ``v0_T`` (N, 3; m, m/s)
+    targeted on the nominal model, plus the perturbation's state errors, are
+    propagated through its gravity and SRP, its attitude initial conditions
+    are flown, its camera misalignments applied and its failed spacecraft left
+    out of the coverage. ``counts=False`` skips the per-vertex image counts
+    (``times_seen`` is then 0/1; the coverage and first-seen times are the same).
+    """
+    th = np.asarray(theta, dtype=np.float64).ravel()
+    r_img, dcm, att, pos = open_loop_views(setup, th, periods, r0_T, v0_T, perturbation)
+    cov = _coverage(setup, r_img, dcm, perturbation.active, counts)
+    return FlybyOutcome(theta=th, periods=None if periods is None else np.asarray(periods),
+                        targeting=None, image_times=setup.image_times, r_img_T=r_img,
+                        dcm_BT=dcm, coverage=cov, attitude=att, position_T=pos)
+
+
+def open_loop_views(setup: FlybySetup, theta, periods, r0_T, v0_T,
+                    perturbation: Perturbation = Perturbation(), *, ideal_dcm_BT=None):
+    """What :func:`fly_open_loop` images from: positions ``r_img_T`` (N, n_img, 3) m and
+    camera DCMs (N, n_img, 3, 3) at the image times (misalignment applied), the
+    attitude result (simulated) and the trajectory (N, T, 3) m. Failures are not applied.
+    ``ideal_dcm_BT``: the ideal camera DCMs of these spacecraft when already computed
+    (``attitude_mode = "ideal"`` and not body tracking: they do not depend on the
+    perturbation then)."""
+    th = np.asarray(theta, dtype=np.float64).ravel()
+    p = perturbation
+    r0 = r0_T if p.position_error_T is None else r0_T + p.position_error_T
+    v0 = v0_T if p.velocity_error_T is None else v0_T + p.velocity_error_T
+    _, pos, _ = propagate_swarm(setup.body, r0, v0, setup.t0, setup.tf,
+                                force_model=setup.force_model, dt_sample=setup.dt,
+                                params_override=p.params_override, views=True)
+    r_img = np.ascontiguousarray(pos[:, ::setup.image_every])
+    mis = None if p.misalignment_prv is None else misalignment_dcms(p.misalignment_prv)
+    # body tracking points at the flown positions, so its DCMs move with the perturbation
+    if ideal_dcm_BT is not None and setup.attitude_mode == "ideal" and not setup.maneuver.tracks_body:
+        dcm, att = misaligned(ideal_dcm_BT, mis), None
+    else:
+        dcm, att = camera_at_images(setup, th, periods, p.ics, mis, r_img)
+    return r_img, dcm, att, pos
+
+
+def _image(setup: FlybySetup, th, periods, r_img, ics, misalignment, active, counts):
+    """Attitude at the images, camera misalignment, Sun, coverage: the common tail of a flyby."""
+    dcm, att = camera_at_images(setup, th, periods, ics, misalignment, r_img)
+    return dcm, att, _coverage(setup, r_img, dcm, active, counts)
+
+
+def _coverage(setup: FlybySetup, r_img, dcm, active, counts):
+    img_t = setup.image_times
+    sun = None
+    if setup.coverage.needs_sun:
+        sun = setup.sun_T(img_t)
+    return compute_coverage(setup.body.shape, r_img, dcm, img_t, setup.eta, setup.near,
+                            setup.far, options=setup.coverage, sun_T=sun, active=active,
+                            counts=counts)

@@ -1,0 +1,1 @@
+"""Mapping models: coverage options and the boundary of the coverage and quality kernels (``core.mapping``)."""
