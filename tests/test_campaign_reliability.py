@@ -81,3 +81,27 @@ def test_dispersed_design_stores_validation(tmp_path):
     # design.demonstrate: stepped up until the bound reaches p, or n_max
     assert bool(ds["demonstrated"]) or int(ds["best_swarm_size"]) == 8
     assert (tmp_path / "d-scenarios.zarr").exists()      # the bank, for reuse
+
+
+def test_sample_free_design_is_exact_on_a_fast_encounter(tmp_path):
+    """The success-probability design over the ring perpendicular to a 10 km/s approach
+    (issue 24): with the continuous dispersions off its P, P-hat and bound are the exact
+    failure-enumerated P of the chosen swarm over the nominal masks (numpy here)."""
+    enc = ROOT / "campaigns" / "eros-fast-encounter.toml"
+    sets = ['body.name="ellipsoid"', "dynamics.srp=false", "design.angle_step_deg=15",
+            "coverage.require_lit=false", "coverage.occlusion=false", "run.workers=0", "design.verify_samples=100",
+            "design.success_probability=0.9", "monte_carlo.failure_probability=0.05",
+            "design.scenarios=100"] + QUIET
+    ds = xr.open_zarr(run_file(enc, out=tmp_path / "e.zarr", overrides=sets))
+    c = load(enc, sets)
+    assert c.config.flyby.geometry == "encounter"
+    setup = setup_from_campaign(c)
+    bank = build_bank(setup, c.config.design.grid_step_rad)
+    w = bank.areas / bank.areas.sum()
+    need = ds.attrs["reliability_threshold"]
+    idx = np.rint(np.asarray(ds["swarm_angle"].values) / bank.step).astype(int) % bank.n_candidates
+    p = exact_p(bank.masks, w, list(idx), need, 0.05)
+    assert p >= 0.9
+    assert float(ds["reliability_probability"]) == pytest.approx(p, abs=1e-12)
+    assert float(ds["validation_p_hat"]) == pytest.approx(p, abs=1e-12)
+    assert float(ds["validation_lower_bound"]) == pytest.approx(p, abs=1e-12)
