@@ -25,7 +25,7 @@ kernels in ``core/maneuvers.py`` (unless it reuses a mode code) and add one
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
@@ -101,7 +101,9 @@ class Maneuver:
     name: str
     code: int
     gains: str
-    params: Callable
+    # the function's repr holds its address, which differs between processes; a
+    # maneuver is identified by its data (reprs of setups feed config hashes)
+    params: Callable = field(repr=False)
     description: str = ""
     key: str = ""
     sweeps: bool = False
