@@ -226,15 +226,18 @@ def targeting_input_error(exc: TargetingError, setup: FlybySetup, theta) -> Inpu
     worst = int(failed[np.argmax(np.where(np.isfinite(fm[failed]), fm[failed], np.inf))])
     n = int(res.n_iter[worst])
     hist = res.miss[worst, :n + 1]
-    closest = float(np.min(np.linalg.norm(res.position_T[worst], axis=1)))
+    dist = np.linalg.norm(res.position_T[worst], axis=1)
+    dist = dist[np.isfinite(dist)]     # an integration that broke off leaves NaN behind
+    closest = float(dist.min()) if dist.size else float("nan")
     r_max = setup.body.shape.r_max
     others = f" (and {failed.size - 1} more)" if failed.size > 1 else ""
     head = (f"targeting did not converge for spacecraft {worst}{others} at swarm angle "
             f"{theta[worst]:.4g} rad: miss {fm[worst]:.3g} m after {n} iterations, tolerance "
             f"{setup.tol:g} m; ")
     if closest <= r_max or not np.all(np.isfinite(hist)) or n < setup.max_iter:
-        return InputError(head + f"its path comes within {closest / 1e3:.3g} km of the body's "
-                          f"centre (R_max {r_max / 1e3:.3g} km): increase flyby.d_sep_km "
+        where = (f"its path comes within {closest / 1e3:.3g} km of the body's centre"
+                 if np.isfinite(closest) else "its integration broke off near the body")
+        return InputError(head + f"{where} (R_max {r_max / 1e3:.3g} km): increase flyby.d_sep_km "
                           f"(now {setup.d_sep / 1e3:.4g} km)", field="flyby.d_sep_km")
     if n >= 4 and np.min(hist[-3:]) >= 0.5 * np.min(hist[:-3]):
         return InputError(head + f"the miss stalls near {np.min(hist):.3g} m: loosen "
