@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.ticker import MaxNLocator
 
-from ideas_hpc.plots.figures import plt, save_png
+from ideas_hpc.plots.figures import body_name, plt, save_png
 
 
 def _threshold_pct(ds) -> float:
@@ -49,7 +49,8 @@ def reliability_curve(ds, path) -> "Path":  # noqa: F821
     ax.set_xlabel("number of spacecraft N")
     ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set_ylabel(f"P(mapping >= {_threshold_pct(ds):.2f} %), %")
-    ax.set_title(f"probability of mapping >= {_threshold_pct(ds):.2f} % vs number of spacecraft")
+    ax.set_title(f"{body_name(ds)}: probability of mapping >= {_threshold_pct(ds):.2f} % vs "
+                 "number of spacecraft")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, loc="lower right")
     return save_png(fig, path)
@@ -67,7 +68,7 @@ def validation_coverage(ds, path) -> "Path":  # noqa: F821
     ax.axvline(thr, color="k", ls=":", label=f"threshold {thr:.2f} %")
     ax.set_xlabel("area coverage, %")
     ax.set_ylabel("validation flights")
-    ax.set_title(f"validation: {cov.size} flights, failures sampled "
+    ax.set_title(f"{body_name(ds)}: validation, {cov.size} flights with sampled failures\n"
                  f"({int(failed.sum())} with a failure)")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
