@@ -86,6 +86,28 @@ def test_gap_matrix_counts_each_group_inside_an_arc():
     assert (np.diff(M, axis=1) >= 0).all()
 
 
+@pytest.mark.parametrize("seed", range(4))
+def test_gap_matrix_equals_its_definition_by_brute_force(seed):
+    # M[i, d] = weight of the groups whose candidates all lie in the open arc
+    # (i, i + d), checked set by set; dyadic weights make every sum exact
+    rng = np.random.default_rng(seed)
+    k, g = 16, 40
+    cover = np.zeros((k, g), dtype=bool)
+    for j in range(g):
+        for _ in range(1 + (rng.random() < 0.4)):
+            a, ln = rng.integers(k), rng.integers(1, k)
+            cover[(a + np.arange(ln)) % k, j] = True
+    cover[:, 0] = True                                  # seen by all: never inside an arc
+    w = rng.integers(1, 64, g) / 1024.0
+    M = gap_matrix(cover, w)
+    for i in range(k):
+        for d in range(k + 1):
+            arc = {(i + t) % k for t in range(1, d)}
+            want = sum(w[j] for j in range(g)
+                       if not cover[:, j].all() and set(np.flatnonzero(cover[:, j])) <= arc)
+            assert M[i, d] == want, (i, d)
+
+
 def test_swap_search_keeps_size_and_separation_and_never_gets_worse():
     bank = _circle_bank(7, k=24)
     start = np.array([0, 1, 2])

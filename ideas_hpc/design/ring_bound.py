@@ -30,45 +30,22 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ideas_hpc.core.design.ring_gaps import ring_gap_bound, ring_gap_swarm
+from ideas_hpc.core.design.ring_gaps import gap_matrix_of, ring_gap_bound, ring_gap_swarm
 from ideas_hpc.design.bank import CandidateBank, Reduced
 
 #: Largest grid on which the O(N K^3) bound is computed (0.25 deg).
 MAX_GRID = 1440
 
 
-def _runs(col: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Circular runs of True in ``col``: (starts, lengths); ``col`` has a False entry."""
-    k = col.size
-    i0 = int(np.argmin(col))                      # a False entry: no run is cut at 0
-    c = np.roll(col, -i0).astype(np.int8)
-    d = np.diff(np.r_[0, c, 0])
-    st = np.flatnonzero(d == 1)
-    return (st + i0) % k, np.flatnonzero(d == -1) - st
-
-
 def gap_matrix(cover: np.ndarray, weight: np.ndarray) -> np.ndarray:
     """``M[i, d]`` (K, K + 1): weight of the groups inside the open arc ``(i, i + d)``.
 
-    ``cover`` is (K, G) over the full grid (no merged candidates), ``weight`` (G,).
+    ``cover`` is (K, G) over the full grid (no merged candidates), every group
+    seen by some candidate; ``weight`` (G,). Compiled in
+    :func:`ideas_hpc.core.design.ring_gaps.gap_matrix_of`.
     """
-    k, g = cover.shape
-    starts, lengths, w = [], [], []
-    for j in np.flatnonzero(~cover.all(axis=0)):
-        gs, gl = _runs(~cover[:, j])                # gaps of group j
-        starts.append((gs + gl) % k)                # complement of each gap: an arc
-        lengths.append(k - gl)
-        w.append(np.full(gs.size, weight[j]))
-    if not starts:
-        return np.zeros((k, k + 1))
-    a, length, w = np.concatenate(starts), np.concatenate(lengths), np.concatenate(w)
-    m = np.zeros((k, k + 1))
-    for i in range(k):
-        off = (a - i) % k                           # arc start inside (i, i + k)
-        need = off + length                         # smallest d whose gap holds the arc
-        ok = (off >= 1) & (need <= k)
-        m[i] = np.bincount(need[ok], weights=w[ok], minlength=k + 1)
-    return np.ascontiguousarray(np.cumsum(m, axis=1))
+    return gap_matrix_of(np.ascontiguousarray(cover, dtype=np.bool_),
+                         np.ascontiguousarray(weight, dtype=np.float64))
 
 
 @dataclass

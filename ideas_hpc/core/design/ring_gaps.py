@@ -25,6 +25,98 @@ from numba import njit, prange
 
 
 @njit(parallel=True, cache=True)
+def gap_matrix_of(cover, weight):
+    """``M[i, d]`` (K, K + 1): weight of the groups inside the open arc ``(i, i + d)``.
+
+    Parameters
+    ----------
+    cover : (K, G) bool
+        Which grid candidate sees which vertex group (every group seen by at
+        least one candidate, as :func:`ideas_hpc.design.bank.reduce_problem`
+        leaves them).
+    weight : (G,) float64
+        Group weights (area fractions).
+
+    A group's candidate set lies inside an arc exactly when the arc contains
+    the complement of one of the group's gaps (its circular runs of
+    candidates that do not see it), itself an arc: start ``gap start + gap
+    length``, length ``K - gap length``. ``M[i, d]`` sums the weights of the
+    arcs that start inside ``(i, i + K)`` and end by ``i + d``; the sums are
+    accumulated per row in the order groups, then gaps, appear (the order of
+    the NumPy reference in the tests), then cumulated along ``d``.
+    """
+    k, g = cover.shape
+    n_arcs = 0
+    for j in range(g):
+        for t in range(k):
+            if not cover[t, j] and cover[t - 1 if t > 0 else k - 1, j]:
+                n_arcs += 1
+    a_start = np.empty(n_arcs, dtype=np.int64)
+    a_len = np.empty(n_arcs, dtype=np.int64)
+    a_w = np.empty(n_arcs)
+    q = 0
+    for j in range(g):
+        i0 = -1
+        for t in range(k):
+            if cover[t, j]:
+                i0 = t
+                break
+        full = True
+        for t in range(k):
+            if not cover[t, j]:
+                full = False
+                break
+        if i0 < 0 or full:
+            continue
+        t = 0
+        while t < k:                       # runs of "not seen", from the first seeing one
+            if not cover[(t + i0) % k, j]:
+                st = t
+                while t < k and not cover[(t + i0) % k, j]:
+                    t += 1
+                gl = t - st
+                a_start[q] = ((st + i0) % k + gl) % k
+                a_len[q] = k - gl
+                a_w[q] = weight[j]
+                q += 1
+            else:
+                t += 1
+    m = np.zeros((k, k + 1))
+    for i in prange(k):
+        for r in range(q):
+            off = a_start[r] - i
+            if off < 0:
+                off += k
+            need = off + a_len[r]
+            if off >= 1 and need <= k:
+                m[i, need] += a_w[r]
+        for d in range(1, k + 1):
+            m[i, d] += m[i, d - 1]
+    return m
+
+
+@njit(cache=True, fastmath={"nnan", "nsz"})
+def _band_min(a, b, lo, hi):
+    """``min(a[i] + b[i] for lo <= i < hi)`` (``inf`` when empty), four running minima
+    at once: one running minimum is bound by its own latency."""
+    b0 = np.inf
+    b1 = np.inf
+    b2 = np.inf
+    b3 = np.inf
+    i = lo
+    while i + 3 < hi:
+        b0 = min(b0, a[i] + b[i])
+        b1 = min(b1, a[i + 1] + b[i + 1])
+        b2 = min(b2, a[i + 2] + b[i + 2])
+        b3 = min(b3, a[i + 3] + b[i + 3])
+        i += 4
+    while i < hi:
+        b0 = min(b0, a[i] + b[i])
+        i += 1
+    return min(min(b0, b1), min(b2, b3))
+
+
+@njit(parallel=True, cache=True, fastmath={"nnan", "nsz"})
 def ring_gap_bound(M, n_max, m, stop_miss, extra):
     """Least gap-missed weight of every swarm size, per first member.
 
@@ -49,11 +141,24 @@ def ring_gap_bound(M, n_max, m, stop_miss, extra):
     tot : (n_max + 1, K) float64
         ``tot[n, s]``: least missed weight of an n-swarm whose smallest index
         is ``s`` (``inf`` when none fits, rows after the stop are ``inf``).
+
+    Notes
+    -----
+    The inner minimum runs over the previous member ``i`` with both operands
+    contiguous in ``i``: ``E[j, i] = M[i, j - i]`` is laid out once per call
+    (a strided ``M[i, j - i]`` walk cost most of the time). A minimum does not
+    depend on the order of its terms and no NaN can occur (``inf + finite``
+    only), so the vectorised loop (``fastmath`` without ``ninf``) gives the
+    same numbers.
     """
     K = M.shape[0]
     tot = np.full((n_max + 1, K), np.inf)
     if n_max < 1:
         return tot
+    E = np.full((K, K), np.inf)
+    for j in prange(K):
+        for i in range(j):
+            E[j, i] = M[i, j - i]
     # two layers of the shortest path, one row per first member s
     prev = np.full((K, K), np.inf)
     cur = np.full((K, K), np.inf)
@@ -68,12 +173,10 @@ def ring_gap_bound(M, n_max, m, stop_miss, extra):
     for n in range(2, n_max + 1):
         for s in prange(K):
             cur[s, s] = np.inf
+            ps = prev[s]
             for j in range(s + 1, K):
-                best = np.inf
-                for i in range(s, j - m):
-                    v = prev[s, i] + M[i, j - i]
-                    if v < best:
-                        best = v
+                ej = E[j]
+                best = _band_min(ps, ej, np.int64(s), np.int64(j) - m)
                 cur[s, j] = best
                 if s + K - j > m:
                     v = best + M[j, s + K - j]
