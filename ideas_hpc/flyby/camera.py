@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ideas_hpc.attitude import ideal_dcm_BT, initial_conditions, simulate_attitude
+from ideas_hpc.core.attitude.compose import compose_each
 from ideas_hpc.core.attitude.mrp import dcm_from_mrp, mrp_from_prv
 from ideas_hpc.flyby.encounter import camera_dcms_encounter, track_dcms
 
@@ -64,6 +65,8 @@ def camera_at_images(setup, th, periods, ics, misalignment, r_img):
 
 
 def misaligned(dcm, misalignment):
+    """Camera DCMs ``[C T] = [C B][B T]`` (N, n_img, 3, 3); ``misalignment`` ``[C B]`` (N, 3, 3) or None."""
     if misalignment is None:
         return dcm
-    return np.ascontiguousarray(np.matmul(misalignment[:, None], dcm))  # [CB][BT]
+    return compose_each(np.ascontiguousarray(misalignment, dtype=np.float64),
+                        np.ascontiguousarray(dcm, dtype=np.float64))
