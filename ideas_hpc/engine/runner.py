@@ -194,7 +194,10 @@ def _submit_all(client, path: Path, chunk_fn: ChunkFn, todo, summary: RunSummary
         if _accepts_n_workers(client) else len(client.scheduler_info().get("workers", {}))
     tag = uuid.uuid4().hex[:8]
     gate = gate_from_env()  # read here, in the client: workers may not share its environment
-    futures = [client.submit(_run_chunk, str(path), chunk_fn, cid, start, stop, gate,
+    # the chunk function once per worker, not once per task: a scenario bank's
+    # carries its row engine (about 12 MB), which every task would otherwise ship
+    fn = client.scatter(chunk_fn, broadcast=True, hash=False) if todo else chunk_fn
+    futures = [client.submit(_run_chunk, str(path), fn, cid, start, stop, gate,
                              key=f"chunk-{cid}-{tag}", pure=False, retries=retries)
                for cid, start, stop in todo]
     bar = tqdm(total=summary.n_chunks, initial=summary.chunks_skipped, unit="chunk",

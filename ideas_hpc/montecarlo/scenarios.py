@@ -126,6 +126,10 @@ def row_engine(setup: FlybySetup, theta, mc, seed: int, stream: int) -> RowEngin
     return RowEngine(setup, theta, r0, v0).prepare(pilot)
 
 
+def _apply(part, fn):
+    return fn(part)
+
+
 def _run_chunks(ks, fn, client, chunk_size, progress, label):
     parts = [ks[i:i + chunk_size] for i in range(0, len(ks), chunk_size)]
     bar = None
@@ -142,7 +146,9 @@ def _run_chunks(ks, fn, client, chunk_size, progress, label):
                 bar.update(len(p))
     else:
         from distributed import as_completed
-        futures = client.map(fn, parts, pure=False)
+        # the row engine once per worker (see engine.runner._submit_all)
+        fn_f = client.scatter(fn, broadcast=True, hash=False)
+        futures = client.map(_apply, parts, fn=fn_f, pure=False)
         index = {f.key: i for i, f in enumerate(futures)}
         res = [None] * len(parts)
         for f in as_completed(futures):
