@@ -175,8 +175,10 @@ def ring_gap_bound(M, n_max, m, stop_miss, extra):
             cur[s, s] = np.inf
             ps = prev[s]
             for j in range(s + 1, K):
-                ej = E[j]
-                best = _band_min(ps, ej, np.int64(s), np.int64(j) - m)
+                if n == 2:      # prev[s] is 0 at s and inf elsewhere: the minimum is E[j, s]
+                    best = E[j, s] if s < j - m else np.inf
+                else:
+                    best = _band_min(ps, E[j], np.int64(s), np.int64(j) - m)
                 cur[s, j] = best
                 if s + K - j > m:
                     v = best + M[j, s + K - j]
@@ -232,3 +234,67 @@ def ring_gap_swarm(M, n, m, s):
         out[k - 1] = j
         j = P[k, j]
     return out, best
+
+
+@njit(parallel=True, cache=True, fastmath={"nnan", "nsz"})
+def ring_gap_low(M, n_max, m, stop_miss):
+    """Fewest members whose least gap-missed weight is ``<= stop_miss`` (``n_max + 1``: none).
+
+    The same answer as the first row ``n`` of :func:`ring_gap_bound` with
+    ``min_s tot[n, s] <= stop_miss``, with fewer first members: a swarm with
+    no member in ``[0, G)`` has a gap of at least ``G + 1`` steps, so it
+    misses at least ``min_i M[i, G + 1]`` (``M`` is non-decreasing in ``d``);
+    with ``G`` the smallest such that this exceeds ``stop_miss``, only swarms
+    with a member in ``[0, G)`` can reach it, and their rows ``s < G`` of the
+    shortest path are the full computation's (each row depends on its own
+    ``s`` only).
+    """
+    K = M.shape[0]
+    if n_max < 1:
+        return n_max + 1
+    low = np.inf
+    for s in range(K):
+        low = min(low, M[s, K])
+    if low <= stop_miss:
+        return 1
+    G = K
+    for g in range(1, K):
+        least = np.inf
+        for i in range(K):
+            least = min(least, M[i, g + 1])
+        if least > stop_miss:
+            G = g
+            break
+    E = np.full((K, K), np.inf)
+    for j in prange(K):
+        for i in range(j):
+            E[j, i] = M[i, j - i]
+    prev = np.full((G, K), np.inf)
+    cur = np.full((G, K), np.inf)
+    for s in range(G):
+        prev[s, s] = 0.0
+    best_n = np.full(G, np.inf)
+    block = 32
+    for n in range(2, n_max + 1):
+        # blocks of first members, so that a size that reaches stop_miss stops at
+        # the first block holding a witness (the last size needs no full layer)
+        for b0 in range(0, G, block):
+            for s in prange(b0, min(G, b0 + block)):
+                cur[s, s] = np.inf
+                best_n[s] = np.inf
+                ps = prev[s]
+                for j in range(s + 1, K):
+                    if n == 2:
+                        best = E[j, s] if s < j - m else np.inf
+                    else:
+                        best = _band_min(ps, E[j], np.int64(s), np.int64(j) - m)
+                    cur[s, j] = best
+                    if s + K - j > m:
+                        v = best + M[j, s + K - j]
+                        if v < best_n[s]:
+                            best_n[s] = v
+            for s in range(b0, min(G, b0 + block)):
+                if best_n[s] <= stop_miss:
+                    return n
+        prev, cur = cur, prev
+    return n_max + 1
