@@ -45,7 +45,7 @@ from ideas_hpc.mapping.coverage import CoverageOptions, compute_coverage, observ
 # the tiled kernel is a test oracle kept in tests/, not part of the package
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from coverage_tiles import coverage_counts_tiles  # noqa: E402
-from embree_peer import embree_section  # noqa: E402
+from embree_peer import best_of, embree_section  # noqa: E402
 
 ANGLES = np.array([0.2, 1.7, 2.4, 2.9, 3.3, 3.5, 5.6, 6.0])
 N_IMG = 6001
@@ -118,16 +118,6 @@ def numpy_per_image(p, n, r_T, dcm_BT, times, tan_eta, near, far):
             first[hit] = np.minimum(first[hit], times[i])
     first[np.isinf(first)] = np.nan
     return count > 0, first, count
-
-
-def best_of(fn, repeat):
-    best = math.inf
-    out = None
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
 
 
 def main():

@@ -17,14 +17,17 @@ run, on eros001708 (the main job's body):
    against serial. A full-count strict flyby asks the opposite kind of
    query: 99.8 % *clear* rays, where the BVH must prove that no face is
    crossed and Embree is about 7x faster per ray.
-3. **End to end.** The masks with the per-image scan, with the coherent scan
-   that the project now uses (``core/mapping/seen_masks.py``: time-tree
-   pruning by elevation, a cone test that skips whole runs of images the last
-   blocking face covers, the face hint), and without occlusion at all (the
-   floor no occlusion engine can beat). With the coherent scan the masks cost
-   little more than the floor, so an Embree path could save at most the
-   difference, and it would pay a float32-to-float64 certification and a
-   two-pass kernel on top.
+3. **End to end.** The masks with the time-tree scan the project uses (its
+   occlusion queries start at the previous blocking face; before that hint,
+   at fbb2344, the same masks took 8.7-9.2 s against 2.8-3.5 s with it in
+   back-to-back runs on the loaded machine, identical masks), with the
+   scenario rows' coherent scan (``scenario_rows.perturbed_rows`` with no
+   witness: elevation pruning of image runs and a cone test that skips runs
+   the last blocking face covers; identical masks, faster warm, but it
+   compiles a larger kernel, about 13 s more on a cold cache, so it is not
+   used for the masks), and without occlusion at all (the floor that no
+   occlusion engine can beat). Also a 3-spacecraft strict sample, with and
+   without counts.
 
 Why Embree is not adopted (the decision of issue 19 item 5; figures from a
 run on the loaded 2-core machine are in the issue's report): its speed is in
@@ -34,9 +37,9 @@ dominate (strict full counts, not in the main job) an exact Embree path needs
 a certified float32 test (a scene of inflated triangles, per-vertex near-face
 lists, a float64 re-test of every hit, the BVH for the rest), and embreex
 runs one thread under the GIL (two Python threads are no faster) against the
-kernels' ``prange``: the best case, 217 ns/ray on one core against the BVH's
-~1.5 us/ray on each of two, is under 2x on that path before the certification
-and the second pass. Proving whole runs of images clear with one cone test,
+kernels' ``prange``: the best case, 100-220 ns/ray on one core against the
+BVH's 1.0-1.5 us/ray on each of two, is 2.5-3.5x on that path before the
+float32 ray set-up (50-220 ns/ray), the certification and the second pass. Proving whole runs of images clear with one cone test,
 as the quality pass does (``core/mapping/bvh.cone_clear``), is the Numba way to
 the same gain.
 """
@@ -50,7 +53,7 @@ import numpy as np
 from numba import njit
 
 from ideas_hpc.core.mapping import bvh as cbvh
-from ideas_hpc.core.mapping import coverage as ccov
+from ideas_hpc.core.mapping.scenario_rows import perturbed_rows
 from ideas_hpc.core.mapping.segments import segment_hit
 from ideas_hpc.core.mapping.visibility import _seen
 
@@ -197,12 +200,15 @@ def workload_section(shape, tree, scene, eps):
     args = (v, nrm, r, C, te, setup.near, setup.far, True, sin_e, np.inf, True, False,
             np.zeros((1, 3)), *tree)
     sub = tuple(a[:2] if a is r or a is C else a for a in args)
-    ccov.observed_by_spacecraft(*sub)
     observed_per_spacecraft(shape, r[:2], C[:2], *geo, options=opts)
     free = dataclasses.replace(opts, occlusion=False)
     observed_per_spacecraft(shape, r[:2], C[:2], *geo, options=free)
-    t_old, m_old = best_of(lambda: ccov.observed_by_spacecraft(*args), 2)
-    t_new, m_new = best_of(lambda: observed_per_spacecraft(shape, r, C, *geo, options=opts), 2)
+    nsc, nv = r.shape[0], v.shape[0]
+    rows = (np.full((nsc, nv), -1, dtype=np.int64), np.full((nsc, nv, 2), -1, dtype=np.int64),
+            np.zeros((nsc, nv)), np.full(nsc, r.shape[1], dtype=np.int64), np.zeros(nsc))
+    perturbed_rows(*(a[:2] for a in rows), *sub)
+    t_old, m_old = best_of(lambda: observed_per_spacecraft(shape, r, C, *geo, options=opts), 2)
+    t_new, m_new = best_of(lambda: perturbed_rows(*rows, *args), 2)
     t_free, _ = best_of(lambda: observed_per_spacecraft(shape, r, C, *geo, options=free), 2)
     assert np.array_equal(m_old, m_new)
     js = np.arange(0, shape.n_vertices, 8)
@@ -225,10 +231,10 @@ def workload_section(shape, tree, scene, eps):
                              counts=counts)
             sample.append(best_of(lambda: compute_coverage(shape, r3, C3, t, *geo, options=o,
                                                            counts=counts), 3)[0])
-    print(f"  end to end, masks of the main job (720 strict candidates, 2 threads): per-image "
-          f"scan {t_old:.2f} s, coherent scan {t_new:.2f} s ({t_old / t_new:.1f}x, same masks), "
-          f"no occlusion {t_free:.2f} s: occlusion is {100 * (1 - t_free / t_old):.0f} % of "
-          f"the per-image scan, {100 * max(0.0, 1 - t_free / t_new):.0f} % of the coherent one")
+    print(f"  end to end, masks of the main job (720 strict candidates, 2 threads): time-tree "
+          f"scan with the face hint {t_old:.2f} s (used), scenario rows' coherent scan "
+          f"{t_new:.2f} s (same masks), no occlusion {t_free:.2f} s: occlusion is "
+          f"{100 * max(0.0, 1 - t_free / t_old):.0f} % of the masks")
     print(f"  end to end, a 3-spacecraft strict sample: verification (no counts) "
           f"{1e3 * sample[0]:.1f} ms ({1e3 * sample[2]:.1f} ms without occlusion), full counts "
           f"{1e3 * sample[1]:.0f} ms ({1e3 * sample[3]:.0f} ms without occlusion)")

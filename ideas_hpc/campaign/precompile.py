@@ -34,7 +34,6 @@ import tempfile
 import numpy as np
 
 from ideas_hpc.core.mapping import coverage as _cov
-from ideas_hpc.core.mapping import seen_masks as _seen
 from ideas_hpc.core.dynamics import targeting as _tgt
 
 
@@ -42,7 +41,7 @@ def cache_is_warm() -> bool:
     """True when the cache has an index for the coverage and propagation kernels."""
     try:
         return all(os.path.exists(f._cache._cache_file._index_path)
-                   for f in (_cov.coverage_vertices, _seen.seen_by_spacecraft,
+                   for f in (_cov.coverage_vertices, _cov.observed_by_spacecraft,
                              _tgt.propagate_batch))
     except AttributeError:  # a Numba without these internals: assume warm
         return True

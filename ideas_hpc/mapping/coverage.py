@@ -35,7 +35,6 @@ from ideas_hpc.core.mapping import bvh as _bvh
 from ideas_hpc.core.mapping import coverage as _cov
 from ideas_hpc.core.mapping import quality as _qual
 from ideas_hpc.core.mapping import quality_masks as _qmask
-from ideas_hpc.core.mapping import seen_masks as _seen
 from ideas_hpc.core.mapping import stereo_pairs as _pairs
 from ideas_hpc.mapping.options import (CoverageOptions, _finite,  # noqa: F401 (re-exported)
                                coverage_options_from_config)
@@ -295,15 +294,14 @@ def observed_per_spacecraft(shape, r_T, dcm_BT, eta, near, far, *,
     """(N, V) bool: vertex j seen by spacecraft k at any image (for the GA's subset unions).
 
     Arguments as in :func:`compute_coverage` (no times: each scan stops at its
-    first hit). The kernel is :func:`ideas_hpc.core.mapping.seen_masks.seen_by_spacecraft`
-    (coherent occlusion queries; the same mask as
-    :func:`~ideas_hpc.core.mapping.coverage.observed_by_spacecraft`).
+    first hit).
     """
     r, c, tan_eta, near, far, _ = _check_geometry(shape, r_T, dcm_BT, eta, near, far)
     v, n, _ = _mesh(shape)
     sin_e, max_r, occ, ill, s, tree = _strict_args(shape, options, sun_T, r.shape[1])
-    return _seen.seen_by_spacecraft(v, n, r, c, tan_eta, near, far, options.mode == "exact",
-                                    sin_e, max_r, occ, ill, s, *tree)
+    return _cov.observed_by_spacecraft(v, n, r, c, tan_eta, near, far,
+                                       options.mode == "exact", sin_e, max_r, occ, ill, s,
+                                       *tree)
 
 
 def _per_spacecraft_args(shape, r_T, dcm_BT, image_times, eta, near, far, options, sun_T):

@@ -1,6 +1,7 @@
-"""Per-spacecraft seen masks with coherent occlusion queries (``core/mapping/seen_masks``)
-against a brute force over every image: NumPy culling, clipping, elevation and range,
-then the BVH's any-hit query per remaining (vertex, image) pair."""
+"""Per-spacecraft masks with occlusion (the time-tree scan whose occlusion query starts
+at the face that blocked the previous image, issue 19 item 5) against a brute force
+over every image: NumPy culling, clipping, elevation and range, then the BVH's
+any-hit query per remaining (vertex, image) pair, with no hint."""
 
 from __future__ import annotations
 
@@ -12,9 +13,7 @@ import pytest
 from ideas_hpc.body.analytic import ellipsoid_mesh
 from ideas_hpc.body.shape import build_shape
 from ideas_hpc.core.mapping import bvh as cbvh
-from ideas_hpc.core.mapping import coverage as ccov
-from ideas_hpc.mapping.coverage import (CoverageOptions, observed_per_spacecraft,
-                                        occlusion_structure)
+from ideas_hpc.mapping.coverage import CoverageOptions, compute_coverage, observed_per_spacecraft
 
 
 def _look_at(r):
@@ -41,12 +40,14 @@ def _passes(angles, dist, half_len, n_img, tilt=0.0):
 
 
 def brute_masks(shape, r, C, eta, near, far, opts, sun=None):
-    """(N, V): every image tested, the SPEC expressions in NumPy, occlusion by the BVH."""
+    """(N, V) masks and (V,) counts: every image tested, the SPEC expressions in NumPy,
+    occlusion and shadows by the BVH's any-hit query (no hint)."""
     p = shape.vertices_T
     n = shape.vertex_normals_T
     tree = cbvh.build_bvh(np.ascontiguousarray(p), np.ascontiguousarray(shape.faces, np.int64))
     t = math.tan(eta)
     out = np.zeros((r.shape[0], p.shape[0]), bool)
+    count = np.zeros(p.shape[0], np.int64)
     for k in range(r.shape[0]):
         for i in range(r.shape[1]):
             d = p - r[k, i]
@@ -61,7 +62,7 @@ def brute_masks(shape, r, C, eta, near, far, opts, sun=None):
             ok &= rng <= opts.max_range
             if opts.illumination:
                 ok &= n @ sun[i] > 0.0
-            j = np.flatnonzero(ok & ~out[k])
+            j = np.flatnonzero(ok)
             if opts.occlusion and j.size:
                 tgt = np.ascontiguousarray(np.broadcast_to(r[k, i], (j.size, 3)))
                 ok[j] &= ~cbvh.segments_blocked(*tree, np.ascontiguousarray(p[j]), tgt, j)
@@ -69,7 +70,8 @@ def brute_masks(shape, r, C, eta, near, far, opts, sun=None):
                 far_sun = np.ascontiguousarray(p[j] + 1e9 * sun[i])
                 ok[j] &= ~cbvh.segments_blocked(*tree, np.ascontiguousarray(p[j]), far_sun, j)
             out[k] |= ok
-    return out
+            count += ok
+    return out, count
 
 
 def _dumbbell():
@@ -86,24 +88,27 @@ STRICT = CoverageOptions(mode="exact", occlusion=True, min_elevation=math.radian
 
 @pytest.mark.parametrize("opts", [STRICT, CoverageOptions(mode="exact", occlusion=True),
                                   CoverageOptions(mode="paper", occlusion=True)])
-def test_dumbbell_masks_equal_brute_force(opts):
+def test_dumbbell_masks_and_counts_equal_brute_force(opts):
     shape = _dumbbell()
     # short passes looking along the lobes' axis: the second lobe hides the first's tip
     r, C = _passes(np.array([math.pi / 2 + 0.05, math.pi / 2 + 0.3, 1.2, 1.5 * math.pi + 0.1]),
                    9e3, 1e3, 240, tilt=1.2)
     eta, near, far = 0.35, 1.0, 1e6
-    ref = brute_masks(shape, r, C, eta, near, far, opts)
+    ref, count = brute_masks(shape, r, C, eta, near, far, opts)
     got = observed_per_spacecraft(shape, r, C, eta, near, far, options=opts)
     np.testing.assert_array_equal(got, ref)
+    cov = compute_coverage(shape, r, C, np.arange(r.shape[1], dtype=float), eta, near, far,
+                           options=opts)
+    np.testing.assert_array_equal(cov.times_seen, count)
     # occlusion decides a share of the pairs: the test can fail on it
-    free = brute_masks(shape, r, C, eta, near, far,
-                       CoverageOptions(mode=opts.mode, min_elevation=opts.min_elevation))
+    free, _ = brute_masks(shape, r, C, eta, near, far,
+                          CoverageOptions(mode=opts.mode, min_elevation=opts.min_elevation))
     assert (free & ~ref).sum() > 100
 
 
-def test_eros_masks_equal_brute_force_and_per_image_scan(eros1708):
+def test_eros_masks_and_counts_equal_brute_force(eros1708):
     """eros001708, strict (exact culling, occlusion, 5 deg elevation) and with shadows:
-    the coherent scan equals every-image brute force and the per-image BVH scan."""
+    masks, union and counts equal every-image brute force."""
     shape = eros1708.shape
     # twelve short passes at 20 km: the lobes hide each other from the long axis
     r, C = _passes(np.linspace(0.0, 2 * math.pi, 13)[:-1], 20e3, 2e3, 120, tilt=1.0)
@@ -114,14 +119,15 @@ def test_eros_masks_equal_brute_force_and_per_image_scan(eros1708):
     for opts in (STRICT, CoverageOptions(mode="exact", occlusion=True, illumination=True,
                                          min_elevation=math.radians(5.0))):
         s = suns if opts.illumination else None
-        ref = brute_masks(shape, r, C, eta, near, far, opts, sun=suns)
+        ref, count = brute_masks(shape, r, C, eta, near, far, opts, sun=suns)
         got = observed_per_spacecraft(shape, r, C, eta, near, far, options=opts, sun_T=s)
         np.testing.assert_array_equal(got, ref)
-        per_image = ccov.observed_by_spacecraft(
-            np.ascontiguousarray(shape.vertices_T), np.ascontiguousarray(shape.vertex_normals_T),
-            r, C, math.tan(eta), near, far, True, math.sin(opts.min_elevation), np.inf, True,
-            bool(opts.illumination), np.ascontiguousarray(suns), *occlusion_structure(shape))
-        np.testing.assert_array_equal(got, per_image)
-        free = brute_masks(shape, r, C, eta, near, far,
-                           CoverageOptions(mode="exact", min_elevation=opts.min_elevation))
+        t = np.arange(r.shape[1], dtype=float)
+        for counts in (True, False):
+            cov = compute_coverage(shape, r, C, t, eta, near, far, options=opts, sun_T=s,
+                                   counts=counts)
+            np.testing.assert_array_equal(cov.observed, ref.any(axis=0))
+            np.testing.assert_array_equal(cov.times_seen, count if counts else count > 0)
+        free, _ = brute_masks(shape, r, C, eta, near, far,
+                              CoverageOptions(mode="exact", min_elevation=opts.min_elevation))
         assert (free & ~ref).sum() > 100
