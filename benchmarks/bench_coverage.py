@@ -13,6 +13,11 @@ input validation. Also timed: the early-out union
 kernel, strict mode with self-occlusion (BVH build reported separately), and
 the BVH against trimesh's ray engine on the same segments.
 
+Occlusion against Embree (``embreex``, issue 19 item 5): see ``embree_peer.py``
+beside this file for what is measured and why the project keeps its own BVH
+(on eros001708: random rays, the main job's mask rays in the kernels' order,
+full-count rays, and the masks and a strict sample end to end).
+
 Quality pass (issue 14), on eros022540 when the data is there: the paper
 swarm with 3001 images, exact culling, self-occlusion, a Sun turning with the
 body, and a requirement that uses every quality variable (lit, emission <= 60
@@ -40,6 +45,7 @@ from ideas_hpc.mapping.coverage import CoverageOptions, compute_coverage, observ
 # the tiled kernel is a test oracle kept in tests/, not part of the package
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from coverage_tiles import coverage_counts_tiles  # noqa: E402
+from embree_peer import best_of, embree_section  # noqa: E402
 
 ANGLES = np.array([0.2, 1.7, 2.4, 2.9, 3.3, 3.5, 5.6, 6.0])
 N_IMG = 6001
@@ -112,16 +118,6 @@ def numpy_per_image(p, n, r_T, dcm_BT, times, tan_eta, near, far):
             first[hit] = np.minimum(first[hit], times[i])
     first[np.isinf(first)] = np.nan
     return count > 0, first, count
-
-
-def best_of(fn, repeat):
-    best = math.inf
-    out = None
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
 
 
 def main():
@@ -231,45 +227,6 @@ def main():
 
     print(f"threads: {numba.get_num_threads()} (machine shared; timings are best of several runs)")
     print(f"coverage: {t_np / t_nb:.1f}x faster than vectorised numpy")
-
-
-def embree_section(shape, tree, n=20000):
-    """The honest peer of the occlusion engine: Embree's any-hit (occluded) queries.
-
-    Same segments for both: from a vertex out 150 km in a random direction.
-    Embree (``embreex``, optional) works in float32 and has no "ignore the
-    faces at this vertex" query, so its rays start ``1e-3`` mesh edge out along
-    the direction; the BVH's float64 answers with the vertex's faces skipped
-    are what the coverage kernels need, so Embree is a speed reference here,
-    not a drop-in (its answers differ on a few grazing rays).
-    """
-    try:
-        from embreex import rtcore_scene
-        from embreex.mesh_construction import TriangleMesh
-    except ImportError:
-        print("segment queries vs Embree: embreex not installed (pip install embreex)")
-        return
-    rng = np.random.default_rng(2)
-    j = rng.integers(0, shape.n_vertices, n)
-    u = rng.normal(size=(n, 3))
-    u /= np.linalg.norm(u, axis=1)[:, None]
-    src = np.ascontiguousarray(shape.vertices_T[j])
-    tgt = np.ascontiguousarray(src + 150e3 * u)
-    skip = j.astype(np.int64)
-    t_bvh, blocked = best_of(lambda: cbvh.segments_blocked(*tree, src, tgt, skip), 3)
-    scene = rtcore_scene.EmbreeScene()
-    TriangleMesh(scene, shape.vertices_T.astype(np.float32), shape.faces.astype(np.int32))
-    eps = 1e-3 * math.sqrt(float(np.mean(shape.vertex_areas)))
-    o = (src + eps * u).astype(np.float32)
-    d = u.astype(np.float32)
-    far = np.full(n, 150e3, dtype=np.float32)
-    scene.run(o[:2], d[:2], dists=far[:2], query="OCCLUDED")
-    t_em, hit = best_of(lambda: scene.run(o, d, dists=far, query="OCCLUDED"), 3)
-    agree = float(np.mean((hit != -1) == blocked))
-    r = t_bvh / t_em
-    print(f"segment queries vs Embree (embreex, float32, 1 thread, {n} rays): numba BVH "
-          f"{n / t_bvh:.3e}/s, Embree occluded {n / t_em:.3e}/s -> Embree {r:.2f}x "
-          f"{'faster' if r > 1 else 'slower'}; same answer on {100 * agree:.2f} % of rays")
 
 
 def quality_section():

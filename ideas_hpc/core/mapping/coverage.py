@@ -20,7 +20,10 @@ later than the earliest hit found so far.
 Speed (see ``benchmarks/bench_coverage.py``): per (vertex, spacecraft) the
 kernels walk the time tree (:func:`~ideas_hpc.core.mapping.time_tree.time_tree`);
 results are identical to testing every image (tests compare bit for bit with
-an un-pruned evaluation). An independent second implementation (spatial
+an un-pruned evaluation). With occlusion, each image's query starts at the
+face that blocked the scan's previous image (97 % of the main job's queries
+are blocked, nearly always by that face; the same any-hit answer). An
+independent second implementation (spatial
 vertex tiles, no time coherence) lives in ``tests/coverage_tiles.py`` as a
 cross-check.
 """

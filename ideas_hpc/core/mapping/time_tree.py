@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from ideas_hpc.core.mapping.segments import segment_hit
 from ideas_hpc.core.mapping.visibility import _seen, _seen_basic
 
 
@@ -251,7 +252,9 @@ def _scan(j, k, NF, NI, stack, image_times, best, early, vertices, normals, r_T,
     Depth-first over the time tree in image order. ``early``: skip images at
     or after ``best`` and stop at the first hit. ``strict``: the node test only
     prunes (culling and clipping are necessary conditions), images of
-    accepted nodes still go through :func:`_seen`.
+    accepted nodes still go through :func:`_seen`, whose occlusion query
+    starts at the face that blocked the scan's previous image
+    (:func:`~ideas_hpc.core.mapping.segments.segment_hit`; issue 19 item 5).
     """
     px = vertices[j, 0]
     py = vertices[j, 1]
@@ -261,6 +264,7 @@ def _scan(j, k, NF, NI, stack, image_times, best, early, vertices, normals, r_T,
     nz = normals[j, 2]
     nabs = np.sqrt(nx * nx + ny * ny + nz * nz)
     cnt = 0
+    hint = np.int64(-1)
     sp = 1
     stack[0] = NI.shape[0] - 1
     while sp > 0:
@@ -289,9 +293,18 @@ def _scan(j, k, NF, NI, stack, image_times, best, early, vertices, normals, r_T,
             if early and image_times[i] >= best:
                 break
             if strict:
+                # occlusion last, starting at the face that blocked the previous
+                # image (any crossed face answers the any-hit query: same answer)
                 hit = _seen(j, k, i, vertices, normals, r_T, dcm_BT, tan_eta, near, far,
-                            exact, sin_min_elev, max_range, occlusion, illumination, sun_T,
+                            exact, sin_min_elev, max_range, False, illumination, sun_T,
                             node_bounds, node_info, tri, tri_vid)
+                if hit and occlusion:
+                    f = segment_hit(node_bounds, node_info, tri, tri_vid, px, py, pz,
+                                    r_T[k, i, 0] - px, r_T[k, i, 1] - py, r_T[k, i, 2] - pz,
+                                    1.0, np.int64(j), hint)
+                    if f >= 0:
+                        hint = f
+                        hit = False
             else:
                 hit = _seen_basic(px, py, pz, nx, ny, nz, k, i, r_T, dcm_BT, tan_eta,
                                   near, far, exact)
