@@ -112,6 +112,38 @@ def config_diff(old: Mapping, new: Mapping, limit: int = 6) -> list[str]:
     return out
 
 
+def without_later_defaults(old: Mapping, new: Mapping, defaults: Mapping[str, Any]) -> dict:
+    """``new`` (canonical JSON form) without the keys a store's ``old`` config predates.
+
+    A key is dropped when it is absent from ``old`` (a store written before the
+    key existed) and its value in ``new`` equals ``defaults[key]`` (dotted key:
+    its default, which by the project's rule is the old behaviour). A key absent
+    from ``old`` with any other value, or absent from ``defaults``, stays, so a
+    real change still differs. Tables left empty by the dropping are dropped too.
+    """
+    a = _flatten(json.loads(config_json(old)))
+    canon = json.loads(config_json(new))
+    flat_defaults = {k: config_json({"v": v}) for k, v in defaults.items()}
+
+    def prune(obj: Any, prefix: str) -> Any:
+        if not isinstance(obj, dict) or not obj:
+            return obj
+        out = {}
+        for k, v in obj.items():
+            key = f"{prefix}.{k}" if prefix else k
+            if isinstance(v, dict) and v:
+                v = prune(v, key)
+                if v == {} and key not in a and not any(x.startswith(key + ".") for x in a):
+                    continue
+            elif (key not in a and key in flat_defaults
+                  and config_json({"v": v}) == flat_defaults[key]):
+                continue
+            out[k] = v
+        return out
+
+    return prune(canon, "")
+
+
 # --------------------------------------------------------------------------- metadata
 
 def is_store(path: str | os.PathLike) -> bool:
