@@ -76,6 +76,11 @@ LATER_KEYS = {"flyby": ["geometry", "speed_km_s", "approach_dec_deg", "approach_
               "design": ["confidence", "demonstrate", "scenarios", "success_probability"]}
 
 
+# What the code before those keys wrote for the keys whose default is now null
+# (as read from a store written by a6739bb^): the values the designers still use.
+FORMER_DEFAULTS = {"angle_step_deg": 0.5, "angle_step_rad": 0.01, "verify_samples": 64}
+
+
 @pytest.fixture()
 def old_store(tiny_store, tmp_path):
     """A copy of the tiny store as older code wrote it: no later keys, its own hash."""
@@ -90,6 +95,9 @@ def old_store(tiny_store, tmp_path):
     for table, keys in LATER_KEYS.items():
         for key in keys:
             del config[table][key]  # KeyError: the test's list is stale
+    # keys whose default became null ("the designer's own"), written out then
+    assert [config["design"][k] for k in FORMER_DEFAULTS] == [None] * len(FORMER_DEFAULTS)
+    config["design"].update(FORMER_DEFAULTS)
     meta["attributes"]["config"] = config_json(config)
     meta["attributes"]["config_hash"] = config_hash(config)
     (out / "zarr.json").write_text(json.dumps(meta))
@@ -112,6 +120,8 @@ def test_resume_accepts_a_store_written_before_keys_with_their_defaults(old_stor
     ("design.confidence=0.9", "design.confidence absent in the store, 0.9 now"),
     ("design.scenarios=128", "design.scenarios absent in the store, 128 now"),
     ("instrument.aperture_cm=9.5", "instrument.aperture_cm = 8.0 in the store, 9.5 now"),
+    ("design.verify_samples=32", "design.verify_samples = 64 in the store, 32 now"),
+    ("design.angle_step_deg=1.0", "design.angle_step_deg = 0.5 in the store, 1.0 now"),
 ])
 def test_resume_of_an_old_store_still_refuses_real_changes(old_store, override, message):
     with pytest.raises(InputError) as ei:

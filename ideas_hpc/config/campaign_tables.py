@@ -78,7 +78,8 @@ from ideas_hpc.flyby.sizing import INSTRUMENT_DEFAULTS as _CAM
 from ideas_hpc.config.design_checks import check_stereo_design, resolve_angle_step
 from ideas_hpc.config.encounter_table import ENCOUNTER, check_encounter
 from ideas_hpc.campaign.kinds import KINDS as REGISTRY
-from ideas_hpc.config.design_table import DESIGN, MC_SCHEMA, reliability_checks  # noqa: F401
+from ideas_hpc.config.design_table import (DESIGN, MC_SCHEMA, reliability_checks,  # noqa: F401
+                                           verify_samples)
 
 KINDS = REGISTRY.keys()   # live: a kind registered later is a valid choice
 
@@ -339,10 +340,13 @@ class ResolvedConfig(dict):
     ``defaults`` maps dotted keys to their default: the schema's (file units)
     and, under ``models.<name>.``, the sub-model dataclasses' field defaults.
     The engine uses it on ``--resume`` to accept a store written before a key
-    existed when the key still has its default (the old behaviour).
+    existed when the key still has its default (the old behaviour). ``effective``
+    maps keys whose default is null (the code picks the value) to the value
+    picked, so a store that wrote that value out (older code) still matches.
     """
 
     defaults: dict[str, Any]
+    effective: dict[str, Any]
 
 
 def _model_defaults(extras: dict) -> dict[str, Any]:
@@ -381,4 +385,8 @@ def resolved_config(c: Campaign) -> dict[str, Any]:
         out.get(table, {}).pop(key, None)
     out = ResolvedConfig(out)
     out.defaults = {**schema_defaults(SCHEMA), **_model_defaults(c.extras)}
+    d = c.config.design
+    out.effective = {"design.angle_step_deg": d.grid_step_rad / DEG,
+                     "design.angle_step_rad": d.angle_step_rad,
+                     "design.verify_samples": verify_samples(d)}
     return out

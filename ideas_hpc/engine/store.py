@@ -250,16 +250,19 @@ def _encoding(ds, plan: ChunkPlan, compressors) -> dict:
 def config_problems(attrs: Mapping, config: Mapping, campaign_seed: int) -> list[str]:
     """How a store's attrs differ from a resolved config and seed (empty: compatible).
 
-    When ``config`` has a ``defaults`` attribute (dotted key -> default, as
+    When ``config`` has ``defaults`` and ``effective`` attributes (dotted key ->
+    default, and -> the value a null key resolves to, as
     :func:`ideas_hpc.config.campaign_tables.resolved_config` gives), keys the
-    stored config lacks and whose value is their default are not differences:
-    the store was written before those keys existed (:func:`without_later_defaults`).
+    stored config lacks and whose value is their default, and null keys whose
+    resolved value is the stored one, are not differences: the store was
+    written by older code (:func:`without_later_defaults`).
     """
     problems = []
     if attrs.get("config_hash") != config_hash(config):
         old = attrs.get("config", {})
         old = json.loads(old) if isinstance(old, str) else old
-        new = without_later_defaults(old, config, getattr(config, "defaults", None) or {})
+        new = without_later_defaults(old, config, getattr(config, "defaults", None) or {},
+                                     getattr(config, "effective", None))
         if config_json(new) != config_json(old):
             problems += config_diff(old, new) or ["config hash differs"]
     if int(attrs.get("campaign_seed", -1)) != int(campaign_seed):
