@@ -12,6 +12,7 @@ import numpy as np
 
 from ideas_hpc.attitude import ideal_dcm_BT, initial_conditions, simulate_attitude
 from ideas_hpc.core.attitude.mrp import dcm_from_mrp, mrp_from_prv
+from ideas_hpc.errors import InputError
 from ideas_hpc.flyby.encounter import camera_dcms_encounter, track_dcms, track_reference
 
 
@@ -39,6 +40,9 @@ def camera_dcms(setup, theta, periods=None, *, sigma0=None, omega0=None,
     kw = dict(mode=setup.maneuver.name, periods=periods, theta_max=setup.theta_max, p_min=setup.p_min)
     sim_kw = kw
     if setup.maneuver.tracks_body:
+        if track_T is None:
+            raise InputError("body tracking with simulated attitude needs the flown positions "
+                             "and velocities at every step", field="track_T")
         sim_kw = dict(kw, ref_table=track_reference(setup, *track_T))
     if setup.encounter is not None:
         if sigma0 is None and setup.attitude_mode == "simulated":
