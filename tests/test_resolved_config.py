@@ -66,3 +66,64 @@ def test_resume_warns_once_when_code_version_differs(tiny_store, monkeypatch, ca
     run_file(FLYBY, out=tiny_store, overrides=TINY, resume=True)
     warn = [ln for ln in capsys.readouterr().err.splitlines() if "warning" in ln]
     assert len(warn) == 1 and "code version" in warn[0] and "0.0.0+gdeadbee" in warn[0]
+
+
+# The keys issue 24 added to [flyby] (the encounter) and issue 22 to [design]:
+# stores written before them lack them, and their defaults are the old behaviour.
+LATER_KEYS = {"flyby": ["geometry", "speed_km_s", "approach_dec_deg", "approach_ra_deg",
+                        "phase_angle_deg", "v_inf_km_s", "before_km", "after_km", "before_s",
+                        "after_s"],
+              "design": ["confidence", "demonstrate", "scenarios", "success_probability"]}
+
+
+# What the code before those keys wrote for the keys whose default is now null
+# (as read from a store written by a6739bb^): the values the designers still use.
+FORMER_DEFAULTS = {"angle_step_deg": 0.5, "angle_step_rad": 0.01, "verify_samples": 64}
+
+
+@pytest.fixture()
+def old_store(tiny_store, tmp_path):
+    """A copy of the tiny store as older code wrote it: no later keys, its own hash."""
+    import shutil
+
+    from ideas_hpc.engine.store import config_hash, config_json
+
+    out = tmp_path / "old.zarr"
+    shutil.copytree(tiny_store, out)
+    meta = json.loads((out / "zarr.json").read_text())
+    config = json.loads(meta["attributes"]["config"])
+    for table, keys in LATER_KEYS.items():
+        for key in keys:
+            del config[table][key]  # KeyError: the test's list is stale
+    # keys whose default became null ("the designer's own"), written out then
+    assert [config["design"][k] for k in FORMER_DEFAULTS] == [None] * len(FORMER_DEFAULTS)
+    config["design"].update(FORMER_DEFAULTS)
+    meta["attributes"]["config"] = config_json(config)
+    meta["attributes"]["config_hash"] = config_hash(config)
+    (out / "zarr.json").write_text(json.dumps(meta))
+    return out
+
+
+def test_resume_accepts_a_store_written_before_keys_with_their_defaults(old_store, capsys):
+    from ideas_hpc.engine.store import config_problems, store_attrs
+
+    run_file(FLYBY, out=old_store, overrides=TINY, resume=True)
+    assert "nothing to do" in capsys.readouterr().err
+    attrs, rc = store_attrs(old_store), resolved_config(load(FLYBY, TINY))
+    assert config_problems(attrs, rc, rc["seed"]) == []
+    # without the defaults the comparison is the strict one: every later key differs
+    strict = config_problems(attrs, dict(rc), rc["seed"])
+    assert "design.confidence absent in the store, 0.95 now" in strict
+
+
+@pytest.mark.parametrize("override, message", [
+    ("design.confidence=0.9", "design.confidence absent in the store, 0.9 now"),
+    ("design.scenarios=128", "design.scenarios absent in the store, 128 now"),
+    ("instrument.aperture_cm=9.5", "instrument.aperture_cm = 8.0 in the store, 9.5 now"),
+    ("design.verify_samples=32", "design.verify_samples = 64 in the store, 32 now"),
+    ("design.angle_step_deg=1.0", "design.angle_step_deg = 0.5 in the store, 1.0 now"),
+])
+def test_resume_of_an_old_store_still_refuses_real_changes(old_store, override, message):
+    with pytest.raises(InputError) as ei:
+        run_file(FLYBY, out=old_store, overrides=TINY + [override], resume=True)
+    assert message in str(ei.value)

@@ -30,7 +30,7 @@ from typing import Callable
 
 import numpy as np
 
-from ideas_hpc.core.attitude.maneuvers import FOV_MODE, NP_MODE
+from ideas_hpc.core.attitude.maneuvers import FOV_MODE, NP_MODE, TRACK_MODE
 from ideas_hpc.errors import InputError
 from ideas_hpc.units import MINUTE
 from ideas_hpc.attitude.checks import pos_float as _pos_float
@@ -89,9 +89,11 @@ class Maneuver:
         Camera half-angle over the nadir half cone ``eta_N`` of the sizing
         (SPEC section 2; FoV sweeping images with half the cone).
     tracks_body : bool
-        The camera follows the body centre along the flown positions (no
-        reference kernel, ``code`` -1): encounter geometry and ideal attitude
-        only (:func:`ideas_hpc.flyby.encounter.track_dcms`).
+        The camera follows the body centre along the flown positions
+        (encounter geometry): ideal attitude is
+        :func:`ideas_hpc.flyby.encounter.track_dcms`, simulated attitude reads a
+        reference table built from the track (``code`` ``TRACK_MODE``,
+        :func:`ideas_hpc.flyby.encounter.track_reference`).
     figures : tuple of (str, int)
         The paper's figure numbers of its report figures (``"pyramids"``: camera
         pyramids, ``"attitude"``: first of the four attitude series); others are
@@ -137,7 +139,7 @@ MANEUVERS = {m.name: m for m in (
     Maneuver("fov", FOV_MODE, "fov", _sweep_params,
              "FoV Sweeping: theta_max sin(2 pi t / P_i) about the ring x axis",
              sweeps=True, fov_factor=0.5, figures=(("pyramids", 33), ("attitude", 34))),
-    Maneuver("track", -1, "np", _no_params,
+    Maneuver("track", TRACK_MODE, "np", _no_params,
              "Body tracking: boresight on the body centre along the flown track (encounters)",
              tracks_body=True),
 )}
@@ -181,11 +183,14 @@ def get_maneuver(mode) -> Maneuver:
     return MANEUVERS[mode]
 
 
-def maneuver_args(mode, n, periods, theta_max, p_min):
-    """``(maneuver, periods (n,) s, theta_max rad)`` for the kernels, checked."""
+def maneuver_args(mode, n, periods, theta_max, p_min, *, from_track: bool = False):
+    """``(maneuver, periods (n,) s, theta_max rad)`` for the kernels, checked.
+
+    A body-tracking maneuver needs its reference from the flown track
+    (``from_track``: the caller passes the reference table)."""
     m = get_maneuver(mode)
-    if m.code < 0:
-        raise InputError(f"maneuver {mode!r} has no reference kernel: it is flown from the "
-                         "trajectory (ideal attitude)", field="mode")
+    if m.tracks_body and not from_track:
+        raise InputError(f"maneuver {mode!r} has no reference of its own: it follows the "
+                         "flown track (give the track's reference table)", field="mode")
     p, tm = m.params(n, periods, theta_max, p_min)
     return m, p, tm

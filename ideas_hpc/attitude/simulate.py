@@ -111,6 +111,16 @@ def _ring_dcms(theta, dcm_TS):
     return np.ascontiguousarray(np.array([_dcm_RT(float(t), ts) for t in theta]).reshape(-1, 3, 3))
 
 
+def _ref_table(ref_table, n: int, n_steps: int) -> np.ndarray:
+    if ref_table is None:
+        return np.empty((n, 0, 9))
+    t = np.ascontiguousarray(ref_table, dtype=np.float64)
+    if t.shape != (n, n_steps + 1, 9) or not np.all(np.isfinite(t)):
+        raise InputError(f"must be finite with shape ({n}, {n_steps + 1}, 9), got {t.shape}",
+                         field="ref_table")
+    return t
+
+
 def ideal_dcm_BT(theta, spin_rate, image_times, *, mode="np", periods=None,
                  theta_max=None, dcm_TS=None, p_min=P_MIN_DEFAULT):
     """Camera DCM ``[B T]`` under perfect tracking (B = reference frame).
@@ -144,7 +154,7 @@ def ideal_dcm_BT(theta, spin_rate, image_times, *, mode="np", periods=None,
 def simulate_attitude(theta, spin_rate, t_f, *, mode="np", periods=None, theta_max=None,
                       gains=None, spacecraft=None, dt=0.1, image_dt=0.2, sigma0=None,
                       omega0=None, wheel0=None, decimate=1, dcm_TS=None,
-                      p_min=P_MIN_DEFAULT, seed=0, n_samples=1) -> AttitudeResult:
+                      p_min=P_MIN_DEFAULT, seed=0, n_samples=1, ref_table=None) -> AttitudeResult:
     """Closed-loop attitude of ``S`` samples of an ``N``-spacecraft swarm (SPEC section 5).
 
     Parameters
@@ -180,6 +190,10 @@ def simulate_attitude(theta, spin_rate, t_f, *, mode="np", periods=None, theta_m
         Swarm frame ``[TS]`` (default identity).
     p_min : float
         Minimum sweep period, s (paper: 0.3 min).
+    ref_table : (N, n_steps + 1, 9), optional
+        Body tracking ('track'): the reference at every step
+        (:func:`ideas_hpc.core.attitude.maneuvers.track_reference_table`); its frame
+        is inertial, so give ``spin_rate`` 0 and read ``dcm_BT`` as ``[B N]``.
 
     Returns
     -------
@@ -187,7 +201,8 @@ def simulate_attitude(theta, spin_rate, t_f, *, mode="np", periods=None, theta_m
     """
     th = check_theta(theta)
     n = th.size
-    man, p, tm = maneuver_args(mode, n, periods, theta_max, p_min)
+    man, p, tm = maneuver_args(mode, n, periods, theta_max, p_min,
+                               from_track=ref_table is not None)
     sc = validate_spacecraft(spacecraft or default_spacecraft())
     g = gains_from_config(man.gains if gains is None else gains)
     ws = float(spin_rate)
@@ -215,9 +230,10 @@ def simulate_attitude(theta, spin_rate, t_f, *, mode="np", periods=None, theta_m
         if not (s0.shape == w0.shape == W0.shape):
             raise InputError("sigma0, omega0, wheel0 must have the same shape", field="omega0")
     k_p, k_i, eta, phi = g.arrays(dt)
+    table = _ref_table(ref_table, n, n_steps)
     out = simulate_batch(man.code, _ring_dcms(th, dcm_TS), ws, p, tm, k_p, k_i, eta, phi,
                          float(g.int_limit), sc.inertia_rw, sc.J_s, float(sc.u_max),
-                         float(sc.h_max), dt, n_steps, decimate, img_every, s0, w0, W0)
+                         float(sc.h_max), dt, n_steps, decimate, img_every, s0, w0, W0, table)
     sig, om, wh, tq, dcm, mu, mh = out
     times = np.arange(0, n_steps + 1, decimate) * dt
     image_times = np.arange(0, n_steps + 1, img_every) * dt

@@ -71,14 +71,15 @@ from ideas_hpc.config.toml_file import CampaignSource, load_campaign
 from ideas_hpc.design.pareto.objectives import check_objectives
 from ideas_hpc.errors import InputError
 from ideas_hpc.montecarlo.dispersions import check_dispersions
-from ideas_hpc.config.fields import (Field, live_typed_table, to_typed, typed_table, validate,
-                      with_defaults)
+from ideas_hpc.config.fields import (Field, live_typed_table, schema_defaults, to_typed,
+                                     typed_table, validate, with_defaults)
 from ideas_hpc.units import CM, DEG, KM, MINUTE, MM, UM
 from ideas_hpc.flyby.sizing import INSTRUMENT_DEFAULTS as _CAM
 from ideas_hpc.config.design_checks import check_stereo_design, resolve_angle_step
 from ideas_hpc.config.encounter_table import ENCOUNTER, check_encounter
 from ideas_hpc.campaign.kinds import KINDS as REGISTRY
-from ideas_hpc.config.design_table import DESIGN, MC_SCHEMA, reliability_checks  # noqa: F401
+from ideas_hpc.config.design_table import (DESIGN, MC_SCHEMA, reliability_checks,  # noqa: F401
+                                           verify_samples)
 
 KINDS = REGISTRY.keys()   # live: a kind registered later is a valid choice
 
@@ -333,6 +334,33 @@ def load(path, overrides: list[str] | None = None) -> Campaign:
 EXECUTION_KNOBS = ("run.workers", "run.chunk_size", "design.chunk_size")
 
 
+class ResolvedConfig(dict):
+    """A resolved config (a plain dict: stored and hashed as such) that knows its defaults.
+
+    ``defaults`` maps dotted keys to their default: the schema's (file units)
+    and, under ``models.<name>.``, the sub-model dataclasses' field defaults.
+    The engine uses it on ``--resume`` to accept a store written before a key
+    existed when the key still has its default (the old behaviour). ``effective``
+    maps keys whose default is null (the code picks the value) to the value
+    picked, so a store that wrote that value out (older code) still matches.
+    """
+
+    defaults: dict[str, Any]
+    effective: dict[str, Any]
+
+
+def _model_defaults(extras: dict) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for name, model in extras.items():
+        if dataclasses.is_dataclass(model):
+            for f in dataclasses.fields(model):
+                if f.default is not dataclasses.MISSING:
+                    out[f"models.{name}.{f.name}"] = f.default
+                elif f.default_factory is not dataclasses.MISSING:
+                    out[f"models.{name}.{f.name}"] = f.default_factory()
+    return out
+
+
 def resolved_config(c: Campaign) -> dict[str, Any]:
     """The campaign as run, with nothing implicit: what a store records and hashes.
 
@@ -343,6 +371,8 @@ def resolved_config(c: Campaign) -> dict[str, Any]:
     changed default changes the hash, and ``--resume`` names the field. The
     :data:`EXECUTION_KNOBS` are left out: they do not change the numbers.
     Every store writer (flyby, designs, Monte Carlo) uses this one function.
+    The result is a :class:`ResolvedConfig`: its ``defaults`` let ``--resume``
+    accept a store written before a key was added, while the key keeps its default.
     """
     from ideas_hpc.engine.store import config_json  # the engine's canonical JSON, for one hash
 
@@ -353,4 +383,10 @@ def resolved_config(c: Campaign) -> dict[str, Any]:
     for dotted in EXECUTION_KNOBS:
         table, _, key = dotted.partition(".")
         out.get(table, {}).pop(key, None)
+    out = ResolvedConfig(out)
+    out.defaults = {**schema_defaults(SCHEMA), **_model_defaults(c.extras)}
+    d = c.config.design
+    out.effective = {"design.angle_step_deg": d.grid_step_rad / DEG,
+                     "design.angle_step_rad": d.angle_step_rad,
+                     "design.verify_samples": verify_samples(d)}
     return out

@@ -55,9 +55,6 @@ def check_encounter(fb, attitude) -> None:
         if fb.geometry != "encounter":
             raise InputError('body tracking needs flyby.geometry = "encounter"',
                              field="attitude.maneuver")
-        if attitude.mode != "ideal":
-            raise InputError(f"{attitude.maneuver!r} is flown in attitude.mode = \"ideal\" only "
-                             "(its demand on the wheels is reported)", field="attitude.mode")
     given = [key for si, key in _ANGLE_KEYS if getattr(fb, si) is not None]
     if fb.geometry != "encounter":
         extra = given + [k for k in ("v_inf_km_s", "before_km", "after_km", "before_s",

@@ -190,6 +190,22 @@ def with_defaults(data: Any, schema: dict) -> dict:
     return out
 
 
+def schema_defaults(schema: dict, prefix: str = "") -> dict[str, Any]:
+    """Every key of ``schema`` that has a default, as ``{"table.key": default}`` (file units).
+
+    What a key means when a file (or a store written before the key existed)
+    leaves it out; required keys are absent.
+    """
+    out: dict[str, Any] = {}
+    for key, spec in schema.items():
+        dotted = f"{prefix}.{key}" if prefix else key
+        if isinstance(spec, dict):
+            out.update(schema_defaults(spec, dotted))
+        elif spec.default is not REQUIRED:
+            out[dotted] = spec.default
+    return out
+
+
 def typed_table(cls_name: str, schema: dict, module: str, doc: str = "") -> type:
     """A frozen dataclass for one table: one attribute per field, named by its SI name.
 

@@ -35,7 +35,8 @@ def _views(setup: FlybySetup, keys):
         s0, w0, W0 = (np.ascontiguousarray(np.concatenate([d[j] for d in draws])) for j in range(3))
         dcm, _ = camera_dcms(setup.with_(decimate=max(1, int(round((setup.tf - setup.t0)
                                                                     / setup.dt)))),
-                             th, periods, sigma0=s0, omega0=w0, wheel0=W0)
+                             th, periods, sigma0=s0, omega0=w0, wheel0=W0,
+                             track_T=(tgt.position_T, tgt.velocity_T))
     else:
         dcm, _ = camera_dcms(setup, th, periods, r_img_T=r_img)
     sun = setup.sun_T() if setup.coverage.needs_sun else None

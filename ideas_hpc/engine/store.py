@@ -53,7 +53,7 @@ from ideas_hpc.engine.chunk_write import done_mask, write_chunk_region  # noqa: 
 from ideas_hpc.engine.store_meta import (CHUNK_DIM, DONE_VAR, ENGINE_TAG, SAMPLE_DIM, SEED_VAR,  # noqa: F401
                          _jsonable,
                          ChunkPlan, config_diff, config_hash, config_json,
-                         is_store, store_attrs, store_plan)
+                         is_store, store_attrs, store_plan, without_later_defaults)
 
 _PARTIAL = ".partial-"
 
@@ -248,12 +248,23 @@ def _encoding(ds, plan: ChunkPlan, compressors) -> dict:
 
 
 def config_problems(attrs: Mapping, config: Mapping, campaign_seed: int) -> list[str]:
-    """How a store's attrs differ from a resolved config and seed (empty: compatible)."""
+    """How a store's attrs differ from a resolved config and seed (empty: compatible).
+
+    When ``config`` has ``defaults`` and ``effective`` attributes (dotted key ->
+    default, and -> the value a null key resolves to, as
+    :func:`ideas_hpc.config.campaign_tables.resolved_config` gives), keys the
+    stored config lacks and whose value is their default, and null keys whose
+    resolved value is the stored one, are not differences: the store was
+    written by older code (:func:`without_later_defaults`).
+    """
     problems = []
     if attrs.get("config_hash") != config_hash(config):
         old = attrs.get("config", {})
         old = json.loads(old) if isinstance(old, str) else old
-        problems += config_diff(old, config) or ["config hash differs"]
+        new = without_later_defaults(old, config, getattr(config, "defaults", None) or {},
+                                     getattr(config, "effective", None))
+        if config_json(new) != config_json(old):
+            problems += config_diff(old, new) or ["config hash differs"]
     if int(attrs.get("campaign_seed", -1)) != int(campaign_seed):
         problems.append(f"campaign seed {attrs.get('campaign_seed')} in the store, "
                         f"{campaign_seed} now")

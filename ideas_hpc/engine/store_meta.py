@@ -112,6 +112,50 @@ def config_diff(old: Mapping, new: Mapping, limit: int = 6) -> list[str]:
     return out
 
 
+def without_later_defaults(old: Mapping, new: Mapping, defaults: Mapping[str, Any],
+                           effective: Mapping[str, Any] | None = None) -> dict:
+    """``new`` (canonical JSON form) as a store's ``old`` config, written by older code, says it.
+
+    A key is dropped when it is absent from ``old`` (a store written before the
+    key existed) and its value in ``new`` equals ``defaults[key]`` (dotted key:
+    its default, which by the project's rule is the old behaviour). A key whose
+    default became null ("the code's own value") reads as ``old``'s value when
+    that is the value the code uses now, ``effective[key]`` (floats to 1e-12).
+    Any other difference stays, so a real change still differs. Tables left
+    empty by the dropping are dropped too.
+    """
+    a = _flatten(json.loads(config_json(old)))
+    canon = json.loads(config_json(new))
+    flat_defaults = {k: config_json({"v": v}) for k, v in defaults.items()}
+    effective = effective or {}
+
+    def same(x: Any, y: Any) -> bool:
+        if isinstance(x, float) or isinstance(y, float):
+            return (isinstance(x, (int, float)) and isinstance(y, (int, float))
+                    and abs(x - y) <= 1e-12 * max(abs(x), abs(y)))
+        return x == y
+
+    def prune(obj: Any, prefix: str) -> Any:
+        if not isinstance(obj, dict) or not obj:
+            return obj
+        out = {}
+        for k, v in obj.items():
+            key = f"{prefix}.{k}" if prefix else k
+            if isinstance(v, dict) and v:
+                v = prune(v, key)
+                if v == {} and key not in a and not any(x.startswith(key + ".") for x in a):
+                    continue
+            elif (key not in a and key in flat_defaults
+                  and config_json({"v": v}) == flat_defaults[key]):
+                continue
+            elif v is None and key in a and key in effective and same(a[key], effective[key]):
+                v = a[key]
+            out[k] = v
+        return out
+
+    return prune(canon, "")
+
+
 # --------------------------------------------------------------------------- metadata
 
 def is_store(path: str | os.PathLike) -> bool:

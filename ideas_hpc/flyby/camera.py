@@ -13,7 +13,8 @@ import numpy as np
 from ideas_hpc.attitude import ideal_dcm_BT, initial_conditions, simulate_attitude
 from ideas_hpc.core.attitude.compose import compose_each
 from ideas_hpc.core.attitude.mrp import dcm_from_mrp, mrp_from_prv
-from ideas_hpc.flyby.encounter import camera_dcms_encounter, track_dcms
+from ideas_hpc.errors import InputError
+from ideas_hpc.flyby.encounter import camera_dcms_encounter, track_dcms, track_reference
 
 
 def misalignment_dcms(prv) -> np.ndarray:
@@ -23,25 +24,33 @@ def misalignment_dcms(prv) -> np.ndarray:
 
 
 def camera_dcms(setup, theta, periods=None, *, sigma0=None, omega0=None,
-                wheel0=None, spin_rate=None, r_img_T=None):
+                wheel0=None, spin_rate=None, r_img_T=None, track_T=None):
     """Camera DCMs at the image times, and the attitude result when simulated.
 
-    ``r_img_T`` (N, n_img, 3): the flown positions, for body tracking.
+    ``r_img_T`` (N, n_img, 3): the flown positions, for body tracking;
+    ``track_T``: ``(position_T, velocity_T)`` (N, T, 3) at every attitude step,
+    for body tracking with simulated attitude.
     Returns ``(dcm_BT (N, n_img, 3, 3), AttitudeResult or None)``.
     """
     th = np.asarray(theta, dtype=np.float64)
-    if setup.maneuver.tracks_body:
+    if setup.maneuver.tracks_body and setup.attitude_mode == "ideal":
         return track_dcms(setup, r_img_T)[0], None
     ws = setup.body.params.spin_rate if spin_rate is None else spin_rate
     duration = setup.tf - setup.t0
     img_t = setup.image_times - setup.t0
     kw = dict(mode=setup.maneuver.name, periods=periods, theta_max=setup.theta_max, p_min=setup.p_min)
+    sim_kw = kw
+    if setup.maneuver.tracks_body:
+        if track_T is None:
+            raise InputError("body tracking with simulated attitude needs the flown positions "
+                             "and velocities at every step", field="track_T")
+        sim_kw = dict(kw, ref_table=track_reference(setup, *track_T))
     if setup.encounter is not None:
         if sigma0 is None and setup.attitude_mode == "simulated":
             sigma0, omega0, wheel0 = initial_conditions(setup.seed, 0, th.size)
         bt, att, _ = camera_dcms_encounter(
             setup, th, periods, lambda w, ns: ideal_dcm_BT(th, w, img_t, dcm_TS=ns, **kw),
-            lambda w, ns: _simulate(setup, th, w, duration, sigma0, omega0, wheel0, ns, kw))
+            lambda w, ns: _simulate(setup, th, w, duration, sigma0, omega0, wheel0, ns, sim_kw))
         return bt, att
     if setup.attitude_mode == "ideal":
         return ideal_dcm_BT(th, ws, img_t, **kw), None
@@ -57,10 +66,11 @@ def _simulate(setup, th, ws, duration, sigma0, omega0, wheel0, dcm_TS, kw):
     return np.ascontiguousarray(res.dcm_BT[0]), res
 
 
-def camera_at_images(setup, th, periods, ics, misalignment, r_img):
+def camera_at_images(setup, th, periods, ics, misalignment, r_img, track_T=None):
     """Camera DCMs at the images (attitude, then the camera misalignment)."""
     s0, w0, W0 = ics if ics is not None else (None, None, None)
-    dcm, att = camera_dcms(setup, th, periods, sigma0=s0, omega0=w0, wheel0=W0, r_img_T=r_img)
+    dcm, att = camera_dcms(setup, th, periods, sigma0=s0, omega0=w0, wheel0=W0, r_img_T=r_img,
+                           track_T=track_T)
     return misaligned(dcm, misalignment), att
 
 

@@ -33,6 +33,7 @@ import numpy as np
 from ideas_hpc.attitude import default_spacecraft, ideal_dcm_BT
 from ideas_hpc.core.dynamics.encounter import (dcm_BT_from_BN, dcm_NS, pointing_demand, straight_tracks_T,
                              track_dcm_BN)
+from ideas_hpc.core.attitude.maneuvers import track_reference_table
 from ideas_hpc.errors import InputError
 from ideas_hpc.dynamics.trajectory import TargetingResult, propagate_swarm, target_swarm
 
@@ -203,6 +204,28 @@ def track_dcms(setup, r_img_T) -> tuple[np.ndarray, np.ndarray]:
     bn = track_dcm_BN(np.ascontiguousarray(r_img_T, dtype=np.float64), t, enc.t_ca_s, w,
                       np.ascontiguousarray(enc.dcm_NS[:, 2]))
     return dcm_BT_from_BN(bn, w, t, enc.t_ca_s), bn
+
+
+def track_reference(setup, r_T, v_T) -> np.ndarray:
+    """Body-tracking reference (N, T, 9) in N at the attitude steps, from the flown track.
+
+    ``r_T``, ``v_T`` (N, T, 3): positions (m) and velocities (m/s) in T at
+    ``t0 + k dt``, ``k = 0 .. T - 1``; turned into N (``N = T`` at closest
+    approach, ``v_N = [N T] v_T + w x r_N``) for
+    :func:`ideas_hpc.core.attitude.maneuvers.track_reference_table`.
+    """
+    enc = setup.encounter
+    w = setup.body.params.spin_rate
+    r = np.asarray(r_T, dtype=np.float64)
+    v = np.asarray(v_T, dtype=np.float64)
+    phi = w * (setup.t0 + setup.dt * np.arange(r.shape[1]) - enc.t_ca_s)
+    c, s_ = np.cos(phi)[None, :], np.sin(phi)[None, :]
+    r_N = np.stack([c * r[..., 0] - s_ * r[..., 1], s_ * r[..., 0] + c * r[..., 1], r[..., 2]],
+                   axis=-1)
+    v_N = np.stack([c * v[..., 0] - s_ * v[..., 1], s_ * v[..., 0] + c * v[..., 1], v[..., 2]],
+                   axis=-1) + np.cross([0.0, 0.0, w], r_N)
+    return track_reference_table(np.ascontiguousarray(r_N), np.ascontiguousarray(v_N),
+                                 np.ascontiguousarray(enc.dcm_NS[:, 2]), float(setup.dt))
 
 
 def pointing_check(dcm_BN, dt: float, spacecraft) -> dict:

@@ -304,7 +304,8 @@ def fly(setup: FlybySetup, theta, periods=None, *, sample: int = 0, ics=None,
     r_img = np.ascontiguousarray(tgt.position_T[:, ::setup.image_every])
     if ics is None and setup.attitude_mode == "simulated":
         ics = initial_conditions(setup.seed, sample, th.size)
-    dcm, att, cov = _image(setup, th, periods, r_img, ics, None, None, counts)
+    dcm, att, cov = _image(setup, th, periods, r_img, ics, None, None, counts,
+                           (tgt.position_T, tgt.velocity_T))
     return FlybyOutcome(theta=th, periods=None if periods is None else np.asarray(periods),
                         targeting=tgt, image_times=setup.image_times, r_img_T=r_img, dcm_BT=dcm,
                         coverage=cov, attitude=att)
@@ -342,7 +343,7 @@ def open_loop_views(setup: FlybySetup, theta, periods, r0_T, v0_T,
     p = perturbation
     r0 = r0_T if p.position_error_T is None else r0_T + p.position_error_T
     v0 = v0_T if p.velocity_error_T is None else v0_T + p.velocity_error_T
-    _, pos, _ = propagate_swarm(setup.body, r0, v0, setup.t0, setup.tf,
+    _, pos, vel = propagate_swarm(setup.body, r0, v0, setup.t0, setup.tf,
                                 force_model=setup.force_model, dt_sample=setup.dt,
                                 params_override=p.params_override, views=True)
     r_img = np.ascontiguousarray(pos[:, ::setup.image_every])
@@ -351,13 +352,15 @@ def open_loop_views(setup: FlybySetup, theta, periods, r0_T, v0_T,
     if ideal_dcm_BT is not None and setup.attitude_mode == "ideal" and not setup.maneuver.tracks_body:
         dcm, att = misaligned(ideal_dcm_BT, mis), None
     else:
-        dcm, att = camera_at_images(setup, th, periods, p.ics, mis, r_img)
+        dcm, att = camera_at_images(setup, th, periods, p.ics, mis, r_img, (pos, vel))
     return r_img, dcm, att, pos
 
 
-def _image(setup: FlybySetup, th, periods, r_img, ics, misalignment, active, counts):
-    """Attitude at the images, camera misalignment, Sun, coverage: the common tail of a flyby."""
-    dcm, att = camera_at_images(setup, th, periods, ics, misalignment, r_img)
+def _image(setup: FlybySetup, th, periods, r_img, ics, misalignment, active, counts,
+           track_T=None):
+    """Attitude at the images, camera misalignment, Sun, coverage: the common tail of a flyby.
+    ``track_T``: positions and velocities at every step (body tracking, simulated)."""
+    dcm, att = camera_at_images(setup, th, periods, ics, misalignment, r_img, track_T)
     return dcm, att, _coverage(setup, r_img, dcm, active, counts)
 
 

@@ -21,7 +21,7 @@ from numba import njit, prange
 from ideas_hpc.core.attitude.rigid_body import rk4_step_into
 from ideas_hpc.core.attitude.control import sliding_mode_into
 from ideas_hpc.core.attitude.mrp import mrp_from_dcm
-from ideas_hpc.core.attitude.maneuvers import reference_into
+from ideas_hpc.core.attitude.maneuvers import TRACK_MODE, reference_into
 
 
 @njit(cache=True, error_model="numpy")
@@ -84,13 +84,14 @@ def closed_loop_step(mode, t, x, z, sigma_RT, dcm_RT, spin_rate, theta_max, peri
 @njit(cache=True, parallel=True, error_model="numpy")
 def simulate_batch(mode, dcm_RT_all, spin_rate, periods, theta_max,
                    k_p, k_i, eta, phi, int_limit, I_rw, J_s, u_max, h_max,
-                   dt, n_steps, decimate, img_every, sigma0, omega0, wheel0):
+                   dt, n_steps, decimate, img_every, sigma0, omega0, wheel0, ref_table):
     """Closed-loop attitude of ``S x N`` spacecraft over ``n_steps`` steps of ``dt``.
 
     Parameters
     ----------
     mode : int
-        0 Nadir Pointing, 1 FoV Sweeping (``core.maneuvers``).
+        0 Nadir Pointing, 1 FoV Sweeping, 2 body tracking from ``ref_table``
+        (``core.maneuvers``).
     dcm_RT_all : (N, 3, 3) float64
         Ring frames ``[R_i T]`` (``core.frames.dcm_RT``).
     spin_rate : float
@@ -118,6 +119,10 @@ def simulate_batch(mode, dcm_RT_all, spin_rate, periods, theta_max,
         Steps per image; camera DCMs at ``k = 0, img_every, ...``.
     sigma0, omega0, wheel0 : (S, N, 3) float64
         Initial ``sigma_BN``, ``omega_BN_B`` (rad/s), wheel speeds (rad/s).
+    ref_table : (N, n_steps + 1, 9) float64
+        ``mode`` 2 (body tracking): the reference at every step
+        (``core.maneuvers.track_reference_table``); other modes ignore it
+        (pass an empty ``(N, 0, 9)`` array).
 
     Returns
     -------
@@ -193,7 +198,11 @@ def simulate_batch(mode, dcm_RT_all, spin_rate, periods, theta_max,
             # closed_loop_step written out (a call with this many array
             # arguments is not inlined and costs more than the step itself);
             # at the final time only the errors and the next torque are formed
-            reference_into(mode, t, spin_rate, sigma_RT, dcm_RT, theta_max, period, ref)
+            if mode == TRACK_MODE:
+                for j in range(9):
+                    ref[j] = ref_table[i, k, j]
+            else:
+                reference_into(mode, t, spin_rate, sigma_RT, dcm_RT, theta_max, period, ref)
             sliding_mode_into(x, z, ref, k_p, k_i, eta, phi, I_rw, J_s, L_ext,
                               u_max, h_max, u, err)
             if k < n_steps:

@@ -49,6 +49,9 @@ from ideas_hpc.core.attitude.mrp import mrp_add_s, mrp_from_dcm
 #: Mode codes of the maneuvers (the dispatch value of :func:`reference_into`).
 NP_MODE = 0
 FOV_MODE = 1
+#: Body tracking: the reference is precomputed per step from the flown track
+#: (:func:`track_reference_table`), read by ``core.attitude.batch.simulate_batch``.
+TRACK_MODE = 2
 
 
 @njit(cache=True, error_model="numpy")
@@ -211,4 +214,85 @@ def reference_dcm_BT(mode, dcm_RT_all, theta_max, periods, times):
     for i in range(n):
         for k in range(m):
             camera_dcm_into(mode, times[k], dcm_RT_all[i], theta_max, periods[i], out[i, k])
+    return out
+
+
+@njit(cache=True, error_model="numpy")
+def _track_frame(r, v, z_S, dcm, w):
+    """Body-tracking frame ``[R N]`` (rows ``x, y, z`` in N) and its rate in R (rad/s).
+
+    ``z = -r/|r|`` (boresight on the body centre), ``x = unit(z_S - (z_S . z) z)``,
+    ``y = z x x`` (as ``core.dynamics.encounter.track_dcm_BN``). With
+    ``z' = -(v - (rhat . v) rhat)/|r|``: ``w_x = -z' . y``, ``w_y = z' . x`` and
+    ``w_z = x' . y = -(z_S . z)(z' . y)/|z_S - (z_S . z) z|``. ``r`` m, ``v`` m/s, frame N.
+    """
+    rn = np.sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2])
+    z0, z1, z2 = -r[0] / rn, -r[1] / rn, -r[2] / rn
+    rv = -(z0 * v[0] + z1 * v[1] + z2 * v[2])             # rhat . v
+    zd0 = -(v[0] + rv * z0) / rn                          # rhat = -z
+    zd1 = -(v[1] + rv * z1) / rn
+    zd2 = -(v[2] + rv * z2) / rn
+    d = z_S[0] * z0 + z_S[1] * z1 + z_S[2] * z2
+    p0, p1, p2 = z_S[0] - d * z0, z_S[1] - d * z1, z_S[2] - d * z2
+    pn = np.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
+    x0, x1, x2 = p0 / pn, p1 / pn, p2 / pn
+    y0, y1, y2 = z1 * x2 - z2 * x1, z2 * x0 - z0 * x2, z0 * x1 - z1 * x0
+    dcm[0, 0], dcm[0, 1], dcm[0, 2] = x0, x1, x2
+    dcm[1, 0], dcm[1, 1], dcm[1, 2] = y0, y1, y2
+    dcm[2, 0], dcm[2, 1], dcm[2, 2] = z0, z1, z2
+    zy = zd0 * y0 + zd1 * y1 + zd2 * y2
+    w[0] = -zy
+    w[1] = zd0 * x0 + zd1 * x1 + zd2 * x2
+    w[2] = -d * zy / pn
+
+
+@njit(cache=True, error_model="numpy")
+def track_reference_table(r_N, v_N, z_S, dt):
+    """Body-tracking reference at every step, in the layout of :func:`reference_into`.
+
+    Parameters
+    ----------
+    r_N, v_N : (N, T, 3) float64
+        Positions (m) and velocities (m/s) relative to the body centre, inertial
+        frame N, at the steps ``t_k = t0 + k dt``.
+    z_S : (3,) float64
+        Approach direction (unit), frame N.
+    dt : float
+        Step, s (T >= 3).
+
+    Returns
+    -------
+    (N, T, 9) float64
+        ``[sigma_RN, omega_RN_R (rad/s), omegadot_RN_R (rad/s^2)]`` per step; the
+        rate from the position and velocity (:func:`_track_frame`), its inertial
+        derivative by second-order differences of ``omega_RN`` in N.
+    """
+    n = r_N.shape[0]
+    m = r_N.shape[1]
+    out = np.empty((n, m, 9))
+    dcm = np.empty((n, m, 3, 3))
+    w_N = np.empty((n, m, 3))
+    w = np.empty(3)
+    for i in range(n):
+        for k in range(m):
+            _track_frame(r_N[i, k], v_N[i, k], z_S, dcm[i, k], w)
+            sig = mrp_from_dcm(np.ascontiguousarray(dcm[i, k]))
+            for a in range(3):
+                out[i, k, a] = sig[a]
+                out[i, k, 3 + a] = w[a]
+                w_N[i, k, a] = dcm[i, k, 0, a] * w[0] + dcm[i, k, 1, a] * w[1] \
+                    + dcm[i, k, 2, a] * w[2]
+        for k in range(m):
+            for a in range(3):
+                if k == 0:
+                    wd = (-3.0 * w_N[i, 0, a] + 4.0 * w_N[i, 1, a] - w_N[i, 2, a]) / (2.0 * dt)
+                elif k == m - 1:
+                    wd = (3.0 * w_N[i, k, a] - 4.0 * w_N[i, k - 1, a]
+                          + w_N[i, k - 2, a]) / (2.0 * dt)
+                else:
+                    wd = (w_N[i, k + 1, a] - w_N[i, k - 1, a]) / (2.0 * dt)
+                w[a] = wd
+            for a in range(3):
+                out[i, k, 6 + a] = dcm[i, k, a, 0] * w[0] + dcm[i, k, a, 1] * w[1] \
+                    + dcm[i, k, a, 2] * w[2]
     return out
