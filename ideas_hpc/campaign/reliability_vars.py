@@ -14,7 +14,7 @@ scenario_probability            (scenario,)           exact failure-weighted P p
 validation_probability          (validation_sample,)  the same for each fresh sample
 validation_p_hat, _lower_bound  ()                    their mean and lower confidence bound
 demonstrated                    ()                    lower bound >= p
-validation_coverage, _n_failed  (validation_sample,)  coverage with failures sampled (histogram)
+validation_coverage, _n_failed  (validation_sample,)  coverage with failures sampled (figure)
 reliability_vs_n (_upper,       (reliability_n,)      best P on the scenarios (proven upper
 _validated, _lower, _swarm)                           bound), validated P-hat and its bound
 tolerant_swarm_size, _prob.     (tolerated,)          k-failure-tolerant designs on the curve
