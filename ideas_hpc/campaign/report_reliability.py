@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ideas_hpc.campaign.reliability_vars import bank_line
+
 
 def reliability_lines(ds) -> list[str]:
     """The requirement, the design's P on the scenarios, the validation and the curve."""
@@ -14,17 +16,26 @@ def reliability_lines(ds) -> list[str]:
     thr = 100 * float(a["reliability_threshold"])
     conf = 100 * float(a.get("confidence", 0.95))
     ok = bool(ds["demonstrated"])
+    n = int(ds["best_swarm_size"])
+    # stores before the split carry only the chosen N (solver_status "demonstrated")
+    n_bank = int(ds["bank_swarm_size"]) if "bank_swarm_size" in ds else n
+    p_bank = float(ds["bank_probability"]) if "bank_probability" in ds else float(
+        ds["reliability_probability"])
+    steps = a.get("demonstrate_steps", "none")
     out = [f"requirement: P(coverage >= {thr:.3f} %) >= {p:g} at {conf:g} % confidence, "
            f"failures (p_f = {float(a.get('failure_probability', float('nan'))):g} each) "
            f"enumerated exactly; {a['n_scenarios']} scenarios, "
            f"{a['verify_samples']} validation samples ({a['continuous_dispersions']})",
-           f"success-probability design: N = {int(ds['best_swarm_size'])} "
-           f"({a['solver_status']}, gap {100 * float(a['optimality_gap']):.1f} %; nominal N = "
-           f"{a['nominal_swarm_size']}), P on the scenarios = "
-           f"{float(ds['reliability_probability']):.4f}",
+           bank_line(n_bank, p_bank, str(ds["solver_status"].values),
+                     float(ds["proven_bound"]), float(ds["optimality_gap"])),
            f"validation: P-hat = {float(ds['validation_p_hat']):.4f}, {conf:g} % lower bound "
            f"{float(ds['validation_lower_bound']):.4f} ({a['confidence_bound']}) -> "
-           + ("requirement DEMONSTRATED" if ok else "requirement NOT demonstrated")]
+           + ("requirement DEMONSTRATED" if ok else "requirement NOT demonstrated"),
+           f"success-probability design: N = {n}, requirement "
+           + ("DEMONSTRATED" if ok else "NOT demonstrated") + " by validation"
+           + (f" (design.demonstrate: {steps})" if steps != "none" else "")
+           + f"; P on the scenarios = {float(ds['reliability_probability']):.4f}; nominal "
+           f"N = {a['nominal_swarm_size']}"]
     pts = [f"{int(n)}: {float(b):.4f} (<= {float(u):.4f}; validated {float(v):.4f}, "
            f">= {float(lo):.4f})" for n, b, u, v, lo in zip(
                ds["reliability_n"].values, ds["reliability_vs_n"].values,

@@ -39,7 +39,10 @@ def ring_view(ds, path) -> "Path":  # noqa: F821
     status = a.get("solver_status")
     gap = a.get("optimality_gap")
     title = "chosen swarm (top view)"
-    if status is not None:
+    if a.get("validation_outcome") is not None:     # success-probability design
+        word = "DEMONSTRATED" if a["validation_outcome"] == "demonstrated" else "NOT demonstrated"
+        title += f": requirement {word} by validation"
+    elif status is not None:
         title += f": {status}" + ("" if gap is None else f", gap {100 * float(gap):.1f} %")
     ax.set_title(title)
     ax.set_xlabel("x_T, km")
