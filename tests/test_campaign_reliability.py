@@ -10,6 +10,7 @@ import pytest
 import xarray as xr
 
 from ideas_hpc.campaign.report import write_report
+from ideas_hpc.campaign.report_reliability import bank_answer
 from ideas_hpc.campaign.run import run_file
 from ideas_hpc.config.campaign_tables import load
 from ideas_hpc.design import build_bank
@@ -78,6 +79,12 @@ def test_sample_free_design_is_exact(tmp_path):
             and "requirement DEMONSTRATED by validation" in ln and "stepped" not in ln]
     assert "status" not in text.split("success-probability design")[0].splitlines()[-1]
     assert "DEMONSTRATED by validation" in figs["design_ring.png"].axes[0].get_title()
+    # a store written before the split, stepped up by one: the bank's answer comes back
+    old = ds.drop_vars(["bank_swarm_size", "bank_probability", "validation_outcome"]).assign(
+        solver_status=((), "demonstrated"), best_swarm_size=((), np.int64(n + 1)))
+    nb, pb, _, _, gap, steps = bank_answer(old)
+    assert nb == n and steps == f"N stepped up from {n} to {n + 1}"
+    assert pb == pytest.approx(p, abs=1e-12) and gap == pytest.approx(float(ds["optimality_gap"]))
     ax = figs["design_validation_coverage.png"].axes[0]      # all flights at one coverage
     thr = [line for line in ax.get_lines() if line.get_label().startswith("threshold")]
     assert np.allclose(thr[0].get_xdata(), 100 * need)

@@ -4,7 +4,34 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 from ideas_hpc.campaign.reliability_vars import bank_line
+
+
+def bank_answer(ds) -> tuple:
+    """(N, P, status, bound, gap, steps) of the optimisation on the scenario bank.
+
+    Stores written before the two answers were split say ``solver_status =
+    "demonstrated"`` when design.demonstrate stepped N up, with the gap taken
+    against the chosen N; their bank answer is the first N of the stored curve
+    meeting p, and the status is ``optimal`` exactly when its gap is 0.
+    """
+    bound = float(ds["proven_bound"])
+    if "bank_swarm_size" in ds:
+        return (int(ds["bank_swarm_size"]), float(ds["bank_probability"]),
+                str(ds["solver_status"].values), bound, float(ds["optimality_gap"]),
+                ds.attrs.get("demonstrate_steps", "none"))
+    n = int(ds["best_swarm_size"])
+    if str(ds["solver_status"].values) != "demonstrated":
+        return (n, float(ds["reliability_probability"]), str(ds["solver_status"].values),
+                bound, float(ds["optimality_gap"]), "none")
+    curve_n, curve_p = ds["reliability_n"].values, ds["reliability_vs_n"].values
+    k = int(np.argmax(curve_p >= float(ds["success_probability_required"]) - 1e-12))
+    nb = int(curve_n[k])
+    gap = (nb - bound) / nb
+    return (nb, float(curve_p[k]), "optimal" if gap == 0 else "not stored (older store)",
+            bound, gap, f"N stepped up from {nb} to {n}" if nb < n else "none")
 
 
 def reliability_lines(ds) -> list[str]:
@@ -17,17 +44,12 @@ def reliability_lines(ds) -> list[str]:
     conf = 100 * float(a.get("confidence", 0.95))
     ok = bool(ds["demonstrated"])
     n = int(ds["best_swarm_size"])
-    # stores before the split carry only the chosen N (solver_status "demonstrated")
-    n_bank = int(ds["bank_swarm_size"]) if "bank_swarm_size" in ds else n
-    p_bank = float(ds["bank_probability"]) if "bank_probability" in ds else float(
-        ds["reliability_probability"])
-    steps = a.get("demonstrate_steps", "none")
+    n_bank, p_bank, status, bound, gap, steps = bank_answer(ds)
     out = [f"requirement: P(coverage >= {thr:.3f} %) >= {p:g} at {conf:g} % confidence, "
            f"failures (p_f = {float(a.get('failure_probability', float('nan'))):g} each) "
            f"enumerated exactly; {a['n_scenarios']} scenarios, "
            f"{a['verify_samples']} validation samples ({a['continuous_dispersions']})",
-           bank_line(n_bank, p_bank, str(ds["solver_status"].values),
-                     float(ds["proven_bound"]), float(ds["optimality_gap"])),
+           bank_line(n_bank, p_bank, status, bound, gap),
            f"validation: P-hat = {float(ds['validation_p_hat']):.4f}, {conf:g} % lower bound "
            f"{float(ds['validation_lower_bound']):.4f} ({a['confidence_bound']}) -> "
            + ("requirement DEMONSTRATED" if ok else "requirement NOT demonstrated"),
