@@ -71,7 +71,7 @@ QUIET_CLUSTER_CONFIG = {"distributed.admin.tick.interval": "1s",
 #: worker that ran the prange (OpenMP) kernels takes about 1 s longer to exit
 #: than one that did not, and on the loaded 2-core machine the main job's
 #: workers took over 4 s: that WARNING was the last thing the job printed.
-WORKER_EXIT_S = 60.0
+WORKER_EXIT_S = 60.0   # on a clean close only (connect: 5 s, dask's own, after an error)
 
 #: The package's SLURM settings (package data), dask config format.
 DEFAULT_SLURM_CONFIG = Path(__file__).resolve().with_name("jobqueue.yaml")
@@ -103,9 +103,11 @@ def _local_cluster_class():
     from distributed.core import Status
 
     class JobLocalCluster(LocalCluster):
+        worker_exit_s = WORKER_EXIT_S
+
         async def _close(self):
             if self.status in (Status.running, Status.failed):
-                await asyncio.gather(*(w.close(timeout=WORKER_EXIT_S)
+                await asyncio.gather(*(w.close(timeout=self.worker_exit_s)
                                        for w in list(self.workers.values())))
             await super()._close()
 
@@ -305,8 +307,15 @@ def connect(*, cluster: str = "local", workers: int | None = None, scheduler: st
             client.close()
         return
     if cluster == "local":
-        with local_cluster(workers, **cluster_kwargs) as lc, Client(lc) as client:
-            yield client
+        with local_cluster(workers, **cluster_kwargs) as lc:
+            try:
+                with Client(lc) as client:
+                    yield client
+            except BaseException:
+                # a failed or interrupted job does not wait for its running tasks:
+                # a worker's close waits for them, and a chunk can run a minute
+                lc.worker_exit_s = 5.0
+                raise
         return
     n_jobs = _check_workers(workers) if workers is not None else 1
     if log_directory is not None and not load_slurm_config(slurm_config).get("log-directory"):
