@@ -10,10 +10,13 @@ import pytest
 import xarray as xr
 
 from ideas_hpc.campaign.report import write_report
+from ideas_hpc.campaign.report_reliability import bank_answer
 from ideas_hpc.campaign.run import run_file
 from ideas_hpc.config.campaign_tables import load
 from ideas_hpc.design import build_bank
 from ideas_hpc.flyby.flight import setup_from_campaign
+from ideas_hpc.plots import figures
+from report_numbers import lines_for, printed, printed_int
 
 ROOT = Path(__file__).resolve().parent.parent
 DESIGN = ROOT / "campaigns" / "eros-design.toml"
@@ -60,9 +63,34 @@ def test_sample_free_design_is_exact(tmp_path):
     assert float(ds.attrs["optimality_gap"]) == 0.0 or ds.attrs["solver_status"] != "optimal"
     assert ds["reliability_vs_n"].attrs["units"] == "1"
     assert "long_name" in ds["validation_lower_bound"].attrs
-    rep = write_report(tmp_path / "r.zarr", tmp_path / "rep")
-    text = (rep / "summary.txt").read_text() if rep.is_dir() else Path(rep).read_text()
-    assert "requirement DEMONSTRATED" in text or "requirement NOT demonstrated" in text
+    # the optimisation on the bank and the validation are stored apart (nothing stepped here)
+    assert ds.attrs["solver_status"] in ("optimal", "time_limit", "feasible")
+    assert int(ds["bank_swarm_size"]) == n and ds.attrs["demonstrate_steps"] == "none"
+    assert float(ds["bank_probability"]) == pytest.approx(p, abs=1e-12)
+    assert str(ds["validation_outcome"].values) == ("demonstrated" if p >= 0.9 else
+                                                   "not demonstrated")
+    with figures.kept() as figs:
+        rep = write_report(tmp_path / "r.zarr", tmp_path / "rep")
+    text = Path(rep).read_text()
+    printed_int(text, "optimisation on the scenario bank", n, int(ds["proven_bound"]))
+    printed(text, "optimisation on the scenario bank", p, 100 * float(ds["optimality_gap"]))
+    printed(text, "^validation", p, p)
+    assert [ln for ln in lines_for(text, "^success-probability design") if f"N = {n}," in ln
+            and "requirement DEMONSTRATED by validation" in ln and "stepped" not in ln]
+    assert "status" not in text.split("success-probability design")[0].splitlines()[-1]
+    assert "DEMONSTRATED by validation" in figs["design_ring.png"].axes[0].get_title()
+    # a store written before the split, stepped up by one: the bank's answer comes back
+    old = ds.drop_vars(["bank_swarm_size", "bank_probability", "validation_outcome"]).assign(
+        solver_status=((), "demonstrated"), best_swarm_size=((), np.int64(n + 1)))
+    nb, pb, _, _, gap, steps = bank_answer(old)
+    assert nb == n and steps == f"N stepped up from {n} to {n + 1}"
+    assert pb == pytest.approx(p, abs=1e-12) and gap == pytest.approx(float(ds["optimality_gap"]))
+    ax = figs["design_validation_coverage.png"].axes[0]      # all flights at one coverage
+    thr = [line for line in ax.get_lines() if line.get_label().startswith("threshold")]
+    assert np.allclose(thr[0].get_xdata(), 100 * need)
+    lo, hi = ax.get_xlim()
+    assert lo < 100 * need < hi and ds.attrs["shape_model"] in ax.get_title()
+    figures.plt.close("all")
 
 
 @pytest.mark.slow
@@ -80,6 +108,19 @@ def test_dispersed_design_stores_validation(tmp_path):
     assert ds.attrs["scenario_stream"] != ds.attrs["validation_stream"]
     # design.demonstrate: stepped up until the bound reaches p, or n_max
     assert bool(ds["demonstrated"]) or int(ds["best_swarm_size"]) == 8
+    # the optimisation's status, bound and gap are the bank-optimal N's, whatever stepping did
+    n, n_bank = int(ds["best_swarm_size"]), int(ds["bank_swarm_size"])
+    assert ds.attrs["solver_status"] in ("optimal", "time_limit", "feasible")
+    assert n_bank <= n and float(ds["bank_probability"]) >= 0.5
+    assert float(ds["optimality_gap"]) == pytest.approx((n_bank - float(ds["proven_bound"]))
+                                                        / n_bank)
+    steps = ds.attrs["demonstrate_steps"]
+    assert steps == ("none" if n == n_bank else f"N stepped up from {n_bank} to {n}")
+    text = Path(write_report(tmp_path / "d.zarr", tmp_path / "rep")).read_text()
+    printed_int(text, "optimisation on the scenario bank", n_bank)
+    verdict = "DEMONSTRATED" if bool(ds["demonstrated"]) else "NOT demonstrated"
+    assert [ln for ln in lines_for(text, "^success-probability design")
+            if f"N = {n}, requirement {verdict}" in ln and (n == n_bank or steps in ln)]
     assert (tmp_path / "d-scenarios.zarr").exists()      # the bank, for reuse
 
 

@@ -140,3 +140,37 @@ def test_coverage_map_unseen_faces_red_and_area_title(tmp_path):
     area = shape.vertex_areas
     assert f"{100 * area[seen].sum() / area.sum():.3f} % of the area" in fig._suptitle.get_text()
     figures.plt.close("all")
+
+
+def test_validation_coverage_resolves_the_threshold_region(tmp_path):
+    """The success-probability validation figure is the same exceedance curve: 50 flights in
+    a 0.15-point band at the threshold, 6 with a failure far below, 4 with a failure
+    that still reach it. Every flight near the threshold is a point, failures are marked,
+    and the fraction line is the count (50 + 4 of 60, not the failure-exact P-hat)."""
+    from ideas_hpc.plots import reliability
+
+    rng = np.random.default_rng(2)
+    cov = np.r_[rng.uniform(0.9974, 0.9989, 50), rng.uniform(0.90, 0.95, 6),
+                rng.uniform(0.9975, 0.9980, 4)]
+    n_failed = np.r_[np.zeros(50, int), np.ones(6, int), np.ones(4, int)]
+    ds = xr.Dataset({"validation_coverage": (("validation_sample",), cov),
+                     "validation_n_failed": (("validation_sample",), n_failed),
+                     "validation_p_hat": ((), 0.8)},
+                    attrs={"reliability_threshold": 0.9974, "shape_model": "eros001708"})
+    with figures.kept() as figs:
+        reliability.validation_coverage(ds, tmp_path / "val.png")
+    ax = figs["val.png"].axes[0]
+    lo, hi = ax.get_xlim()
+    assert 97.0 < lo < 99.74 and hi > 99.89                 # the band is readable
+    pts = [line for line in ax.get_lines() if line.get_marker() == "o"]
+    x = pts[0].get_xdata()
+    assert x.size == 60 and ((x >= lo) & (x <= hi)).sum() == 54
+    orange = [line for line in pts if line.get_label().startswith("flights with a failure")]
+    assert orange[0].get_xdata().size == 10
+    thr = [line for line in ax.get_lines() if line.get_label().startswith("threshold")]
+    assert np.allclose(thr[0].get_xdata(), 99.74)
+    p_line = [line for line in ax.get_lines() if line.get_label().startswith("P(coverage >= t")]
+    assert np.isclose(p_line[0].get_ydata()[0], 54 / 60)
+    assert "90.0 % of them reach" in ax.get_title() and "eros001708" in ax.get_title()
+    assert "6 flights below" in ax.get_xlabel()
+    figures.plt.close("all")

@@ -184,9 +184,11 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact):
             break
         stepped.append((n, pb))
         v = _validate(c, setup, bank.theta[sw], need, w, exact, client)
+        # status, bound and gap stay the optimisation's (of the bank-optimal res.n):
+        # stepping up is the validation's decision, stored apart (reliability_vars)
         chosen = type(res)(indices=sw, n=n, probability=pb,
-                           per_scenario=rel.ev.per_scenario([sw])[0], status="demonstrated",
-                           bound=res.bound, gap=(n - res.bound) / n, solve_time=res.solve_time)
+                           per_scenario=rel.ev.per_scenario([sw])[0], status=res.status,
+                           bound=res.bound, gap=res.gap, solve_time=res.solve_time)
         chosen_val = v
     # the reliability curve: N0 .. first N with P >= CURVE_TOP (or n_max)
     n0 = int(nominal.data["best_swarm_size"])

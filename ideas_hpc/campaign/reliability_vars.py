@@ -1,9 +1,19 @@
 """Store variables and summary lines of the success-probability design (issue 20).
 
-The chosen design replaces the nominal one in ``best_swarm_size``,
-``solver_status``, ``optimality_gap``, ``proven_bound`` and
+The chosen design replaces the nominal one in ``best_swarm_size`` and
 ``design_coverage`` (the nominal design stays as ``nominal_swarm_size`` and
-``nominal_solver_status``); the rest is new:
+``nominal_solver_status``). Two questions are answered apart:
+
+* the optimisation on the scenario bank: ``solver_status`` (optimal,
+  time_limit, feasible), ``proven_bound`` and ``optimality_gap`` are those of
+  ``bank_swarm_size``, the fewest N found to meet p on the scenarios
+  (``bank_probability``);
+* the validation: ``validation_outcome`` ("demonstrated" / "not demonstrated",
+  ``demonstrated`` the same as a bool); when ``design.demonstrate`` stepped N
+  up, ``best_swarm_size`` > ``bank_swarm_size`` (attr ``demonstrate_steps``
+  says "from a to b").
+
+The rest is new:
 
 =============================  ====================  =========================================
 variable                        dims                  meaning
@@ -13,8 +23,9 @@ reliability_probability         ()                    P on the scenario bank (fa
 scenario_probability            (scenario,)           exact failure-weighted P per scenario
 validation_probability          (validation_sample,)  the same for each fresh sample
 validation_p_hat, _lower_bound  ()                    their mean and lower confidence bound
-demonstrated                    ()                    lower bound >= p
-validation_coverage, _n_failed  (validation_sample,)  coverage with failures sampled (histogram)
+bank_swarm_size, _probability   ()                    fewest N meeting p on the bank, its P
+validation_outcome, demonstrated ()                   lower bound >= p (str, bool)
+validation_coverage, _n_failed  (validation_sample,)  coverage with failures sampled (figure)
 reliability_vs_n (_upper,       (reliability_n,)      best P on the scenarios (proven upper
 _validated, _lower, _swarm)                           bound), validated P-hat and its bound
 tolerant_swarm_size, _prob.     (tolerated,)          k-failure-tolerant designs on the curve
@@ -42,6 +53,13 @@ def verdict(val, p: float) -> str:
     return "DEMONSTRATED" if val.lower >= p else "NOT demonstrated"
 
 
+def bank_line(n: int, probability: float, status: str, bound: float, gap: float) -> str:
+    """The optimisation's answer on the scenario bank, worded apart from the validation."""
+    return (f"optimisation on the scenario bank: fewest N meeting p = {int(n)} (P = "
+            f"{probability:.4f}; {status}, proven lower bound {bound:g}, gap "
+            f"{100 * gap:.1f} %)")
+
+
 def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, tolerant, *,
                         stepped, need: float, exact: bool, t_bank: float) -> ExactDesign:
     """The :class:`ExactDesign` of the chosen swarm with the variables of the module docstring."""
@@ -55,14 +73,19 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
     for i, r in enumerate(curve):
         sw[i, :r[0]] = bank.theta[r[5]]
     nominal_cov = float(nominal.bank.coverage([idx])[0]) if nominal.bank is not None else np.nan
+    outcome = "demonstrated" if val.lower >= p else "not demonstrated"
+    steps = f"N stepped up from {res.n} to {chosen.n}" if stepped else "none"
     ds = nominal.data.copy()
     ds = ds.rename({"best_swarm_size": "nominal_swarm_size",
                     "solver_status": "nominal_solver_status"})
     new = xr.Dataset({
         "best_swarm_size": ((), np.int64(chosen.n)),
-        "solver_status": ((), chosen.status),
-        "optimality_gap": ((), float(chosen.gap)),
-        "proven_bound": ((), float(chosen.bound)),
+        "solver_status": ((), res.status),
+        "optimality_gap": ((), float(res.gap)),
+        "proven_bound": ((), float(res.bound)),
+        "bank_swarm_size": ((), np.int64(res.n)),
+        "bank_probability": ((), float(res.probability)),
+        "validation_outcome": ((), outcome),
         "design_coverage": ((), nominal_cov),
         "success_probability_required": ((), p),
         "reliability_probability": ((), float(chosen.probability)),
@@ -83,7 +106,12 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
     }, coords={"reliability_n": np.array([r[0] for r in curve], dtype=np.int64),
                "tolerated": np.array([t[0] for t in tolerant], dtype=np.int64)})
     thr = f"coverage >= {100 * need:.3f} %"
-    _with(new, "optimality_gap", "1", "(N - proven lower bound) / N, success-probability design")
+    _with(new, "optimality_gap", "1", "(N - proven lower bound) / N of bank_swarm_size")
+    _with(new, "bank_swarm_size", "1", f"fewest N found with P({thr}) >= p on the scenario "
+          "bank (the optimisation's answer, before design.demonstrate)")
+    _with(new, "bank_probability", "1", f"P({thr}) of that swarm on the scenario bank")
+    _with(new, "validation_outcome", "1", "requirement demonstrated by the validation or not "
+          "(lower bound >= required probability)")
     _with(new, "design_coverage", "1", "nominal coverage of the chosen swarm")
     _with(new, "success_probability_required", "1", f"required P({thr})")
     _with(new, "reliability_probability", "1", f"P({thr}) on the scenario bank, failures exact")
@@ -93,7 +121,7 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
     _with(new, "validation_p_hat", "1", "mean of validation_probability")
     _with(new, "validation_lower_bound", "1", f"{100 * conf:g} % lower confidence bound on P "
           f"({BOUND_METHOD})")
-    _with(new, "demonstrated", None, "validation lower bound >= required probability")
+    _with(new, "demonstrated", "1", "validation lower bound >= required probability")
     _with(new, "validation_coverage", "1", "coverage of each validation flight with failures "
           "sampled")
     _with(new, "validation_n_failed", None, "failed spacecraft in each validation flight")
@@ -109,8 +137,10 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
                   combine_attrs="override")
     attrs = dict(nominal.attrs)
     attrs.update({
-        "design_method": "exact-reliability", "solver_status": chosen.status,
-        "optimality_gap": float(chosen.gap), "success_probability": p, "confidence": conf,
+        "design_method": "exact-reliability", "solver_status": res.status,
+        "optimality_gap": float(res.gap), "proven_bound": float(res.bound),
+        "bank_swarm_size": int(res.n), "validation_outcome": outcome,
+        "demonstrate_steps": steps, "success_probability": p, "confidence": conf,
         "n_scenarios": int(bank.rows.shape[0]), "reliability_threshold": float(need),
         "failure_probability": float(c.config.monte_carlo.failure_probability), "verify_samples": int(val.per_sample.size),
         "scenario_stream": SCENARIO_STREAM, "validation_stream": VALIDATION_STREAM,
@@ -123,18 +153,18 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
     })
     notes = list(nominal.notes) + list(res.notes)
     if stepped:
-        notes.append(f"design.demonstrate: N stepped up from {res.n} to {chosen.n} until the "
-                     f"validation bound reached p = {p:g}" if val.lower >= p else
-                     f"design.demonstrate: N stepped up from {res.n} to {chosen.n} (n_max) "
-                     "without demonstrating p")
+        notes.append(f"design.demonstrate: {steps} until the validation bound reached p = {p:g}"
+                     if val.lower >= p else
+                     f"design.demonstrate: {steps} (n_max) without demonstrating p")
     n_val = val.per_sample.size
-    samples = "exact (continuous dispersions off)" if exact else f"{n_val} fresh samples"
-    summary = (f"success-probability design: N = {chosen.n} ({chosen.status}, gap "
-               f"{100 * chosen.gap:.1f} %, bound {chosen.bound:g}; nominal N = "
-               f"{attrs['nominal_swarm_size']}) for P({thr}) >= {p:g}: P = "
-               f"{chosen.probability:.4f} on {bank.rows.shape[0]} scenarios; validation over "
-               f"{samples}: P-hat = {val.p_hat:.4f}, {100 * conf:g} % lower bound "
-               f"{val.lower:.4f} -> {verdict(val, p)}"
-               + (" (design.demonstrate stepped N up)" if stepped else ""))
+    samples = "the one exact scenario (continuous dispersions off)" if exact else f"{n_val} fresh samples"
+    summary = (f"success-probability design for P({thr}) >= {p:g}: N = {chosen.n}, "
+               f"requirement {verdict(val, p)} by validation"
+               + (f" (design.demonstrate: {steps})" if stepped else "")
+               + f"; P = {chosen.probability:.4f} on {bank.rows.shape[0]} scenarios; "
+               f"validation over {samples}: P-hat = {val.p_hat:.4f}, {100 * conf:g} % lower "
+               f"bound {val.lower:.4f}; "
+               f"{bank_line(res.n, res.probability, res.status, res.bound, res.gap)}; "
+               f"nominal N = {attrs['nominal_swarm_size']}")
     return ExactDesign(theta=theta, data=ds, attrs=attrs, notes=notes, summary=summary,
                        bank=nominal.bank)

@@ -108,7 +108,8 @@ def _design_lines(ds) -> list[str]:
     a = ds.attrs
     method = str(ds["design_method"].values)
     out = []
-    if "optimality_gap" in ds:
+    if "optimality_gap" in ds and "success_probability_required" not in ds:
+        # (a success-probability store words its status apart: report_reliability)
         out.append(f"design: method {method}, status {str(ds['solver_status'].values)}, "
                    f"N = {int(ds['best_swarm_size'])}, proven lower bound "
                    f"{float(ds['proven_bound']):g}, optimality gap "

@@ -18,7 +18,9 @@
 
 from __future__ import annotations
 
+import asyncio
 import contextlib
+import functools
 import logging
 import os
 from pathlib import Path
@@ -63,6 +65,14 @@ QUIET_CLUSTER_CONFIG = {"distributed.admin.tick.interval": "1s",
                         "distributed.admin.system-monitor.interval": "2s",
                         "distributed.worker.memory.monitor-interval": "1s"}
 
+#: Seconds each local worker process gets to exit when its cluster closes.
+#: distributed's nanny waits 4 s (0.8 x its 5 s close timeout), then kills the
+#: process and logs "Worker process still alive after 4.0 seconds, killing". A
+#: worker that ran the prange (OpenMP) kernels takes about 1 s longer to exit
+#: than one that did not, and on the loaded 2-core machine the main job's
+#: workers took over 4 s: that WARNING was the last thing the job printed.
+WORKER_EXIT_S = 60.0   # on a clean close only (connect: 5 s, dask's own, after an error)
+
 #: The package's SLURM settings (package data), dask config format.
 DEFAULT_SLURM_CONFIG = Path(__file__).resolve().with_name("jobqueue.yaml")
 
@@ -85,13 +95,31 @@ def _check_workers(workers: int | None) -> int:
     return workers
 
 
+@functools.cache
+def _local_cluster_class():
+    """:class:`distributed.LocalCluster` whose close gives every worker process
+    :data:`WORKER_EXIT_S` to exit before it is killed (imported on first use)."""
+    from distributed import LocalCluster
+    from distributed.core import Status
+
+    class JobLocalCluster(LocalCluster):
+        worker_exit_s = WORKER_EXIT_S
+
+        async def _close(self):
+            if self.status in (Status.running, Status.failed):
+                await asyncio.gather(*(w.close(timeout=self.worker_exit_s)
+                                       for w in list(self.workers.values())))
+            await super()._close()
+
+    return JobLocalCluster
+
+
 def local_cluster(workers: int | None = None, **kwargs: Any):
     """A process-based :class:`distributed.LocalCluster`, one thread per worker.
 
     ``kwargs`` override the defaults (``dashboard_address=None``, quiet logs).
     """
-    from distributed import LocalCluster
-
+    cls = _local_cluster_class()   # imports distributed (its config) outside config.set
     opts = dict(n_workers=_check_workers(workers), threads_per_worker=1, processes=True,
                 env=dict(WORKER_ENV), dashboard_address=None, silence_logs=logging.WARNING)
     opts.update(kwargs)
@@ -111,7 +139,7 @@ def local_cluster(workers: int | None = None, **kwargs: Any):
     # Workers take the spawning process's dask config (env vars are applied
     # after dask is imported there), so the profiler switch must be set here.
     with dask.config.set({"distributed.worker.profile.enabled": False, **QUIET_CLUSTER_CONFIG}):
-        return LocalCluster(**opts)
+        return cls(**opts)
 
 
 def _read_config_file(path: Path) -> dict:
@@ -279,8 +307,15 @@ def connect(*, cluster: str = "local", workers: int | None = None, scheduler: st
             client.close()
         return
     if cluster == "local":
-        with local_cluster(workers, **cluster_kwargs) as lc, Client(lc) as client:
-            yield client
+        with local_cluster(workers, **cluster_kwargs) as lc:
+            try:
+                with Client(lc) as client:
+                    yield client
+            except BaseException:
+                # a failed or interrupted job does not wait for its running tasks:
+                # a worker's close waits for them, and a chunk can run a minute
+                lc.worker_exit_s = 5.0
+                raise
         return
     n_jobs = _check_workers(workers) if workers is not None else 1
     if log_directory is not None and not load_slurm_config(slurm_config).get("log-directory"):

@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.ticker import MaxNLocator
 
+from ideas_hpc.plots.ecdf import exceedance_zoom
 from ideas_hpc.plots.figures import body_name, plt, save_png
 
 KM = 1e3
@@ -38,7 +39,10 @@ def ring_view(ds, path) -> "Path":  # noqa: F821
     status = a.get("solver_status")
     gap = a.get("optimality_gap")
     title = "chosen swarm (top view)"
-    if status is not None:
+    if a.get("validation_outcome") is not None:     # success-probability design
+        word = "DEMONSTRATED" if a["validation_outcome"] == "demonstrated" else "NOT demonstrated"
+        title += f": requirement {word} by validation"
+    elif status is not None:
         title += f": {status}" + ("" if gap is None else f", gap {100 * float(gap):.1f} %")
     ax.set_title(title)
     ax.set_xlabel("x_T, km")
@@ -103,31 +107,13 @@ def coverage_vs_n(ds, path) -> "Path":  # noqa: F821
 def verification(ds, path) -> "Path":  # noqa: F821
     """Monte Carlo verification: the fraction of dispersed samples reaching each
     coverage (complementary ECDF, every sample resolved) with the threshold."""
-    cov = np.sort(100.0 * ds["verify_coverage"].values)
+    cov = 100.0 * ds["verify_coverage"].values
     thr = 100.0 * float(ds.attrs["verify_threshold"])
     p = float(ds.attrs["verify_probability"])
-    m = cov.size
     fig, ax = plt.subplots(figsize=(7.2, 4.2))
-    frac = 1.0 - np.arange(m) / m          # P(coverage >= cov[i])
-    ax.step(cov, frac, where="pre", color="tab:green", lw=1.5,   # P(cov >= x) on (c_i-1, c_i]
-            label=f"P(coverage >= x), {m} samples")
-    ax.plot(cov, frac, "o", color="tab:green", ms=3)
-    ax.axvline(thr, color="tab:purple", ls="-.", label=f"threshold {thr:.3f} % "
-               "(target - eps_tol)")
-    ax.axhline(p, color="k", ls=":", lw=1, label=f"P(coverage >= threshold) = {100 * p:.1f} %")
-    # x range on the threshold region: samples far below (failures) are counted, not drawn
-    span = max(cov[-1] - thr, thr - float(np.median(cov)), 0.05)
-    lo = thr - 3 * span
-    cut = int((cov < lo).sum())
-    ax.set_xlim(lo, max(cov[-1], thr) + 0.3 * span)
-    ax.set_ylim(0.0, 1.05)
-    ax.ticklabel_format(axis="x", useOffset=False, style="plain")
-    ax.set_xlabel("area coverage x, %" + (f" ({cut} samples below {lo:.2f} % not shown)"
-                                          if cut else ""))
-    ax.set_ylabel("fraction of samples with coverage >= x")
-    ax.set_title(f"verification: P(coverage >= {thr:.2f} %) = {100 * p:.1f} % ({m} samples)",
-                 fontsize=10)
-    ax.grid(alpha=0.3)
+    exceedance_zoom(ax, cov, thr, fraction=p, what="samples")
+    ax.set_title(f"verification: P(coverage >= {thr:.2f} %) = {100 * p:.1f} % ({cov.size} "
+                 "samples)", fontsize=10)
     ax.legend(fontsize=7, loc="lower left")
     return save_png(fig, path, body=body_name(ds))
 

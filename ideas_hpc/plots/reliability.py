@@ -1,5 +1,6 @@
 """Figures of the success-probability design (issue 20): the reliability curve and the
-validation flights' coverage with sampled failures.
+validation flights' coverage with sampled failures (an exceedance curve zoomed on the
+threshold, :mod:`ideas_hpc.plots.ecdf`).
 
 Each function takes an ``xarray.Dataset`` opened from a design store, writes
 one PNG and returns its path (%).
@@ -10,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.ticker import MaxNLocator
 
+from ideas_hpc.plots.ecdf import exceedance_zoom
 from ideas_hpc.plots.figures import body_name, plt, save_png
 
 
@@ -57,19 +59,25 @@ def reliability_curve(ds, path) -> "Path":  # noqa: F821
 
 
 def validation_coverage(ds, path) -> "Path":  # noqa: F821
-    """Coverage of the validation flights with failures sampled (histogram)."""
+    """Coverage of the validation flights with failures sampled: the fraction of flights
+    reaching each coverage (complementary ECDF, zoomed on the threshold, every flight
+    a point; flights with a failure in orange), the fraction at or above the
+    threshold, and the validation's P-hat (failures enumerated exactly) beside it."""
     cov = 100.0 * ds["validation_coverage"].values
     failed = ds["validation_n_failed"].values > 0
     thr = _threshold_pct(ds)
-    fig, ax = plt.subplots(figsize=(6.4, 4.0))
-    bins = np.linspace(cov.min(), max(cov.max(), cov.min() + 1e-6), 31)
-    ax.hist([cov[~failed], cov[failed]], bins=bins, stacked=True, edgecolor="k",
-            color=["tab:green", "tab:orange"], label=["no failure", "with a failure"])
-    ax.axvline(thr, color="k", ls=":", label=f"threshold {thr:.2f} %")
-    ax.set_xlabel("area coverage, %")
-    ax.set_ylabel("validation flights")
-    ax.set_title(f"{body_name(ds)}: validation, {cov.size} flights with sampled failures\n"
-                 f"({int(failed.sum())} with a failure)")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
+    fig, ax = plt.subplots(figsize=(7.2, 4.4))
+    e = exceedance_zoom(ax, cov, thr, what="flights")
+    hit = failed[e["order"]]
+    if hit.any():
+        ax.plot(e["coverage"][hit], e["fraction_at"][hit], "o", color="tab:orange", ms=4,
+                label=f"flights with a failure ({int(hit.sum())})")
+    if "validation_p_hat" in ds:
+        ph = float(ds["validation_p_hat"])
+        ax.axhline(ph, color="tab:green", ls="--", lw=1,
+                   label=f"validation P-hat (failures exact) = {100 * ph:.1f} %")
+    ax.set_title(f"{body_name(ds)}: validation, {cov.size} flights with sampled failures "
+                 f"({int(failed.sum())} with a failure)\n{100 * e['fraction']:.1f} % of them "
+                 f"reach the threshold {thr:.2f} %", fontsize=10)
+    ax.legend(fontsize=7, loc="lower left")
     return save_png(fig, path)
