@@ -14,7 +14,8 @@ from ideas_hpc.body.analytic import sphere_mesh
 from ideas_hpc.core.mapping import quality as cq
 from ideas_hpc.mapping.options import coverage_options_from_config
 from ideas_hpc.errors import InputError
-from ideas_hpc.mapping.coverage import CoverageOptions, compute_coverage
+from ideas_hpc.mapping.coverage import compute_coverage
+from ideas_hpc.mapping.options import CoverageOptions
 from test_coverage import look_at
 
 DEG = math.pi / 180.0
@@ -216,7 +217,7 @@ def test_quality_in_flyby_and_mc_stores(tmp_path):
     variables with units (~1-2 min: slow)."""
     import xarray as xr
 
-    from ideas_hpc.campaign.datasets import QUALITY_VARS
+    from ideas_hpc.mapping.coverage import QUALITY_VARS
     from ideas_hpc.campaign.run import run_file
     from test_campaign_mc import MC, SHORT
 

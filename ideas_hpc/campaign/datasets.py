@@ -7,8 +7,8 @@ import numpy as np
 import xarray as xr
 
 from ideas_hpc.flyby.encounter import encounter_attrs
-from ideas_hpc.mapping.coverage import QUALITY_VARS, quality_arrays  # noqa: F401  (store layout)
-from ideas_hpc.engine.variables import with_attrs  # noqa: F401  (used by the kinds)
+from ideas_hpc.mapping.coverage import quality_arrays
+from ideas_hpc.engine.variables import with_attrs
 
 AXES = ["x", "y", "z"]
 WHEELS = ["1", "2", "3"]
@@ -91,7 +91,7 @@ def base_attrs(c, setup) -> dict:
     """Global attrs of every campaign store besides the engine's provenance (resolved
     config and hash, code version, seed, creation time): kind, execution settings
     (not hashed), the campaign file and the setup's sizing."""
-    from ideas_hpc.engine.store import config_json
+    from ideas_hpc.engine.store_meta import config_json
     from ideas_hpc.config.campaign_tables import EXECUTION_KNOBS
 
     knobs = {k: getattr(getattr(c.config, k.split(".")[0]), k.split(".")[1])

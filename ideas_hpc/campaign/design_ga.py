@@ -28,6 +28,7 @@ from ideas_hpc.design.ga.swarm_eval import MaskBank, fov_keys, nadir_keys, snap_
 from ideas_hpc.progress import bar as progress_bar
 from ideas_hpc.flyby.swarm_geometry import min_separation_angle
 from ideas_hpc.campaign import datasets
+from ideas_hpc.engine.variables import with_attrs
 from ideas_hpc.campaign.design_exact import checked_setup, ga_gap
 from ideas_hpc.config.campaign_tables import Campaign
 from ideas_hpc.campaign.vocabulary import requirement_line
@@ -256,7 +257,7 @@ def run_design(c: Campaign, out: Path, *, workers=None, scheduler=None, cluster=
         "best_swarm_size": ((), res.best_swarm_size),
         "best_coverage": ((), flight.coverage.coverage),
     }, coords={"generation": np.arange(1, res.best_fitness.size + 1)})
-    ds = xr.merge([ds, datasets.with_attrs(g)], combine_attrs="override")
+    ds = xr.merge([ds, with_attrs(g)], combine_attrs="override")
     if getattr(res, "gap_data", None) is not None:
         ds = xr.merge([ds, res.gap_data], combine_attrs="override")
     ds["best_fitness"].attrs["long_name"] = ("fitness (-N if feasible)" if nadir

@@ -78,7 +78,7 @@ from ideas_hpc.flyby.sizing import INSTRUMENT_DEFAULTS as _CAM
 from ideas_hpc.config.design_checks import check_stereo_design, resolve_angle_step
 from ideas_hpc.config.encounter_table import ENCOUNTER, check_encounter
 from ideas_hpc.campaign.kinds import KINDS as REGISTRY
-from ideas_hpc.config.design_table import DESIGN, MC_SCHEMA, reliability_checks  # noqa: F401
+from ideas_hpc.config.design_table import DESIGN, MC_SCHEMA, reliability_checks
 
 KINDS = REGISTRY.keys()   # live: a kind registered later is a valid choice
 
@@ -299,8 +299,8 @@ def build_models(raw: dict, config: CampaignConfig) -> dict:
     in one place only. They are read in the file's units, as written.
     """
     from ideas_hpc.attitude import gains_from_config, spacecraft_from_config
-    from ideas_hpc.mapping.coverage import coverage_options_from_config
-    from ideas_hpc.dynamics.trajectory import force_model_from_config
+    from ideas_hpc.mapping.options import coverage_options_from_config
+    from ideas_hpc.dynamics.forces import force_model_from_config
 
     cov = dict(_sub_table(raw, "coverage"))
     # The ground-resolution test and the quality pass use the instrument's camera
@@ -344,7 +344,7 @@ def resolved_config(c: Campaign) -> dict[str, Any]:
     :data:`EXECUTION_KNOBS` are left out: they do not change the numbers.
     Every store writer (flyby, designs, Monte Carlo) uses this one function.
     """
-    from ideas_hpc.engine.store import config_json  # the engine's canonical JSON, for one hash
+    from ideas_hpc.engine.store_meta import config_json  # the engine's canonical JSON, for one hash
 
     out = json.loads(config_json(with_defaults(c.raw, SCHEMA)))
     out["models"] = json.loads(config_json({k: dataclasses.asdict(v) if

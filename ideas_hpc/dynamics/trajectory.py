@@ -10,7 +10,7 @@ and of the prime-meridian angle (``t = 0``), so ``t0 = 0`` in the paper's
 flyby.
 
 The force model (settings objects, the ``[dynamics]`` table and the packing)
-lives in :mod:`ideas_hpc.dynamics.forces`; its names are re-exported here.
+lives in :mod:`ideas_hpc.dynamics.forces`; import its names from there.
 """
 
 from __future__ import annotations
@@ -24,9 +24,8 @@ from ideas_hpc.constants import MU_SUN
 from ideas_hpc.core.dynamics.ephemeris import sun_T_batch
 from ideas_hpc.core.dynamics.targeting import propagate_batch, target_batch
 from ideas_hpc.errors import InputError
-from ideas_hpc.dynamics.forces import (BOX_AREA, GRAVITY_MODELS, ForceModel,  # noqa: F401  (re-exported)
-                     PackedForceModel, elements_and_pole, force_model_from_config,
-                     pack_force_model, pack_forces)
+from ideas_hpc.dynamics.forces import (ForceModel, PackedForceModel, elements_and_pole,
+                                       pack_force_model)
 from ideas_hpc.body.params import PhysicalParams
 
 MAX_STEPS = 100_000

@@ -32,11 +32,13 @@ from ideas_hpc.flyby.encounter import (Encounter, approach_angles, endpoints_enc
                         window_s)
 from ideas_hpc.errors import InputError
 from ideas_hpc.flyby.camera import camera_at_images, misaligned, misalignment_dcms
-from ideas_hpc.mapping.coverage import CoverageOptions, CoverageResult, compute_coverage
+from ideas_hpc.mapping.coverage import CoverageResult, compute_coverage
+from ideas_hpc.mapping.options import CoverageOptions
 from ideas_hpc.flyby.sizing import Sizing, size_flyby
 from ideas_hpc.flyby.swarm_geometry import check_separation
-from ideas_hpc.dynamics.trajectory import (ForceModel, TargetingError, TargetingResult, propagate_swarm,
-                         ring_states, sun_direction_T, target_swarm)
+from ideas_hpc.dynamics.forces import ForceModel
+from ideas_hpc.dynamics.trajectory import (TargetingError, TargetingResult, propagate_swarm,
+                                           ring_states, sun_direction_T, target_swarm)
 
 TWO_PI = 2.0 * math.pi
 

@@ -20,6 +20,7 @@ import numpy as np
 
 from ideas_hpc.design.candidates import rows_from_views
 from ideas_hpc.core.mapping import scenario_rows as _k
+from ideas_hpc.core.mapping.coverage import first_image_by_spacecraft
 from ideas_hpc.flyby.flight import FlybySetup, Perturbation, open_loop_views
 from ideas_hpc.mapping.coverage import _check_geometry, _mesh, _strict_args
 
@@ -84,8 +85,8 @@ class RowEngine:
             return self
         r_img, dcm = self.nominal()
         v, n, r, c, te, ne, fa, ex, se, mr, oc, il, s, tree = self._args(r_img, dcm)
-        self.witness = _k.nominal_witness(v, n, r, c, te, ne, fa, ex, se, mr, oc, il, s,
-                                          *tree).astype(np.int32)   # shipped to workers
+        self.witness = first_image_by_spacecraft(v, n, r, c, te, ne, fa, ex, se, mr, oc, il, s,
+                                               *tree).astype(np.int32)   # shipped to workers
         if pilot is not None:
             rp, dp = self.flight(pilot)
             dev_r = np.linalg.norm(rp - r_img, axis=2)
