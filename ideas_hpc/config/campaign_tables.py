@@ -300,7 +300,7 @@ def build_models(raw: dict, config: CampaignConfig) -> dict:
     """
     from ideas_hpc.attitude import gains_from_config, spacecraft_from_config
     from ideas_hpc.mapping.options import coverage_options_from_config
-    from ideas_hpc.dynamics.forces import force_model_from_config
+    from ideas_hpc.dynamics.force_model import force_model_from_config
 
     cov = dict(_sub_table(raw, "coverage"))
     # The ground-resolution test and the quality pass use the instrument's camera

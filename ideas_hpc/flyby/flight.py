@@ -36,7 +36,7 @@ from ideas_hpc.mapping.coverage import CoverageResult, compute_coverage
 from ideas_hpc.mapping.options import CoverageOptions
 from ideas_hpc.flyby.sizing import Sizing, size_flyby
 from ideas_hpc.flyby.swarm_geometry import check_separation
-from ideas_hpc.dynamics.forces import ForceModel
+from ideas_hpc.dynamics.force_model import ForceModel
 from ideas_hpc.dynamics.trajectory import (TargetingError, TargetingResult, propagate_swarm,
                                            ring_states, sun_direction_T, target_swarm)
 
