@@ -96,10 +96,10 @@ def test_optional_objectives_need_the_quality_arrays():
     for name in ("stereo_coverage", "mean_resolution"):
         with pytest.raises(InputError, match=name) as ei:
             evaluate(bank, ("n", name), [[0, 1, -1]])
-        assert ei.value.field == "design.objectives"
+        assert ei.value.field == "objectives"
     with pytest.raises(InputError) as ei:
         run_pareto(bank, ("n", "stereo_coverage"), n_max=2, population=4, generations=1, seed=0)
-    assert ei.value.field == "design.objectives"
+    assert ei.value.field == "objectives"
 
 
 @pytest.mark.parametrize("names, msg", [
@@ -108,7 +108,7 @@ def test_optional_objectives_need_the_quality_arrays():
 def test_check_objectives_refuses(names, msg):
     with pytest.raises(InputError, match=msg) as ei:
         check_objectives(names)
-    assert ei.value.field == "design.objectives"
+    assert ei.value.field == "objectives"
 
 
 def _toy(seed=1, k=24, v=120, p=0.25):

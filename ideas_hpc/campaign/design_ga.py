@@ -31,12 +31,13 @@ from ideas_hpc.campaign import datasets
 from ideas_hpc.engine.variables import with_attrs
 from ideas_hpc.campaign.design_exact import checked_setup, ga_gap
 from ideas_hpc.config.campaign_tables import Campaign
+from ideas_hpc.config.design_checks import DESIGNER_FIELDS
 from ideas_hpc.campaign.vocabulary import requirement_line
 
 
-#: The GA's parameter names -> the campaign file's keys.
-GA_FIELDS = {"population": "design.population", "generations": "design.generations",
-             "n_max": "design.n_max", "p_min": "design.p_min_min"}
+#: The GA's parameter names -> the campaign file's keys (with every designer's).
+GA_FIELDS = {**DESIGNER_FIELDS, "population": "design.population",
+             "generations": "design.generations", "p_min": "design.p_min_min"}
 
 
 def _log(msg: str) -> None:

@@ -69,13 +69,14 @@ from typing import Any
 from ideas_hpc.attitude.maneuvers import CAMPAIGN_NAMES, campaign_maneuver
 from ideas_hpc.config.toml_file import CampaignSource, load_campaign
 from ideas_hpc.design.pareto.objectives import check_objectives
-from ideas_hpc.errors import InputError
+from ideas_hpc.errors import InputError, config_fields
 from ideas_hpc.montecarlo.dispersions import check_dispersions
 from ideas_hpc.config.fields import (Field, live_typed_table, to_typed, typed_table, validate,
                       with_defaults)
 from ideas_hpc.units import CM, DEG, KM, MINUTE, MM, UM
 from ideas_hpc.flyby.sizing import INSTRUMENT_DEFAULTS as _CAM
-from ideas_hpc.config.design_checks import check_stereo_design, resolve_angle_step
+from ideas_hpc.config.design_checks import (DESIGNER_FIELDS, check_stereo_design,
+                                           resolve_angle_step)
 from ideas_hpc.config.encounter_table import ENCOUNTER, check_encounter
 from ideas_hpc.campaign.kinds import KINDS as REGISTRY
 from ideas_hpc.config.design_table import DESIGN, MC_SCHEMA, reliability_checks
@@ -245,10 +246,8 @@ def _cross_checks(c: CampaignConfig) -> None:
     if d.p_min_s >= d.p_max_s:
         raise InputError(f"must be > design.p_min_min ({d.p_min_s / MINUTE:g} min)",
                          field="design.p_max_min")
-    try:
+    with config_fields(prefix="monte_carlo."):
         check_dispersions(mc)
-    except InputError as exc:
-        raise InputError(exc.message, field=f"monte_carlo.{exc.field}") from None
     if d.failures_tolerated >= d.n_max:
         raise InputError(f"must be < design.n_max ({d.n_max}): {d.failures_tolerated} "
                          "failures would leave no spacecraft", field="design.failures_tolerated")
@@ -266,7 +265,8 @@ def _cross_checks(c: CampaignConfig) -> None:
     if mc.failures_k and sw.angles_rad and mc.failures_k > len(sw.angles_rad):
         raise InputError(f"cannot exceed the swarm size {len(sw.angles_rad)}",
                          field="monte_carlo.failures_k")
-    check_objectives(d.objectives)
+    with config_fields(DESIGNER_FIELDS):
+        check_objectives(d.objectives)
     check_encounter(fb, c.attitude)
     reliability_checks(c)
     step = fb.dt_s
