@@ -77,12 +77,12 @@ def setup_attrs(setup) -> dict:
     return {
         "body": setup.body.name, "body_note": setup.body.note,
         "shape_model": setup.body.shape.name,
-        "half_angle_rad": float(setup.eta), "near_m": float(setup.near),
-        "far_m": float(setup.far), "d_sep_m": float(setup.d_sep),
+        "half_angle_rad": float(setup.eta_rad), "near_m": float(setup.near_m),
+        "far_m": float(setup.far_m), "d_sep_m": float(setup.d_sep_m),
         "altitude_m": float(s.altitude), "eta_nadir_rad": float(s.eta_nadir),
-        "theta_max_rad": float(setup.theta_max), "maneuver": setup.maneuver.campaign_name,
+        "theta_max_rad": float(setup.theta_max_rad), "maneuver": setup.maneuver.campaign_name,
         "attitude_mode": setup.attitude_mode, "coverage_mode": setup.coverage.mode,
-        "targeting_tolerance_m": float(setup.tol), "configuration": setup.configuration,
+        "targeting_tolerance_m": float(setup.tol_m), "configuration": setup.configuration,
         **encounter_attrs(setup),
     }
 

@@ -94,7 +94,7 @@ def design_exact(c, setup, client) -> ExactDesign:
     n_grid = grid_size(d.grid_step_rad)
     # a separation no two grid points satisfy fails before any mask is computed
     with designer_errors(c):
-        separation_steps(2 * math.pi / n_grid, setup.d_sep, sep, n_grid)
+        separation_steps(2 * math.pi / n_grid, setup.d_sep_m, sep, n_grid)
     stereo = setup.coverage.require_stereo      # grid size checked with the config
     t0 = time.perf_counter()
     if not stereo:  # the pair table is one pass in this process

@@ -102,7 +102,7 @@ def _stereo_ga(c: Campaign, setup, client):
                        mutation_probability=d.mutation_probability,
                        stall_generations=d.stall_generations,
                        min_separation=min_separation_angle(c.config.swarm.min_separation_m,
-                                                           setup.d_sep),
+                                                           setup.d_sep_m),
                        progress=_progress_printer(d.generations, "NP GA (stereo)"))
     n = res.best_swarm_size
     res.notes.append("GA scoring stereo from own tracks and from pairs of spacecraft (the "
@@ -153,7 +153,7 @@ def design_nadir(c: Campaign, setup, client):
         return cov, np.rint(genomes[:, 0]).astype(int)
 
     eps = d.eps_tol_pct / 100.0
-    min_sep = min_separation_angle(c.config.swarm.min_separation_m, setup.d_sep)
+    min_sep = min_separation_angle(c.config.swarm.min_separation_m, setup.d_sep_m)
     cover = None if masks is None else GridCover(
         masks, areas, step, target, eps, d.n_max,
         min_sep_steps=math.ceil(min_sep / step - 1e-9) if min_sep > 0 else 0)

@@ -136,7 +136,7 @@ def run_design_pareto(c, out, *, workers=None, scheduler=None, cluster="local",
             check_grid(n_grid, STEP_KEY)
     # a separation no two grid points satisfy fails before any mask is computed
     with designer_errors(c):
-        separation_steps(2 * math.pi / n_grid, setup.d_sep, sep, n_grid)
+        separation_steps(2 * math.pi / n_grid, setup.d_sep_m, sep, n_grid)
     t0 = time.perf_counter()
     work = visibility_tests(n_grid, 1, setup.image_times.size, setup.body.shape.n_vertices)
     with JobCluster(workers=workers, scheduler=scheduler, cluster=cluster,

@@ -168,7 +168,7 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact):
          + (" (continuous dispersions off: one exact scenario)" if exact else ""))
     n_grid = grid_size(d.grid_step_rad)
     sep = c.config.swarm.min_separation_m
-    m_sep = separation_steps(2 * math.pi / n_grid, setup.d_sep, sep, n_grid)
+    m_sep = separation_steps(2 * math.pi / n_grid, setup.d_sep_m, sep, n_grid)
     with designer_errors(c):
         res = min_swarm_reliable(bank.rows, bank.areas, p=p, p_f=p_f, need=need, n_max=d.n_max,
                                  sep_steps=m_sep, time_limit=d.time_limit_s)

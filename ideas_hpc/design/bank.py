@@ -118,7 +118,7 @@ def build_bank(setup, step: float, *, client=None, chunk_size: int = 32,
     n = grid_size(step)
     step = TWO_PI / n if snap else float(step)
     keys = [(k * step, 0.0, k) for k in range(n)]
-    common = dict(theta=step * np.arange(n), step=step, d_sep=float(setup.d_sep),
+    common = dict(theta=step * np.arange(n), step=step, d_sep=float(setup.d_sep_m),
                   areas=np.asarray(setup.body.shape.vertex_areas, dtype=np.float64))
     if pairs:
         q = candidate_quality(setup, keys, pairs=True)

@@ -53,8 +53,8 @@ class RowEngine:
     def _args(self, r_img, dcm):
         setup = self.setup
         shape = setup.body.shape
-        r, c, tan_eta, near, far, _ = _check_geometry(shape, r_img, dcm, setup.eta, setup.near,
-                                                      setup.far)
+        r, c, tan_eta, near, far, _ = _check_geometry(shape, r_img, dcm, setup.eta_rad, setup.near_m,
+                                                      setup.far_m)
         v, n, _ = _mesh(shape)
         sun = setup.sun_T() if setup.coverage.needs_sun else None
         sin_e, max_r, occ, ill, s, tree = _strict_args(shape, setup.coverage, sun, r.shape[1])
@@ -125,7 +125,7 @@ def rows_setup(setup: FlybySetup) -> FlybySetup:
     """The setup the rows are flown with: closed-loop time series not kept (one sample)."""
     if setup.attitude_mode != "simulated":
         return setup
-    return setup.with_(decimate=max(1, int(round((setup.tf - setup.t0) / setup.dt))))
+    return setup.with_(decimate=max(1, int(round((setup.tf_s - setup.t0_s) / setup.dt_s))))
 
 
 def full_rows(setup: FlybySetup, theta, periods, r0_T, v0_T, pert: Perturbation) -> np.ndarray:
