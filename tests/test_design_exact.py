@@ -94,7 +94,7 @@ def _toy(seed=1, k=14, v=80, p=0.3):
     masks = rng.uniform(size=(k, v)) < p
     step = 2 * np.pi / k
     return CandidateBank(theta=step * np.arange(k), masks=masks, areas=rng.uniform(1, 3, v),
-                         step=step, d_sep=1e4)
+                         step_rad=step, d_sep_m=1e4)
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
@@ -104,7 +104,7 @@ def test_toy_min_swarm_separation_and_curve(seed):
     all_sets = [np.array(c) for n in range(1, 8)
                 for c in itertools.combinations(range(bank.n_candidates), n)]
     covs = bank.coverage(all_sets)
-    for sep in (0.0, 1e4 * bank.step * 1.5):    # 1.5 steps: neighbours conflict
+    for sep in (0.0, 1e4 * bank.step_rad * 1.5):    # 1.5 steps: neighbours conflict
         gap_ok = [s for s, c in zip(all_sets, covs) if c >= target - 0.02 - 1e-12
                   and (sep == 0 or _separated(s, bank.n_candidates, 1))]
         if not gap_ok:

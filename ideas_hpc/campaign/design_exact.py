@@ -105,7 +105,7 @@ def design_exact(c, setup, client) -> ExactDesign:
     scorer = stereo_scorer(bank) if stereo else bank
     t_masks = time.perf_counter() - t0
     _log(f"candidate {'rows' if setup.coverage.requirement else 'masks'}: {bank.n_candidates} "
-         f"grid angles ({math.degrees(bank.step):g} deg)"
+         f"grid angles ({math.degrees(bank.step_rad):g} deg)"
          f"{' and their stereo pairs' if stereo else ''} in {t_masks:.1f} s")
     notes: list = []
     target = _target(scorer, eps, setup.coverage, notes)
@@ -149,7 +149,7 @@ def design_exact(c, setup, client) -> ExactDesign:
              "threshold_coverage": float(target - eps),
              "design_masks_s": float(t_masks), "design_solve_s": float(t_design - t_masks),
              "coverage_curve_s": float(curve.solve_time), "failures_tolerated": int(k),
-             "failures_evaluated": int(k_eval), "angle_step_rad": float(bank.step)}
+             "failures_evaluated": int(k_eval), "angle_step_rad": float(bank.step_rad)}
     summary = (f"exact design: N = {res.n} ({res.status}, gap {100 * res.gap:.1f} %, bound "
                f"{res.bound:g}), {requirement_line(target, target - eps, res.coverage)}, "
                f"{'k = %d tolerant, ' % k if k else ''}masks {t_masks:.1f} s + solve "

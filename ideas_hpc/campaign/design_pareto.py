@@ -147,7 +147,7 @@ def run_design_pareto(c, out, *, workers=None, scheduler=None, cluster="local",
                           chunk_size=d.chunk_size, quality="quality" in needs,
                           pairs="pairs" in needs)
     t_masks = time.perf_counter() - t0
-    _log(f"candidate masks: {bank.n_candidates} grid angles ({math.degrees(bank.step):g} deg) "
+    _log(f"candidate masks: {bank.n_candidates} grid angles ({math.degrees(bank.step_rad):g} deg) "
          f"in {t_masks:.1f} s")
     with designer_errors(c):
         res = run_pareto(bank, names, n_max=d.n_max, population=d.population,
@@ -156,7 +156,7 @@ def run_design_pareto(c, out, *, workers=None, scheduler=None, cluster="local",
                          progress=_progress(d.generations))
     ds = pareto_dataset(bank, res, d.n_max)
     notes = list(res.notes)
-    attrs = {"objectives": json.dumps(list(names)), "angle_step_rad": float(bank.step),
+    attrs = {"objectives": json.dumps(list(names)), "angle_step_rad": float(bank.step_rad),
              "design_masks_s": float(t_masks), "pareto_wall_s": float(res.wall_s),
              "pareto_evaluations": int(res.evaluations),
              "pareto_generations": int(res.generations)}

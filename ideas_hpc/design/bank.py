@@ -37,15 +37,15 @@ class CandidateBank:
     Attributes
     ----------
     theta : (K,) float64
-        Swarm angles, rad, ``k * step``.
+        Swarm angles, rad, ``k * step_rad``.
     masks : (K, V) bool
         Vertex v observed by candidate k during the flyby.
     areas : (V,) float64
         Vertex areas, m^2.
-    step : float
+    step_rad : float
         Grid step, rad.
-    d_sep : float
-        Ring radius, m (separations along the ring are ``d_sep * dtheta``).
+    d_sep_m : float
+        Ring radius, m (separations along the ring are ``d_sep_m * dtheta``).
     usable, stereo : (K, V) bool, optional
         With a ``[coverage]`` requirement and ``build_bank(quality=True)``: a
         usable observation, a stereo pair from the candidate's own track
@@ -61,8 +61,8 @@ class CandidateBank:
     theta: np.ndarray
     masks: np.ndarray
     areas: np.ndarray
-    step: float
-    d_sep: float
+    step_rad: float
+    d_sep_m: float
     usable: np.ndarray | None = None
     stereo: np.ndarray | None = None
     resolution: np.ndarray | None = None
@@ -118,7 +118,7 @@ def build_bank(setup, step: float, *, client=None, chunk_size: int = 32,
     n = grid_size(step)
     step = TWO_PI / n if snap else float(step)
     keys = [(k * step, 0.0, k) for k in range(n)]
-    common = dict(theta=step * np.arange(n), step=step, d_sep=float(setup.d_sep_m),
+    common = dict(theta=step * np.arange(n), step_rad=step, d_sep_m=float(setup.d_sep_m),
                   areas=np.asarray(setup.body.shape.vertex_areas, dtype=np.float64))
     if pairs:
         q = candidate_quality(setup, keys, pairs=True)

@@ -110,7 +110,7 @@ def _separation_rows(red: Reduced, m: int, n_grid: int, n_cols: int):
 
 def prepare(bank: CandidateBank, min_separation: float, *, redundancy: bool = False):
     """Reduced data and the separation width ``m`` (grid steps) for a bank."""
-    m = separation_steps(bank.step, bank.d_sep, min_separation, bank.n_candidates)
+    m = separation_steps(bank.step_rad, bank.d_sep_m, min_separation, bank.n_candidates)
     red = reduce_problem(bank.masks, bank.areas, merge_candidates=(m == 0 and not redundancy))
     return red, m
 

@@ -192,7 +192,7 @@ class ReliabilityDesigner:
             areas = self.ev.w
             for s in range(self.s_n):
                 bank = CandidateBank(theta=step * np.arange(self.c_n), masks=self.ev.rows[s],
-                                     areas=areas, step=step, d_sep=1.0)
+                                     areas=areas, step_rad=step, d_sep_m=1.0)
                 red = reduce_problem(bank.masks, areas, merge_candidates=False)
                 rb = ring_bound(bank, red, self.m, int(n_max), self.ev.need)
                 if rb is not None:

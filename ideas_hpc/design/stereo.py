@@ -222,7 +222,7 @@ def min_swarm_stereo(sb: StereoBank, *, target: float, eps_tol: float, n_max: in
     time_limit = check_time_limit(time_limit)
     bank = sb.bank
     check_grid(bank.n_candidates)
-    m = separation_steps(bank.step, bank.d_sep, min_separation, bank.n_candidates)
+    m = separation_steps(bank.step_rad, bank.d_sep_m, min_separation, bank.n_candidates)
     need = target - eps_tol
     cover, red, ends = _model(sb, m)
     k, p, g = bank.n_candidates, ends.shape[0], red.n_groups
@@ -281,7 +281,7 @@ def max_coverage_stereo(sb: StereoBank, n: int, *, min_separation: float = 0.0,
     time_limit = check_time_limit(time_limit)
     bank = sb.bank
     check_grid(bank.n_candidates)
-    m = separation_steps(bank.step, bank.d_sep, min_separation, bank.n_candidates)
+    m = separation_steps(bank.step_rad, bank.d_sep_m, min_separation, bank.n_candidates)
     cover, red, ends = _model(sb, m)
     k, p = bank.n_candidates, ends.shape[0]
     cons, integ, n_var = _constraints(sb, cover, red, ends, m, (0, int(n)))
