@@ -36,7 +36,7 @@ def _toy(seed=1, k=16, v=100, p=0.3) -> CandidateBank:
     rng = np.random.default_rng(seed)
     step = 2 * np.pi / k
     return CandidateBank(theta=step * np.arange(k), masks=rng.uniform(size=(k, v)) < p,
-                         areas=rng.uniform(1, 3, v), step=step, d_sep=1e4)
+                         areas=rng.uniform(1, 3, v), step_rad=step, d_sep_m=1e4)
 
 
 def _best_of_size(bank, n):
