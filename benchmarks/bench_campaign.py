@@ -85,7 +85,7 @@ def main() -> None:
     setup, nom = _prepare(c)
     print(f"body: {setup.body.note}")
     print(f"workload: {args.samples} samples x {nom.theta.size} spacecraft, chunks of "
-          f"{args.chunk}, {setup.tf - setup.t0:g} s flights, attitude {setup.attitude_mode}; "
+          f"{args.chunk}, {setup.tf_s - setup.t0_s:g} s flights, attitude {setup.attitude_mode}; "
           f"{args.rounds} rounds")
     tmp = Path(tempfile.mkdtemp(prefix="bench_campaign_"))
     try:

@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import math
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -40,7 +39,8 @@ from ideas_hpc.body.bodies import load_body
 from ideas_hpc.core.mapping import bvh as cbvh
 from ideas_hpc.core.mapping import coverage as ccov
 from ideas_hpc.body.datapath import have_data_file
-from ideas_hpc.mapping.coverage import CoverageOptions, compute_coverage, observed_per_spacecraft
+from ideas_hpc.mapping.coverage import compute_coverage, observed_per_spacecraft
+from ideas_hpc.mapping.options import CoverageOptions
 
 # the tiled kernel is a test oracle kept in tests/, not part of the package
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))

@@ -91,7 +91,7 @@ def main() -> None:
 
     ga = run_nadir_ga(evaluate, n_max=20, population=100, generations=115, seed=2026,
                       eps_tol=EPS, angle_step=STEP, target=target,
-                      min_separation=SEP / setup.d_sep)
+                      min_separation=SEP / setup.d_sep_m)
     t_ga = time.perf_counter() - t
     n_opt = _exact(setup)[1].n
     print(f"GA paper    : {t_ga:5.1f} s (masks included), {ga.evaluations} designs, N = "

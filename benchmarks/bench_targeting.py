@@ -40,7 +40,8 @@ from ideas_hpc.body.bodies import load_body
 from ideas_hpc.constants import MU_SUN
 from ideas_hpc.core.dynamics import propagate as P
 from ideas_hpc.core.dynamics.forces import K_SRP
-from ideas_hpc.dynamics.trajectory import ForceModel, pack_force_model, ring_states, target_swarm
+from ideas_hpc.dynamics.force_model import ForceModel, pack_force_model
+from ideas_hpc.dynamics.trajectory import ring_states, target_swarm
 
 ANGLES = [0.2, 1.7, 2.4, 2.9, 3.3, 3.5, 5.6, 6.0]
 D_SEP = 155.901e3

@@ -195,9 +195,9 @@ def workload_section(shape, tree, scene, eps):
     opts = setup.coverage
     v = np.ascontiguousarray(shape.vertices_T)
     nrm = np.ascontiguousarray(shape.vertex_normals_T)
-    te, sin_e = math.tan(setup.eta), math.sin(opts.min_elevation)
-    geo = (setup.eta, setup.near, setup.far)
-    args = (v, nrm, r, C, te, setup.near, setup.far, True, sin_e, np.inf, True, False,
+    te, sin_e = math.tan(setup.eta_rad), math.sin(opts.min_elevation)
+    geo = (setup.eta_rad, setup.near_m, setup.far_m)
+    args = (v, nrm, r, C, te, setup.near_m, setup.far_m, True, sin_e, np.inf, True, False,
             np.zeros((1, 3)), *tree)
     sub = tuple(a[:2] if a is r or a is C else a for a in args)
     observed_per_spacecraft(shape, r[:2], C[:2], *geo, options=opts)
@@ -212,13 +212,13 @@ def workload_section(shape, tree, scene, eps):
     t_free, _ = best_of(lambda: observed_per_spacecraft(shape, r, C, *geo, options=free), 2)
     assert np.array_equal(m_old, m_new)
     js = np.arange(0, shape.n_vertices, 8)
-    q = _queries(js, v, nrm, r, C, te, setup.near, setup.far, sin_e, True, *tree)
+    q = _queries(js, v, nrm, r, C, te, setup.near_m, setup.far_m, sin_e, True, *tree)
     _, ratio = _compare("masks' rays (every 8th vertex x 720 candidates, to the first clear)",
                         scene, tree, np.ascontiguousarray(v[q[:, 0].astype(np.int64)]),
                         np.ascontiguousarray(q[:, 1:]), q[:, 0].astype(np.int64), eps)
     three = [20, 260, 500]
     r3, C3 = np.ascontiguousarray(r[three]), np.ascontiguousarray(C[three])
-    q = _queries(np.arange(0, shape.n_vertices, 2), v, nrm, r3, C3, te, setup.near, setup.far,
+    q = _queries(np.arange(0, shape.n_vertices, 2), v, nrm, r3, C3, te, setup.near_m, setup.far_m,
                  sin_e, False, *tree)
     _compare("full-count rays (every 2nd vertex x 3 candidates, every image)", scene, tree,
              np.ascontiguousarray(v[q[:, 0].astype(np.int64)]), np.ascontiguousarray(q[:, 1:]),

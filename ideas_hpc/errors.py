@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import re
 
 
 class InputError(ValueError):
@@ -64,15 +65,28 @@ def positive_number(value, field: str) -> float:
 
 @contextlib.contextmanager
 def config_fields(names: dict | None = None, prefix: str = ""):
-    """Re-raise a model's or designer's :class:`InputError` under the file's key.
+    """Re-raise a model's or designer's :class:`InputError` under the file's keys.
 
-    The layer below names its own parameters (``p_min``, ``sh_degree``); the
-    campaign layer maps them: ``names[field]`` when listed, else ``prefix + field``.
+    The layer below names its own parameters (``p_min``, ``sh_degree``), in the
+    field and, between backticks, in the message (``"raise `n_max`"``); the
+    campaign layer maps them: ``names[name]`` when listed, else ``prefix + name``
+    (a name the mapping does not cover keeps its own spelling, without the
+    backticks, in the message).
     """
     try:
         yield
     except InputError as e:
-        if e.field is None or not (prefix or (names and e.field in names)):
+        def mapped(name):
+            if names and name in names:
+                return names[name]
+            return prefix + name if prefix else None
+
+        key = mapped(e.field) if e.field is not None else None
+        message = _PARAM.sub(lambda m: mapped(m.group(1)) or m.group(1), e.message)
+        if key is None and message == e.message:
             raise
-        key = (names or {}).get(e.field, prefix + e.field)
-        raise InputError(e.message, field=key, file=e.file, line=e.line) from None
+        raise InputError(message, field=key or e.field, file=e.file, line=e.line) from None
+
+
+#: A parameter name quoted in a model's message, mapped by :func:`config_fields`.
+_PARAM = re.compile(r"`([A-Za-z_][A-Za-z0-9_]*)`")

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from ideas_hpc.core.mapping.coverage import coverage_counts, coverage_fractions  # noqa: F401
+from ideas_hpc.core.mapping.coverage import coverage_fractions
 
 #: Vertices per tile of the tiled counting kernel.
 BLOCK = 32

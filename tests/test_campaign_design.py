@@ -55,7 +55,7 @@ def test_fig32_half_fov_sweep(eros1708):
     """Paper Fig. 32 periods with half the field of view; the paper reports 100 %."""
     c = load(CAMPAIGNS / "eros-fov-ga.toml")
     setup = setup_from_campaign(c)
-    assert setup.eta == pytest.approx(setup.sizing.eta_nadir / 2)
+    assert setup.eta_rad == pytest.approx(setup.sizing.eta_nadir / 2)
     out = fly(setup, FIG21, np.array(FIG32_MIN) * 60.0)
     print(f"Fig. 32 swarm, half FoV, ideal sweep: coverage {100 * out.coverage.coverage:.3f} % "
           f"(paper: 100 %)")
@@ -187,7 +187,7 @@ def test_helix_configuration(tmp_path):
     r0, rt = endpoints(setup, th)
     assert np.allclose(r0[:, 2], -3e3 + 12e3 * th / (2 * np.pi))
     assert np.allclose(rt[:, 2] - r0[:, 2], 6e3)
-    assert np.allclose(np.hypot(r0[:, 0], r0[:, 1]), setup.d_sep)
+    assert np.allclose(np.hypot(r0[:, 0], r0[:, 1]), setup.d_sep_m)
     out = fly(setup, th)
     assert np.all(out.targeting.converged)
     assert np.allclose(out.targeting.position_T[:, -1], rt, atol=0.01)

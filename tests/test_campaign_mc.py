@@ -16,7 +16,7 @@ from gates import Gate, wait_until
 from ideas_hpc.campaign.montecarlo import run_sample
 from ideas_hpc.campaign.run import run_file
 from ideas_hpc.config.campaign_tables import load
-from ideas_hpc.engine.store import done_mask
+from ideas_hpc.engine.chunk_write import done_mask
 from ideas_hpc.errors import InputError
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -52,7 +52,7 @@ def test_sample_free_design_is_exact(tmp_path):
     w = bank.areas / bank.areas.sum()
     need = ds.attrs["reliability_threshold"]
     n = int(ds["best_swarm_size"])
-    idx = np.rint(np.asarray(ds["swarm_angle"].values) / bank.step).astype(int) % bank.n_candidates
+    idx = np.rint(np.asarray(ds["swarm_angle"].values) / bank.step_rad).astype(int) % bank.n_candidates
     p = exact_p(bank.masks, w, list(idx), need, 0.05)
     assert float(ds["reliability_probability"]) == pytest.approx(p, abs=1e-12)
     assert float(ds["validation_p_hat"]) == pytest.approx(p, abs=1e-12)
@@ -140,7 +140,7 @@ def test_sample_free_design_is_exact_on_a_fast_encounter(tmp_path):
     bank = build_bank(setup, c.config.design.grid_step_rad)
     w = bank.areas / bank.areas.sum()
     need = ds.attrs["reliability_threshold"]
-    idx = np.rint(np.asarray(ds["swarm_angle"].values) / bank.step).astype(int) % bank.n_candidates
+    idx = np.rint(np.asarray(ds["swarm_angle"].values) / bank.step_rad).astype(int) % bank.n_candidates
     p = exact_p(bank.masks, w, list(idx), need, 0.05)
     assert p >= 0.9
     assert float(ds["reliability_probability"]) == pytest.approx(p, abs=1e-12)

@@ -70,7 +70,8 @@ def test_report_on_incomplete_store_names_missing_chunks(tmp_path, capsys):
     import numpy as np
     import xarray as xr
 
-    from ideas_hpc.engine.store import create_store, write_chunk_region
+    from ideas_hpc.engine.chunk_write import write_chunk_region
+    from ideas_hpc.engine.store import create_store
 
     tpl = xr.Dataset({"coverage": (("sample",), np.zeros(6), {"units": "1", "long_name": "c"})})
     store = tmp_path / "mc.zarr"

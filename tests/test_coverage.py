@@ -15,8 +15,8 @@ from ideas_hpc.core.mapping import bvh as cbvh
 from ideas_hpc.core.mapping import coverage as ccov
 from coverage_tiles import coverage_counts_tiles
 from ideas_hpc.errors import InputError
-from ideas_hpc.mapping.coverage import (CoverageOptions, compute_coverage,
-                               coverage_options_from_config, observed_per_spacecraft)
+from ideas_hpc.mapping.coverage import compute_coverage, observed_per_spacecraft
+from ideas_hpc.mapping.options import CoverageOptions, coverage_options_from_config
 
 R_SPHERE = 1000.0
 

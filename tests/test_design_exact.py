@@ -94,7 +94,7 @@ def _toy(seed=1, k=14, v=80, p=0.3):
     masks = rng.uniform(size=(k, v)) < p
     step = 2 * np.pi / k
     return CandidateBank(theta=step * np.arange(k), masks=masks, areas=rng.uniform(1, 3, v),
-                         step=step, d_sep=1e4)
+                         step_rad=step, d_sep_m=1e4)
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
@@ -104,13 +104,13 @@ def test_toy_min_swarm_separation_and_curve(seed):
     all_sets = [np.array(c) for n in range(1, 8)
                 for c in itertools.combinations(range(bank.n_candidates), n)]
     covs = bank.coverage(all_sets)
-    for sep in (0.0, 1e4 * bank.step * 1.5):    # 1.5 steps: neighbours conflict
+    for sep in (0.0, 1e4 * bank.step_rad * 1.5):    # 1.5 steps: neighbours conflict
         gap_ok = [s for s, c in zip(all_sets, covs) if c >= target - 0.02 - 1e-12
                   and (sep == 0 or _separated(s, bank.n_candidates, 1))]
         if not gap_ok:
             with pytest.raises(InputError, match="without the separation") as ei:
                 min_swarm(bank, target=target, eps_tol=0.02, min_separation=sep)
-            assert ei.value.field == "swarm.min_separation_km"
+            assert ei.value.field == "min_separation"
             continue
         res = min_swarm(bank, target=target, eps_tol=0.02, min_separation=sep)
         assert res.n == min(len(s) for s in gap_ok) and res.status == "optimal"
@@ -161,19 +161,40 @@ def test_bad_design_input_names_the_field():
             min_swarm(bank, target=1.5, eps_tol=0.0)
     with pytest.raises(InputError, match="N_max too small: no swarm of at most 1 ") as ei:
         min_swarm(bank, target=bank.reach, eps_tol=0.0, n_max=1)
-    assert ei.value.field == "design.n_max"
+    assert ei.value.field == "n_max" and ei.value.message.endswith("raise `n_max`")
     best1 = max(bank.coverage([[k] for k in range(bank.n_candidates)]))   # enumeration
     assert f"the best with 1 is {100 * best1:.3f} %;" in ei.value.message
     assert "time_limit" not in ei.value.message                 # proven: not the cause
     with pytest.raises(InputError) as ei:
         min_swarm(bank, target=bank.reach, eps_tol=0.0, min_separation=1e9)
-    assert ei.value.field == "swarm.min_separation_km"
+    assert ei.value.field == "min_separation"
     with pytest.raises(InputError) as ei:
         min_swarm(bank, target=bank.reach, eps_tol=0.0, time_limit=0)
-    assert ei.value.field == "design.time_limit_s"
+    assert ei.value.field == "time_limit"
     with pytest.raises(InputError) as ei:
         failure_tolerant(bank, 3, target=bank.reach, eps_tol=0.0, n_max=3)
+    assert ei.value.field == "k"
+
+
+def test_designer_errors_map_to_the_file_keys():
+    """The designers name their own parameters; the campaign layer's map gives the file's
+    keys, in the field and in the message (the user's line is unchanged)."""
+    from ideas_hpc.config.design_checks import designer_errors
+
+    bank = _toy(1)
+    cases = [(dict(n_max=1), "design.n_max"), (dict(min_separation=1e9), "swarm.min_separation_km"),
+             (dict(time_limit=0), "design.time_limit_s")]
+    for kw, key in cases:
+        with pytest.raises(InputError) as ei, designer_errors():
+            min_swarm(bank, target=bank.reach, eps_tol=0.0, **kw)
+        assert ei.value.field == key and "`" not in ei.value.message, kw
+    with pytest.raises(InputError) as ei, designer_errors():
+        min_swarm(bank, target=bank.reach, eps_tol=0.0, n_max=1)
+    assert ei.value.message.endswith("raise design.n_max")
+    with pytest.raises(InputError) as ei, designer_errors():
+        failure_tolerant(bank, 3, target=bank.reach, eps_tol=0.0, n_max=3)
     assert ei.value.field == "design.failures_tolerated"
+    assert ei.value.message == "3 failures need more than design.n_max = 3 spacecraft"
 
 
 def test_ga_separation_repair():

@@ -28,7 +28,7 @@ def _bank(seed: int, k: int = 14, v: int = 70) -> StereoBank:
             pairs[pair_index(a, b, k)] = rng.random(v) < 0.25
     areas = rng.uniform(0.5, 2.0, v)
     bank = CandidateBank(theta=np.arange(k) * 2 * np.pi / k, masks=own, areas=areas,
-                         step=2 * np.pi / k, d_sep=1e5)
+                         step_rad=2 * np.pi / k, d_sep_m=1e5)
     return StereoBank(bank, pairs)
 
 
@@ -77,8 +77,8 @@ def test_max_coverage_and_curve_match_enumeration(seed):
 
 def test_separation_keeps_pairs_apart():
     sb = _bank(5)
-    sb.bank.d_sep = 1e5
-    step_m = sb.bank.d_sep * sb.bank.step        # about one grid step along the ring
+    sb.bank.d_sep_m = 1e5
+    step_m = sb.bank.d_sep_m * sb.bank.step_rad        # about one grid step along the ring
     top = max_coverage_stereo(sb, 14, min_separation=2.5 * step_m).coverage
     assert top < sb.reach          # the separation costs coverage here
     res = min_swarm_stereo(sb, target=top, eps_tol=0.01, n_max=14,

@@ -86,7 +86,7 @@ def test_gravity_off_is_a_straight_line(tmp_path):
     ra, dec = math.radians(30.0), math.radians(45.0)
     u = np.array([math.cos(dec) * math.cos(ra), math.cos(dec) * math.sin(ra), math.sin(dec)])
     tca = s.encounter.t_ca_s
-    assert tca == pytest.approx(4.0) and s.tf - s.t0 == pytest.approx(7.0)
+    assert tca == pytest.approx(4.0) and s.tf_s - s.t0_s == pytest.approx(7.0)
     for i in range(3):
         # the ring point: perpendicular to v_inf, at d_sep, at swarm angle th (x_S from +z side)
         r_ca = r_N[i, np.argmin(abs(tg.times - tca))]
@@ -157,14 +157,14 @@ def test_sphere_seen_from_a_segment_matches_the_closed_form(tmp_path):
     s = _setup(tmp_path, "speed_km_s = 10.0\napproach_dec_deg = 30.0\napproach_ra_deg = 40.0\n"
                "d_sep_km = 31.2\nbefore_km = 20.0\nafter_km = 20.0", res=5, mu=0.0,
                spin_period=1e15)
-    s = s.with_(eta=math.radians(80.0), near=1.0, far=1e9)
-    assert s.tf - s.t0 == pytest.approx(4.0)  # +-20 km at 10 km/s, images every 2 km
+    s = s.with_(eta_rad=math.radians(80.0), near_m=1.0, far_m=1e9)
+    assert s.tf_s - s.t0_s == pytest.approx(4.0)  # +-20 km at 10 km/s, images every 2 km
     cov = fly(s, [1.0]).coverage.coverage
     want = _seen_fraction_closed_form(31.2e3, 20e3, R)
     assert 0.5 < want < 0.8
     assert cov == pytest.approx(want, abs=3e-3)
     # a shorter segment sees less, by the same formula
-    s2 = s.with_(tf=s.tf - 1.0, t0=s.t0 + 1.0)
+    s2 = s.with_(tf_s=s.tf_s - 1.0, t0_s=s.t0_s + 1.0)
     cov2 = fly(s2, [1.0]).coverage.coverage
     assert cov2 == pytest.approx(_seen_fraction_closed_form(31.2e3, 10e3, R), abs=3e-3)
 

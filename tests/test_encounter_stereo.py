@@ -41,7 +41,7 @@ def encounter(tmp_path_factory):
                spin_period=1e15)
     opts = dataclasses.replace(s.coverage, quality=True, require_stereo=True,
                                stereo_min=S_MIN, stereo_max=S_MAX)
-    s = s.with_(eta=math.radians(80.0), near=1.0, far=1e9, maneuver="track", coverage=opts)
+    s = s.with_(eta_rad=math.radians(80.0), near_m=1.0, far_m=1e9, maneuver="track", coverage=opts)
     return s, fly(s, [0.0, 1.0])
 
 
@@ -102,7 +102,7 @@ def test_stereo_of_the_swarm_matches_every_pair(encounter):
 def test_own_track_stereo_and_the_pair_table_match_every_pair(encounter):
     s, out = encounter
     lo, hi, u = _oracle(s, out)
-    args = (s.body.shape, out.r_img_T, out.dcm_BT, s.image_times, s.eta, s.near, s.far)
+    args = (s.body.shape, out.r_img_T, out.dcm_BT, s.image_times, s.eta_rad, s.near_m, s.far_m)
     sun = s.sun_T(s.image_times)
     own = quality_per_spacecraft(*args, options=s.coverage, sun_T=sun)["stereo"]
     pairs = stereo_pair_table(*args, options=s.coverage, sun_T=sun)

@@ -14,8 +14,10 @@ from ideas_hpc.body.bodies import load_body
 from ideas_hpc.core.dynamics import forces as F
 from ideas_hpc.core.dynamics import gravity as gk
 from ideas_hpc.errors import InputError
-from ideas_hpc.dynamics.forces import (CannonballSRP, Degree2, ForceModel, PointMass, Polyhedron,
-                              SphericalHarmonics, pack_force_model, pack_forces)
+from ideas_hpc.dynamics.force_model import ForceModel, pack_force_model
+from ideas_hpc.dynamics.force_terms import (CannonballSRP, Degree2, PointMass, Polyhedron,
+                                            SphericalHarmonics)
+from ideas_hpc.dynamics.forces import pack_forces
 
 BODY = load_body("eros-ellipsoid", resolution=1)
 

@@ -147,7 +147,7 @@ def test_campaign_ga_with_min_separation(eros1708, tmp_path):
             "swarm.min_separation_km=40"]
     ds = xr.open_zarr(run_file(CAMPAIGN, out=tmp_path / "np.zarr", overrides=sets))
     c = load(CAMPAIGN, sets)
-    sep = min_separation_angle(40.0, setup_from_campaign(c).d_sep)
+    sep = min_separation_angle(40.0, setup_from_campaign(c).d_sep_m)
     a = np.sort(np.asarray(ds["swarm_angle"].values, dtype=float))
     d = np.diff(np.r_[a, a[0] + 2 * np.pi])
     assert a.size == 1 or np.all(d >= sep - 1e-9)

@@ -16,6 +16,7 @@ import pytest
 from scipy.special import lpmv
 
 from ideas_hpc.core.dynamics import gravity as gk
+from ideas_hpc.core.dynamics import harmonics as hk
 from ideas_hpc.body.datapath import have_data_file
 from ideas_hpc.errors import InputError
 from ideas_hpc.body.gravity_field import load_sh_field, sh_from_degree2
@@ -53,7 +54,7 @@ def _sh(tables, gm, rref):
     def f(r):
         a = np.zeros(3)
         g = np.zeros((3, 3))
-        u = gk.sh_gravity(r, gm, rref, ct, st, a, g, np.empty((k, k)), np.empty((k, k)))
+        u = hk.sh_gravity(r, gm, rref, ct, st, a, g, np.empty((k, k)), np.empty((k, k)))
         return u, a, g
     return f
 
@@ -94,11 +95,11 @@ def test_degree2_matches_closed_form_spec_u2():
 def test_degree2_equals_degree2_part_of_sh():
     """Degree 2 = the SH model built from the same C20, C22 (minus its central term)."""
     fld = sh_from_degree2(EROS.c20, EROS.c22, R_REF, EROS.mu)
-    c, s = gk.sh_unnormalise(fld.cbar, fld.sbar)
+    c, s = hk.sh_unnormalise(fld.cbar, fld.sbar)
     # unnormalised C20 R^2, C22 R^2 reproduce the m^2 inputs (Kaula normalisation)
     assert c[2, 0] * R_REF ** 2 == pytest.approx(EROS.c20, rel=1e-14)
     assert c[2, 2] * R_REF ** 2 == pytest.approx(EROS.c22, rel=1e-14)
-    sh = _sh(gk.sh_derivative_tables(c, s), EROS.mu, R_REF)
+    sh = _sh(hk.sh_derivative_tables(c, s), EROS.mu, R_REF)
     for r in _points(50, 20e3, 300e3):
         u_s, a_s, g_s = sh(r)
         u_p, a_p, g_p = _pm(r)
@@ -141,8 +142,8 @@ def test_sh_loader_reads_label(n15a):
 
 
 def test_sh_full_field_vs_lpmv_and_finite_differences(n15a):
-    c, s = gk.sh_unnormalise(n15a.cbar, n15a.sbar)
-    sh = _sh(gk.sh_derivative_tables(c, s), n15a.gm, n15a.r_ref)
+    c, s = hk.sh_unnormalise(n15a.cbar, n15a.sbar)
+    sh = _sh(hk.sh_derivative_tables(c, s), n15a.gm, n15a.r_ref)
     for r in _points(6, 20e3, 160e3):
         u = sh(r)[0]
         assert u == pytest.approx(_sh_potential_lpmv(r, n15a), rel=1e-12)

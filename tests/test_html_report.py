@@ -4,12 +4,10 @@ reason, where Chromium is missing or cannot run."""
 
 from __future__ import annotations
 
-import os
 import re
 import shutil
 import subprocess
 import tempfile
-from pathlib import Path
 
 import numpy as np
 import pytest

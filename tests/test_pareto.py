@@ -64,7 +64,7 @@ def _hand_bank(quality=True):
     inf = np.inf
     masks = np.array([[1, 1, 0, 0], [0, 1, 1, 0], [0, 0, 0, 1]], dtype=bool)
     kw = dict(theta=np.arange(3) * 2 * np.pi / 3, masks=masks,
-              areas=np.array([1.0, 2.0, 3.0, 4.0]), step=2 * np.pi / 3, d_sep=1e4)
+              areas=np.array([1.0, 2.0, 3.0, 4.0]), step_rad=2 * np.pi / 3, d_sep_m=1e4)
     if not quality:
         return CandidateBank(**kw)
     return QualityBank(**kw, stereo=np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 0, 0]], bool),
@@ -96,10 +96,10 @@ def test_optional_objectives_need_the_quality_arrays():
     for name in ("stereo_coverage", "mean_resolution"):
         with pytest.raises(InputError, match=name) as ei:
             evaluate(bank, ("n", name), [[0, 1, -1]])
-        assert ei.value.field == "design.objectives"
+        assert ei.value.field == "objectives"
     with pytest.raises(InputError) as ei:
         run_pareto(bank, ("n", "stereo_coverage"), n_max=2, population=4, generations=1, seed=0)
-    assert ei.value.field == "design.objectives"
+    assert ei.value.field == "objectives"
 
 
 @pytest.mark.parametrize("names, msg", [
@@ -108,14 +108,14 @@ def test_optional_objectives_need_the_quality_arrays():
 def test_check_objectives_refuses(names, msg):
     with pytest.raises(InputError, match=msg) as ei:
         check_objectives(names)
-    assert ei.value.field == "design.objectives"
+    assert ei.value.field == "objectives"
 
 
 def _toy(seed=1, k=24, v=120, p=0.25):
     rng = np.random.default_rng(seed)
     step = 2 * np.pi / k
     return CandidateBank(theta=step * np.arange(k), masks=rng.uniform(size=(k, v)) < p,
-                         areas=rng.uniform(1, 3, v), step=step, d_sep=1e4)
+                         areas=rng.uniform(1, 3, v), step_rad=step, d_sep_m=1e4)
 
 
 def test_worst_failure_objective_equals_enumeration():
@@ -223,7 +223,7 @@ def test_cli_end_to_end(eros1708, tmp_path):
     assert np.array_equal(np.isfinite(sw).sum(axis=1), n)
     # the stored swarms reproduce their stored coverage from freshly computed masks
     bank = eros_bank(False, 1.0)
-    idx = [np.rint(r[np.isfinite(r)] / bank.step).astype(int) for r in sw]
+    idx = [np.rint(r[np.isfinite(r)] / bank.step_rad).astype(int) for r in sw]
     cov = ds["pareto_coverage"].values
     np.testing.assert_allclose([_union(bank, i) for i in idx], cov, atol=1e-15)
     # the gap to the exact curve, computed here by enumeration: singles and all pairs
@@ -266,7 +266,7 @@ def test_three_objectives_through_run_file_on_the_ellipsoid(tmp_path):
     sw = ds["pareto_swarm"].values
     members = np.full(sw.shape, -1)
     for i, r in enumerate(sw):
-        idx = np.rint(r[np.isfinite(r)] / bank.step).astype(int)
+        idx = np.rint(r[np.isfinite(r)] / bank.step_rad).astype(int)
         members[i, :idx.size] = idx
     # re-scored here with plain NumPy over the bank's masks (not the objectives' evaluator)
     for m, row in zip(members, vals):

@@ -19,7 +19,9 @@ from ideas_hpc.constants import AU, MU_SUN, P_SUN_1AU
 from ideas_hpc.core.dynamics import propagate as P
 from ideas_hpc.core.dynamics.forces import K_SRP
 from ideas_hpc.core.dynamics.ephemeris import body_position_N
-from ideas_hpc.dynamics.trajectory import BOX_AREA, ForceModel, pack_force_model, sun_direction_T
+from ideas_hpc.dynamics.force_model import ForceModel, pack_force_model
+from ideas_hpc.dynamics.force_terms import BOX_AREA
+from ideas_hpc.dynamics.trajectory import sun_direction_T
 
 BODY = load_body("eros-ellipsoid", resolution=1)
 PAR = BODY.params

@@ -14,7 +14,8 @@ from ideas_hpc.body.analytic import sphere_mesh
 from ideas_hpc.core.mapping import quality as cq
 from ideas_hpc.mapping.options import coverage_options_from_config
 from ideas_hpc.errors import InputError
-from ideas_hpc.mapping.coverage import CoverageOptions, compute_coverage
+from ideas_hpc.mapping.coverage import compute_coverage
+from ideas_hpc.mapping.options import CoverageOptions
 from test_coverage import look_at
 
 DEG = math.pi / 180.0
@@ -216,7 +217,7 @@ def test_quality_in_flyby_and_mc_stores(tmp_path):
     variables with units (~1-2 min: slow)."""
     import xarray as xr
 
-    from ideas_hpc.campaign.datasets import QUALITY_VARS
+    from ideas_hpc.mapping.coverage import QUALITY_VARS
     from ideas_hpc.campaign.run import run_file
     from test_campaign_mc import MC, SHORT
 
@@ -290,12 +291,12 @@ def test_arrival_scan_matches_flybys_at_each_epoch():
             "swarm.angles_rad=[0.2, 1.7]", "flyby.epoch_s=1000.0"]
     c = load(ROOT_CAMPAIGNS / "eros-flyby.toml", sets)
     setup = setup_from_campaign(c)
-    assert setup.epoch == 1000.0
+    assert setup.epoch_s == 1000.0
     period = 2 * math.pi / setup.body.params.spin_rate
-    epochs = setup.epoch + period * np.array([0.0, 0.25, 0.5, 0.75, 1.0])
+    epochs = setup.epoch_s + period * np.array([0.0, 0.25, 0.5, 0.75, 1.0])
     ds = arrival_scan(setup, [0.2, 1.7], None, epochs)
     for m in (0, 2):
-        direct = fly(setup.with_(epoch=float(epochs[m])), [0.2, 1.7])
+        direct = fly(setup.with_(epoch_s=float(epochs[m])), [0.2, 1.7])
         assert ds["coverage"].values[m] == direct.coverage.coverage
         assert ds["coverage_seen"].values[m] == direct.coverage.coverage_seen
     cov = ds["coverage"].values

@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from ideas_hpc.core.mapping import bvh as cbvh
-from ideas_hpc.mapping.coverage import CoverageOptions, compute_coverage
+from ideas_hpc.mapping.coverage import compute_coverage
+from ideas_hpc.mapping.options import CoverageOptions
 from test_coverage import _trimesh_blocked, eros_rays, look_at  # noqa: F401 (fixture)
 from test_quality import DEG, _pairwise
 

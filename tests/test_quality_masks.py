@@ -6,7 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ideas_hpc.mapping.coverage import CoverageOptions, quality_per_spacecraft
+from ideas_hpc.mapping.coverage import quality_per_spacecraft
+from ideas_hpc.mapping.options import CoverageOptions
 from test_quality_eros import CASES, DEG, eros_views, quality_oracle
 
 

@@ -12,6 +12,7 @@ import pytest
 from ideas_hpc.core.design.reliability import swarm_probabilities
 from ideas_hpc.design.reliability import min_swarm_reliable
 from ideas_hpc.errors import InputError
+from ideas_hpc.config.design_checks import designer_errors
 from ideas_hpc.design.reliability_stats import (failure_upper_bound, hoeffding_lower_bound,
                                                 lower_confidence_bound)
 from ideas_hpc.design.scenario_mip import BoundResult, ScenarioMIP
@@ -155,9 +156,12 @@ def test_bound_solver_time_limit_gives_gap():
 
 def test_unreachable_requirement_names_field():
     rows, areas = random_bank(9, s_n=3, c_n=6, v_n=18)
-    with pytest.raises(Exception) as e:
+    with pytest.raises(InputError) as e:
         min_swarm_reliable(rows, areas, p=0.999999, p_f=0.2, need=0.99, n_max=3)
-    assert "design.success_probability" in str(e.value) and "best probability" in str(e.value)
+    assert e.value.field == "p" and "best probability" in str(e.value)
+    with pytest.raises(InputError) as e, designer_errors():   # the campaign's file key
+        min_swarm_reliable(rows, areas, p=0.999999, p_f=0.2, need=0.99, n_max=3)
+    assert e.value.field == "design.success_probability"
 
 
 def test_failure_upper_bound_closed_form():

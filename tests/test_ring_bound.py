@@ -28,7 +28,7 @@ def _circle_bank(seed: int, k: int = 18, v: int = 60) -> CandidateBank:
             masks[(a + np.arange(ln)) % k, j] = True
     areas = rng.uniform(0.5, 2.0, v)
     return CandidateBank(theta=np.arange(k) * 2 * np.pi / k, masks=masks, areas=areas,
-                         step=2 * np.pi / k, d_sep=1e5)
+                         step_rad=2 * np.pi / k, d_sep_m=1e5)
 
 
 def _inside_one_gap(masks, subset, k):

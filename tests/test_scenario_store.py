@@ -11,7 +11,7 @@ import pytest
 
 from gates import Gate, wait_until
 from ideas_hpc.engine.gate import GATE_ENV
-from ideas_hpc.engine.store import done_mask
+from ideas_hpc.engine.chunk_write import done_mask
 from ideas_hpc.engine.store_meta import is_store, store_attrs
 from ideas_hpc.montecarlo.scenarios import build_scenario_bank
 from test_scenarios import STEP, _campaign

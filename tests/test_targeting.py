@@ -18,8 +18,9 @@ from ideas_hpc.body.bodies import load_body
 from ideas_hpc.constants import AU, MU_SUN, P_SUN_1AU
 from ideas_hpc.core.dynamics.ephemeris import body_position_N
 from ideas_hpc.errors import InputError
-from ideas_hpc.dynamics.trajectory import (BOX_AREA, ForceModel, TargetingError, force_model_from_config,
-                                  ring_states, sun_direction_T, target_swarm)
+from ideas_hpc.dynamics.force_model import ForceModel, force_model_from_config
+from ideas_hpc.dynamics.force_terms import BOX_AREA
+from ideas_hpc.dynamics.trajectory import TargetingError, ring_states, sun_direction_T, target_swarm
 
 ANGLES = [0.2, 1.7, 2.4, 2.9, 3.3, 3.5, 5.6, 6.0]   # paper Fig. 21
 D_SEP = 155.901e3                                    # paper Table 4
@@ -183,7 +184,8 @@ def test_propagate_swarm_reproduces_targeted_trajectory():
     import numpy as np
 
     from ideas_hpc.body.bodies import load_body
-    from ideas_hpc.dynamics.trajectory import ForceModel, propagate_swarm, ring_states, target_swarm
+    from ideas_hpc.dynamics.force_model import ForceModel
+    from ideas_hpc.dynamics.trajectory import propagate_swarm, ring_states, target_swarm
 
     body = load_body("ellipsoid")
     th = np.array([0.3, 2.0])

@@ -28,8 +28,8 @@ def _error(history, radius=100e3, max_iter=25):
     res = TargetingResult(v0_T=np.zeros((1, 3)), miss=miss, n_iter=np.array([n]),
                           converged=np.array([False]), times=np.arange(5.0), position_T=pos,
                           velocity_T=np.zeros((1, 5, 3)))
-    setup = SimpleNamespace(tol=1e-13 if n == max_iter else 0.01, max_iter=max_iter,
-                            d_sep=radius, body=SimpleNamespace(shape=SimpleNamespace(r_max=R_MAX)))
+    setup = SimpleNamespace(tol_m=1e-13 if n == max_iter else 0.01, max_iter=max_iter,
+                            d_sep_m=radius, body=SimpleNamespace(shape=SimpleNamespace(r_max=R_MAX)))
     return targeting_input_error(TargetingError("x", [0], res), setup, np.array([0.2]))
 
 

@@ -36,7 +36,7 @@ def _toy(seed=1, k=16, v=100, p=0.3) -> CandidateBank:
     rng = np.random.default_rng(seed)
     step = 2 * np.pi / k
     return CandidateBank(theta=step * np.arange(k), masks=rng.uniform(size=(k, v)) < p,
-                         areas=rng.uniform(1, 3, v), step=step, d_sep=1e4)
+                         areas=rng.uniform(1, 3, v), step_rad=step, d_sep_m=1e4)
 
 
 def _best_of_size(bank, n):
@@ -163,4 +163,4 @@ def test_failure_tolerant_out_of_time_and_n_max_names_the_time_limit():
                             time_limit=600).n == 10
     with pytest.raises(InputError, match="within the time limit") as ei:
         failure_tolerant(bank, 1, target=bank.reach, eps_tol=EPS, n_max=10, time_limit=BINDS)
-    assert ei.value.field == "design.time_limit_s"
+    assert ei.value.field == "time_limit" and ei.value.message.endswith("`time_limit` or `n_max`")

@@ -10,10 +10,7 @@ the wheel limits.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
-import pytest
 
 from ideas_hpc.core.attitude.mrp import dcm_from_mrp
 from ideas_hpc.core.dynamics.encounter import track_dcm_BN
@@ -37,7 +34,7 @@ def test_track_reference_of_a_straight_pass_is_the_closed_form(tmp_path):
     th = np.array([0.0, 2.5])
     tgt = target(s, th)
     ref = track_reference(s, tgt.position_T, tgt.velocity_T)
-    tau = s.t0 + s.dt * np.arange(ref.shape[1]) - s.encounter.t_ca_s
+    tau = s.t0_s + s.dt_s * np.arange(ref.shape[1]) - s.encounter.t_ca_s
     w_y = v * d / (d * d + v * v * tau * tau)
     wd_y = -2.0 * v ** 3 * d * tau / (d * d + v * v * tau * tau) ** 2
     assert np.ptp(tau) > 5.0 and abs(tau).min() < 1e-9  # through closest approach
@@ -49,7 +46,7 @@ def test_track_reference_of_a_straight_pass_is_the_closed_form(tmp_path):
         np.testing.assert_allclose(ref[i, :, 7], sign * wd_y, atol=2e-3 * (v / d) ** 2)
         np.testing.assert_allclose(ref[i, :, [6, 8]], 0.0, atol=1e-9 * (v / d) ** 2)
     # the attitude part is the body-tracking frame [B N] of the positions
-    bn = track_dcm_BN(np.ascontiguousarray(tgt.position_T), s.t0 + s.dt * np.arange(
+    bn = track_dcm_BN(np.ascontiguousarray(tgt.position_T), s.t0_s + s.dt_s * np.arange(
         ref.shape[1]), s.encounter.t_ca_s, s.body.params.spin_rate,
         np.ascontiguousarray(s.encounter.dcm_NS[:, 2]))
     dcm = np.array([[dcm_from_mrp(np.ascontiguousarray(r[:3])) for r in row] for row in ref])

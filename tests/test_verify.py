@@ -54,7 +54,7 @@ def test_design_store_holds_the_verification(tmp_path):
     # without spacecraft i, for every i
     c = load(campaign, sets)
     bank = build_bank(setup_from_campaign(c), np.deg2rad(5.0))
-    idx = np.rint(np.mod(ds["swarm_angle"].values, 2 * np.pi) / bank.step).astype(int)
+    idx = np.rint(np.mod(ds["swarm_angle"].values, 2 * np.pi) / bank.step_rad).astype(int)
     cases = subset_coverage(bank.masks, bank.areas,
                             np.array([np.delete(idx, i) for i in range(idx.size)]))
     assert float(ds["worst_failure_coverage"]) == pytest.approx(cases.min(), abs=1e-12)

@@ -1,7 +1,7 @@
 """A toy campaign that exercises the engine without any physics.
 
 Each sample draws four numbers from its own generator
-(:func:`~ideas_hpc.engine.store.sample_rng`) and a compiled kernel turns them
+(:func:`~ideas_hpc.seeds.sample_rng`) and a compiled kernel turns them
 into store-shaped results (per-vertex ``observed`` / ``first_seen`` /
 ``times_seen``, a ``coverage`` scalar and a ``sigma_error`` time series) by
 iterating a chaotic logistic map ``work`` times per vertex. The chaos makes
@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 from numba import njit, prange
 
-from ideas_hpc.engine.store import sample_rng
+from ideas_hpc.seeds import sample_rng
 
 N_PARAMS = 4
 
@@ -175,7 +175,9 @@ def run_toy_serial(out, *, n_samples: int = 64, chunk_size: int = 4, n_vertex: i
 
     The reference the distributed, killed-and-resumed runs must reproduce.
     """
-    from ideas_hpc.engine.store import ChunkPlan, create_store, write_chunk_region
+    from ideas_hpc.engine.chunk_write import write_chunk_region
+    from ideas_hpc.engine.store import create_store
+    from ideas_hpc.engine.store_meta import ChunkPlan
 
     create_store(out, toy_template(n_samples, n_vertex, n_time),
                  config=toy_config(n_samples, chunk_size, n_vertex, n_time, work, seed),

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from ideas_hpc.engine.store import done_mask, store_attrs
+from ideas_hpc.engine.chunk_write import done_mask
+from ideas_hpc.engine.store_meta import store_attrs
 from toy_campaign import run_toy_serial
 
 SAMPLE_VARS = ("coverage", "observed", "first_seen", "times_seen", "sigma_error", "sample_seed")

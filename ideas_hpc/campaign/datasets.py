@@ -7,8 +7,8 @@ import numpy as np
 import xarray as xr
 
 from ideas_hpc.flyby.encounter import encounter_attrs
-from ideas_hpc.mapping.coverage import QUALITY_VARS, quality_arrays  # noqa: F401  (store layout)
-from ideas_hpc.engine.variables import with_attrs  # noqa: F401  (used by the kinds)
+from ideas_hpc.mapping.coverage import quality_arrays
+from ideas_hpc.engine.variables import with_attrs
 
 AXES = ["x", "y", "z"]
 WHEELS = ["1", "2", "3"]
@@ -77,12 +77,12 @@ def setup_attrs(setup) -> dict:
     return {
         "body": setup.body.name, "body_note": setup.body.note,
         "shape_model": setup.body.shape.name,
-        "half_angle_rad": float(setup.eta), "near_m": float(setup.near),
-        "far_m": float(setup.far), "d_sep_m": float(setup.d_sep),
+        "half_angle_rad": float(setup.eta_rad), "near_m": float(setup.near_m),
+        "far_m": float(setup.far_m), "d_sep_m": float(setup.d_sep_m),
         "altitude_m": float(s.altitude), "eta_nadir_rad": float(s.eta_nadir),
-        "theta_max_rad": float(setup.theta_max), "maneuver": setup.maneuver.campaign_name,
+        "theta_max_rad": float(setup.theta_max_rad), "maneuver": setup.maneuver.campaign_name,
         "attitude_mode": setup.attitude_mode, "coverage_mode": setup.coverage.mode,
-        "targeting_tolerance_m": float(setup.tol), "configuration": setup.configuration,
+        "targeting_tolerance_m": float(setup.tol_m), "configuration": setup.configuration,
         **encounter_attrs(setup),
     }
 
@@ -91,7 +91,7 @@ def base_attrs(c, setup) -> dict:
     """Global attrs of every campaign store besides the engine's provenance (resolved
     config and hash, code version, seed, creation time): kind, execution settings
     (not hashed), the campaign file and the setup's sizing."""
-    from ideas_hpc.engine.store import config_json
+    from ideas_hpc.engine.store_meta import config_json
     from ideas_hpc.config.campaign_tables import EXECUTION_KNOBS
 
     knobs = {k: getattr(getattr(c.config, k.split(".")[0]), k.split(".")[1])

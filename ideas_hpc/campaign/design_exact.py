@@ -34,6 +34,7 @@ from ideas_hpc.montecarlo.verify import verify_swarm
 from ideas_hpc.campaign import datasets
 from ideas_hpc.campaign.kinds import KINDS
 from ideas_hpc.campaign.vocabulary import requirement_line, verification_verdict
+from ideas_hpc.config.design_checks import designer_errors
 from ideas_hpc.config.design_table import verify_samples
 
 
@@ -91,10 +92,9 @@ def design_exact(c, setup, client) -> ExactDesign:
     k = d.failures_tolerated
     sep = c.config.swarm.min_separation_m
     n_grid = grid_size(d.grid_step_rad)
-    try:  # a separation no two grid points satisfy fails before any mask is computed
-        separation_steps(2 * math.pi / n_grid, setup.d_sep, sep, n_grid)
-    except InputError as exc:
-        raise c.error(exc.message, exc.field) from None
+    # a separation no two grid points satisfy fails before any mask is computed
+    with designer_errors(c):
+        separation_steps(2 * math.pi / n_grid, setup.d_sep_m, sep, n_grid)
     stereo = setup.coverage.require_stereo      # grid size checked with the config
     t0 = time.perf_counter()
     if not stereo:  # the pair table is one pass in this process
@@ -105,11 +105,11 @@ def design_exact(c, setup, client) -> ExactDesign:
     scorer = stereo_scorer(bank) if stereo else bank
     t_masks = time.perf_counter() - t0
     _log(f"candidate {'rows' if setup.coverage.requirement else 'masks'}: {bank.n_candidates} "
-         f"grid angles ({math.degrees(bank.step):g} deg)"
+         f"grid angles ({math.degrees(bank.step_rad):g} deg)"
          f"{' and their stereo pairs' if stereo else ''} in {t_masks:.1f} s")
     notes: list = []
     target = _target(scorer, eps, setup.coverage, notes)
-    try:
+    with designer_errors(c):
         if stereo:
             res = min_swarm_stereo(scorer, target=target, eps_tol=eps, n_max=d.n_max,
                                    min_separation=sep, time_limit=d.time_limit_s)
@@ -119,8 +119,6 @@ def design_exact(c, setup, client) -> ExactDesign:
         else:
             res = min_swarm(bank, target=target, eps_tol=eps, n_max=d.n_max,
                             min_separation=sep, time_limit=d.time_limit_s)
-    except InputError as exc:
-        raise c.error(exc.message, exc.field) from None
     notes.extend(res.notes)
     t_design = time.perf_counter() - t0
     curve = (stereo_curve(scorer, d.n_max, min_separation=sep, time_limit=d.time_limit_s)
@@ -151,7 +149,7 @@ def design_exact(c, setup, client) -> ExactDesign:
              "threshold_coverage": float(target - eps),
              "design_masks_s": float(t_masks), "design_solve_s": float(t_design - t_masks),
              "coverage_curve_s": float(curve.solve_time), "failures_tolerated": int(k),
-             "failures_evaluated": int(k_eval), "angle_step_rad": float(bank.step)}
+             "failures_evaluated": int(k_eval), "angle_step_rad": float(bank.step_rad)}
     summary = (f"exact design: N = {res.n} ({res.status}, gap {100 * res.gap:.1f} %, bound "
                f"{res.bound:g}), {requirement_line(target, target - eps, res.coverage)}, "
                f"{'k = %d tolerant, ' % k if k else ''}masks {t_masks:.1f} s + solve "
@@ -169,9 +167,10 @@ def ga_gap(c, setup, mask_bank, n_ga: int, target: float) -> tuple[xr.Dataset, l
             "continuous GA angles: no exact optimum to compare with"]
     bank = build_bank(setup, step, mask_bank=mask_bank, snap=False)
     try:
-        ex = min_swarm(bank, target=target, eps_tol=d.eps_tol_pct / 100.0, n_max=d.n_max,
-                       min_separation=c.config.swarm.min_separation_m,
-                       time_limit=d.time_limit_s)
+        with designer_errors():   # the note quotes the file's keys
+            ex = min_swarm(bank, target=target, eps_tol=d.eps_tol_pct / 100.0, n_max=d.n_max,
+                           min_separation=c.config.swarm.min_separation_m,
+                           time_limit=d.time_limit_s)
     except InputError as exc:
         return xr.Dataset({"design_method": ((), "ga")}), [f"no exact reference: {exc.message}"]
     if not ex.optimal:
@@ -226,7 +225,8 @@ def run_exact(c, setup, *, workers=None, scheduler=None, cluster="local",
     :func:`design_exact` (the success-probability design validates its own swarm)."""
     helper = precompile.start(setup)  # cold cache: later kernels compile alongside
     try:
-        return _run_exact(c, setup, workers, scheduler, cluster, slurm_config, designer)
+        with designer_errors(c):
+            return _run_exact(c, setup, workers, scheduler, cluster, slurm_config, designer)
     finally:
         if helper is not None:
             helper.close()

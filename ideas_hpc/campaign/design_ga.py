@@ -28,14 +28,16 @@ from ideas_hpc.design.ga.swarm_eval import MaskBank, fov_keys, nadir_keys, snap_
 from ideas_hpc.progress import bar as progress_bar
 from ideas_hpc.flyby.swarm_geometry import min_separation_angle
 from ideas_hpc.campaign import datasets
+from ideas_hpc.engine.variables import with_attrs
 from ideas_hpc.campaign.design_exact import checked_setup, ga_gap
 from ideas_hpc.config.campaign_tables import Campaign
+from ideas_hpc.config.design_checks import DESIGNER_FIELDS
 from ideas_hpc.campaign.vocabulary import requirement_line
 
 
-#: The GA's parameter names -> the campaign file's keys.
-GA_FIELDS = {"population": "design.population", "generations": "design.generations",
-             "n_max": "design.n_max", "p_min": "design.p_min_min"}
+#: The GA's parameter names -> the campaign file's keys (with every designer's).
+GA_FIELDS = {**DESIGNER_FIELDS, "population": "design.population",
+             "generations": "design.generations", "p_min": "design.p_min_min"}
 
 
 def _log(msg: str) -> None:
@@ -100,7 +102,7 @@ def _stereo_ga(c: Campaign, setup, client):
                        mutation_probability=d.mutation_probability,
                        stall_generations=d.stall_generations,
                        min_separation=min_separation_angle(c.config.swarm.min_separation_m,
-                                                           setup.d_sep),
+                                                           setup.d_sep_m),
                        progress=_progress_printer(d.generations, "NP GA (stereo)"))
     n = res.best_swarm_size
     res.notes.append("GA scoring stereo from own tracks and from pairs of spacecraft (the "
@@ -151,7 +153,7 @@ def design_nadir(c: Campaign, setup, client):
         return cov, np.rint(genomes[:, 0]).astype(int)
 
     eps = d.eps_tol_pct / 100.0
-    min_sep = min_separation_angle(c.config.swarm.min_separation_m, setup.d_sep)
+    min_sep = min_separation_angle(c.config.swarm.min_separation_m, setup.d_sep_m)
     cover = None if masks is None else GridCover(
         masks, areas, step, target, eps, d.n_max,
         min_sep_steps=math.ceil(min_sep / step - 1e-9) if min_sep > 0 else 0)
@@ -256,7 +258,7 @@ def run_design(c: Campaign, out: Path, *, workers=None, scheduler=None, cluster=
         "best_swarm_size": ((), res.best_swarm_size),
         "best_coverage": ((), flight.coverage.coverage),
     }, coords={"generation": np.arange(1, res.best_fitness.size + 1)})
-    ds = xr.merge([ds, datasets.with_attrs(g)], combine_attrs="override")
+    ds = xr.merge([ds, with_attrs(g)], combine_attrs="override")
     if getattr(res, "gap_data", None) is not None:
         ds = xr.merge([ds, res.gap_data], combine_attrs="override")
     ds["best_fitness"].attrs["long_name"] = ("fitness (-N if feasible)" if nadir

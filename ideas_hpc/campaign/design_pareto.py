@@ -41,10 +41,9 @@ from ideas_hpc.design.bank import grid_size, separation_steps
 from ideas_hpc.design.pareto.objectives import OBJECTIVES, bank_needs, check_objectives, evaluate
 from ideas_hpc.design.pareto.nsga2 import run_pareto
 from ideas_hpc.engine.job_cluster import JobCluster, visibility_tests
-from ideas_hpc.errors import InputError
 from ideas_hpc.flyby.flight import setup_from_campaign, target
 from ideas_hpc.campaign import datasets
-from ideas_hpc.config.design_checks import STEP_KEY
+from ideas_hpc.config.design_checks import STEP_KEY, designer_errors
 
 #: A front point matches the exact curve when their coverages differ by at most this.
 MATCH_TOL = 1e-12
@@ -125,24 +124,19 @@ def run_design_pareto(c, out, *, workers=None, scheduler=None, cluster="local",
     """Kind ``design-pareto``: bank, NSGA-II, the non-dominated set (module docstring)."""
     d = c.config.design
     sep = c.config.swarm.min_separation_m
-    try:
+    with designer_errors(c):
         names = check_objectives(d.objectives)
-    except InputError as exc:
-        raise c.error(exc.message, exc.field) from None
     setup = setup_from_campaign(c)
     _log(f"body: {setup.body.note}")
     target(setup, np.linspace(0.0, 2 * np.pi, 16, endpoint=False))
     n_grid = grid_size(d.grid_step_rad)
     needs = bank_needs(names)
     if "pairs" in needs:   # the pair table has one variable per candidate pair
-        try:
+        with designer_errors(c):
             check_grid(n_grid, STEP_KEY)
-        except InputError as exc:
-            raise c.error(exc.message, exc.field) from None
-    try:  # a separation no two grid points satisfy fails before any mask is computed
-        separation_steps(2 * math.pi / n_grid, setup.d_sep, sep, n_grid)
-    except InputError as exc:
-        raise c.error(exc.message, exc.field) from None
+    # a separation no two grid points satisfy fails before any mask is computed
+    with designer_errors(c):
+        separation_steps(2 * math.pi / n_grid, setup.d_sep_m, sep, n_grid)
     t0 = time.perf_counter()
     work = visibility_tests(n_grid, 1, setup.image_times.size, setup.body.shape.n_vertices)
     with JobCluster(workers=workers, scheduler=scheduler, cluster=cluster,
@@ -153,23 +147,22 @@ def run_design_pareto(c, out, *, workers=None, scheduler=None, cluster="local",
                           chunk_size=d.chunk_size, quality="quality" in needs,
                           pairs="pairs" in needs)
     t_masks = time.perf_counter() - t0
-    _log(f"candidate masks: {bank.n_candidates} grid angles ({math.degrees(bank.step):g} deg) "
+    _log(f"candidate masks: {bank.n_candidates} grid angles ({math.degrees(bank.step_rad):g} deg) "
          f"in {t_masks:.1f} s")
-    try:
+    with designer_errors(c):
         res = run_pareto(bank, names, n_max=d.n_max, population=d.population,
                          generations=d.generations, seed=c.config.seed, min_separation=sep,
                          parents=d.parents, mutation_probability=d.mutation_probability,
                          progress=_progress(d.generations))
-    except InputError as exc:
-        raise c.error(exc.message, exc.field) from None
     ds = pareto_dataset(bank, res, d.n_max)
     notes = list(res.notes)
-    attrs = {"objectives": json.dumps(list(names)), "angle_step_rad": float(bank.step),
+    attrs = {"objectives": json.dumps(list(names)), "angle_step_rad": float(bank.step_rad),
              "design_masks_s": float(t_masks), "pareto_wall_s": float(res.wall_s),
              "pareto_evaluations": int(res.evaluations),
              "pareto_generations": int(res.generations)}
     if set(names) == {"n", "coverage"}:
-        ref, ref_attrs, note = exact_reference(bank, ds, d.n_max, sep, d.time_limit_s)
+        with designer_errors(c):
+            ref, ref_attrs, note = exact_reference(bank, ds, d.n_max, sep, d.time_limit_s)
         ds = xr.merge([ds, ref], combine_attrs="override")
         attrs.update(ref_attrs)
         notes.append(note)

@@ -44,6 +44,7 @@ from ideas_hpc.engine.job_cluster import phase_client
 from ideas_hpc.montecarlo.scenarios import build_scenario_bank, fly_members
 from ideas_hpc.seeds import VALIDATION_STREAM, stream_rng
 from ideas_hpc.campaign.design_exact import design_exact
+from ideas_hpc.config.design_checks import designer_errors
 from ideas_hpc.campaign.reliability_vars import reliability_dataset
 from ideas_hpc.config.design_table import verify_samples
 
@@ -167,12 +168,10 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact):
          + (" (continuous dispersions off: one exact scenario)" if exact else ""))
     n_grid = grid_size(d.grid_step_rad)
     sep = c.config.swarm.min_separation_m
-    m_sep = separation_steps(2 * math.pi / n_grid, setup.d_sep, sep, n_grid)
-    try:
+    m_sep = separation_steps(2 * math.pi / n_grid, setup.d_sep_m, sep, n_grid)
+    with designer_errors(c):
         res = min_swarm_reliable(bank.rows, bank.areas, p=p, p_f=p_f, need=need, n_max=d.n_max,
                                  sep_steps=m_sep, time_limit=d.time_limit_s)
-    except InputError as exc:
-        raise c.error(exc.message, exc.field) from None
     rel = res.designer
     w = rel.ev.w
     val = _validate(c, setup, bank.theta[res.indices], need, w, exact, client)

@@ -11,6 +11,7 @@ import xarray as xr
 from ideas_hpc.flyby.encounter import pointing_profile
 from ideas_hpc.flyby.flight import fly, setup_from_campaign
 from ideas_hpc.campaign import datasets
+from ideas_hpc.engine.variables import with_attrs
 from ideas_hpc.config.campaign_tables import Campaign
 
 
@@ -35,4 +36,4 @@ def run_flyby(c: Campaign, out: Path, **_) -> xr.Dataset:
     _log(point.pop("summary"))
     for name, v in point.items():
         ds[name] = (("spacecraft",), v)
-    return datasets.with_attrs(ds)
+    return with_attrs(ds)

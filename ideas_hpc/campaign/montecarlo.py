@@ -29,7 +29,7 @@ from ideas_hpc.engine.runner import run_campaign
 from ideas_hpc.flyby.flight import FlybySetup, Perturbation, setup_from_campaign
 from ideas_hpc.montecarlo.dispersions import dispersion_order, dispersion_vars, draw_sample
 from ideas_hpc.montecarlo.sample import Nominal, design_nominal, fly_sample
-from ideas_hpc.engine.variables import ATTITUDE_SERIES, PER_SAMPLE, QUALITY, VARS
+from ideas_hpc.engine.variables import ATTITUDE_SERIES, PER_SAMPLE, QUALITY, VARS, with_attrs
 from ideas_hpc.campaign import datasets
 from ideas_hpc.config.campaign_tables import Campaign, resolved_config
 
@@ -87,7 +87,7 @@ def mc_template(setup: FlybySetup, nom: Nominal, n_samples: int) -> xr.Dataset:
                                "iteration": np.arange(nom.miss.shape[1]),
                                "axis": datasets.AXES, "wheel": datasets.WHEELS,
                                "vertex": np.arange(nv)})
-    return datasets.with_attrs(ds)
+    return with_attrs(ds)
 
 
 def _prepare(c: Campaign):

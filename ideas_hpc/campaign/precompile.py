@@ -55,22 +55,22 @@ def warm_kernels(setup) -> None:
     shape = setup.body.shape
     t = np.ascontiguousarray(setup.image_times[:2])
     r = np.zeros((1, t.size, 3))
-    r[..., 0] = setup.d_sep
+    r[..., 0] = setup.d_sep_m
     dcm = np.ascontiguousarray(np.broadcast_to(np.eye(3), (1, t.size, 3, 3)))
     opts = setup.coverage
     sun = setup.sun_T(t) if opts.needs_sun else None
-    args = (shape, r, dcm, setup.eta, setup.near, setup.far)
+    args = (shape, r, dcm, setup.eta_rad, setup.near_m, setup.far_m)
     if opts.requirement:
-        quality_per_spacecraft(shape, r, dcm, t, setup.eta, setup.near, setup.far,
+        quality_per_spacecraft(shape, r, dcm, t, setup.eta_rad, setup.near_m, setup.far_m,
                                options=opts, sun_T=sun)
     else:
         observed_per_spacecraft(*args, options=opts, sun_T=sun)
-    compute_coverage(shape, r, dcm, t, setup.eta, setup.near, setup.far, options=opts,
+    compute_coverage(shape, r, dcm, t, setup.eta_rad, setup.near_m, setup.far_m, options=opts,
                      sun_T=sun, active=np.ones(1, dtype=np.bool_), counts=False)
-    r0 = np.array([[setup.d_sep, 0.0, setup.z_start]])
-    v0 = np.array([[0.0, 0.0, (setup.z_stop - setup.z_start) / (setup.tf - setup.t0)]])
-    propagate_swarm(setup.body, r0, v0, setup.t0, setup.t0 + 2 * setup.dt,
-                    force_model=setup.force_model, dt_sample=setup.dt, views=True)
+    r0 = np.array([[setup.d_sep_m, 0.0, setup.z_start_m]])
+    v0 = np.array([[0.0, 0.0, (setup.z_stop_m - setup.z_start_m) / (setup.tf_s - setup.t0_s)]])
+    propagate_swarm(setup.body, r0, v0, setup.t0_s, setup.t0_s + 2 * setup.dt_s,
+                    force_model=setup.force_model, dt_sample=setup.dt_s, views=True)
 
 
 class Helper:

@@ -64,7 +64,7 @@ def arrival_scan(setup, theta, periods=None, epochs=None) -> xr.Dataset:
     for m, e in enumerate(ep):
         sun = setup.sun_T(base.image_times, epoch=e)
         cov = compute_coverage(setup.body.shape, base.r_img_T, base.dcm_BT, base.image_times,
-                               setup.eta, setup.near, setup.far, options=opts, sun_T=sun,
+                               setup.eta_rad, setup.near_m, setup.far_m, options=opts, sun_T=sun,
                                counts=False)
         q = cov.quality
         rows["coverage"][m] = cov.coverage
@@ -99,7 +99,7 @@ def scan_file(path, overrides=None, *, n: int = 24, span_h: float | None = None,
             else float(span_h) * 3600.0)
     if not span > 0.0:
         raise InputError(f"must be > 0, got {span_h}", field="--span-h")
-    epochs = setup.epoch + span * np.arange(n) / n
+    epochs = setup.epoch_s + span * np.arange(n) / n
     sw = c.config.swarm
     periods = setup.maneuver.swarm_periods(sw.sweep_periods_s)
     ds = arrival_scan(setup, sw.angles_rad, periods, epochs)

@@ -88,7 +88,7 @@ def encounter_scan(setup, fb, decs_rad, phases_rad, *, step_rad: float = 10 * DE
                             "phase": ("phase", phases, {"units": "rad",
                                                         "long_name": "phase angle"})},
                     attrs={"step_rad": float(step_rad), "speed_m_s": setup.encounter.speed_m_s,
-                           "d_sep_m": float(setup.d_sep)})
+                           "d_sep_m": float(setup.d_sep_m)})
     for name, attrs in SCAN_ATTRS.items():
         ds[name].attrs.update(attrs)
     return ds
@@ -111,7 +111,7 @@ def scan_encounter_file(path, overrides=None, *, decs_deg=None, phases_deg=None,
                         eps=c.config.design.eps_tol_pct / 100)
     what = "ring coverage % [greedy N]" + (" (swarm %)" if theta else "")
     print(f"{what} by approach declination (rows, deg) and phase angle (columns, deg), "
-          f"{setup.encounter.speed_m_s / 1e3:g} km/s, d_sep {setup.d_sep / 1e3:.4g} km")
+          f"{setup.encounter.speed_m_s / 1e3:g} km/s, d_sep {setup.d_sep_m / 1e3:.4g} km")
     print(f"{'dec':>6} " + " ".join(f"{p:>18g}" for p in phases))
     for i, d in enumerate(decs):
         cells = []

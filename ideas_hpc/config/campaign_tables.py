@@ -69,17 +69,17 @@ from typing import Any
 from ideas_hpc.attitude.maneuvers import CAMPAIGN_NAMES, campaign_maneuver
 from ideas_hpc.config.toml_file import CampaignSource, load_campaign
 from ideas_hpc.design.pareto.objectives import check_objectives
-from ideas_hpc.errors import InputError
+from ideas_hpc.errors import InputError, config_fields
 from ideas_hpc.montecarlo.dispersions import check_dispersions
 from ideas_hpc.config.fields import (Field, live_typed_table, schema_defaults, to_typed,
                                      typed_table, validate, with_defaults)
 from ideas_hpc.units import CM, DEG, KM, MINUTE, MM, UM
 from ideas_hpc.flyby.sizing import INSTRUMENT_DEFAULTS as _CAM
-from ideas_hpc.config.design_checks import check_stereo_design, resolve_angle_step
+from ideas_hpc.config.design_checks import (DESIGNER_FIELDS, check_stereo_design,
+                                           resolve_angle_step)
 from ideas_hpc.config.encounter_table import ENCOUNTER, check_encounter
 from ideas_hpc.campaign.kinds import KINDS as REGISTRY
-from ideas_hpc.config.design_table import (DESIGN, MC_SCHEMA, reliability_checks,  # noqa: F401
-                                           verify_samples)
+from ideas_hpc.config.design_table import DESIGN, MC_SCHEMA, reliability_checks, verify_samples
 
 KINDS = REGISTRY.keys()   # live: a kind registered later is a valid choice
 
@@ -246,10 +246,8 @@ def _cross_checks(c: CampaignConfig) -> None:
     if d.p_min_s >= d.p_max_s:
         raise InputError(f"must be > design.p_min_min ({d.p_min_s / MINUTE:g} min)",
                          field="design.p_max_min")
-    try:
+    with config_fields(prefix="monte_carlo."):
         check_dispersions(mc)
-    except InputError as exc:
-        raise InputError(exc.message, field=f"monte_carlo.{exc.field}") from None
     if d.failures_tolerated >= d.n_max:
         raise InputError(f"must be < design.n_max ({d.n_max}): {d.failures_tolerated} "
                          "failures would leave no spacecraft", field="design.failures_tolerated")
@@ -267,7 +265,8 @@ def _cross_checks(c: CampaignConfig) -> None:
     if mc.failures_k and sw.angles_rad and mc.failures_k > len(sw.angles_rad):
         raise InputError(f"cannot exceed the swarm size {len(sw.angles_rad)}",
                          field="monte_carlo.failures_k")
-    check_objectives(d.objectives)
+    with config_fields(DESIGNER_FIELDS):
+        check_objectives(d.objectives)
     check_encounter(fb, c.attitude)
     reliability_checks(c)
     step = fb.dt_s
@@ -300,8 +299,8 @@ def build_models(raw: dict, config: CampaignConfig) -> dict:
     in one place only. They are read in the file's units, as written.
     """
     from ideas_hpc.attitude import gains_from_config, spacecraft_from_config
-    from ideas_hpc.mapping.coverage import coverage_options_from_config
-    from ideas_hpc.dynamics.trajectory import force_model_from_config
+    from ideas_hpc.mapping.options import coverage_options_from_config
+    from ideas_hpc.dynamics.force_model import force_model_from_config
 
     cov = dict(_sub_table(raw, "coverage"))
     # The ground-resolution test and the quality pass use the instrument's camera
@@ -374,7 +373,7 @@ def resolved_config(c: Campaign) -> dict[str, Any]:
     The result is a :class:`ResolvedConfig`: its ``defaults`` let ``--resume``
     accept a store written before a key was added, while the key keeps its default.
     """
-    from ideas_hpc.engine.store import config_json  # the engine's canonical JSON, for one hash
+    from ideas_hpc.engine.store_meta import config_json  # the engine's canonical JSON, for one hash
 
     out = json.loads(config_json(with_defaults(c.raw, SCHEMA)))
     out["models"] = json.loads(config_json({k: dataclasses.asdict(v) if

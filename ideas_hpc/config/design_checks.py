@@ -8,23 +8,32 @@ change. ``design.angle_step_rad``, the GA's former key, is a deprecated alias
 that warns once. The typed table keeps the resolved steps under SI names:
 ``grid_step_rad`` (exact, Pareto) and ``angle_step_rad`` (GA).
 
-The designers raise errors with their own parameter names; this module maps
-them to the file's keys (issue 21).
+The designers raise errors with their own parameter names (field and, between
+backticks, in the message); :data:`DESIGNER_FIELDS` maps them to the file's keys
+and :func:`designer_errors` applies the map in the campaign layer (issue 21).
 """
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
 import warnings
 
 from ideas_hpc.design.bank import grid_size
 from ideas_hpc.design.stereo import check_grid
-from ideas_hpc.errors import InputError
+from ideas_hpc.errors import InputError, config_fields
 from ideas_hpc.units import DEG
 
 STEP_KEY = "design.angle_step_deg"
 ALIAS_KEY = "design.angle_step_rad"
+#: The designers' parameter names (``ideas_hpc.design``) -> the campaign file's keys.
+DESIGNER_FIELDS = {
+    "n_max": "design.n_max", "time_limit": "design.time_limit_s", "eps_tol": "design.eps_tol_pct",
+    "k": "design.failures_tolerated", "p": "design.success_probability",
+    "confidence": "design.confidence", "objectives": "design.objectives", "step": STEP_KEY,
+    "min_separation": "swarm.min_separation_km", "require_stereo": "coverage.require_stereo",
+}
 EXACT_STEP_RAD = 0.5 * DEG   #: exact designer and design-pareto default grid, rad
 GA_STEP_RAD = 0.01           #: the paper GA's default gene grid, rad
 _warned: list = []
@@ -35,6 +44,19 @@ def _warn_alias() -> None:
         _warned.append(True)
         warnings.warn(f"{ALIAS_KEY} is deprecated: use {STEP_KEY} (one grid for every "
                       "designer)", FutureWarning, stacklevel=3)
+
+
+@contextlib.contextmanager
+def designer_errors(c=None):
+    """Re-raise a designer's :class:`InputError` under the file's key
+    (:data:`DESIGNER_FIELDS`), with its file and line when the campaign ``c`` is given."""
+    try:
+        with config_fields(DESIGNER_FIELDS):
+            yield
+    except InputError as exc:
+        if c is None or exc.file is not None or not exc.field:
+            raise
+        raise c.error(exc.message, exc.field) from None
 
 
 def step_key(raw_design) -> str:

@@ -37,15 +37,15 @@ class CandidateBank:
     Attributes
     ----------
     theta : (K,) float64
-        Swarm angles, rad, ``k * step``.
+        Swarm angles, rad, ``k * step_rad``.
     masks : (K, V) bool
         Vertex v observed by candidate k during the flyby.
     areas : (V,) float64
         Vertex areas, m^2.
-    step : float
+    step_rad : float
         Grid step, rad.
-    d_sep : float
-        Ring radius, m (separations along the ring are ``d_sep * dtheta``).
+    d_sep_m : float
+        Ring radius, m (separations along the ring are ``d_sep_m * dtheta``).
     usable, stereo : (K, V) bool, optional
         With a ``[coverage]`` requirement and ``build_bank(quality=True)``: a
         usable observation, a stereo pair from the candidate's own track
@@ -61,8 +61,8 @@ class CandidateBank:
     theta: np.ndarray
     masks: np.ndarray
     areas: np.ndarray
-    step: float
-    d_sep: float
+    step_rad: float
+    d_sep_m: float
     usable: np.ndarray | None = None
     stereo: np.ndarray | None = None
     resolution: np.ndarray | None = None
@@ -91,7 +91,7 @@ class CandidateBank:
         return cov
 
 
-def grid_size(step: float, field: str = "design.angle_step_deg") -> int:
+def grid_size(step: float, field: str = "step") -> int:
     """Number of grid angles for a step (rad); the step must be in (0, 90] deg."""
     if not (math.isfinite(step) and 0.0 < step <= 0.5 * math.pi + 1e-12):
         raise InputError(f"must be in (0, 90] deg, got {math.degrees(step):g} deg", field=field)
@@ -118,7 +118,7 @@ def build_bank(setup, step: float, *, client=None, chunk_size: int = 32,
     n = grid_size(step)
     step = TWO_PI / n if snap else float(step)
     keys = [(k * step, 0.0, k) for k in range(n)]
-    common = dict(theta=step * np.arange(n), step=step, d_sep=float(setup.d_sep),
+    common = dict(theta=step * np.arange(n), step_rad=step, d_sep_m=float(setup.d_sep_m),
                   areas=np.asarray(setup.body.shape.vertex_areas, dtype=np.float64))
     if pairs:
         q = candidate_quality(setup, keys, pairs=True)
@@ -151,14 +151,14 @@ def separation_steps(step: float, d_sep: float, min_separation: float, n: int) -
     """
     if not (math.isfinite(min_separation) and min_separation >= 0.0):
         raise InputError(f"must be >= 0 km, got {min_separation / 1e3:g}",
-                         field="swarm.min_separation_km")
+                         field="min_separation")
     need = min_separation_angle(min_separation, d_sep)
     widest = (n // 2) * step
     if n > 1 and need > widest * (1 + 1e-12):
         far = 2.0 * d_sep * math.sin(0.5 * min(widest, math.pi))
         raise InputError(f"{min_separation / 1e3:g} km: no two grid angles are that far apart "
                          f"(the largest separation is {far / 1e3:.3f} km, ring radius "
-                         f"{d_sep / 1e3:.3f} km)", field="swarm.min_separation_km")
+                         f"{d_sep / 1e3:.3f} km)", field="min_separation")
     # a pair exactly min_separation apart is allowed (1e-9 guards the float division)
     return int(math.ceil(need / step - 1e-9)) - 1 if min_separation > 0 else 0
 

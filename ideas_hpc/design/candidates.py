@@ -33,8 +33,8 @@ def _views(setup: FlybySetup, keys):
     if setup.attitude_mode == "simulated":
         draws = [initial_conditions(setup.seed, int(k[2]), 1) for k in keys]
         s0, w0, W0 = (np.ascontiguousarray(np.concatenate([d[j] for d in draws])) for j in range(3))
-        dcm, _ = camera_dcms(setup.with_(decimate=max(1, int(round((setup.tf - setup.t0)
-                                                                    / setup.dt)))),
+        dcm, _ = camera_dcms(setup.with_(decimate=max(1, int(round((setup.tf_s - setup.t0_s)
+                                                                    / setup.dt_s)))),
                              th, periods, sigma0=s0, omega0=w0, wheel0=W0,
                              track_T=(tgt.position_T, tgt.velocity_T))
     else:
@@ -54,10 +54,10 @@ def rows_from_views(setup: FlybySetup, r_img, dcm, sun) -> np.ndarray:
     image times, ``sun`` (n_img, 3) or None."""
     if setup.coverage.requirement:
         return quality_per_spacecraft(setup.body.shape, r_img, dcm, setup.image_times,
-                                      setup.eta, setup.near, setup.far,
+                                      setup.eta_rad, setup.near_m, setup.far_m,
                                       options=setup.coverage, sun_T=sun)["mapped"]
-    return observed_per_spacecraft(setup.body.shape, r_img, dcm, setup.eta, setup.near,
-                                   setup.far, options=setup.coverage, sun_T=sun)
+    return observed_per_spacecraft(setup.body.shape, r_img, dcm, setup.eta_rad, setup.near_m,
+                                   setup.far_m, options=setup.coverage, sun_T=sun)
 
 
 def candidate_quality(setup: FlybySetup, keys, pairs: bool = False) -> dict:
@@ -65,7 +65,7 @@ def candidate_quality(setup: FlybySetup, keys, pairs: bool = False) -> dict:
     with ``pairs`` also the stereo table of every candidate pair, ``pairs``
     ((K (K - 1) / 2, V) bool), from the same flights."""
     r_img, dcm, sun = _views(setup, keys)
-    args = (setup.body.shape, r_img, dcm, setup.image_times, setup.eta, setup.near, setup.far)
+    args = (setup.body.shape, r_img, dcm, setup.image_times, setup.eta_rad, setup.near_m, setup.far_m)
     out = quality_per_spacecraft(*args, options=setup.coverage, sun_T=sun)
     if pairs:
         out["pairs"] = stereo_pair_table(*args, options=setup.coverage, sun_T=sun)

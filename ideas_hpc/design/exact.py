@@ -87,7 +87,7 @@ def check_time_limit(time_limit) -> float | None:
         return None
     t = float(time_limit)
     if not (t > 0 and math.isfinite(t)):
-        raise InputError(f"must be > 0 s, got {time_limit!r}", field="design.time_limit_s")
+        raise InputError(f"must be > 0 s, got {time_limit!r}", field="time_limit")
     return t
 
 
@@ -110,7 +110,7 @@ def _separation_rows(red: Reduced, m: int, n_grid: int, n_cols: int):
 
 def prepare(bank: CandidateBank, min_separation: float, *, redundancy: bool = False):
     """Reduced data and the separation width ``m`` (grid steps) for a bank."""
-    m = separation_steps(bank.step, bank.d_sep, min_separation, bank.n_candidates)
+    m = separation_steps(bank.step_rad, bank.d_sep_m, min_separation, bank.n_candidates)
     red = reduce_problem(bank.masks, bank.areas, merge_candidates=(m == 0 and not redundancy))
     return red, m
 
@@ -147,10 +147,10 @@ def n_max_too_small(n_max: int, what: str, top) -> InputError:
     that best value when it is not proven (it is not the cause of the failure)."""
     best = f"{100 * top.coverage:.3f} %" + ("" if top.status == "optimal" else
                                           " (best found, not proven within "
-                                          "design.time_limit_s)")
+                                          "`time_limit`)")
     return InputError(f"N_max too small: no swarm of at most {n_max} spacecraft {what} "
-                      f"(proven); the best with {n_max} is {best}; raise design.n_max",
-                      field="design.n_max")
+                      f"(proven); the best with {n_max} is {best}; raise `n_max`",
+                      field="n_max")
 
 
 def min_swarm(bank: CandidateBank, *, target: float, eps_tol: float, n_max: int | None = None,
@@ -160,9 +160,11 @@ def min_swarm(bank: CandidateBank, *, target: float, eps_tol: float, n_max: int 
     Raises
     ------
     InputError
-        ``design.eps_tol_pct`` when the target cannot be reached by any swarm
-        (the message gives the highest reachable coverage), and
-        ``design.n_max`` when it needs more than ``n_max`` spacecraft.
+        ``eps_tol`` when the target cannot be reached by any swarm
+        (the message gives the highest reachable coverage), ``n_max`` when it
+        needs more than ``n_max`` spacecraft and ``min_separation`` when only
+        the separation stands in the way (the campaign maps these names to its
+        file keys, :data:`ideas_hpc.config.design_checks.DESIGNER_FIELDS`).
     """
     time_limit = check_time_limit(time_limit)
     red, m = prepare(bank, min_separation)
@@ -171,7 +173,7 @@ def min_swarm(bank: CandidateBank, *, target: float, eps_tol: float, n_max: int 
     if need > reach + FEAS_TOL:
         raise InputError(f"target {100 * target:.3f} % (minus eps_tol) is not reachable: the "
                          f"highest coverage any swarm on this grid reaches is {100 * reach:.4f} %",
-                         field="design.eps_tol_pct")
+                         field="eps_tol")
     low, found, above, t_ring = _by_ring(bank, red, min_separation, m, need, n_max)
     if found is not None:
         out = _ring_result(bank, found, target, t_ring)
@@ -202,7 +204,7 @@ def min_swarm(bank: CandidateBank, *, target: float, eps_tol: float, n_max: int 
         raise InputError(f"no swarm{'' if n_max is None else f' of at most {n_max}'} with "
                          f"spacecraft at least {sep_km:g} km apart "
                          f"reaches {100 * need:.3f} %; without the separation {free.n} "
-                         "spacecraft do, with some closer than that", field="swarm.min_separation_km")
+                         "spacecraft do, with some closer than that", field="min_separation")
     out.solve_time += free.solve_time
     if free.n < out.n:
         out.notes.append(f"the separation of {sep_km:g} km costs spacecraft: {free.n} would do "
@@ -275,7 +277,7 @@ def _min_result(bank, red, res, dt, target, need, n_max, m, low=None,
         idx = greedy_cover(bank, need, m, n_max)
         if idx is None:
             raise InputError(f"no swarm found within the time limit ({res.message}); raise "
-                             "design.time_limit_s", field="design.time_limit_s")
+                             "`time_limit`", field="time_limit")
         notes.append(f"the integer programme found no swarm within design.time_limit_s; "
                      f"greedy cover of {idx.size} spacecraft, proven lower bound {bound}")
         res_status = 1

@@ -82,10 +82,10 @@ def failure_tolerant(bank: CandidateBank, k: int, *, target: float, eps_tol: flo
     """
     time_limit = check_time_limit(time_limit)
     if k < 0:
-        raise InputError(f"must be >= 0, got {k}", field="design.failures_tolerated")
+        raise InputError(f"must be >= 0, got {k}", field="k")
     if k >= n_max:
-        raise InputError(f"{k} failures need more than design.n_max = {n_max} spacecraft",
-                         field="design.failures_tolerated")
+        raise InputError(f"{k} failures need more than `n_max` = {n_max} spacecraft",
+                         field="k")
     t0 = time.perf_counter()
     deadline = None if time_limit is None else t0 + time_limit
     plain = min_swarm(bank, target=target, eps_tol=eps_tol, n_max=n_max,
@@ -137,7 +137,7 @@ def failure_tolerant(bank: CandidateBank, k: int, *, target: float, eps_tol: flo
             if best is None:
                 raise InputError(f"no swarm of at most {n_max} spacecraft keeps "
                                  f"{100 * need:.3f} % after any {k} failures",
-                                 field="design.failures_tolerated")
+                                 field="k")
             bound = best.size
             break
         if res.x is None:
@@ -162,7 +162,7 @@ def failure_tolerant(bank: CandidateBank, k: int, *, target: float, eps_tol: flo
         if best is None:
             raise InputError(f"no {k}-failure-tolerant swarm of at most {n_max} found "
                              f"within the time limit (lower bound {bound} spacecraft); raise "
-                             "design.time_limit_s or design.n_max", field="design.time_limit_s")
+                             "`time_limit` or `n_max`", field="time_limit")
     if rounds and k == 1:
         notes.append(f"all {len(scen)} single failures in one integer programme")
     elif rounds:

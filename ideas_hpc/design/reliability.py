@@ -97,7 +97,7 @@ class Evaluator:
         sw = np.ascontiguousarray(np.atleast_2d(np.asarray(swarms, dtype=np.int64)))
         if sw.shape[1] > N_ENUM_MAX:
             raise InputError(f"swarms above {N_ENUM_MAX} spacecraft are out of reach of the "
-                             "exact failure enumeration", field="design.n_max")
+                             "exact failure enumeration", field="n_max")
         return swarm_probabilities(self.rows, sw, self.w, self.need, self.p_f)
 
     def __call__(self, swarms) -> np.ndarray:
@@ -192,7 +192,7 @@ class ReliabilityDesigner:
             areas = self.ev.w
             for s in range(self.s_n):
                 bank = CandidateBank(theta=step * np.arange(self.c_n), masks=self.ev.rows[s],
-                                     areas=areas, step=step, d_sep=1.0)
+                                     areas=areas, step_rad=step, d_sep_m=1.0)
                 red = reduce_problem(bank.masks, areas, merge_candidates=False)
                 if ring_bound_applies(bank, red):
                     low = ring_low(bank, red, self.m, int(n_max), self.ev.need)
@@ -309,7 +309,7 @@ def min_swarm_reliable(rows, areas, *, p: float, p_f: float, need: float, n_max:
     Raises
     ------
     InputError
-        ``design.success_probability`` when no swarm of at most ``n_max``
+        ``p`` when no swarm of at most ``n_max``
         reaches ``p`` on the bank (the message gives the best P found).
     """
     d = ReliabilityDesigner(rows, areas, need=need, p_f=p_f, sep_steps=sep_steps,
@@ -347,7 +347,7 @@ def min_swarm_reliable(rows, areas, *, p: float, p_f: float, need: float, n_max:
             unresolved.append(n)
     best_p = max((v for _, v in d.best.values()), default=0.0)
     what = ("no swarm" if not unresolved else
-            f"no swarm found (sizes {unresolved} unresolved within design.time_limit_s)")
+            f"no swarm found (sizes {unresolved} unresolved within `time_limit`)")
     raise InputError(f"{p:g} is not reached: {what} of at most {n_max} spacecraft on the "
                      f"{d.s_n} scenarios; the best probability found is {best_p:.4f} (proven "
-                     f"upper bound {max(upper.values()):.4f})", field="design.success_probability")
+                     f"upper bound {max(upper.values()):.4f})", field="p")

@@ -73,7 +73,7 @@ def lower_confidence_bound(x, confidence: float) -> float:
     """
     x = np.asarray(x, dtype=np.float64).ravel()
     if not (0.5 < confidence < 1.0):
-        raise InputError(f"must be in (0.5, 1), got {confidence!r}", field="design.confidence")
+        raise InputError(f"must be in (0.5, 1), got {confidence!r}", field="confidence")
     if x.size == 0:
         return 0.0
     if np.any(x < -1e-12) or np.any(x > 1.0 + 1e-12):

@@ -56,7 +56,7 @@ def check_grid(n_candidates: int, field: str = "angle_step_deg") -> None:
                  else f"{TWO_PI / MAX_CANDIDATES:.4f}")
         raise InputError(f"stereo from two spacecraft needs a pair variable per candidate pair; "
                          f"{n_candidates} grid angles are too many (at most {MAX_CANDIDATES}): "
-                         f"use {field} >= {least} with coverage.require_stereo", field=field)
+                         f"use {field} >= {least} with `require_stereo`", field=field)
 
 
 @dataclass
@@ -222,7 +222,7 @@ def min_swarm_stereo(sb: StereoBank, *, target: float, eps_tol: float, n_max: in
     time_limit = check_time_limit(time_limit)
     bank = sb.bank
     check_grid(bank.n_candidates)
-    m = separation_steps(bank.step, bank.d_sep, min_separation, bank.n_candidates)
+    m = separation_steps(bank.step_rad, bank.d_sep_m, min_separation, bank.n_candidates)
     need = target - eps_tol
     cover, red, ends = _model(sb, m)
     k, p, g = bank.n_candidates, ends.shape[0], red.n_groups
@@ -257,7 +257,7 @@ def min_swarm_stereo(sb: StereoBank, *, target: float, eps_tol: float, n_max: in
                               [note + "; the integer programme proves nothing smaller works"])
     if heur is None:
         raise InputError(f"no stereo design found within the time limit ({res.message}); "
-                         "raise design.time_limit_s", field="design.time_limit_s")
+                         "raise `time_limit`", field="time_limit")
     bound = getattr(res, "mip_dual_bound", None)
     bound = math.ceil(bound - 1e-6) if bound is not None and np.isfinite(bound) else 1
     return _stereo_result(sb, heur, target, need, min(max(bound, 1), heur.size), dt,
@@ -281,7 +281,7 @@ def max_coverage_stereo(sb: StereoBank, n: int, *, min_separation: float = 0.0,
     time_limit = check_time_limit(time_limit)
     bank = sb.bank
     check_grid(bank.n_candidates)
-    m = separation_steps(bank.step, bank.d_sep, min_separation, bank.n_candidates)
+    m = separation_steps(bank.step_rad, bank.d_sep_m, min_separation, bank.n_candidates)
     cover, red, ends = _model(sb, m)
     k, p = bank.n_candidates, ends.shape[0]
     cons, integ, n_var = _constraints(sb, cover, red, ends, m, (0, int(n)))

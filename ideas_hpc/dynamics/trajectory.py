@@ -2,15 +2,17 @@
 
 Boundary layer and orchestration for :mod:`ideas_hpc.core.dynamics.ephemeris` and
 :mod:`ideas_hpc.core.dynamics.targeting`: it validates inputs (errors name the field),
-packs the force model once (:func:`ideas_hpc.dynamics.forces.pack_force_model`) and
+packs the force model once (:func:`ideas_hpc.dynamics.force_model.pack_force_model`) and
 calls one compiled kernel for the whole swarm.
 
 Time convention: ``t`` (s) counts from the epoch of the heliocentric elements
 and of the prime-meridian angle (``t = 0``), so ``t0 = 0`` in the paper's
 flyby.
 
-The force model (settings objects, the ``[dynamics]`` table and the packing)
-lives in :mod:`ideas_hpc.dynamics.forces`; its names are re-exported here.
+The force model lives in three modules: the settings objects of the terms
+(:mod:`ideas_hpc.dynamics.force_terms`), the record and its factory
+(:mod:`ideas_hpc.dynamics.forces`) and the ``[dynamics]`` table
+(:mod:`ideas_hpc.dynamics.force_model`); import its names from there.
 """
 
 from __future__ import annotations
@@ -24,9 +26,8 @@ from ideas_hpc.constants import MU_SUN
 from ideas_hpc.core.dynamics.ephemeris import sun_T_batch
 from ideas_hpc.core.dynamics.targeting import propagate_batch, target_batch
 from ideas_hpc.errors import InputError
-from ideas_hpc.dynamics.forces import (BOX_AREA, GRAVITY_MODELS, ForceModel,  # noqa: F401  (re-exported)
-                     PackedForceModel, elements_and_pole, force_model_from_config,
-                     pack_force_model, pack_forces)
+from ideas_hpc.dynamics.force_model import ForceModel, pack_force_model
+from ideas_hpc.dynamics.forces import PackedForceModel, elements_and_pole
 from ideas_hpc.body.params import PhysicalParams
 
 MAX_STEPS = 100_000

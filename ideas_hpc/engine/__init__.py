@@ -8,10 +8,10 @@ Campaign kinds plug in a template and a chunk function::
                            resume=args.resume, workers=args.workers,
                            scheduler=args.scheduler, cluster="local")
 
-* :mod:`~ideas_hpc.engine.store`: store creation and the resume check; re-exports
-  :mod:`~ideas_hpc.engine.store_meta` (names, chunk plan, config hash, attrs),
-  :mod:`~ideas_hpc.engine.chunk_write` (region writes, ``done_mask``) and the
-  seed helpers of :mod:`ideas_hpc.seeds`.
+* :mod:`~ideas_hpc.engine.store`: store creation and the resume check.
+* :mod:`~ideas_hpc.engine.store_meta`: names, chunk plan, config hash, attrs.
+* :mod:`~ideas_hpc.engine.chunk_write`: region writes, ``done_mask``.
+* The per-sample seed helpers are those of :mod:`ideas_hpc.seeds`, gathered here too.
 * :mod:`~ideas_hpc.engine.lock`: one writer per store.
 * :mod:`~ideas_hpc.engine.cluster`: LocalCluster, existing scheduler, SLURMCluster
   (settings in ``dask.config``, defaults shipped as ``engine/jobqueue.yaml``).
@@ -24,9 +24,11 @@ from __future__ import annotations
 from ideas_hpc.engine.cluster import connect, load_slurm_config, local_cluster, slurm_cluster
 from ideas_hpc.engine.lock import StoreLock, StoreLockedError
 from ideas_hpc.engine.runner import CampaignError, RunSummary, run_campaign, run_chunks
-from ideas_hpc.engine.store import (CHUNK_DIM, DONE_VAR, SAMPLE_DIM, SEED_VAR, ChunkPlan, config_hash,
-                    create_store, done_mask, is_store, sample_rng, sample_seed_sequence,
-                    seeds_for, store_attrs, store_plan, write_chunk_region)
+from ideas_hpc.engine.chunk_write import done_mask, write_chunk_region
+from ideas_hpc.engine.store import create_store
+from ideas_hpc.engine.store_meta import (CHUNK_DIM, DONE_VAR, SAMPLE_DIM, SEED_VAR, ChunkPlan,
+                                        config_hash, is_store, store_attrs, store_plan)
+from ideas_hpc.seeds import sample_rng, sample_seed_sequence, seeds_for
 
 __all__ = [
     "CHUNK_DIM", "DONE_VAR", "SAMPLE_DIM", "SEED_VAR", "CampaignError", "ChunkPlan",

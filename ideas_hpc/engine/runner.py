@@ -27,7 +27,9 @@ from ideas_hpc.errors import InputError
 from ideas_hpc.engine.cluster import TASK_THREADS_ENV, connect
 from ideas_hpc.engine.gate import gate_from_env, pass_gate
 from ideas_hpc.engine.lock import StoreLock
-from ideas_hpc.engine.store import ChunkPlan, create_store, done_mask, store_plan, write_chunk_region
+from ideas_hpc.engine.chunk_write import done_mask, write_chunk_region
+from ideas_hpc.engine.store import create_store
+from ideas_hpc.engine.store_meta import ChunkPlan, store_plan
 
 ChunkFn = Callable[[int, int, int], Mapping[str, np.ndarray]]
 

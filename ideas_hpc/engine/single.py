@@ -21,7 +21,9 @@ import numpy as np
 
 from ideas_hpc.errors import InputError
 from ideas_hpc.engine.lock import StoreLock
-from ideas_hpc.engine.store import config_problems, create_store, done_mask, store_attrs, write_chunk_region
+from ideas_hpc.engine.chunk_write import done_mask, write_chunk_region
+from ideas_hpc.engine.store import config_problems, create_store
+from ideas_hpc.engine.store_meta import store_attrs
 from ideas_hpc.engine.store_meta import SAMPLE_DIM
 
 

@@ -13,15 +13,15 @@ A campaign store is written in two steps:
    seed, sample count and chunk size. Creation goes to a hidden sibling
    directory that is renamed into place at the end, so a failure (or a kill)
    never leaves a partial store at ``path``.
-2. Each task calls :func:`write_chunk_region`: an xarray region write of its
+2. Each task calls :func:`ideas_hpc.engine.chunk_write.write_chunk_region`: an xarray region write of its
    sample slice, then ``chunk_done[chunk_id] = True`` **last**. A kill between
    the two leaves the chunk not done; a resumed campaign redoes it, and since
    a chunk depends only on its sample indices and seeds the redo is identical.
 
 Modules: :mod:`~ideas_hpc.engine.store_meta` (names, :class:`ChunkPlan`, config
 hash, attrs), this module (creation and the resume check) and
-:mod:`~ideas_hpc.engine.chunk_write` (region writes, ``done_mask``); the public
-names of all three are importable from here.
+:mod:`~ideas_hpc.engine.chunk_write` (region writes, ``done_mask``); import each name from
+the module that defines it (the package :mod:`ideas_hpc.engine` gathers the public ones).
 
 Seeds
 -----
@@ -47,13 +47,10 @@ import numpy as np
 
 from ideas_hpc.errors import InputError
 from ideas_hpc.engine.variables import describe
-# re-exported: the engine's public seed helpers are those of ideas_hpc.seeds
-from ideas_hpc.seeds import SEED_WORDS, sample_rng, sample_seed_sequence, seeds_for  # noqa: F401
-from ideas_hpc.engine.chunk_write import done_mask, write_chunk_region  # noqa: F401
-from ideas_hpc.engine.store_meta import (CHUNK_DIM, DONE_VAR, ENGINE_TAG, SAMPLE_DIM, SEED_VAR,  # noqa: F401
-                         _jsonable,
-                         ChunkPlan, config_diff, config_hash, config_json,
-                         is_store, store_attrs, store_plan, without_later_defaults)
+from ideas_hpc.engine.store_meta import (CHUNK_DIM, DONE_VAR, ENGINE_TAG, SAMPLE_DIM, SEED_VAR,
+                                        ChunkPlan, _jsonable, config_diff, config_hash,
+                                        config_json, store_attrs, without_later_defaults)
+from ideas_hpc.seeds import seeds_for
 
 _PARTIAL = ".partial-"
 

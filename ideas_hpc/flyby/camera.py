@@ -36,9 +36,9 @@ def camera_dcms(setup, theta, periods=None, *, sigma0=None, omega0=None,
     if setup.maneuver.tracks_body and setup.attitude_mode == "ideal":
         return track_dcms(setup, r_img_T)[0], None
     ws = setup.body.params.spin_rate if spin_rate is None else spin_rate
-    duration = setup.tf - setup.t0
-    img_t = setup.image_times - setup.t0
-    kw = dict(mode=setup.maneuver.name, periods=periods, theta_max=setup.theta_max, p_min=setup.p_min)
+    duration = setup.tf_s - setup.t0_s
+    img_t = setup.image_times - setup.t0_s
+    kw = dict(mode=setup.maneuver.name, periods=periods, theta_max=setup.theta_max_rad, p_min=setup.p_min_s)
     sim_kw = kw
     if setup.maneuver.tracks_body:
         if track_T is None:
@@ -61,7 +61,7 @@ def camera_dcms(setup, theta, periods=None, *, sigma0=None, omega0=None,
 
 def _simulate(setup, th, ws, duration, sigma0, omega0, wheel0, dcm_TS, kw):
     res = simulate_attitude(th, ws, duration, gains=setup.gains, spacecraft=setup.spacecraft,
-                            dt=setup.dt, image_dt=setup.image_dt, sigma0=sigma0, omega0=omega0,
+                            dt=setup.dt_s, image_dt=setup.image_dt_s, sigma0=sigma0, omega0=omega0,
                             wheel0=wheel0, decimate=setup.decimate, dcm_TS=dcm_TS, **kw)
     return np.ascontiguousarray(res.dcm_BT[0]), res
 

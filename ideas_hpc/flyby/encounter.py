@@ -132,13 +132,13 @@ def tracks_T(setup, theta, times) -> np.ndarray:
     enc = setup.encounter
     th = np.ascontiguousarray(np.asarray(theta, dtype=np.float64).ravel())
     t = np.ascontiguousarray(np.atleast_1d(np.asarray(times, dtype=np.float64)))
-    return straight_tracks_T(th, np.ascontiguousarray(enc.dcm_NS), float(setup.d_sep),
+    return straight_tracks_T(th, np.ascontiguousarray(enc.dcm_NS), float(setup.d_sep_m),
                              enc.speed_m_s, enc.t_ca_s, setup.body.params.spin_rate, t)
 
 
 def endpoints_encounter(setup, theta) -> tuple[np.ndarray, np.ndarray]:
     """Start points at ``t0`` and ring points at ``t_ca`` (N, 3), m, frame T."""
-    r = tracks_T(setup, theta, [setup.t0, setup.encounter.t_ca_s])
+    r = tracks_T(setup, theta, [setup.t0_s, setup.encounter.t_ca_s])
     return np.ascontiguousarray(r[:, 0]), np.ascontiguousarray(r[:, 1])
 
 
@@ -147,13 +147,13 @@ def target_encounter(setup, theta, *, raise_on_failure: bool = True) -> Targetin
 
     Returns the :class:`~ideas_hpc.dynamics.trajectory.TargetingResult` of the arc
     ``t0 -> t_ca`` (``v0_T``, miss history) with the trajectory sampled every
-    ``setup.dt`` over ``[t0, tf]``.
+    ``setup.dt_s`` over ``[t0_s, tf_s]``.
     """
     r0, r_ca = endpoints_encounter(setup, theta)
     t_ca = setup.encounter.t_ca_s
     try:
-        arc = target_swarm(setup.body, r0, r_ca, setup.t0, t_ca, force_model=setup.force_model,
-                           dt_sample=t_ca - setup.t0, tol=setup.tol, max_iter=setup.max_iter,
+        arc = target_swarm(setup.body, r0, r_ca, setup.t0_s, t_ca, force_model=setup.force_model,
+                           dt_sample=t_ca - setup.t0_s, tol=setup.tol_m, max_iter=setup.max_iter,
                            raise_on_failure=raise_on_failure)
     except InputError as exc:
         if exc.field == "r0_T":
@@ -163,12 +163,12 @@ def target_encounter(setup, theta, *, raise_on_failure: bool = True) -> Targetin
                              field="flyby.before_km") from None
         if exc.field == "r_target_T":
             raise InputError(f"{exc.message}: the ring passes inside the body's bounding "
-                             f"sphere; increase flyby.d_sep_km (now {setup.d_sep / 1e3:.4g} km)",
+                             f"sphere; increase flyby.d_sep_km (now {setup.d_sep_m / 1e3:.4g} km)",
                              field="flyby.d_sep_km") from None
         raise
     v0 = np.where(np.isfinite(arc.v0_T), arc.v0_T, 0.0)
-    times, pos, vel = propagate_swarm(setup.body, r0, v0, setup.t0, setup.tf,
-                                      force_model=setup.force_model, dt_sample=setup.dt)
+    times, pos, vel = propagate_swarm(setup.body, r0, v0, setup.t0_s, setup.tf_s,
+                                      force_model=setup.force_model, dt_sample=setup.dt_s)
     return TargetingResult(v0_T=arc.v0_T, miss=arc.miss, n_iter=arc.n_iter,
                            converged=arc.converged, times=times, position_T=pos,
                            velocity_T=vel, nfev=arc.nfev)
@@ -218,14 +218,14 @@ def track_reference(setup, r_T, v_T) -> np.ndarray:
     w = setup.body.params.spin_rate
     r = np.asarray(r_T, dtype=np.float64)
     v = np.asarray(v_T, dtype=np.float64)
-    phi = w * (setup.t0 + setup.dt * np.arange(r.shape[1]) - enc.t_ca_s)
+    phi = w * (setup.t0_s + setup.dt_s * np.arange(r.shape[1]) - enc.t_ca_s)
     c, s_ = np.cos(phi)[None, :], np.sin(phi)[None, :]
     r_N = np.stack([c * r[..., 0] - s_ * r[..., 1], s_ * r[..., 0] + c * r[..., 1], r[..., 2]],
                    axis=-1)
     v_N = np.stack([c * v[..., 0] - s_ * v[..., 1], s_ * v[..., 0] + c * v[..., 1], v[..., 2]],
                    axis=-1) + np.cross([0.0, 0.0, w], r_N)
     return track_reference_table(np.ascontiguousarray(r_N), np.ascontiguousarray(v_N),
-                                 np.ascontiguousarray(enc.dcm_NS[:, 2]), float(setup.dt))
+                                 np.ascontiguousarray(enc.dcm_NS[:, 2]), float(setup.dt_s))
 
 
 def pointing_check(dcm_BN, dt: float, spacecraft) -> dict:
@@ -260,15 +260,15 @@ def pointing_profile(setup, theta, periods=None, r_img_T=None) -> dict:
     th = np.asarray(theta, dtype=np.float64).ravel()
     sc = setup.spacecraft or default_spacecraft()
     if setup.maneuver.tracks_body:
-        return pointing_check(track_dcms(setup, r_img_T)[1], setup.image_dt, sc)
-    img_t = setup.image_times - setup.t0
-    kw = dict(mode=setup.maneuver.name, periods=periods, theta_max=setup.theta_max, p_min=setup.p_min)
+        return pointing_check(track_dcms(setup, r_img_T)[1], setup.image_dt_s, sc)
+    img_t = setup.image_times - setup.t0_s
+    kw = dict(mode=setup.maneuver.name, periods=periods, theta_max=setup.theta_max_rad, p_min=setup.p_min_s)
     if setup.encounter is not None:
         bn = ideal_dcm_BT(th, 0.0, img_t, dcm_TS=setup.encounter.dcm_NS, **kw)
     else:
         ws = setup.body.params.spin_rate
         bn = dcm_BT_from_BN(ideal_dcm_BT(th, ws, img_t, **kw), -ws, img_t, 0.0)
-    return pointing_check(bn, setup.image_dt, sc)
+    return pointing_check(bn, setup.image_dt_s, sc)
 
 
 def encounter_attrs(setup) -> dict:

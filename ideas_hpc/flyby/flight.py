@@ -32,62 +32,73 @@ from ideas_hpc.flyby.encounter import (Encounter, approach_angles, endpoints_enc
                         window_s)
 from ideas_hpc.errors import InputError
 from ideas_hpc.flyby.camera import camera_at_images, misaligned, misalignment_dcms
-from ideas_hpc.mapping.coverage import CoverageOptions, CoverageResult, compute_coverage
+from ideas_hpc.mapping.coverage import CoverageResult, compute_coverage
+from ideas_hpc.mapping.options import CoverageOptions
 from ideas_hpc.flyby.sizing import Sizing, size_flyby
 from ideas_hpc.flyby.swarm_geometry import check_separation
-from ideas_hpc.dynamics.trajectory import (ForceModel, TargetingError, TargetingResult, propagate_swarm,
-                         ring_states, sun_direction_T, target_swarm)
+from ideas_hpc.dynamics.force_model import ForceModel
+from ideas_hpc.dynamics.trajectory import (TargetingError, TargetingResult, propagate_swarm,
+                                           ring_states, sun_direction_T, target_swarm)
 
 TWO_PI = 2.0 * math.pi
 
 
 @dataclass(frozen=True)
 class FlybySetup:
-    """Everything a flyby needs, resolved to SI once (picklable, sent to workers)."""
+    """Everything a flyby needs, resolved to SI once (picklable, sent to workers).
+
+    Names carry their unit (``_s``, ``_m``, ``_rad``): times ``t0_s``, ``tf_s``
+    (flyby window, from the epoch of the elements plus ``epoch_s``), integration
+    and image steps ``dt_s``, ``image_dt_s``; ring radius ``d_sep_m``, paper track
+    ends ``z_start_m``, ``z_stop_m`` (helix: ``helix_rise_m`` more start per full turn);
+    camera half angle ``eta_rad``, near and far planes ``near_m``, ``far_m``;
+    sweep amplitude ``theta_max_rad``; targeting tolerance ``tol_m``; shortest
+    sweep period ``p_min_s``; arrival epoch ``epoch_s``.
+    """
 
     body: Body
     sizing: Sizing
-    t0: float
-    tf: float
-    dt: float
-    image_dt: float
-    d_sep: float
-    z_start: float
-    z_stop: float
+    t0_s: float
+    tf_s: float
+    dt_s: float
+    image_dt_s: float
+    d_sep_m: float
+    z_start_m: float
+    z_stop_m: float
     configuration: str
-    helix_rise: float
-    eta: float
-    near: float
-    far: float
-    theta_max: float
+    helix_rise_m: float
+    eta_rad: float
+    near_m: float
+    far_m: float
+    theta_max_rad: float
     maneuver: Maneuver
     attitude_mode: str
     decimate: int
-    tol: float
+    tol_m: float
     max_iter: int
     seed: int
     force_model: ForceModel = field(default_factory=ForceModel)
     spacecraft: SpacecraftModel | None = None
     gains: Gains | None = None
     coverage: CoverageOptions = field(default_factory=CoverageOptions)
-    p_min: float = 18.0
-    epoch: float = 0.0
+    p_min_s: float = 18.0
+    epoch_s: float = 0.0
     encounter: Encounter | None = None   # None: the paper's geometry (ideas_hpc.flyby.encounter)
 
     @property
     def image_every(self) -> int:
-        return int(round(self.image_dt / self.dt))
+        return int(round(self.image_dt_s / self.dt_s))
 
     @property
     def image_times(self) -> np.ndarray:
-        n = int(round((self.tf - self.t0) / self.image_dt))
-        return self.t0 + self.image_dt * np.arange(n + 1)
+        n = int(round((self.tf_s - self.t0_s) / self.image_dt_s))
+        return self.t0_s + self.image_dt_s * np.arange(n + 1)
 
     def sun_T(self, times=None, epoch=None) -> np.ndarray:
         """Unit body -> Sun directions (n, 3) in T at flyby ``times`` (default: the
         image times), from the ephemeris at ``epoch + times`` (arrival epoch, s)."""
         t = self.image_times if times is None else np.asarray(times, dtype=np.float64)
-        e = self.epoch if epoch is None else float(epoch)
+        e = self.epoch_s if epoch is None else float(epoch)
         return sun_direction_T(self.body.params, e + t)
 
     def with_(self, **kw) -> "FlybySetup":
@@ -144,17 +155,17 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
     if fb.geometry == "encounter":
         t0, tf, enc = _encounter_window(c, body, inst)
     return FlybySetup(
-        body=body, sizing=sizing, t0=t0, tf=tf, dt=fb.dt_s,
-        image_dt=1.0 / inst.image_rate_hz,
-        d_sep=d_sep,
-        z_start=fb.z_start_m, z_stop=fb.z_stop_m, configuration=fb.configuration,
-        helix_rise=fb.helix_rise_m, eta=eta, near=sizing.near, far=sizing.far,
-        theta_max=att.theta_max_rad if att.theta_max_rad is not None else sizing.theta_max,
+        body=body, sizing=sizing, t0_s=t0, tf_s=tf, dt_s=fb.dt_s,
+        image_dt_s=1.0 / inst.image_rate_hz,
+        d_sep_m=d_sep,
+        z_start_m=fb.z_start_m, z_stop_m=fb.z_stop_m, configuration=fb.configuration,
+        helix_rise_m=fb.helix_rise_m, eta_rad=eta, near_m=sizing.near, far_m=sizing.far,
+        theta_max_rad=att.theta_max_rad if att.theta_max_rad is not None else sizing.theta_max,
         maneuver=man, attitude_mode=att.mode, decimate=att.decimate,
-        tol=fb.tolerance_m, max_iter=fb.max_iterations, seed=cfg.seed,
+        tol_m=fb.tolerance_m, max_iter=fb.max_iterations, seed=cfg.seed,
         force_model=ex["force_model"], spacecraft=ex["spacecraft"],
-        gains=ex["gains"], coverage=ex["coverage"], p_min=cfg.design.p_min_s,
-        epoch=fb.epoch_s, encounter=enc)
+        gains=ex["gains"], coverage=ex["coverage"], p_min_s=cfg.design.p_min_s,
+        epoch_s=fb.epoch_s, encounter=enc)
 
 
 def _encounter_window(c, body, inst):
@@ -179,8 +190,8 @@ def endpoints(setup: FlybySetup, theta) -> tuple[np.ndarray, np.ndarray]:
         return endpoints_encounter(setup, th)
     rise = 0.0
     if setup.configuration == "helix":
-        rise = setup.helix_rise * (np.mod(th, TWO_PI) / TWO_PI)
-    return ring_states(setup.body, th, setup.d_sep, setup.z_start + rise, setup.z_stop + rise)
+        rise = setup.helix_rise_m * (np.mod(th, TWO_PI) / TWO_PI)
+    return ring_states(setup.body, th, setup.d_sep_m, setup.z_start_m + rise, setup.z_stop_m + rise)
 
 
 def target(setup: FlybySetup, theta, *, raise_on_failure: bool = True) -> TargetingResult:
@@ -194,8 +205,8 @@ def target(setup: FlybySetup, theta, *, raise_on_failure: bool = True) -> Target
         if setup.encounter is not None:
             return target_encounter(setup, th, raise_on_failure=raise_on_failure)
         r0, rt = endpoints(setup, th)
-        return target_swarm(setup.body, r0, rt, setup.t0, setup.tf,
-                            force_model=setup.force_model, dt_sample=setup.dt, tol=setup.tol,
+        return target_swarm(setup.body, r0, rt, setup.t0_s, setup.tf_s,
+                            force_model=setup.force_model, dt_sample=setup.dt_s, tol=setup.tol_m,
                             max_iter=setup.max_iter, raise_on_failure=raise_on_failure)
     except TargetingError as exc:
         raise targeting_input_error(exc, setup, th) from None
@@ -233,12 +244,12 @@ def targeting_input_error(exc: TargetingError, setup: FlybySetup, theta) -> Inpu
     others = f" (and {failed.size - 1} more)" if failed.size > 1 else ""
     head = (f"targeting did not converge for spacecraft {worst}{others} at swarm angle "
             f"{theta[worst]:.4g} rad: miss {fm[worst]:.3g} m after {n} iterations, tolerance "
-            f"{setup.tol:g} m; ")
+            f"{setup.tol_m:g} m; ")
     if closest <= r_max or not np.all(np.isfinite(hist)) or n < setup.max_iter:
         where = (f"its path comes within {closest / 1e3:.3g} km of the body's centre"
                  if np.isfinite(closest) else "its integration broke off near the body")
         return InputError(head + f"{where} (R_max {r_max / 1e3:.3g} km): increase flyby.d_sep_km "
-                          f"(now {setup.d_sep / 1e3:.4g} km)", field="flyby.d_sep_km")
+                          f"(now {setup.d_sep_m / 1e3:.4g} km)", field="flyby.d_sep_km")
     if n >= 4 and np.min(hist[-3:]) >= 0.5 * np.min(hist[:-3]):
         return InputError(head + f"the miss stalls near {np.min(hist):.3g} m: loosen "
                           "flyby.tolerance_m", field="flyby.tolerance_m")
@@ -343,8 +354,8 @@ def open_loop_views(setup: FlybySetup, theta, periods, r0_T, v0_T,
     p = perturbation
     r0 = r0_T if p.position_error_T is None else r0_T + p.position_error_T
     v0 = v0_T if p.velocity_error_T is None else v0_T + p.velocity_error_T
-    _, pos, vel = propagate_swarm(setup.body, r0, v0, setup.t0, setup.tf,
-                                force_model=setup.force_model, dt_sample=setup.dt,
+    _, pos, vel = propagate_swarm(setup.body, r0, v0, setup.t0_s, setup.tf_s,
+                                force_model=setup.force_model, dt_sample=setup.dt_s,
                                 params_override=p.params_override, views=True)
     r_img = np.ascontiguousarray(pos[:, ::setup.image_every])
     mis = None if p.misalignment_prv is None else misalignment_dcms(p.misalignment_prv)
@@ -369,6 +380,6 @@ def _coverage(setup: FlybySetup, r_img, dcm, active, counts):
     sun = None
     if setup.coverage.needs_sun:
         sun = setup.sun_T(img_t)
-    return compute_coverage(setup.body.shape, r_img, dcm, img_t, setup.eta, setup.near,
-                            setup.far, options=setup.coverage, sun_T=sun, active=active,
+    return compute_coverage(setup.body.shape, r_img, dcm, img_t, setup.eta_rad, setup.near_m,
+                            setup.far_m, options=setup.coverage, sun_T=sun, active=active,
                             counts=counts)

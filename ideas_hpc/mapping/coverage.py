@@ -36,8 +36,7 @@ from ideas_hpc.core.mapping import coverage as _cov
 from ideas_hpc.core.mapping import quality as _qual
 from ideas_hpc.core.mapping import quality_masks as _qmask
 from ideas_hpc.core.mapping import stereo_pairs as _pairs
-from ideas_hpc.mapping.options import (CoverageOptions, _finite,  # noqa: F401 (re-exported)
-                               coverage_options_from_config)
+from ideas_hpc.mapping.options import CoverageOptions, _finite
 from ideas_hpc.errors import InputError
 from ideas_hpc.engine.variables import QUALITY, VARS
 #: Tolerance on ``C C^T = I`` for camera DCMs.

@@ -1,8 +1,8 @@
 """Coverage options: how a vertex counts as observed, and the science requirement.
 
 The ``[coverage]`` table of a campaign (user units) becomes a frozen
-:class:`CoverageOptions` (SI) here; :mod:`ideas_hpc.mapping.coverage` re-exports both
-names. Paper mode is the default: none of the strict options or requirements
+:class:`CoverageOptions` (SI) here; :mod:`ideas_hpc.mapping.coverage` applies them
+to the kernels. Paper mode is the default: none of the strict options or requirements
 set, and the stores hold exactly what they held before issue 14.
 
 Requirement keys (issue 14): a vertex is *mapped* when one observation meets

@@ -95,7 +95,7 @@ def _gravity(rng, n, mc, setup, theta):
 
 def _check_reflectivity(mc):
     if mc.reflectivity_min > mc.reflectivity_max:
-        raise InputError("must be >= monte_carlo.reflectivity_min", field="reflectivity_max")
+        raise InputError("must be >= `reflectivity_min`", field="reflectivity_max")
 
 
 def _reflectivity(rng, n, mc, setup, theta):

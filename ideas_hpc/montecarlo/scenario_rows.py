@@ -20,6 +20,7 @@ import numpy as np
 
 from ideas_hpc.design.candidates import rows_from_views
 from ideas_hpc.core.mapping import scenario_rows as _k
+from ideas_hpc.core.mapping.coverage import first_image_by_spacecraft
 from ideas_hpc.flyby.flight import FlybySetup, Perturbation, open_loop_views
 from ideas_hpc.mapping.coverage import _check_geometry, _mesh, _strict_args
 
@@ -52,8 +53,8 @@ class RowEngine:
     def _args(self, r_img, dcm):
         setup = self.setup
         shape = setup.body.shape
-        r, c, tan_eta, near, far, _ = _check_geometry(shape, r_img, dcm, setup.eta, setup.near,
-                                                      setup.far)
+        r, c, tan_eta, near, far, _ = _check_geometry(shape, r_img, dcm, setup.eta_rad, setup.near_m,
+                                                      setup.far_m)
         v, n, _ = _mesh(shape)
         sun = setup.sun_T() if setup.coverage.needs_sun else None
         sin_e, max_r, occ, ill, s, tree = _strict_args(shape, setup.coverage, sun, r.shape[1])
@@ -84,8 +85,8 @@ class RowEngine:
             return self
         r_img, dcm = self.nominal()
         v, n, r, c, te, ne, fa, ex, se, mr, oc, il, s, tree = self._args(r_img, dcm)
-        self.witness = _k.nominal_witness(v, n, r, c, te, ne, fa, ex, se, mr, oc, il, s,
-                                          *tree).astype(np.int32)   # shipped to workers
+        self.witness = first_image_by_spacecraft(v, n, r, c, te, ne, fa, ex, se, mr, oc, il, s,
+                                               *tree).astype(np.int32)   # shipped to workers
         if pilot is not None:
             rp, dp = self.flight(pilot)
             dev_r = np.linalg.norm(rp - r_img, axis=2)
@@ -124,7 +125,7 @@ def rows_setup(setup: FlybySetup) -> FlybySetup:
     """The setup the rows are flown with: closed-loop time series not kept (one sample)."""
     if setup.attitude_mode != "simulated":
         return setup
-    return setup.with_(decimate=max(1, int(round((setup.tf - setup.t0) / setup.dt))))
+    return setup.with_(decimate=max(1, int(round((setup.tf_s - setup.t0_s) / setup.dt_s))))
 
 
 def full_rows(setup: FlybySetup, theta, periods, r0_T, v0_T, pert: Perturbation) -> np.ndarray:

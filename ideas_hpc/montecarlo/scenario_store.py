@@ -30,7 +30,8 @@ import numpy as np
 
 from ideas_hpc.engine.lock import StoreLock
 from ideas_hpc.engine.runner import _run_chunk, run_campaign
-from ideas_hpc.engine.store import create_store, done_mask
+from ideas_hpc.engine.chunk_write import done_mask
+from ideas_hpc.engine.store import create_store
 from ideas_hpc.engine.store_meta import config_hash, is_store, store_attrs, store_plan
 
 KIND = "scenario-bank"

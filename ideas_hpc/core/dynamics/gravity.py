@@ -17,7 +17,7 @@ Models
   which in Cartesian form is the harmonic quadratic form
   ``U2 = mu x^T Q x / r^5`` with
   ``Q = diag(-C20/2 + 3 C22, -C20/2 - 3 C22, C20)`` (trace 0).
-* spherical harmonics to any degree: :mod:`ideas_hpc.core.dynamics.harmonics` (re-exported here).
+* spherical harmonics to any degree: :mod:`ideas_hpc.core.dynamics.harmonics`.
 * constant-density polyhedron (Werner & Scheeres 1997, Celest. Mech. 65,
   313-344, eqs. 15-17)::
 
@@ -36,8 +36,6 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ideas_hpc.core.dynamics.harmonics import (sh_derivative_tables, sh_gravity,  # noqa: F401  (re-export)
-                        sh_unnormalise, sh_vw)
 
 # ---------------------------------------------------------------- point mass
 

@@ -11,7 +11,7 @@ state propagates the trajectory alone.
 
 Force model: the record ``(fi, ff)`` of :mod:`ideas_hpc.core.dynamics.forces` (gravity
 of any model plus cannonball SRP), built by the boundary layer
-:mod:`ideas_hpc.dynamics.forces`.
+:func:`ideas_hpc.dynamics.forces.pack_forces`.
 
 Integrator: Dormand-Prince 8(5,3) ("DOP853", Hairer, Norsett & Wanner,
 *Solving ODEs I*, section II.10) with the same step control, error norm

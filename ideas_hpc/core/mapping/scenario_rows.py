@@ -18,7 +18,7 @@ e_min|) B_r`` and ``B_r``. Illumination does not depend on the spacecraft.
 
 So with a *budget* ``(B_C, B_r)`` fixed before any scenario:
 
-* :func:`nominal_witness` (:func:`ideas_hpc.core.mapping.coverage.first_image_by_spacecraft`)
+* :func:`ideas_hpc.core.mapping.coverage.first_image_by_spacecraft` (the nominal witness)
   gives, per (candidate, vertex), the first nominal
   image that sees the vertex (-1: unseen), and :func:`reachable` whether any
   image could pass culling, clipping, field of view, elevation and range for
@@ -41,8 +41,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from ideas_hpc.core.mapping.time_tree import LEAF, _FP, _classify, _scan, time_tree
-from ideas_hpc.core.mapping.coverage import first_image_by_spacecraft as nominal_witness  # noqa: F401
+from ideas_hpc.core.mapping.time_tree import LEAF, _FP, _classify, time_tree
 from ideas_hpc.core.mapping.segments import face_blocks_cone, segment_hit
 from ideas_hpc.core.mapping.visibility import _seen
 
@@ -343,7 +342,7 @@ def perturbed_rows(witness, window, margin, i_ok, dev, vertices, normals, r_T, d
                    node_info, tri, tri_vid):
     """(N, V) bool rows of the perturbed flight ``r_T``, ``dcm_BT`` (module docstring).
 
-    ``witness`` (N, V) from :func:`nominal_witness`, ``window`` (N, V, 2) and
+    ``witness`` (N, V) from :func:`~ideas_hpc.core.mapping.coverage.first_image_by_spacecraft`, ``window`` (N, V, 2) and
     ``margin`` (N, V) from :func:`reachable` with the budget, ``i_ok`` and ``dev``
     (N,) from :func:`deviation_start` with the same budget (a window is skipped
     when the candidate's largest deviation from ``i_ok`` on is below the margin); other arguments as

@@ -207,7 +207,7 @@ def run_pareto(bank: CandidateBank, objectives, *, n_max: int, population: int,
         OBJECTIVES[x].evaluate(bank, np.zeros((1, 1), dtype=np.int64))
     k = bank.n_candidates
     n_max = int(min(n_max, k))
-    m = separation_steps(bank.step, bank.d_sep, min_separation, k)
+    m = separation_steps(bank.step_rad, bank.d_sep_m, min_separation, k)
     t0 = time.perf_counter()
     arch = _Archive(bank, names)
     rng = search_rng(seed, PARETO_SEARCH)

@@ -31,7 +31,8 @@ from ideas_hpc.core.design.union import population_coverage
 from ideas_hpc.errors import InputError
 from ideas_hpc.design.bank import CandidateBank
 
-FIELD = "design.objectives"
+#: The objectives' parameter name (the campaign maps it to ``design.objectives``).
+FIELD = "objectives"
 #: Mean resolution (m) searched for a swarm that maps no vertex (stored as inf).
 NO_RESOLUTION = 1e12
 
