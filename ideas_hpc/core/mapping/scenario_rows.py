@@ -53,15 +53,16 @@ S_MAX = 1.0 + 1e-9
 
 
 @njit(cache=True, inline="always")
-def _required(px, py, pz, nx, ny, nz, nabs, k, i, cam, sec_eta, opts, bc, br):
+def _required(vtx, k, i, cam, sec_eta, opts, bc, br):
     """Smallest position deviation (m) with which a camera within ``bc`` of image ``i``
     could pass culling, clipping, field of view, elevation and range (inf: none).
 
     Each test is ``slack >= -(its change bound)``, linear in the deviation (module
     docstring), solved for it; ``br`` (the budget) only sizes the floating-point
     slack, and the result is shrunk by a relative and absolute 1e-9 so that it
-    never exceeds the exact value.
+    never exceeds the exact value. ``vtx`` is ``(px, py, pz, nx, ny, nz, |n|)`` (m, T).
     """
+    px, py, pz, nx, ny, nz, nabs = vtx
     r_T = cam.r_T_m
     dcm_BT = cam.dcm_BT
     tan_eta = cam.tan_eta
@@ -98,20 +99,18 @@ def _required(px, py, pz, nx, ny, nz, nabs, k, i, cam, sec_eta, opts, bc, br):
 
 
 @njit(cache=True, inline="always")
-def _could(px, py, pz, nx, ny, nz, nabs, k, i, cam, sec_eta, opts, bc, br):
+def _could(vtx, k, i, cam, sec_eta, opts, bc, br):
     """False when no camera within ``(bc, br)`` of image ``i`` can pass the geometric tests."""
-    return _required(px, py, pz, nx, ny, nz, nabs, k, i, cam, sec_eta, opts, bc, br) <= br
+    return _required(vtx, k, i, cam, sec_eta, opts, bc, br) <= br
 
 
 @njit(cache=True, inline="always")
-def _extreme(tree, stack, k, p, n, cam, opts, bc, br, last):
-    """First (``last``: last) image that :func:`_could` see the vertex at ``p`` (m, T)
-    with normal ``n``, -1 if none. ``tree`` carries the budget-inflated bounds."""
+def _extreme(tree, stack, k, vtx, cam, opts, bc, br, last):
+    """First (``last``: last) image that :func:`_could` see the vertex ``vtx`` (as in
+    :func:`_required`), -1 if none. ``tree`` carries the budget-inflated bounds."""
     NI = tree.NI
     sec_eta = tree.sec_eta
-    px, py, pz = p
-    nx, ny, nz = n
-    nabs = np.sqrt(nx * nx + ny * ny + nz * nz)
+    px, py, pz, nx, ny, nz, nabs = vtx
     sp = 1
     stack[0] = NI.shape[0] - 1
     while sp > 0:
@@ -133,7 +132,7 @@ def _extreme(tree, stack, k, p, n, cam, opts, bc, br, last):
         n = NI[node, 1] - NI[node, 0]
         for h in range(n):
             i = NI[node, 1] - 1 - h if last else NI[node, 0] + h
-            if _could(px, py, pz, nx, ny, nz, nabs, k, i, cam, sec_eta, opts, bc, br):
+            if _could(vtx, k, i, cam, sec_eta, opts, bc, br):
                 return i
     return -1
 
@@ -174,18 +173,16 @@ def reachable(mesh, cam, opts, bc, br):
         ny = normals[j, 1]
         nz = normals[j, 2]
         nabs = np.sqrt(nx * nx + ny * ny + nz * nz)
-        p = (px, py, pz)
-        n = (nx, ny, nz)
+        vtx = (px, py, pz, nx, ny, nz, nabs)
         for k in range(nsc):
-            lo = _extreme(tree, stack, k, p, n, cam, opts, bc, br, False)
+            lo = _extreme(tree, stack, k, vtx, cam, opts, bc, br, False)
             if lo >= 0:
-                hi = _extreme(tree, stack, k, p, n, cam, opts, bc, br, True)
+                hi = _extreme(tree, stack, k, vtx, cam, opts, bc, br, True)
                 out[k, j, 0] = lo
                 out[k, j, 1] = hi
                 m = np.inf
                 for i in range(lo, hi + 1):
-                    m = min(m, _required(px, py, pz, nx, ny, nz, nabs, k, i, cam, sec_eta,
-                                         opts, bc, br))
+                    m = min(m, _required(vtx, k, i, cam, sec_eta, opts, bc, br))
                 margin[k, j] = m
     return out, margin
 
@@ -252,11 +249,10 @@ def _seen_hint(j, k, i, hint, mesh, cam, opts, bvh):
         return True
     vertices = mesh.vertices_T_m
     r_T = cam.r_T_m
-    node_bounds, node_info, tri, tri_vid = bvh
     px = vertices[j, 0]
     py = vertices[j, 1]
     pz = vertices[j, 2]
-    f = segment_hit(node_bounds, node_info, tri, tri_vid, px, py, pz, r_T[k, i, 0] - px,
+    f = segment_hit(bvh, px, py, pz, r_T[k, i, 0] - px,
                     r_T[k, i, 1] - py, r_T[k, i, 2] - pz, 1.0, j, hint[0])
     if f >= 0:
         hint[0] = f
