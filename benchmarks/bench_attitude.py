@@ -20,6 +20,7 @@ import numpy as np
 
 from ideas_hpc.attitude import GAIN_PRESETS, default_spacecraft, initial_conditions
 from ideas_hpc.core.attitude.batch import simulate_batch
+from ideas_hpc.core.attitude.records import ControlGains, Initial, Wheels
 from ideas_hpc.core.dynamics.frames import dcm_RT
 
 W = 2 * math.pi / (5.270 * 3600)
@@ -186,10 +187,12 @@ def main():
     k_p, k_i, eta, phi = g.arrays(DT)
     rt = np.ascontiguousarray(np.array([dcm_RT(t, np.eye(3)) for t in THETA]))
     s0, w0, W0 = (a[None].copy() for a in initial_conditions(1, 0, THETA.size))
-    args = (0, rt, W, np.ones(THETA.size), 0.0, k_p, k_i, eta, phi, g.int_limit,
-            sc.inertia_rw, sc.J_s, sc.u_max, sc.h_max, DT)
+    args = (0, rt, W, np.ones(THETA.size), 0.0,
+            ControlGains(k_p, k_i, eta, phi, float(g.int_limit)),
+            Wheels(sc.inertia_rw, sc.J_s, float(sc.u_max), float(sc.h_max)), DT)
+    init = Initial(s0, w0, W0)
     no_table = np.empty((THETA.size, 0, 9))  # NP reads no track reference
-    simulate_batch(*args, 10, 1, 2, s0, w0, W0, no_table)  # compile / load cache
+    simulate_batch(*args, 10, (1, 2), init, no_table)  # compile / load cache
     n_sc_steps = THETA.size * N_STEPS
     # the machine is shared: time with all numba threads and with one (a thread
     # descheduled by another process stalls a static prange), best of 9 each
@@ -200,7 +203,7 @@ def main():
         best = math.inf
         for _ in range(9):
             t0 = time.perf_counter()
-            out = simulate_batch(*args, N_STEPS, 1, 2, s0, w0, W0, no_table)
+            out = simulate_batch(*args, N_STEPS, (1, 2), init, no_table)
             best = min(best, time.perf_counter() - t0)
         us_by_threads[n_thr] = best / n_sc_steps * 1e6
     numba.set_num_threads(n_default)

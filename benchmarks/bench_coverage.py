@@ -38,6 +38,7 @@ from ideas_hpc.body.analytic import eros_ellipsoid
 from ideas_hpc.body.bodies import load_body
 from ideas_hpc.core.mapping import bvh as cbvh
 from ideas_hpc.core.mapping import coverage as ccov
+from ideas_hpc.core.mapping.records import Camera, Mesh
 from ideas_hpc.body.datapath import have_data_file
 from ideas_hpc.mapping.coverage import compute_coverage, observed_per_spacecraft
 from ideas_hpc.mapping.options import CoverageOptions
@@ -159,7 +160,9 @@ def main():
     coverage_counts_tiles(*kargs)
     t_tl, res_tl = best_of(lambda: coverage_counts_tiles(*kargs), 3)
     assert np.array_equal(res_tl[2], res.times_seen)
-    t_k, _ = best_of(lambda: ccov.coverage_counts(*kargs), 7)
+    mesh = Mesh(*kargs[:3])
+    cam = Camera(r, C, t, math.tan(ETA), float(NEAR), float(FAR), False)
+    t_k, _ = best_of(lambda: ccov.coverage_counts(mesh, cam, kargs[-2], True), 7)
     t_eo, res_eo = best_of(lambda: compute_coverage(shape, r, C, t, ETA, NEAR, FAR,
                                                     counts=False), 7)
     assert np.array_equal(res_eo.observed, ref[0])

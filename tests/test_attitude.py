@@ -21,6 +21,7 @@ from ideas_hpc.attitude import (GAIN_PRESETS, Gains, SpacecraftModel, default_sp
 from ideas_hpc.core.attitude import mrp
 from ideas_hpc.core.attitude.rigid_body import angular_momentum_N, kinetic_energy, rk4_step
 from ideas_hpc.core.attitude.batch import closed_loop_step
+from ideas_hpc.core.attitude.records import ControlGains, Ring, Wheels
 from ideas_hpc.core.dynamics.frames import dcm_RT
 from ideas_hpc.core.attitude.maneuvers import reference
 from ideas_hpc.errors import InputError
@@ -223,9 +224,10 @@ def test_twin_of_one_closed_loop_step(mode, seed):
         xc, zc = x.copy(), z.copy()
         u, err = np.empty(3), np.empty(6)
         rt = dcm_RT(theta, np.eye(3))
-        closed_loop_step(mode, t, xc, zc, mrp.mrp_from_dcm(rt), rt, W_EROS, THETA_MAX, period,
-                         k_p, k_i, eta, phi, g.int_limit, SC.inertia_rw, SC.J_s, np.zeros(3),
-                         SC.u_max, SC.h_max, 0.1, np.empty(9), u, err, np.empty((5, 9)))
+        ring = Ring(mode, mrp.mrp_from_dcm(rt), rt, W_EROS, THETA_MAX, period)
+        closed_loop_step(t, xc, zc, ring, ControlGains(k_p, k_i, eta, phi, float(g.int_limit)),
+                         Wheels(SC.inertia_rw, SC.J_s, float(SC.u_max), float(SC.h_max)),
+                         np.zeros(3), 0.1, np.empty(9), u, err, np.empty((5, 9)))
         np.testing.assert_allclose(u, ut, rtol=0, atol=1e-12 * SC.u_max)
         np.testing.assert_allclose(err[:3], dst, atol=1e-12)
         np.testing.assert_allclose(err[3:], dwt, atol=1e-12)

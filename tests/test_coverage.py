@@ -13,6 +13,7 @@ from hypothesis import strategies as st
 from ideas_hpc.body.analytic import ellipsoid_mesh, sphere_mesh
 from ideas_hpc.core.mapping import bvh as cbvh
 from ideas_hpc.core.mapping import coverage as ccov
+from ideas_hpc.core.mapping.records import Bvh, Camera, Mesh, Strict
 from coverage_tiles import coverage_counts_tiles
 from ideas_hpc.errors import InputError
 from ideas_hpc.mapping.coverage import compute_coverage, observed_per_spacecraft
@@ -152,9 +153,8 @@ def test_brute_force_agrees_exactly(small_body, cfg):
     # the per-vertex kernel (used with strict options), early-out and full
     v, nrm, a = small_body.vertices_T, small_body.vertex_normals_T, small_body.vertex_areas
     for count_all in (False, True):
-        o = ccov.coverage_vertices(v, nrm, a, r, C, times, math.tan(eta), near, far, exact,
-                                   active, count_all, -2.0, np.inf, False, False,
-                                   np.zeros((1, 3)), *_dummy_tree())
+        o = _vertices(v, nrm, a, r, C, times, math.tan(eta), near, far, exact, active,
+                      count_all)
         np.testing.assert_array_equal(o[0], obs)
         np.testing.assert_array_equal(o[1], first)
         np.testing.assert_array_equal(o[2], count if count_all else obs.astype(int))
@@ -330,18 +330,40 @@ def test_frustum_planes_inside_outside():
             normals_p = np.ascontiguousarray(np.tile(r / np.linalg.norm(r), (len(q), 1)))
         else:
             normals_p = normals
-        obs, first, cnt, cov, covn = ccov.coverage_counts(
+        obs, first, cnt, cov, covn = _counts(
             verts, normals_p, areas, rT, dcm, np.zeros(1), tn, near, far, exact, act, True)
         np.testing.assert_array_equal(obs, want)
-        obs2 = ccov.coverage_vertices(
-            verts, normals_p, areas, rT, dcm, np.zeros(1), tn, near, far, exact, act, True,
-            -2.0, np.inf, False, False, np.zeros((1, 3)), *_dummy_tree())[0]
+        obs2 = _vertices(
+            verts, normals_p, areas, rT, dcm, np.zeros(1), tn, near, far, exact, act, True)[0]
         np.testing.assert_array_equal(obs2, want)
 
 
 def _dummy_tree():
-    return (np.zeros((1, 6)), np.full((1, 4), -1, dtype=np.int64), np.zeros((1, 9)),
-            np.zeros((1, 3), dtype=np.int64))
+    return Bvh(np.zeros((1, 6)), np.full((1, 4), -1, dtype=np.int64), np.zeros((1, 9)),
+               np.zeros((1, 3), dtype=np.int64))
+
+
+def _records(v, n, a, r, C, t, tn, near, far, exact):
+    """The kernels' mesh and camera records from plain arrays (as the boundary builds them)."""
+    c = np.ascontiguousarray
+    return (Mesh(c(v, dtype=float), c(n, dtype=float), c(a, dtype=float)),
+            Camera(c(r, dtype=float), c(C, dtype=float), c(t, dtype=float), float(tn),
+                   float(near), float(far), bool(exact)))
+
+
+def _counts(v, n, a, r, C, t, tn, near, far, exact, act, count_all):
+    """:func:`ccov.coverage_counts` on plain arrays."""
+    return ccov.coverage_counts(*_records(v, n, a, r, C, t, tn, near, far, exact), act,
+                                bool(count_all))
+
+
+def _vertices(v, n, a, r, C, t, tn, near, far, exact, act, count_all):
+    """:func:`ccov.coverage_vertices` on plain arrays, no strict option."""
+    return ccov.coverage_vertices(*_records(v, n, a, r, C, t, tn, near, far, exact), act,
+                                  bool(count_all), _NO_STRICT, _dummy_tree())
+
+
+_NO_STRICT = Strict(-2.0, np.inf, False, False, np.zeros((1, 3)))
 
 
 def test_culling_boundaries():
@@ -352,9 +374,9 @@ def test_culling_boundaries():
     normals = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0]])   # r.n = 0 ; r.n > 0
     args = (verts, normals, np.ones(2), r.reshape(1, 1, 3), C.reshape(1, 1, 3, 3),
             np.zeros(1), 1.0, 1.0, 1e4)
-    obs = ccov.coverage_counts(*args, False, np.ones(1, bool), True)[0]
+    obs = _counts(*args, False, np.ones(1, bool), True)[0]
     np.testing.assert_array_equal(obs, [True, True])
-    obs = ccov.coverage_counts(*args, True, np.ones(1, bool), True)[0]
+    obs = _counts(*args, True, np.ones(1, bool), True)[0]
     np.testing.assert_array_equal(obs, [False, True])
 
 
@@ -740,19 +762,16 @@ def test_time_tree_exact_on_boundaries(medium_body, seed, kind, exact, eta, n_im
     obs, first, count, _ = per_image_reference(p, n, r, C, t, tn, near, far, exact, act)
     _, _, _, per_sc = per_image_reference(p, n, r, C, t, tn, near, far, exact)
     for count_all in (True, False):
-        o, f, c, cov, _ = ccov.coverage_counts(p, n, area, r, C, t, tn, near, far, exact, act,
-                                               count_all)
+        o, f, c, cov, _ = _counts(p, n, area, r, C, t, tn, near, far, exact, act, count_all)
         np.testing.assert_array_equal(o, obs)
         np.testing.assert_array_equal(f, first)
         np.testing.assert_array_equal(c, count if count_all else obs.astype(int))
         assert cov == pytest.approx(obs.mean(), rel=1e-12)
-        o2 = ccov.coverage_vertices(p, n, area, r, C, t, tn, near, far, exact, act, count_all,
-                                    -2.0, np.inf, False, False, np.zeros((1, 3)),
-                                    *_dummy_tree())
+        o2 = _vertices(p, n, area, r, C, t, tn, near, far, exact, act, count_all)
         np.testing.assert_array_equal(o2[1], first)
         np.testing.assert_array_equal(o2[2], count if count_all else obs.astype(int))
-    mask = ccov.observed_by_spacecraft(p, n, r, C, tn, near, far, exact, -2.0, np.inf,
-                                       False, False, np.zeros((1, 3)), *_dummy_tree())
+    mesh, cam = _records(p, n, area, r, C, t, tn, near, far, exact)
+    mask = ccov.observed_by_spacecraft(mesh, cam, _NO_STRICT, _dummy_tree())
     np.testing.assert_array_equal(mask, per_sc)
 
 
@@ -769,8 +788,8 @@ def test_time_tree_non_orthonormal_dcm(medium_body, seed, exact, scale):
     p = np.ascontiguousarray(medium_body.vertices_T)
     n = np.ascontiguousarray(medium_body.vertex_normals_T)
     obs, first, count, _ = per_image_reference(p, n, r, C, t, tn, near, far, exact)
-    o, f, c, _, _ = ccov.coverage_counts(p, n, np.ones(len(p)), r, C, t, tn, near, far, exact,
-                                         np.ones(2, bool), True)
+    o, f, c, _, _ = _counts(p, n, np.ones(len(p)), r, C, t, tn, near, far, exact,
+                            np.ones(2, bool), True)
     np.testing.assert_array_equal(c, count)
     np.testing.assert_array_equal(f, first)
 
@@ -817,7 +836,7 @@ def test_paper_like_flyby_matches_per_image(medium_body):
     obs, first, count, _ = per_image_reference(p, n, r, C, t, tn, near, far, False)
     assert count.sum() > 1000
     args = (p, n, np.ones(len(p)), r, C, t, tn, near, far, False, np.ones(4, bool), True)
-    o, f, c, _, _ = ccov.coverage_counts(*args)
+    o, f, c, _, _ = _counts(*args)
     np.testing.assert_array_equal(c, count)
     np.testing.assert_array_equal(f, first)
 
@@ -834,7 +853,7 @@ def test_previous_tiled_kernel_agrees(medium_body):
         for exact in (False, True):
             args = (p, n, np.ones(len(p)), r, C, t, math.tan(0.25), 50.0, 9000.0, exact,
                     np.ones(3, bool), True)
-            a = ccov.coverage_counts(*args)
+            a = _counts(*args)
             b = coverage_counts_tiles(*args)
             np.testing.assert_array_equal(a[2], b[2])
             np.testing.assert_array_equal(a[1], b[1])

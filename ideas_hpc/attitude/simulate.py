@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ideas_hpc.core.attitude.batch import simulate_batch
+from ideas_hpc.core.attitude.records import ControlGains, Initial, Wheels
 from ideas_hpc.core.dynamics.frames import dcm_RT as _dcm_RT
 from ideas_hpc.core.attitude.maneuvers import reference_dcm_BT
 from ideas_hpc.errors import InputError
@@ -231,9 +232,10 @@ def simulate_attitude(theta, spin_rate, t_f, *, mode="np", periods=None, theta_m
             raise InputError("sigma0, omega0, wheel0 must have the same shape", field="omega0")
     k_p, k_i, eta, phi = g.arrays(dt)
     table = _ref_table(ref_table, n, n_steps)
-    out = simulate_batch(man.code, _ring_dcms(th, dcm_TS), ws, p, tm, k_p, k_i, eta, phi,
-                         float(g.int_limit), sc.inertia_rw, sc.J_s, float(sc.u_max),
-                         float(sc.h_max), dt, n_steps, decimate, img_every, s0, w0, W0, table)
+    out = simulate_batch(man.code, _ring_dcms(th, dcm_TS), ws, p, tm,
+                         ControlGains(k_p, k_i, eta, phi, float(g.int_limit)),
+                         Wheels(sc.inertia_rw, sc.J_s, float(sc.u_max), float(sc.h_max)),
+                         dt, n_steps, (int(decimate), int(img_every)), Initial(s0, w0, W0), table)
     sig, om, wh, tq, dcm, mu, mh = out
     times = np.arange(0, n_steps + 1, decimate) * dt
     image_times = np.arange(0, n_steps + 1, img_every) * dt

@@ -72,8 +72,10 @@ def pack_forces(terms, params: PhysicalParams, shape=None) -> PackedForceModel:
             raise InputError(f"not a force settings object: {t!r}", field="terms")
         t._pack(rec, params, shape)
     elements, pole = elements_and_pole(params)
-    fi, ff = _cf.pack_record(rec["model"], params.mu, params.c20, params.c22, params.spin_rate,
-                             rec["srp_coef"], rec["g_rho"], rec["sh_gm"], rec["sh_r_ref"],
-                             params.prime_meridian, MU_SUN, elements, pole,
-                             rec["sh_ctab"], rec["sh_stab"], *rec["poly"])
+    consts = _cf.ForceConstants(*(float(x) for x in (
+        params.mu, params.c20, params.c22, params.spin_rate, rec["srp_coef"], rec["g_rho"],
+        rec["sh_gm"], rec["sh_r_ref"], params.prime_meridian, MU_SUN)))
+    fi, ff = _cf.pack_record(rec["model"], consts, elements, pole,
+                             _cf.HarmonicTables(rec["sh_ctab"], rec["sh_stab"]),
+                             _cf.PolyhedronData(*rec["poly"]))
     return PackedForceModel(fi, ff)

@@ -36,6 +36,7 @@ from ideas_hpc.core.mapping import coverage as _cov
 from ideas_hpc.core.mapping import quality as _qual
 from ideas_hpc.core.mapping import quality_masks as _qmask
 from ideas_hpc.core.mapping import stereo_pairs as _pairs
+from ideas_hpc.core.mapping.records import Bvh, Camera, Mesh, Quality, Strict
 from ideas_hpc.mapping.options import CoverageOptions, _finite
 from ideas_hpc.errors import InputError
 from ideas_hpc.engine.variables import QUALITY, VARS
@@ -156,10 +157,15 @@ def _check_geometry(shape, r_T, dcm_BT, eta, near, far, active=None):
     return (np.ascontiguousarray(r), np.ascontiguousarray(c), math.tan(eta), near, far, act)
 
 
-def _mesh(shape):
-    return (np.ascontiguousarray(shape.vertices_T, dtype=np.float64),
-            np.ascontiguousarray(shape.vertex_normals_T, dtype=np.float64),
-            np.ascontiguousarray(shape.vertex_areas, dtype=np.float64))
+def _mesh(shape) -> Mesh:
+    return Mesh(np.ascontiguousarray(shape.vertices_T, dtype=np.float64),
+                np.ascontiguousarray(shape.vertex_normals_T, dtype=np.float64),
+                np.ascontiguousarray(shape.vertex_areas, dtype=np.float64))
+
+
+def _camera(r, c, t, tan_eta, near, far, exact) -> Camera:
+    """The kernels' camera record from checked arrays (scalars typed as the record says)."""
+    return Camera(r, c, t, float(tan_eta), float(near), float(far), bool(exact))
 
 
 _BVH_CACHE: dict = {}
@@ -171,19 +177,20 @@ def occlusion_structure(shape):
     hit = _BVH_CACHE.get(key)
     if hit is not None and hit[0] is shape:
         return hit[1]
-    tree = _bvh.build_bvh(np.ascontiguousarray(shape.vertices_T, dtype=np.float64),
-                          np.ascontiguousarray(shape.faces, dtype=np.int64))
+    tree = Bvh(*_bvh.build_bvh(np.ascontiguousarray(shape.vertices_T, dtype=np.float64),
+                               np.ascontiguousarray(shape.faces, dtype=np.int64)))
     if len(_BVH_CACHE) > 16:
         _BVH_CACHE.clear()
     _BVH_CACHE[key] = (shape, tree)
     return tree
 
 
-_EMPTY_TREE = (np.zeros((1, 6)), np.full((1, 4), -1, dtype=np.int64),
-               np.zeros((1, 9)), np.zeros((1, 3), dtype=np.int64))
+_EMPTY_TREE = Bvh(np.zeros((1, 6)), np.full((1, 4), -1, dtype=np.int64),
+                  np.zeros((1, 9)), np.zeros((1, 3), dtype=np.int64))
 
 
-def _strict_args(shape, options: CoverageOptions, sun_T, n_img):
+def _strict_args(shape, options: CoverageOptions, sun_T, n_img) -> tuple[Strict, Bvh]:
+    """The kernels' :class:`Strict` options and the mesh's :class:`Bvh` (a dummy when unread)."""
     if options.needs_sun:
         if sun_T is None:
             raise InputError("illumination and the quality pass need the Sun direction per "
@@ -205,7 +212,8 @@ def _strict_args(shape, options: CoverageOptions, sun_T, n_img):
     tree = occlusion_structure(shape) if (options.occlusion or options.needs_sun) \
         else _EMPTY_TREE
     sin_e = -2.0 if options.min_elevation is None else math.sin(options.min_elevation)
-    return sin_e, options.max_range, bool(options.occlusion), bool(options.illumination), s, tree
+    return Strict(float(sin_e), float(options.max_range), bool(options.occlusion),
+                  bool(options.illumination), s), tree
 
 
 def compute_coverage(shape, r_T, dcm_BT, image_times, eta, near, far, *,
@@ -249,31 +257,31 @@ def compute_coverage(shape, r_T, dcm_BT, image_times, eta, near, far, *,
     if np.any(np.diff(t) < 0.0):
         raise InputError("must be non-decreasing", field="image_times")
     t = np.ascontiguousarray(t)
-    v, n, a = _mesh(shape)
-    exact = options.mode == "exact"
+    mesh = _mesh(shape)
+    cam = _camera(r, c, t, tan_eta, near, far, options.mode == "exact")
     if options.wants_quality:
-        return _quality(shape, options, sun_T, v, n, a, r, c, t, tan_eta, near, far, exact,
-                        act, counts)
+        return _quality(shape, options, sun_T, mesh, cam, act, counts)
     if not options.strict:
-        out = _cov.coverage_counts(v, n, a, r, c, t, tan_eta, near, far, exact, act,
-                                   bool(counts))
+        out = _cov.coverage_counts(mesh, cam, act, bool(counts))
     else:
-        sin_e, max_r, occ, ill, s, tree = _strict_args(shape, options, sun_T, r.shape[1])
-        out = _cov.coverage_vertices(v, n, a, r, c, t, tan_eta, near, far, exact, act,
-                                     bool(counts), sin_e, max_r, occ, ill, s, *tree)
+        opts, bvh = _strict_args(shape, options, sun_T, r.shape[1])
+        out = _cov.coverage_vertices(mesh, cam, act, bool(counts), opts, bvh)
     obs, first, times, cov, cov_n = out
     return CoverageResult(observed=obs, first_seen=first, times_seen=times,
                           coverage=float(cov), coverage_count=float(cov_n))
 
 
-def _quality(shape, options, sun_T, v, n, a, r, c, t, tan_eta, near, far, exact, act,
-             counts) -> CoverageResult:
-    sin_e, max_r, occ, ill, s, tree = _strict_args(shape, options, sun_T, r.shape[1])
+def _quality_record(options) -> Quality:
+    return Quality(float(options.rho), np.ascontiguousarray(options.limits, dtype=np.float64),
+                   bool(options.require_lit))
+
+
+def _quality(shape, options, sun_T, mesh, cam, act, counts) -> CoverageResult:
+    opts, bvh = _strict_args(shape, options, sun_T, cam.r_T_m.shape[1])
     (times, first, lit, res, emi, inc, pha, nsc, stereo,
-     mapped) = _qual.quality_vertices(v, n, r, c, t, tan_eta, near, far, exact, act, sin_e,
-                                      max_r, occ, ill, s, *tree, float(options.rho),
-                                      options.limits, bool(options.require_lit),
+     mapped) = _qual.quality_vertices(mesh, cam, act, opts, bvh, _quality_record(options),
                                       bool(options.require_stereo))
+    a = mesh.areas_m2
     obs = times > 0
     seen, seen_n = _cov.coverage_fractions(obs, a)
     cov, cov_n = _cov.coverage_fractions(mapped, a)
@@ -296,11 +304,9 @@ def observed_per_spacecraft(shape, r_T, dcm_BT, eta, near, far, *,
     first hit).
     """
     r, c, tan_eta, near, far, _ = _check_geometry(shape, r_T, dcm_BT, eta, near, far)
-    v, n, _ = _mesh(shape)
-    sin_e, max_r, occ, ill, s, tree = _strict_args(shape, options, sun_T, r.shape[1])
-    return _cov.observed_by_spacecraft(v, n, r, c, tan_eta, near, far,
-                                       options.mode == "exact", sin_e, max_r, occ, ill, s,
-                                       *tree)
+    opts, bvh = _strict_args(shape, options, sun_T, r.shape[1])
+    cam = _camera(r, c, np.zeros(r.shape[1]), tan_eta, near, far, options.mode == "exact")
+    return _cov.observed_by_spacecraft(_mesh(shape), cam, opts, bvh)
 
 
 def _per_spacecraft_args(shape, r_T, dcm_BT, image_times, eta, near, far, options, sun_T):
@@ -309,10 +315,9 @@ def _per_spacecraft_args(shape, r_T, dcm_BT, image_times, eta, near, far, option
     if t.shape != (r.shape[1],):
         raise InputError(f"must have shape ({r.shape[1]},) to match r_T, got {t.shape}",
                          field="image_times")
-    v, n, _ = _mesh(shape)
-    sin_e, max_r, occ, ill, s, tree = _strict_args(shape, options, sun_T, r.shape[1])
-    return (v, n, r, c, t, tan_eta, near, far, options.mode == "exact", sin_e, max_r, occ, ill,
-            s, *tree, float(options.rho), options.limits, bool(options.require_lit))
+    opts, bvh = _strict_args(shape, options, sun_T, r.shape[1])
+    return (_mesh(shape), _camera(r, c, t, tan_eta, near, far, options.mode == "exact"), opts,
+            bvh, _quality_record(options))
 
 
 def quality_per_spacecraft(shape, r_T, dcm_BT, image_times, eta, near, far, *,

@@ -22,7 +22,8 @@ from ideas_hpc.design.candidates import rows_from_views
 from ideas_hpc.core.mapping import scenario_rows as _k
 from ideas_hpc.core.mapping.coverage import first_image_by_spacecraft
 from ideas_hpc.flyby.flight import FlybySetup, Perturbation, open_loop_views
-from ideas_hpc.mapping.coverage import _check_geometry, _mesh, _strict_args
+from ideas_hpc.core.mapping.records import Nominal
+from ideas_hpc.mapping.coverage import _camera, _check_geometry, _mesh, _strict_args
 
 #: Head room on the pilot's deviations (speed only).
 HEADROOM = 1.5
@@ -53,13 +54,13 @@ class RowEngine:
     def _args(self, r_img, dcm):
         setup = self.setup
         shape = setup.body.shape
-        r, c, tan_eta, near, far, _ = _check_geometry(shape, r_img, dcm, setup.eta_rad, setup.near_m,
-                                                      setup.far_m)
-        v, n, _ = _mesh(shape)
+        r, c, tan_eta, near, far, _ = _check_geometry(shape, r_img, dcm, setup.eta_rad,
+                                                      setup.near_m, setup.far_m)
         sun = setup.sun_T() if setup.coverage.needs_sun else None
-        sin_e, max_r, occ, ill, s, tree = _strict_args(shape, setup.coverage, sun, r.shape[1])
-        exact = setup.coverage.mode == "exact"
-        return v, n, r, c, tan_eta, near, far, exact, sin_e, max_r, occ, ill, s, tree
+        opts, bvh = _strict_args(shape, setup.coverage, sun, r.shape[1])
+        cam = _camera(r, c, np.zeros(r.shape[1]), tan_eta, near, far,
+                      setup.coverage.mode == "exact")
+        return _mesh(shape), cam, opts, bvh
 
     token: str = field(default_factory=lambda: uuid.uuid4().hex)
 
@@ -84,9 +85,8 @@ class RowEngine:
         if not self.fast:
             return self
         r_img, dcm = self.nominal()
-        v, n, r, c, te, ne, fa, ex, se, mr, oc, il, s, tree = self._args(r_img, dcm)
-        self.witness = first_image_by_spacecraft(v, n, r, c, te, ne, fa, ex, se, mr, oc, il, s,
-                                               *tree).astype(np.int32)   # shipped to workers
+        mesh, cam, opts, bvh = self._args(r_img, dcm)
+        self.witness = first_image_by_spacecraft(mesh, cam, opts, bvh).astype(np.int32)  # shipped
         if pilot is not None:
             rp, dp = self.flight(pilot)
             dev_r = np.linalg.norm(rp - r_img, axis=2)
@@ -96,8 +96,7 @@ class RowEngine:
             bc = HEADROOM * float(np.percentile(dev_c[:, half:].max(axis=1), 99))
             self.budget = (bc, br)
         bc, br = self.budget
-        window, self.margin = _k.reachable(v, n, r, c, te, ne, fa, ex, se, mr, float(bc),
-                                           float(br))
+        window, self.margin = _k.reachable(mesh, cam, opts, float(bc), float(br))
         self.window = window.astype(np.int32)
         return self
 
@@ -115,10 +114,11 @@ class RowEngine:
             return rows_from_views(self.setup, r_img, dcm, sun)
         bc, br = self.budget
         r_nom, dcm_nom = self.nominal()
-        v, n, r, c, te, ne, fa, ex, se, mr, oc, il, s, tree = self._args(r_img, dcm)
-        i_ok, dev = _k.deviation_start(r_nom, dcm_nom, r, c, float(bc), float(br))
-        return _k.perturbed_rows(self.witness, self.window, self.margin, i_ok, dev, v, n, r, c, te, ne, fa, ex,
-                                 se, mr, oc, il, s, *tree)
+        mesh, cam, opts, bvh = self._args(r_img, dcm)
+        i_ok, dev = _k.deviation_start(r_nom, dcm_nom, cam.r_T_m, cam.dcm_BT, float(bc),
+                                       float(br))
+        nominal = Nominal(self.witness, self.window, self.margin, i_ok, dev)
+        return _k.perturbed_rows(nominal, mesh, cam, opts, bvh)
 
 
 def rows_setup(setup: FlybySetup) -> FlybySetup:

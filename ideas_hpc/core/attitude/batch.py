@@ -61,20 +61,22 @@ def _dcm_BT(x, spin_rate, t, out, a, b, c_):
 
 
 @njit(cache=True, error_model="numpy")
-def closed_loop_step(mode, t, x, z, sigma_RT, dcm_RT, spin_rate, theta_max, period,
-                     k_p, k_i, eta, phi, int_limit, I_rw, J_s, L_ext, u_max, h_max, dt,
-                     ref, u, err, work):
+def closed_loop_step(t, x, z, ring, gains, wheels, L_ext, dt, ref, u, err, work):
     """One closed-loop step in place: reference, control, RK4, integral update.
 
-    ``x`` (9,) and ``z`` (3,) are advanced from ``t`` to ``t + dt``; ``u`` (3,)
+    ``x`` (9,) and ``z`` (3,) are advanced from ``t`` to ``t + dt`` (s); ``u`` (3,)
     receives the held torques (N m) and ``err`` (6,) the errors ``[ds, dw]``
-    at ``t``. ``ref`` (9,) and ``work`` (5, 9) are scratch. Other arguments as
-    in :func:`simulate_batch`.
+    at ``t``. ``ref`` (9,) and ``work`` (5, 9) are scratch. ``ring``
+    (:class:`~ideas_hpc.core.attitude.records.Ring`) is the spacecraft's
+    reference, ``L_ext`` (3,) the external torque (N m); other arguments as in
+    :func:`simulate_batch`.
     """
-    reference_into(mode, t, spin_rate, sigma_RT, dcm_RT, theta_max, period, ref)
-    sliding_mode_into(x, z, ref, k_p, k_i, eta, phi, I_rw, J_s, L_ext, u_max, h_max, u, err)
-    rk4_step_into(x, u, L_ext, I_rw, J_s, dt, work, x)
+    reference_into(ring.mode, t, ring.spin_rate, ring.sigma_RT, ring.dcm_RT, ring.theta_max,
+                   ring.period_s, ref)
+    sliding_mode_into(x, z, ref, gains, wheels, L_ext, u, err)
+    rk4_step_into(x, u, L_ext, wheels.I_rw_kgm2, wheels.J_s_kgm2, dt, work, x)
     # conditional integration (anti-windup, see core.control): only near the goal
+    int_limit = gains.int_limit
     if err[0] * err[0] + err[1] * err[1] + err[2] * err[2] < int_limit * int_limit:
         z[0] += err[0] * dt
         z[1] += err[1] * dt
@@ -82,9 +84,8 @@ def closed_loop_step(mode, t, x, z, sigma_RT, dcm_RT, spin_rate, theta_max, peri
 
 
 @njit(cache=True, parallel=True, error_model="numpy")
-def simulate_batch(mode, dcm_RT_all, spin_rate, periods, theta_max,
-                   k_p, k_i, eta, phi, int_limit, I_rw, J_s, u_max, h_max,
-                   dt, n_steps, decimate, img_every, sigma0, omega0, wheel0, ref_table):
+def simulate_batch(mode, dcm_RT_all, spin_rate, periods, theta_max, gains, wheels,
+                   dt, n_steps, every, initial, ref_table):
     """Closed-loop attitude of ``S x N`` spacecraft over ``n_steps`` steps of ``dt``.
 
     Parameters
@@ -100,25 +101,22 @@ def simulate_batch(mode, dcm_RT_all, spin_rate, periods, theta_max,
         FoV sweep periods ``P_i``, s (unused for NP but must be > 0).
     theta_max : float
         FoV sweep amplitude, rad.
-    k_p, k_i, eta, phi : (3,) float64
-        Controller gains (``core.control``), ``phi`` already capped.
-    int_limit : float
-        The MRP error integral ``z`` only accumulates while ``|ds| < int_limit``
+    gains : :class:`~ideas_hpc.core.attitude.records.ControlGains`
+        Controller gains (``core.control``), ``phi`` already capped; the MRP
+        error integral ``z`` only accumulates while ``|ds| < gains.int_limit``
         (conditional integration; ``inf`` integrates always, as SPEC writes it).
-    I_rw, J_s : (3,) float64
-        Inertias, kg m^2.
-    u_max, h_max : float
-        Torque (N m) and wheel momentum (N m s) limits.
+    wheels : :class:`~ideas_hpc.core.attitude.records.Wheels`
+        Inertias (kg m^2), torque (N m) and wheel momentum (N m s) limits.
     dt : float
         Step, s.
     n_steps : int
         Number of steps; final time ``n_steps dt``.
-    decimate : int
-        Record every ``decimate``-th step (``k = 0, decimate, ...``).
-    img_every : int
-        Steps per image; camera DCMs at ``k = 0, img_every, ...``.
-    sigma0, omega0, wheel0 : (S, N, 3) float64
-        Initial ``sigma_BN``, ``omega_BN_B`` (rad/s), wheel speeds (rad/s).
+    every : (int, int)
+        ``(decimate, img_every)``: record every ``decimate``-th step (``k = 0,
+        decimate, ...``); camera DCMs every ``img_every``-th (``k = 0,
+        img_every, ...``).
+    initial : :class:`~ideas_hpc.core.attitude.records.Initial`
+        (S, N, 3) initial ``sigma_BN``, ``omega_BN_B`` (rad/s), wheel speeds (rad/s).
     ref_table : (N, n_steps + 1, 9) float64
         ``mode`` 2 (body tracking): the reference at every step
         (``core.maneuvers.track_reference_table``); other modes ignore it
@@ -137,8 +135,13 @@ def simulate_batch(mode, dcm_RT_all, spin_rate, periods, theta_max,
     max_torque, max_momentum : (S, N) float64
         ``max |u_s|`` (N m) and ``max |J_s Omega|`` (N m s) over all steps.
     """
+    sigma0, omega0, wheel0 = initial
+    int_limit = gains.int_limit
+    I_rw = wheels.I_rw_kgm2
+    J_s = wheels.J_s_kgm2
     n_s = sigma0.shape[0]
     n_sc = sigma0.shape[1]
+    decimate, img_every = every
     n_rec = n_steps // decimate + 1
     n_img = n_steps // img_every + 1
     sig_err = np.empty((n_s, n_sc, n_rec, 3))
@@ -195,16 +198,14 @@ def simulate_batch(mode, dcm_RT_all, spin_rate, periods, theta_max,
             if rec:
                 for j in range(3):
                     wheel[smp, i, r, j] = x[6 + j]
-            # closed_loop_step written out (a call with this many array
-            # arguments is not inlined and costs more than the step itself);
-            # at the final time only the errors and the next torque are formed
+            # closed_loop_step written out (at the final time only the errors
+            # and the next torque are formed)
             if mode == TRACK_MODE:
                 for j in range(9):
                     ref[j] = ref_table[i, k, j]
             else:
                 reference_into(mode, t, spin_rate, sigma_RT, dcm_RT, theta_max, period, ref)
-            sliding_mode_into(x, z, ref, k_p, k_i, eta, phi, I_rw, J_s, L_ext,
-                              u_max, h_max, u, err)
+            sliding_mode_into(x, z, ref, gains, wheels, L_ext, u, err)
             if k < n_steps:
                 rk4_step_into(x, u, L_ext, I_rw, J_s, dt, work, x)
                 if err[0] * err[0] + err[1] * err[1] + err[2] * err[2] < int_limit * int_limit:

@@ -54,8 +54,7 @@ from ideas_hpc.core.attitude.mrp import mrp_rotate_s, mrp_sub_s
 
 
 @njit(cache=True, error_model="numpy")
-def sliding_mode_into(x, z, ref, k_p, k_i, eta, phi, I_rw, J_s, L_known,
-                      u_max, h_max, u_out, err_out):
+def sliding_mode_into(x, z, ref, gains, wheels, L_known, u_out, err_out):
     """Sliding-mode wheel torques for one spacecraft (SPEC section 5).
 
     Parameters
@@ -67,25 +66,28 @@ def sliding_mode_into(x, z, ref, k_p, k_i, eta, phi, I_rw, J_s, L_known,
     ref : (9,) float64
         ``[sigma_RN, omega_RN_R (rad/s), omegadot_RN_R (rad/s^2)]`` from
         ``core.maneuvers``.
-    k_p : (3,) float64
-        ``K_P``, 1/s.
-    k_i : (3,) float64
-        ``K_I``, 1/s^2.
-    eta : (3,) float64
-        Reaching gain, rad/s^2.
-    phi : (3,) float64
-        Boundary-layer slope, s/rad (already capped for the step, see module doc).
-    I_rw, J_s : (3,) float64
-        ``[I_RW]`` principal moments and wheel spin inertias, kg m^2.
+    gains : :class:`~ideas_hpc.core.attitude.records.ControlGains`
+        ``K_P`` (1/s), ``K_I`` (1/s^2), reaching gain ``eta`` (rad/s^2) and
+        boundary-layer slope ``phi`` (s/rad, already capped for the step, see
+        module doc), each (3,).
+    wheels : :class:`~ideas_hpc.core.attitude.records.Wheels`
+        ``[I_RW]`` principal moments and wheel spin inertias (kg m^2), torque
+        (N m) and wheel momentum (N m s) limits.
     L_known : (3,) float64
         Known external torque fed forward, N m (zero in SPEC).
-    u_max, h_max : float
-        Torque (N m) and wheel momentum (N m s) limits.
     u_out : (3,) float64
         Output: applied wheel torques, N m (after limits).
     err_out : (6,) float64
         Output: ``[ds, dw (rad/s)]``.
     """
+    k_p = gains.k_p
+    k_i = gains.k_i
+    eta = gains.eta
+    phi = gains.phi
+    I_rw = wheels.I_rw_kgm2
+    J_s = wheels.J_s_kgm2
+    u_max = wheels.u_max_Nm
+    h_max = wheels.h_max_Nms
     s1 = x[0]
     s2 = x[1]
     s3 = x[2]

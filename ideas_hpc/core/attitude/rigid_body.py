@@ -88,9 +88,17 @@ def rw_eom(x, u, L_ext, I_rw, J_s, xdot):
 
 
 @njit(cache=True, error_model="numpy")
-def _eom_s(s1, s2, s3, w1, w2, w3, W1, W2, W3, u1, u2, u3, L1, L2, L3,
-           iI1, iI2, iI3, I1, I2, I3, J1, J2, J3, iJ1, iJ2, iJ3):
-    """Scalar form of :func:`rw_eom` (inverse inertias passed in); returns a 9-tuple."""
+def _eom_s(x, u, L, iI, I, J, iJ):
+    """Scalar form of :func:`rw_eom` on tuples: state ``x`` (9), torques ``u`` and
+    ``L`` (3, N m), inertias ``I``, ``J`` and their inverses ``iI``, ``iJ`` (3,
+    kg m^2 and 1/(kg m^2)); returns the 9-tuple ``xdot``."""
+    s1, s2, s3, w1, w2, w3, W1, W2, W3 = x
+    u1, u2, u3 = u
+    L1, L2, L3 = L
+    iI1, iI2, iI3 = iI
+    I1, I2, I3 = I
+    J1, J2, J3 = J
+    iJ1, iJ2, iJ3 = iJ
     ss = s1 * s1 + s2 * s2 + s3 * s3
     sw = s1 * w1 + s2 * w2 + s3 * w3
     a = 1.0 - ss
@@ -155,21 +163,23 @@ def rk4_step_into(x, u, L_ext, I_rw, J_s, dt, work, out):
     x7 = x[7]
     x8 = x[8]
     h = 0.5 * dt
+    u_ = (u1, u2, u3)
+    L_ = (L1, L2, L3)
+    iI = (iI1, iI2, iI3)
+    I_ = (I1, I2, I3)
+    J_ = (J1, J2, J3)
+    iJ = (iJ1, iJ2, iJ3)
     a0, a1, a2, a3, a4, a5, a6, a7, a8 = _eom_s(
-        x0, x1, x2, x3, x4, x5, x6, x7, x8, u1, u2, u3, L1, L2, L3,
-        iI1, iI2, iI3, I1, I2, I3, J1, J2, J3, iJ1, iJ2, iJ3)
+        (x0, x1, x2, x3, x4, x5, x6, x7, x8), u_, L_, iI, I_, J_, iJ)
     b0, b1, b2, b3, b4, b5, b6, b7, b8 = _eom_s(
-        x0 + h * a0, x1 + h * a1, x2 + h * a2, x3 + h * a3, x4 + h * a4, x5 + h * a5,
-        x6 + h * a6, x7 + h * a7, x8 + h * a8, u1, u2, u3, L1, L2, L3,
-        iI1, iI2, iI3, I1, I2, I3, J1, J2, J3, iJ1, iJ2, iJ3)
+        (x0 + h * a0, x1 + h * a1, x2 + h * a2, x3 + h * a3, x4 + h * a4, x5 + h * a5,
+         x6 + h * a6, x7 + h * a7, x8 + h * a8), u_, L_, iI, I_, J_, iJ)
     c0, c1, c2, c3, c4, c5, c6, c7, c8 = _eom_s(
-        x0 + h * b0, x1 + h * b1, x2 + h * b2, x3 + h * b3, x4 + h * b4, x5 + h * b5,
-        x6 + h * b6, x7 + h * b7, x8 + h * b8, u1, u2, u3, L1, L2, L3,
-        iI1, iI2, iI3, I1, I2, I3, J1, J2, J3, iJ1, iJ2, iJ3)
+        (x0 + h * b0, x1 + h * b1, x2 + h * b2, x3 + h * b3, x4 + h * b4, x5 + h * b5,
+         x6 + h * b6, x7 + h * b7, x8 + h * b8), u_, L_, iI, I_, J_, iJ)
     d0, d1, d2, d3, d4, d5, d6, d7, d8 = _eom_s(
-        x0 + dt * c0, x1 + dt * c1, x2 + dt * c2, x3 + dt * c3, x4 + dt * c4,
-        x5 + dt * c5, x6 + dt * c6, x7 + dt * c7, x8 + dt * c8, u1, u2, u3, L1, L2, L3,
-        iI1, iI2, iI3, I1, I2, I3, J1, J2, J3, iJ1, iJ2, iJ3)
+        (x0 + dt * c0, x1 + dt * c1, x2 + dt * c2, x3 + dt * c3, x4 + dt * c4,
+         x5 + dt * c5, x6 + dt * c6, x7 + dt * c7, x8 + dt * c8), u_, L_, iI, I_, J_, iJ)
     k = dt / 6.0
     s0 = x0 + k * (a0 + 2.0 * b0 + 2.0 * c0 + d0)
     s1 = x1 + k * (a1 + 2.0 * b1 + 2.0 * c1 + d1)

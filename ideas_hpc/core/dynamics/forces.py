@@ -42,6 +42,8 @@ nothing to the gravity gradient.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
@@ -81,33 +83,68 @@ K_EPH = 19    # N_EPH derived ephemeris constants (ephemeris_precompute)
 N_CONSTS = 19 + N_EPH
 
 
+class ForceConstants(NamedTuple):
+    """The scalar slots of the force record (unused terms 0)."""
+
+    mu_m3s2: float
+    c20_m2: float
+    c22_m2: float
+    spin_rate_rad_s: float
+    #: Cannonball SRP coefficient, m^3/s^2.
+    srp_coef_m3s2: float
+    #: Constant radial field gradient, 1/s^2.
+    g_rho_s2: float
+    #: Spherical harmonics' GM (m^3/s^2) and reference radius (m).
+    sh_gm_m3s2: float
+    sh_r_ref_m: float
+    #: Prime meridian at epoch, rad.
+    w0_rad: float
+    mu_sun_m3s2: float
+
+
+class HarmonicTables(NamedTuple):
+    """:func:`ideas_hpc.core.dynamics.harmonics.sh_derivative_tables`, (10, K, K) each (K = 0: none)."""
+
+    ctab: np.ndarray
+    stab: np.ndarray
+
+
+class PolyhedronData(NamedTuple):
+    """Polyhedron mesh (m) and :func:`ideas_hpc.core.dynamics.gravity.polyhedron_precompute`
+    data, (V, 3), (F, 3), (E, 2), (E, 3, 3), (F, 3, 3) (V = 0: none)."""
+
+    vertices_m: np.ndarray
+    faces: np.ndarray
+    edges: np.ndarray
+    edge_dyads: np.ndarray
+    face_dyads: np.ndarray
+
+
 @njit(cache=True)
-def pack_record(model, mu, c20, c22, spin_rate, srp_coef, g_rho, sh_gm, sh_r_ref, w0, mu_sun,
-                elements, pole, sh_ctab, sh_stab, vertices, faces, edges, edge_dyads,
-                face_dyads):
+def pack_record(model, consts, elements, pole, harmonics, poly):
     """Build the force record ``(fi, ff)`` (layout in the module docstring).
 
     Parameters
     ----------
     model : int
         ``MODEL_*``.
-    mu, c20, c22, spin_rate, srp_coef, g_rho, sh_gm, sh_r_ref, w0, mu_sun : float
-        SI (m^3/s^2, m^2, m^2, rad/s, m^3/s^2, 1/s^2, m^3/s^2, m, rad, m^3/s^2);
-        unused terms 0.
+    consts : ForceConstants
+        The scalar slots, SI.
     elements : (6,) float64
         Heliocentric elements a (m), e, i, RAAN, argp, nu0 (rad).
     pole : (3,) float64
         ra, dec (rad), flag (1: set; 0: pole = orbit normal).
-    sh_ctab, sh_stab : (10, K, K) float64
-        :func:`ideas_hpc.core.dynamics.harmonics.sh_derivative_tables` (K = 0: none).
-    vertices, faces, edges, edge_dyads, face_dyads
-        Polyhedron mesh (m) and :func:`ideas_hpc.core.dynamics.gravity.polyhedron_precompute`
-        data, (V, 3), (F, 3), (E, 2), (E, 3, 3), (F, 3, 3) (V = 0: none).
+    harmonics : HarmonicTables
+    poly : PolyhedronData
 
     Returns
     -------
     fi : int64 array, ff : float64 array
     """
+    (mu, c20, c22, spin_rate, srp_coef, g_rho, sh_gm, sh_r_ref, w0,
+     mu_sun) = consts
+    sh_ctab, sh_stab = harmonics
+    vertices, faces, edges, edge_dyads, face_dyads = poly
     k = sh_ctab.shape[1]
     nv = vertices.shape[0]
     nf = faces.shape[0]

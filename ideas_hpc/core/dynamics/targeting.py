@@ -60,8 +60,7 @@ def _solve3(m, b, out):
 
 
 @njit(cache=True)
-def target_one(r0, r_target, t0, tf, tol, max_iter, rtol, atol, max_steps,
-               fi, ff, v0, miss):
+def target_one(r0, r_target, t0, tf, tol, max_iter, rtol, atol, max_steps, forces, v0, miss):
     """Newton targeting of one spacecraft.
 
     Parameters
@@ -76,8 +75,8 @@ def target_one(r0, r_target, t0, tf, tol, max_iter, rtol, atol, max_steps,
         Maximum number of Newton updates (25).
     rtol, atol, max_steps
         Integrator settings (:func:`ideas_hpc.core.dynamics.propagate.dop853`).
-    fi, ff
-        Force record (:mod:`ideas_hpc.core.dynamics.forces`).
+    forces : tuple
+        The force record ``(fi, ff)`` (:mod:`ideas_hpc.core.dynamics.forces`).
     v0 : (3,) float64
         Output: the final initial velocity, m/s.
     miss : (max_iter + 1,) float64
@@ -91,6 +90,7 @@ def target_one(r0, r_target, t0, tf, tol, max_iter, rtol, atol, max_steps,
     nfev : int
         Right-hand-side evaluations (42-state).
     """
+    fi, ff = forces
     dt = tf - t0
     for i in range(3):
         v0[i] = (r_target[i] - r0[i]) / dt  # paper eq. 4
@@ -171,8 +171,7 @@ def target_batch(r0, r_target, t0, tf, tol, max_iter, rtol, atol, max_steps, t_o
     states = np.full((n, t_out.shape[0], 6), np.nan)
     for i in prange(n):
         k, ok, nf = target_one(r0[i], r_target[i], t0, tf, tol, max_iter, rtol, atol,
-                               max_steps, fi, ff,
-                               v0[i], miss[i])
+                               max_steps, (fi, ff), v0[i], miss[i])
         n_iter[i] = k
         converged[i] = ok
         nfev[i] = nf

@@ -33,7 +33,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from ideas_hpc.core.mapping.time_tree import LEAF, _scan, time_tree
+from ideas_hpc.core.mapping.time_tree import LEAF, _scan, scan_tree, time_tree
+from ideas_hpc.core.mapping.records import Bvh, Camera, Strict, TimeTree
 
 __all__ = ["LEAF", "coverage_counts", "coverage_fractions", "coverage_vertices",
            "dcm_check", "first_image_by_spacecraft", "observed_by_spacecraft", "time_tree"]
@@ -118,8 +119,7 @@ def dcm_check(dcm):
 
 
 @njit(parallel=True, cache=True)
-def coverage_counts(vertices, normals, vertex_areas, r_T, dcm_BT, image_times,
-                    tan_eta, near, far, exact, active, count_all):
+def coverage_counts(mesh, cam, active, count_all):
     """Full per-vertex counts, culling + clipping only (paper eq. 25-26), time tree.
 
     Every (spacecraft, image, vertex) triple counts, so ``times_seen`` is
@@ -138,22 +138,13 @@ def coverage_counts(vertices, normals, vertex_areas, r_T, dcm_BT, image_times,
 
     Parameters
     ----------
-    vertices, normals : (V, 3) float64
-        Vertex positions (m) and outward unit normals in frame T.
-    vertex_areas : (V,) float64
-        m^2.
-    r_T : (N, n_img, 3) float64
-        Spacecraft positions in T per image, m.
-    dcm_BT : (N, n_img, 3, 3) float64
-        Camera DCM (B <- T) per image; camera boresight is +z_B.
-    image_times : (n_img,) float64
-        s, non-decreasing.
-    tan_eta : float
-        Tangent of the half angle of the square field of view.
-    near, far : float
-        Clipping distances along the boresight, m, ``0 < near < far``.
-    exact : bool
-        Exact culling ``(r - p) . n > 0`` instead of the paper's ``r . n >= 0``.
+    mesh : :class:`~ideas_hpc.core.mapping.records.Mesh`
+        Vertex positions (m), outward unit normals and areas (m^2) in frame T.
+    cam : :class:`~ideas_hpc.core.mapping.records.Camera`
+        Spacecraft positions (m) and camera DCMs (B <- T, boresight +z_B) per
+        image, image times (s, non-decreasing), ``tan(eta)`` of the square
+        field of view, clipping distances (m, ``0 < near < far``) and whether
+        culling is exact (``(r - p) . n > 0``) instead of the paper's ``r . n >= 0``.
     active : (N,) bool
         Spacecraft that take part (failed ones are False).
     count_all : bool
@@ -170,17 +161,14 @@ def coverage_counts(vertices, normals, vertex_areas, r_T, dcm_BT, image_times,
     coverage, coverage_count : float
         See :func:`coverage_fractions`.
     """
-    nv = vertices.shape[0]
-    nsc = r_T.shape[0]
-    NF, NI = time_tree(r_T, dcm_BT, LEAF)
-    sec_eta = np.sqrt(1.0 + tan_eta * tan_eta) * (1.0 + 1e-12)
+    nv = mesh.vertices_T_m.shape[0]
+    nsc = cam.r_T_m.shape[0]
+    tree = TimeTree(*scan_tree(cam))
     times_seen = np.zeros(nv, dtype=np.int32)
     first_seen = np.full(nv, np.nan)
-    sun_T = np.zeros((1, 3))
-    nb_ = np.zeros((1, 6))
-    ni_ = np.full((1, 4), -1, dtype=np.int64)
-    tr_ = np.zeros((1, 9))
-    tv_ = np.zeros((1, 3), dtype=np.int64)
+    opts = Strict(-2.0, np.inf, False, False, np.zeros((1, 3)))
+    bvh = Bvh(np.zeros((1, 6)), np.full((1, 4), -1, dtype=np.int64), np.zeros((1, 9)),
+              np.zeros((1, 3), dtype=np.int64))
     early = not count_all
     for j in prange(nv):
         stack = np.empty(128, dtype=np.int64)
@@ -189,23 +177,19 @@ def coverage_counts(vertices, normals, vertex_areas, r_T, dcm_BT, image_times,
         for k in range(nsc):
             if not active[k]:
                 continue
-            c, best = _scan(j, k, NF, NI, stack, image_times, best, early, vertices,
-                            normals, r_T, dcm_BT, tan_eta, sec_eta, near, far, exact,
-                            False, -2.0, np.inf, False, False, sun_T, nb_, ni_, tr_, tv_)
-            cnt += c
+            s = _scan(j, k, tree, stack, best, early, mesh, cam, False, bvh, opts)
+            best = s.first_s
+            cnt += s.count
         if cnt > 0:
             first_seen[j] = best
             times_seen[j] = cnt if count_all else 1
     observed = times_seen > 0
-    cov, cov_n = coverage_fractions(observed, vertex_areas)
+    cov, cov_n = coverage_fractions(observed, mesh.areas_m2)
     return observed, first_seen, times_seen, cov, cov_n
 
 
 @njit(parallel=True, cache=True)
-def coverage_vertices(vertices, normals, vertex_areas, r_T, dcm_BT, image_times,
-                      tan_eta, near, far, exact, active, count_all,
-                      sin_min_elev, max_range, occlusion, illumination, sun_T,
-                      node_bounds, node_info, tri, tri_vid):
+def coverage_vertices(mesh, cam, active, count_all, opts, bvh):
     """Per-vertex coverage with every option, ``prange`` over vertices.
 
     With ``count_all=False`` only the union and first-seen time are computed
@@ -216,34 +200,30 @@ def coverage_vertices(vertices, normals, vertex_areas, r_T, dcm_BT, image_times,
 
     Parameters
     ----------
-    vertices, normals, vertex_areas, r_T, dcm_BT, image_times, tan_eta, near, far, exact, active
+    mesh, cam, active
         As in :func:`coverage_counts`.
     count_all : bool
         Full counts (True) or union + first-seen with early-out (False).
-    sin_min_elev : float
-        Sine of the minimum elevation angle; ``-2.0`` disables the test.
-    max_range : float
-        Largest vertex-spacecraft range, m (``X D / lambda`` for ground
-        resolution X, aperture D, wavelength lambda); ``inf`` disables it.
-    occlusion, illumination : bool
-        Self-occlusion and illumination (lit and unshadowed) tests.
-    sun_T : (n_img, 3) float64
-        Unit vector from the body to the Sun in T per image (read only when
-        ``illumination``; pass a (1, 3) dummy otherwise).
-    node_bounds, node_info, tri, tri_vid
+    opts : :class:`~ideas_hpc.core.mapping.records.Strict`
+        Minimum elevation (its sine; ``-2.0`` disables it), largest
+        vertex-spacecraft range (m, ``X D / lambda`` for ground resolution X,
+        aperture D, wavelength lambda; ``inf`` disables it), the
+        self-occlusion and illumination (lit and unshadowed) tests, and the
+        unit body -> Sun direction per image in T (read only when
+        ``illumination``; a (1, 3) dummy otherwise).
+    bvh : :class:`~ideas_hpc.core.mapping.records.Bvh`
         BVH of the mesh from :func:`ideas_hpc.core.mapping.bvh.build_bvh` (read only
-        when ``occlusion`` or ``illumination``).
+        when occlusion or illumination is on).
 
     Returns
     -------
     observed, first_seen, times_seen, coverage, coverage_count
         As in :func:`coverage_counts`.
     """
-    nv = vertices.shape[0]
-    nsc = r_T.shape[0]
-    NF, NI = time_tree(r_T, dcm_BT, LEAF)
-    sec_eta = np.sqrt(1.0 + tan_eta * tan_eta) * (1.0 + 1e-12)
-    strict = occlusion or illumination or sin_min_elev > -1.0 or max_range < np.inf
+    nv = mesh.vertices_T_m.shape[0]
+    nsc = cam.r_T_m.shape[0]
+    tree = TimeTree(*scan_tree(cam))
+    strict = _is_strict(opts)
     times_seen = np.zeros(nv, dtype=np.int32)
     first_seen = np.full(nv, np.nan)
     early = not count_all
@@ -254,62 +234,60 @@ def coverage_vertices(vertices, normals, vertex_areas, r_T, dcm_BT, image_times,
         for k in range(nsc):
             if not active[k]:
                 continue
-            c, best = _scan(j, k, NF, NI, stack, image_times, best, early, vertices,
-                            normals, r_T, dcm_BT, tan_eta, sec_eta, near, far, exact,
-                            strict, sin_min_elev, max_range, occlusion, illumination,
-                            sun_T, node_bounds, node_info, tri, tri_vid)
-            cnt += c
+            s = _scan(j, k, tree, stack, best, early, mesh, cam, strict, bvh, opts)
+            best = s.first_s
+            cnt += s.count
         if cnt > 0:
             first_seen[j] = best
             times_seen[j] = cnt if count_all else 1
     observed = times_seen > 0
-    cov, cov_n = coverage_fractions(observed, vertex_areas)
+    cov, cov_n = coverage_fractions(observed, mesh.areas_m2)
     return observed, first_seen, times_seen, cov, cov_n
 
 
+@njit(cache=True, inline="always")
+def _is_strict(opts):
+    """Some strict option is on (the time tree then only prunes)."""
+    return (opts.occlusion or opts.illumination or opts.sin_min_elev > -1.0
+            or opts.max_range_m < np.inf)
+
+
 @njit(cache=True)
-def observed_by_spacecraft(vertices, normals, r_T, dcm_BT, tan_eta, near, far, exact,
-                           sin_min_elev, max_range, occlusion, illumination, sun_T,
-                           node_bounds, node_info, tri, tri_vid):
+def observed_by_spacecraft(mesh, cam, opts, bvh):
     """Per-spacecraft observed mask (N, V): vertex j seen by spacecraft k in any image.
 
     The union over a subset of spacecraft is ``mask[subset].any(axis=0)``,
     which lets a genetic algorithm score swarms drawn from a pool of candidate
     ring angles without re-running the geometry. Each (k, j) scan stops at
-    the first hit. Arguments as in :func:`coverage_vertices`.
+    the first hit. Arguments as in :func:`coverage_vertices` (the image times
+    are not read).
 
     Returns
     -------
     mask : (N, V) bool
     """
-    return first_image_by_spacecraft(vertices, normals, r_T, dcm_BT, tan_eta, near, far,
-                                     exact, sin_min_elev, max_range, occlusion, illumination,
-                                     sun_T, node_bounds, node_info, tri, tri_vid) >= 0
+    return first_image_by_spacecraft(mesh, cam, opts, bvh) >= 0
 
 
 @njit(cache=True, parallel=True)
-def first_image_by_spacecraft(vertices, normals, r_T, dcm_BT, tan_eta, near, far, exact,
-                              sin_min_elev, max_range, occlusion, illumination, sun_T,
-                              node_bounds, node_info, tri, tri_vid):
+def first_image_by_spacecraft(mesh, cam, opts, bvh):
     """(N, V) int64: first image index at which spacecraft k sees vertex j, -1 if never.
 
     Arguments as :func:`observed_by_spacecraft` (whose mask is ``>= 0`` of this).
     """
-    nv = vertices.shape[0]
-    nsc = r_T.shape[0]
-    nimg = r_T.shape[1]
-    NF, NI = time_tree(r_T, dcm_BT, LEAF)
-    sec_eta = np.sqrt(1.0 + tan_eta * tan_eta) * (1.0 + 1e-12)
-    strict = occlusion or illumination or sin_min_elev > -1.0 or max_range < np.inf
-    idx = np.arange(nimg).astype(np.float64)
+    nv = mesh.vertices_T_m.shape[0]
+    nsc = cam.r_T_m.shape[0]
+    nimg = cam.r_T_m.shape[1]
+    tree = TimeTree(*scan_tree(cam))
+    strict = _is_strict(opts)
+    # the scan's "times" are the image indices
+    cam_i = Camera(cam.r_T_m, cam.dcm_BT, np.arange(nimg).astype(np.float64), cam.tan_eta,
+                   cam.near_m, cam.far_m, cam.exact)
     out = np.full((nsc, nv), -1, dtype=np.int64)
     for j in prange(nv):
         stack = np.empty(128, dtype=np.int64)
         for k in range(nsc):
-            c, best = _scan(j, k, NF, NI, stack, idx, np.inf, True, vertices, normals, r_T,
-                            dcm_BT, tan_eta, sec_eta, near, far, exact, strict, sin_min_elev,
-                            max_range, occlusion, illumination, sun_T, node_bounds, node_info,
-                            tri, tri_vid)
-            if c > 0:
-                out[k, j] = int(best)
+            s = _scan(j, k, tree, stack, np.inf, True, mesh, cam_i, strict, bvh, opts)
+            if s.count > 0:
+                out[k, j] = int(s.first_s)
     return out

@@ -13,7 +13,8 @@ import numpy as np
 from numba import njit
 
 from ideas_hpc.core.mapping.bvh import cone_clear, segment_blocked
-from ideas_hpc.core.mapping.time_tree import LEAF, _classify, time_tree
+from ideas_hpc.core.mapping.records import Observations
+from ideas_hpc.core.mapping.time_tree import _classify
 from ideas_hpc.core.mapping.visibility import _seen
 
 #: Layout of ``limits``.
@@ -25,11 +26,12 @@ _CONE_MAX = 0.01
 
 
 @njit(cache=True, inline="always")
-def _run_clear(NF, k, node, px, py, pz, j, node_bounds, node_info, tri, tri_vid, leaf):
+def _run_clear(tree, k, node, px, py, pz, j, bvh, leaf):
     """No image of the time-tree node can be occluded: the segments ``p -> r_i`` lie
     in the cone around ``r_m - p`` of half-angle ``asin(e_r / |r_m - p|)``
     (``|r_i - r_m| <= e_r``) and no face meets it (:func:`~ideas_hpc.core.mapping.bvh.cone_clear`).
     False means unknown (the images are then ray-tested one by one)."""
+    NF = tree.NF
     vx = NF[k, node, 9] - px
     vy = NF[k, node, 10] - py
     vz = NF[k, node, 11] - pz
@@ -40,14 +42,15 @@ def _run_clear(NF, k, node, px, py, pz, j, node_bounds, node_info, tri, tri_vid,
     alpha = np.arcsin(er / dist)
     if alpha > _CONE_MAX and not leaf:
         return False
-    return cone_clear(node_bounds, node_info, tri, tri_vid, px, py, pz, vx / dist, vy / dist,
-                      vz / dist, alpha, j)
+    return cone_clear(bvh.node_bounds_m, bvh.node_info, bvh.tri_m, bvh.tri_vid, px, py, pz,
+                      vx / dist, vy / dist, vz / dist, alpha, j)
 
 
 @njit(cache=True, inline="always")
-def _lit(j, i, lc, px, py, pz, nx, ny, nz, sun_T, node_bounds, node_info, tri, tri_vid):
+def _lit(j, i, lc, px, py, pz, nx, ny, nz, sun_T, bvh):
     """Vertex ``j`` lit at image ``i`` (cached in ``lc``: 0 unknown, 1 lit, 2 dark)."""
     if lc[i] == 0:
+        node_bounds, node_info, tri, tri_vid = bvh
         sx = sun_T[i, 0]
         sy = sun_T[i, 1]
         sz = sun_T[i, 2]
@@ -60,38 +63,60 @@ def _lit(j, i, lc, px, py, pz, nx, ny, nz, sun_T, node_bounds, node_info, tri, t
 
 
 @njit(cache=True)
-def scan_setup(r_T, dcm_BT, tan_eta, limits):
-    """What every scan of a pass shares: ``(NF, NI, sec_eta, check_ang, c_emi, c_inc, c_pha)``.
+def quality_tests(quality):
+    """The fields of the :class:`~ideas_hpc.core.mapping.records.QualityTests` of a
+    :class:`~ideas_hpc.core.mapping.records.Quality` (build it with
+    ``QualityTests(*quality_tests(quality))``, see
+    :func:`~ideas_hpc.core.mapping.time_tree.scan_tree`).
 
-    The time tree of the images, the secant of the half angle (with a
-    relative 1e-12 margin, as the time tree's bounds), whether any angle limit
-    is set, and the cosines of the emission, incidence and phase limits
-    (-2 when a limit is not set: the cosine test then always holds).
+    The tests add whether any angle limit is set and the cosines of the
+    emission, incidence and phase limits (-2 when a limit is not set: the
+    cosine test then always holds).
     """
-    NF, NI = time_tree(r_T, dcm_BT, LEAF)
-    sec_eta = np.sqrt(1.0 + tan_eta * tan_eta) * (1.0 + 1e-12)
+    limits = quality.limits
     check_ang = limits[L_EMI] < np.inf or limits[L_INC] < np.inf or limits[L_PHA] < np.inf
     c_emi = np.cos(limits[L_EMI]) if limits[L_EMI] < np.inf else -2.0
     c_inc = np.cos(limits[L_INC]) if limits[L_INC] < np.inf else -2.0
     c_pha = np.cos(limits[L_PHA]) if limits[L_PHA] < np.inf else -2.0
-    return NF, NI, sec_eta, check_ang, c_emi, c_inc, c_pha
+    return quality.rho_rad, limits, quality.require_lit, check_ang, c_emi, c_inc, c_pha
 
 
 @njit(cache=True)
-def _scan(j, k, NF, NI, stack, lc, vertices, normals, r_T,
-          dcm_BT, image_times, tan_eta, sec_eta, near, far, exact, sin_min_elev, max_range,
-          occlusion, illumination, sun_T, node_bounds, node_info, tri, tri_vid, rho, limits,
-          check_ang, c_emi, c_inc, c_pha, require_lit, U, m, vlit, cnt, first, bres, bk, bi):
+def _scan(j, k, tree, stack, lc, mesh, cam, opts, bvh, tests, U, state):
     """Every observation of vertex ``j`` by spacecraft ``k`` (time-tree pruned), folded in.
 
-    Updates and returns the running per-vertex state of
-    :func:`ideas_hpc.core.mapping.quality.quality_vertices`: ``m`` usable unit lines of
-    sight appended to ``U``, ``vlit``, the observation count ``cnt``, the
-    first time ``first``, the best resolution ``bres`` and its spacecraft and
-    image ``bk, bi``; plus ``seen_k`` (k observed the vertex) and ``usable_k``
-    (one of k's observations meets every limit). ``lc`` caches lighting per
-    image for this vertex (it does not depend on the spacecraft).
+    ``state`` is the running per-vertex
+    :class:`~ideas_hpc.core.mapping.records.Observations` of
+    :func:`ideas_hpc.core.mapping.quality.quality_vertices`; the scan returns it
+    updated: ``m`` usable unit lines of sight appended to ``U``, ``lit``, the
+    observation count, the first time, the best resolution and its spacecraft
+    and image; plus ``seen_k`` (k observed the vertex) and ``usable_k`` (one of
+    k's observations meets every limit of ``tests``, a
+    :class:`~ideas_hpc.core.mapping.records.QualityTests`). ``lc`` caches lighting
+    per image for this vertex (it does not depend on the spacecraft).
     """
+    NI = tree.NI
+    vertices = mesh.vertices_T_m
+    normals = mesh.normals_T
+    r_T = cam.r_T_m
+    image_times = cam.times_s
+    occlusion = opts.occlusion
+    illumination = opts.illumination
+    sun_T = opts.sun_T
+    rho = tests.rho_rad
+    limits = tests.limits
+    check_ang = tests.check_ang
+    c_emi = tests.c_emi
+    c_inc = tests.c_inc
+    c_pha = tests.c_pha
+    require_lit = tests.require_lit
+    m = state.m
+    vlit = state.lit
+    cnt = state.count
+    first = state.first_s
+    bres = state.best_res_m
+    bk = state.best_k
+    bi = state.best_i
     px = vertices[j, 0]
     py = vertices[j, 1]
     pz = vertices[j, 2]
@@ -106,16 +131,14 @@ def _scan(j, k, NF, NI, stack, lc, vertices, normals, r_T,
     while sp > 0:
         sp -= 1
         node = stack[sp]
-        cls = _classify(NF, k, node, px, py, pz, nx, ny, nz, nabs, tan_eta,
-                        sec_eta, near, far, exact)
+        cls = _classify(tree, k, node, px, py, pz, nx, ny, nz, nabs, cam)
         if cls == 0:
             continue
         # occlusion: one cone query can clear a whole run of images
         occl = occlusion
         leaf = NI[node, 2] < 0
         if occl and (cls == 2 or leaf):
-            occl = not _run_clear(NF, k, node, px, py, pz, j, node_bounds,
-                                  node_info, tri, tri_vid, leaf)
+            occl = not _run_clear(tree, k, node, px, py, pz, j, bvh, leaf)
         if (cls == 1 or occl) and not leaf:
             if NI[node, 3] >= 0:
                 stack[sp] = NI[node, 3]
@@ -124,14 +147,11 @@ def _scan(j, k, NF, NI, stack, lc, vertices, normals, r_T,
             sp += 1
             continue
         for i in range(NI[node, 0], NI[node, 1]):
-            if not _seen(j, k, i, vertices, normals, r_T, dcm_BT, tan_eta, near,
-                         far, exact, sin_min_elev, max_range, occl, False,
-                         sun_T, node_bounds, node_info, tri, tri_vid):
+            if not _seen(j, k, i, mesh, cam, opts, bvh, occl, False):
                 continue
             li = False
             if illumination or not vlit:
-                li = _lit(j, i, lc, px, py, pz, nx, ny, nz, sun_T, node_bounds,
-                          node_info, tri, tri_vid)
+                li = _lit(j, i, lc, px, py, pz, nx, ny, nz, sun_T, bvh)
                 if illumination and not li:
                     continue
                 vlit = vlit or li
@@ -159,12 +179,11 @@ def _scan(j, k, NF, NI, stack, lc, vertices, normals, r_T,
                       and sx * nx + sy * ny + sz * nz >= c_inc * nabs
                       and sx * lx + sy * ly + sz * lz >= c_pha * rng)
             if ok and require_lit:
-                ok = _lit(j, i, lc, px, py, pz, nx, ny, nz, sun_T, node_bounds,
-                          node_info, tri, tri_vid)
+                ok = _lit(j, i, lc, px, py, pz, nx, ny, nz, sun_T, bvh)
             if ok:
                 usable_k = True
                 U[m, 0] = lx / rng
                 U[m, 1] = ly / rng
                 U[m, 2] = lz / rng
                 m += 1
-    return m, vlit, cnt, first, bres, bk, bi, seen_k, usable_k
+    return Observations(m, vlit, cnt, first, bres, bk, bi, seen_k, usable_k)

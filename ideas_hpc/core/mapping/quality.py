@@ -47,7 +47,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from ideas_hpc.core.mapping.observations import L_SMAX, L_SMIN, _scan, scan_setup
+from ideas_hpc.core.mapping.observations import L_SMAX, L_SMIN, _scan, quality_tests
+from ideas_hpc.core.mapping.time_tree import scan_tree
+from ideas_hpc.core.mapping.records import QualityTests, TimeTree, no_observations
 
 #: Radius of the direction caps of the stereo test, rad (an efficiency knob
 #: only; the result does not depend on it).
@@ -162,27 +164,22 @@ def _stereo(U, m, smin, smax, cap, capc, caprad, capn, capstart, order, fill):
 
 
 @njit(parallel=True, cache=True)
-def quality_vertices(vertices, normals, r_T, dcm_BT, image_times, tan_eta, near, far,
-                     exact, active, sin_min_elev, max_range, occlusion, illumination,
-                     sun_T, node_bounds, node_info, tri, tri_vid, rho, limits,
-                     require_lit, require_stereo):
+def quality_vertices(mesh, cam, active, opts, bvh, quality, require_stereo):
     """Coverage and observation quality per vertex in one pass (module docstring).
 
     Parameters
     ----------
-    vertices, normals, r_T, dcm_BT, image_times, tan_eta, near, far, exact, active
+    mesh, cam, active
         As in :func:`ideas_hpc.core.mapping.coverage.coverage_counts`.
-    sin_min_elev, max_range, occlusion, illumination, node_bounds, node_info, tri, tri_vid
+    opts, bvh
         As in :func:`ideas_hpc.core.mapping.coverage.coverage_vertices` (the visibility
-        tests; ``illumination`` True drops unlit observations).
-    sun_T : (n_img, 3) float64
-        Unit body -> Sun direction per image, frame T (always needed).
-    rho : float
-        Angular sample, rad: ``lambda / D`` or ``pixel pitch / focal length``.
-    limits : (6,) float64
-        ``[X_max (m), e_max, i_max, g_max, s_min, s_max (rad)]``; ``inf``
-        disables a maximum.
-    require_lit, require_stereo : bool
+        tests; ``illumination`` True drops unlit observations); ``opts.sun_T``
+        (n_img, 3), the unit body -> Sun direction per image, is always needed.
+    quality : :class:`~ideas_hpc.core.mapping.records.Quality`
+        Angular sample ``rho_rad`` (``lambda / D`` or ``pixel pitch / focal
+        length``), ``limits`` ``[X_max (m), e_max, i_max, g_max, s_min, s_max
+        (rad)]`` (``inf`` disables a maximum) and ``require_lit``.
+    require_stereo : bool
 
     Returns
     -------
@@ -195,10 +192,16 @@ def quality_vertices(vertices, normals, r_T, dcm_BT, image_times, tan_eta, near,
         m and rad; NaN when never observed.
     n_spacecraft : (V,) int32
     """
+    vertices = mesh.vertices_T_m
+    normals = mesh.normals_T
+    r_T = cam.r_T_m
+    sun_T = opts.sun_T
+    limits = quality.limits
     nv = vertices.shape[0]
     nsc = r_T.shape[0]
     nimg = r_T.shape[1]
-    NF, NI, sec_eta, check_ang, c_emi, c_inc, c_pha = scan_setup(r_T, dcm_BT, tan_eta, limits)
+    tree = TimeTree(*scan_tree(cam))
+    tests = QualityTests(*quality_tests(quality))
     times_seen = np.zeros(nv, dtype=np.int32)
     first_seen = np.full(nv, np.nan)
     lit = np.zeros(nv, dtype=np.bool_)
@@ -230,27 +233,23 @@ def quality_vertices(vertices, normals, r_T, dcm_BT, image_times, tan_eta, near,
             nx = normals[j, 0]
             ny = normals[j, 1]
             nz = normals[j, 2]
-            cnt = 0
-            first = np.inf
-            vlit = False
             vusable = False
-            bres = np.inf
-            bk = -1
-            bi = -1
             nk = 0
-            m = 0
+            ob = no_observations(0, False)
             for k in range(nsc):
                 if not active[k]:
                     continue
-                m, vlit, cnt, first, bres, bk, bi, seen_k, usable_k = _scan(
-                    j, k, NF, NI, stack, lc, vertices,
-                    normals, r_T, dcm_BT, image_times, tan_eta, sec_eta, near, far, exact,
-                    sin_min_elev, max_range, occlusion, illumination, sun_T, node_bounds,
-                    node_info, tri, tri_vid, rho, limits, check_ang, c_emi, c_inc, c_pha,
-                    require_lit, U, m, vlit, cnt, first, bres, bk, bi)
-                vusable = vusable or usable_k
-                if seen_k:
+                ob = _scan(j, k, tree, stack, lc, mesh, cam, opts, bvh, tests, U, ob)
+                vusable = vusable or ob.usable_k
+                if ob.seen_k:
                     nk += 1
+            m = ob.m
+            vlit = ob.lit
+            cnt = ob.count
+            first = ob.first_s
+            bres = ob.best_res_m
+            bk = ob.best_k
+            bi = ob.best_i
             times_seen[j] = cnt
             n_sc[j] = nk
             lit[j] = vlit

@@ -21,19 +21,19 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from ideas_hpc.core.mapping.observations import L_SMAX, L_SMIN, _scan, scan_setup
+from ideas_hpc.core.mapping.observations import L_SMAX, L_SMIN, _scan, quality_tests
 from ideas_hpc.core.mapping.quality import _CHUNK, _stereo
+from ideas_hpc.core.mapping.time_tree import scan_tree
+from ideas_hpc.core.mapping.records import QualityTests, TimeTree, no_observations
 
 
 @njit(parallel=True, cache=True)
-def quality_by_spacecraft(vertices, normals, r_T, dcm_BT, image_times, tan_eta, near, far,
-                          exact, sin_min_elev, max_range, occlusion, illumination, sun_T,
-                          node_bounds, node_info, tri, tri_vid, rho, limits, require_lit):
+def quality_by_spacecraft(mesh, cam, opts, bvh, quality):
     """Per-spacecraft usable, own-track stereo and best resolution (module docstring).
 
     Parameters
     ----------
-    All as in :func:`ideas_hpc.core.mapping.quality.quality_vertices` (``r_T`` is
+    All as in :func:`ideas_hpc.core.mapping.quality.quality_vertices` (``cam.r_T_m`` is
     (K, n_img, 3) m for K candidate spacecraft, every one active).
 
     Returns
@@ -42,10 +42,12 @@ def quality_by_spacecraft(vertices, normals, r_T, dcm_BT, image_times, tan_eta, 
     resolution : (K, V) float64
         m; ``inf`` where the spacecraft never observes the vertex.
     """
-    nv = vertices.shape[0]
-    nsc = r_T.shape[0]
-    nimg = r_T.shape[1]
-    NF, NI, sec_eta, check_ang, c_emi, c_inc, c_pha = scan_setup(r_T, dcm_BT, tan_eta, limits)
+    limits = quality.limits
+    nv = mesh.vertices_T_m.shape[0]
+    nsc = cam.r_T_m.shape[0]
+    nimg = cam.r_T_m.shape[1]
+    tree = TimeTree(*scan_tree(cam))
+    tests = QualityTests(*quality_tests(quality))
     usable = np.zeros((nsc, nv), dtype=np.bool_)
     stereo = np.zeros((nsc, nv), dtype=np.bool_)
     resolution = np.full((nsc, nv), np.inf)
@@ -66,15 +68,11 @@ def quality_by_spacecraft(vertices, normals, r_T, dcm_BT, image_times, tan_eta, 
             for k in range(nsc):
                 # vlit = True: the per-vertex 'lit' output is not needed here, so
                 # shadow rays are cast only for the illumination filter and require_lit
-                m, _, _, _, bres, _, _, _, usable_k = _scan(
-                    j, k, NF, NI, stack, lc, vertices,
-                    normals, r_T, dcm_BT, image_times, tan_eta, sec_eta, near, far, exact,
-                    sin_min_elev, max_range, occlusion, illumination, sun_T, node_bounds,
-                    node_info, tri, tri_vid, rho, limits, check_ang, c_emi, c_inc, c_pha,
-                    require_lit, U, 0, True, 0, np.inf, np.inf, -1, -1)
-                usable[k, j] = usable_k
-                resolution[k, j] = bres
-                if m >= 2:
-                    stereo[k, j] = _stereo(U, m, limits[L_SMIN], limits[L_SMAX], cap, capc,
+                ob = _scan(j, k, tree, stack, lc, mesh, cam, opts, bvh, tests, U,
+                           no_observations(0, True))
+                usable[k, j] = ob.usable_k
+                resolution[k, j] = ob.best_res_m
+                if ob.m >= 2:
+                    stereo[k, j] = _stereo(U, ob.m, limits[L_SMIN], limits[L_SMAX], cap, capc,
                                            caprad, capn, capstart, order, fill)
     return usable, stereo, resolution

@@ -41,25 +41,35 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from ideas_hpc.core.mapping.time_tree import LEAF, _FP, _classify, time_tree
+from ideas_hpc.core.mapping.time_tree import _FP, _classify, scan_tree
+from ideas_hpc.core.mapping.coverage import _is_strict
 from ideas_hpc.core.mapping.segments import face_blocks_cone, segment_hit
 from ideas_hpc.core.mapping.visibility import _seen
+from ideas_hpc.core.mapping.records import TimeTree
 
 #: Bound on ||C'||_2 for the flown rotation matrices (checked by the boundary layer).
 S_MAX = 1.0 + 1e-9
 
 
 @njit(cache=True, inline="always")
-def _required(px, py, pz, nx, ny, nz, nabs, k, i, r_T, dcm_BT, tan_eta, sec_eta, near, far,
-              exact, sin_min_elev, max_range, bc, br):
+def _required(vtx, k, i, cam, sec_eta, opts, bc, br):
     """Smallest position deviation (m) with which a camera within ``bc`` of image ``i``
     could pass culling, clipping, field of view, elevation and range (inf: none).
 
     Each test is ``slack >= -(its change bound)``, linear in the deviation (module
     docstring), solved for it; ``br`` (the budget) only sizes the floating-point
     slack, and the result is shrunk by a relative and absolute 1e-9 so that it
-    never exceeds the exact value.
+    never exceeds the exact value. ``vtx`` is ``(px, py, pz, nx, ny, nz, |n|)`` (m, T).
     """
+    px, py, pz, nx, ny, nz, nabs = vtx
+    r_T = cam.r_T_m
+    dcm_BT = cam.dcm_BT
+    tan_eta = cam.tan_eta
+    near = cam.near_m
+    far = cam.far_m
+    exact = cam.exact
+    sin_min_elev = opts.sin_min_elev
+    max_range = opts.max_range_m
     rx = r_T[k, i, 0]
     ry = r_T[k, i, 1]
     rz = r_T[k, i, 2]
@@ -88,24 +98,24 @@ def _required(px, py, pz, nx, ny, nz, nabs, k, i, r_T, dcm_BT, tan_eta, sec_eta,
 
 
 @njit(cache=True, inline="always")
-def _could(px, py, pz, nx, ny, nz, nabs, k, i, r_T, dcm_BT, tan_eta, sec_eta, near, far,
-           exact, sin_min_elev, max_range, bc, br):
+def _could(vtx, k, i, cam, sec_eta, opts, bc, br):
     """False when no camera within ``(bc, br)`` of image ``i`` can pass the geometric tests."""
-    return _required(px, py, pz, nx, ny, nz, nabs, k, i, r_T, dcm_BT, tan_eta, sec_eta, near,
-                     far, exact, sin_min_elev, max_range, bc, br) <= br
+    return _required(vtx, k, i, cam, sec_eta, opts, bc, br) <= br
 
 
 @njit(cache=True, inline="always")
-def _extreme(NF, NI, stack, k, px, py, pz, nx, ny, nz, nabs, r_T, dcm_BT, tan_eta, sec_eta,
-             near, far, exact, sin_min_elev, max_range, bc, br, last):
-    """First (``last``: last) image that :func:`_could` see the vertex, -1 if none."""
+def _extreme(tree, stack, k, vtx, cam, opts, bc, br, last):
+    """First (``last``: last) image that :func:`_could` see the vertex ``vtx`` (as in
+    :func:`_required`), -1 if none. ``tree`` carries the budget-inflated bounds."""
+    NI = tree.NI
+    sec_eta = tree.sec_eta
+    px, py, pz, nx, ny, nz, nabs = vtx
     sp = 1
     stack[0] = NI.shape[0] - 1
     while sp > 0:
         sp -= 1
         node = stack[sp]
-        if _classify(NF, k, node, px, py, pz, nx, ny, nz, nabs, tan_eta, sec_eta, near, far,
-                     exact) == 0:
+        if _classify(tree, k, node, px, py, pz, nx, ny, nz, nabs, cam) == 0:
             continue
         if NI[node, 2] >= 0:
             first, second = NI[node, 3], NI[node, 2]     # pushed second, popped first
@@ -121,33 +131,36 @@ def _extreme(NF, NI, stack, k, px, py, pz, nx, ny, nz, nabs, r_T, dcm_BT, tan_et
         n = NI[node, 1] - NI[node, 0]
         for h in range(n):
             i = NI[node, 1] - 1 - h if last else NI[node, 0] + h
-            if _could(px, py, pz, nx, ny, nz, nabs, k, i, r_T, dcm_BT, tan_eta, sec_eta, near,
-                      far, exact, sin_min_elev, max_range, bc, br):
+            if _could(vtx, k, i, cam, sec_eta, opts, bc, br):
                 return i
     return -1
 
 
 @njit(cache=True, parallel=True)
-def reachable(vertices, normals, r_T, dcm_BT, tan_eta, near, far, exact, sin_min_elev,
-              max_range, bc, br):
+def reachable(mesh, cam, opts, bc, br):
     """(N, V, 2) int64: first and last image at which a camera within the budget could
     see vertex j (-1, -1: none), and (N, V) the smallest position deviation (m, with
     the DCM deviation ``bc``) that could let any image of that window see it
     (:func:`_required`; inf when none).
 
+    ``mesh``, ``cam`` (the nominal flight) and ``opts`` (only the elevation and
+    range are read) as in :func:`ideas_hpc.core.mapping.coverage.coverage_vertices`.
     ``bc`` (Frobenius norm of the DCM deviation) and ``br`` (m, position
     deviation) is the budget; outside the window no camera within it passes
     culling, clipping, field of view, elevation and range (module docstring).
     The nominal time tree prunes with its node bounds inflated by the budget.
     """
+    vertices = mesh.vertices_T_m
+    normals = mesh.normals_T
     nv = vertices.shape[0]
-    nsc = r_T.shape[0]
-    NF, NI = time_tree(r_T, dcm_BT, LEAF)
+    nsc = cam.r_T_m.shape[0]
+    tree = TimeTree(*scan_tree(cam))
+    NF = tree.NF
     for k in range(nsc):
-        for node in range(NI.shape[0]):
+        for node in range(tree.NI.shape[0]):
             NF[k, node, 14] = (NF[k, node, 14] + br) * S_MAX * (1.0 + 1e-12)
             NF[k, node, 13] = (NF[k, node, 13] + bc) * (1.0 + 1e-12)
-    sec_eta = np.sqrt(1.0 + tan_eta * tan_eta) * (1.0 + 1e-12)
+    sec_eta = tree.sec_eta
     out = np.full((nsc, nv, 2), -1, dtype=np.int64)
     margin = np.full((nsc, nv), np.inf)
     for j in prange(nv):
@@ -159,20 +172,16 @@ def reachable(vertices, normals, r_T, dcm_BT, tan_eta, near, far, exact, sin_min
         ny = normals[j, 1]
         nz = normals[j, 2]
         nabs = np.sqrt(nx * nx + ny * ny + nz * nz)
+        vtx = (px, py, pz, nx, ny, nz, nabs)
         for k in range(nsc):
-            lo = _extreme(NF, NI, stack, k, px, py, pz, nx, ny, nz, nabs, r_T, dcm_BT, tan_eta,
-                          sec_eta, near, far, exact, sin_min_elev, max_range, bc, br, False)
+            lo = _extreme(tree, stack, k, vtx, cam, opts, bc, br, False)
             if lo >= 0:
-                hi = _extreme(NF, NI, stack, k, px, py, pz, nx, ny, nz, nabs, r_T, dcm_BT,
-                              tan_eta, sec_eta, near, far, exact, sin_min_elev, max_range, bc,
-                              br, True)
+                hi = _extreme(tree, stack, k, vtx, cam, opts, bc, br, True)
                 out[k, j, 0] = lo
                 out[k, j, 1] = hi
                 m = np.inf
                 for i in range(lo, hi + 1):
-                    m = min(m, _required(px, py, pz, nx, ny, nz, nabs, k, i, r_T, dcm_BT,
-                                         tan_eta, sec_eta, near, far, exact, sin_min_elev,
-                                         max_range, bc, br))
+                    m = min(m, _required(vtx, k, i, cam, sec_eta, opts, bc, br))
                 margin[k, j] = m
     return out, margin
 
@@ -230,21 +239,19 @@ def deviation_start(r_nom, dcm_nom, r_T, dcm_BT, bc, br):
 
 
 @njit(cache=True, inline="always")
-def _seen_hint(j, k, i, hint, vertices, normals, r_T, dcm_BT, tan_eta, near, far, exact,
-               sin_min_elev, max_range, occlusion, illumination, sun_T, node_bounds,
-               node_info, tri, tri_vid):
+def _seen_hint(j, k, i, hint, mesh, cam, opts, bvh):
     """:func:`~ideas_hpc.core.mapping.visibility._seen` with the occlusion query started at face
     ``hint[0]`` (updated to the face that blocks, if any): the same answer."""
-    if not _seen(j, k, i, vertices, normals, r_T, dcm_BT, tan_eta, near, far, exact,
-                 sin_min_elev, max_range, False, illumination, sun_T, node_bounds, node_info,
-                 tri, tri_vid):
+    if not _seen(j, k, i, mesh, cam, opts, bvh, False, opts.illumination):
         return False
-    if not occlusion:
+    if not opts.occlusion:
         return True
+    vertices = mesh.vertices_T_m
+    r_T = cam.r_T_m
     px = vertices[j, 0]
     py = vertices[j, 1]
     pz = vertices[j, 2]
-    f = segment_hit(node_bounds, node_info, tri, tri_vid, px, py, pz, r_T[k, i, 0] - px,
+    f = segment_hit(bvh, px, py, pz, r_T[k, i, 0] - px,
                     r_T[k, i, 1] - py, r_T[k, i, 2] - pz, 1.0, j, hint[0])
     if f >= 0:
         hint[0] = f
@@ -274,9 +281,7 @@ def _below_elevation(NF, k, node, px, py, pz, nx, ny, nz, nabs, sin_min_elev, ma
 
 
 @njit(cache=True, inline="always")
-def _scan_range(j, k, a, b, NF, NI, stack, hint, vertices, normals, r_T, dcm_BT, tan_eta,
-                sec_eta, near, far, exact, strict, sin_min_elev, max_range, occlusion,
-                illumination, sun_T, node_bounds, node_info, tri, tri_vid):
+def _scan_range(j, k, a, b, tree, stack, hint, mesh, cam, strict, opts, bvh):
     """Does spacecraft ``k`` see vertex ``j`` in an image ``a <= i < b``? Exact.
 
     Walks the perturbed flight's time tree: a node failing culling or clipping
@@ -285,6 +290,15 @@ def _scan_range(j, k, a, b, NF, NI, stack, hint, vertices, normals, r_T, dcm_BT,
     ``hint[0]`` covers (:func:`~ideas_hpc.core.mapping.segments.face_blocks_cone`); leaf
     images are tested one by one (:func:`_seen_hint`).
     """
+    NF = tree.NF
+    NI = tree.NI
+    vertices = mesh.vertices_T_m
+    normals = mesh.normals_T
+    sin_min_elev = opts.sin_min_elev
+    max_range = opts.max_range_m
+    occlusion = opts.occlusion
+    tri = bvh.tri_m
+    tri_vid = bvh.tri_vid
     px = vertices[j, 0]
     py = vertices[j, 1]
     pz = vertices[j, 2]
@@ -301,8 +315,7 @@ def _scan_range(j, k, a, b, NF, NI, stack, hint, vertices, normals, r_T, dcm_BT,
         i1 = NI[node, 1]
         if i1 <= a or i0 >= b:
             continue
-        cls = _classify(NF, k, node, px, py, pz, nx, ny, nz, nabs, tan_eta, sec_eta, near,
-                        far, exact)
+        cls = _classify(tree, k, node, px, py, pz, nx, ny, nz, nabs, cam)
         if cls == 0:
             continue
         if cls == 2 and not strict and i0 >= a and i1 <= b:
@@ -329,54 +342,45 @@ def _scan_range(j, k, a, b, NF, NI, stack, hint, vertices, normals, r_T, dcm_BT,
             sp += 1
             continue
         for i in range(max(i0, a), min(i1, b)):
-            if _seen_hint(j, k, i, hint, vertices, normals, r_T, dcm_BT, tan_eta, near, far,
-                          exact, sin_min_elev, max_range, occlusion, illumination, sun_T,
-                          node_bounds, node_info, tri, tri_vid):
+            if _seen_hint(j, k, i, hint, mesh, cam, opts, bvh):
                 return True
     return False
 
 
 @njit(cache=True, parallel=True)
-def perturbed_rows(witness, window, margin, i_ok, dev, vertices, normals, r_T, dcm_BT, tan_eta, near, far,
-                   exact, sin_min_elev, max_range, occlusion, illumination, sun_T, node_bounds,
-                   node_info, tri, tri_vid):
-    """(N, V) bool rows of the perturbed flight ``r_T``, ``dcm_BT`` (module docstring).
+def perturbed_rows(nominal, mesh, cam, opts, bvh):
+    """(N, V) bool rows of the perturbed flight ``cam`` (module docstring).
 
-    ``witness`` (N, V) from :func:`~ideas_hpc.core.mapping.coverage.first_image_by_spacecraft`, ``window`` (N, V, 2) and
-    ``margin`` (N, V) from :func:`reachable` with the budget, ``i_ok`` and ``dev``
-    (N,) from :func:`deviation_start` with the same budget (a window is skipped
-    when the candidate's largest deviation from ``i_ok`` on is below the margin); other arguments as
-    :func:`ideas_hpc.core.mapping.coverage.observed_by_spacecraft`, for the perturbed flight.
-    A (candidate, vertex) not settled by its witness image is scanned exactly
-    over the images before ``i_ok`` and over its window from ``i_ok`` on
-    (:func:`_scan_range`).
+    ``nominal`` is a :class:`~ideas_hpc.core.mapping.records.Nominal`: ``witness`` (N, V) from
+    :func:`~ideas_hpc.core.mapping.coverage.first_image_by_spacecraft`, ``window`` (N, V, 2) and ``margin`` (N, V) from
+    :func:`reachable` with the budget, ``i_ok`` and ``dev`` (N,) from
+    :func:`deviation_start` with the same budget (a window is skipped when the
+    candidate's largest deviation from ``i_ok`` on is below the margin); other
+    arguments as :func:`ideas_hpc.core.mapping.coverage.observed_by_spacecraft`,
+    for the perturbed flight. A (candidate, vertex) not settled by its
+    witness image is scanned exactly over the images before ``i_ok`` and over
+    its window from ``i_ok`` on (:func:`_scan_range`).
     """
-    nv = vertices.shape[0]
-    nsc = r_T.shape[0]
-    NF, NI = time_tree(r_T, dcm_BT, LEAF)
-    sec_eta = np.sqrt(1.0 + tan_eta * tan_eta) * (1.0 + 1e-12)
-    strict = occlusion or illumination or sin_min_elev > -1.0 or max_range < np.inf
+    witness, window, margin, i_ok, dev = nominal
+    nv = mesh.vertices_T_m.shape[0]
+    nsc = cam.r_T_m.shape[0]
+    tree = TimeTree(*scan_tree(cam))
+    strict = _is_strict(opts)
     mask = np.zeros((nsc, nv), dtype=np.bool_)
     for j in prange(nv):
         stack = np.empty(128, dtype=np.int64)
         hint = np.full(1, -1, dtype=np.int64)
         for k in range(nsc):
             w = witness[k, j]
-            if w >= 0 and _seen(j, k, w, vertices, normals, r_T, dcm_BT, tan_eta, near, far,
-                                exact, sin_min_elev, max_range, occlusion, illumination,
-                                sun_T, node_bounds, node_info, tri, tri_vid):
+            if w >= 0 and _seen(j, k, w, mesh, cam, opts, bvh, opts.occlusion,
+                                opts.illumination):
                 mask[k, j] = True
                 continue
             hint[0] = -1
-            seen = _scan_range(j, k, 0, i_ok[k], NF, NI, stack, hint, vertices, normals,
-                               r_T, dcm_BT, tan_eta, sec_eta, near, far, exact, strict,
-                               sin_min_elev, max_range, occlusion, illumination, sun_T,
-                               node_bounds, node_info, tri, tri_vid)
+            seen = _scan_range(j, k, 0, i_ok[k], tree, stack, hint, mesh, cam, strict, opts,
+                               bvh)
             if not seen and window[k, j, 0] >= 0 and not dev[k] < margin[k, j]:
                 seen = _scan_range(j, k, max(window[k, j, 0], i_ok[k]), window[k, j, 1] + 1,
-                                   NF, NI, stack, hint, vertices, normals, r_T, dcm_BT,
-                                   tan_eta, sec_eta, near, far, exact, strict, sin_min_elev,
-                                   max_range, occlusion, illumination, sun_T, node_bounds,
-                                   node_info, tri, tri_vid)
+                                   tree, stack, hint, mesh, cam, strict, opts, bvh)
             mask[k, j] = seen
     return mask

@@ -86,19 +86,22 @@ def segment_blocked(node_bounds, node_info, tri, tri_vid,
         True when a face is crossed (Moller-Trumbore, both face sides). Hits
         with ``t <= 1e-9 |d|``-relative slack at the origin are ignored.
     """
-    return segment_hit(node_bounds, node_info, tri, tri_vid, ox, oy, oz, dx, dy, dz, tmax,
+    return segment_hit((node_bounds, node_info, tri, tri_vid), ox, oy, oz, dx, dy, dz, tmax,
                        skip_vertex, -1) >= 0
 
 
 @njit(cache=True)
-def segment_hit(node_bounds, node_info, tri, tri_vid, ox, oy, oz, dx, dy, dz, tmax,
-                skip_vertex, hint):
+def segment_hit(bvh, ox, oy, oz, dx, dy, dz, tmax, skip_vertex, hint):
     """:func:`segment_blocked` that returns the crossed face (BVH order, -1: none).
+
+    ``bvh`` is the tree ``(node_bounds, node_info, tri, tri_vid)`` (a
+    :class:`~ideas_hpc.core.mapping.records.Bvh` or a plain tuple).
 
     Face ``hint`` (>= 0) is tested first: consecutive images of a scan are
     usually blocked by the same face, and any crossed face answers the
     any-hit query, so the answer ``>= 0`` is exactly ``segment_blocked``'s True.
     """
+    node_bounds, node_info, tri, tri_vid = bvh
     dn = np.sqrt(dx * dx + dy * dy + dz * dz)
     # Minimum t: 1 nm (ignore round-off hits at the start point).
     t_min = 1e-9 / dn

@@ -21,11 +21,34 @@ rounding of ``acos``).
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit, prange
 
-from ideas_hpc.core.mapping.observations import L_SMAX, L_SMIN, _scan, scan_setup
+from ideas_hpc.core.mapping.observations import L_SMAX, L_SMIN, _scan, quality_tests
 from ideas_hpc.core.mapping.quality import _CHUNK
+from ideas_hpc.core.mapping.time_tree import scan_tree
+from ideas_hpc.core.mapping.records import QualityTests, TimeTree, no_observations
+
+class Scratch(NamedTuple):
+    """Per-chunk scratch arrays of :func:`stereo_pairs` (reused vertex after vertex)."""
+
+    #: (128,) int64, time-tree walk.
+    stack: np.ndarray
+    #: (n_img,) int8, lighting cache of the vertex.
+    lc: np.ndarray
+    #: (K n_img, 3) float64, usable unit lines of sight, candidate after candidate.
+    U: np.ndarray
+    #: (K + 1,) int64, first row of each candidate in ``U``.
+    start: np.ndarray
+    #: (K,) float64, radius of each candidate's whole-track cap, rad.
+    rad: np.ndarray
+    #: (K n_img + 1, 5) float64, caps: centre xyz, radius (rad), first member.
+    cap: np.ndarray
+    #: (K + 1,) int64, first cap of each candidate.
+    cstart: np.ndarray
+
 
 #: Angular slack of the cap decisions, rad (see module docstring).
 SLACK = 1e-6
@@ -40,22 +63,17 @@ def pair_index(a, b, k):
 
 
 @njit(parallel=True, cache=True)
-def stereo_pairs(vertices, normals, r_T, dcm_BT, image_times, tan_eta, near, far, exact,
-                 sin_min_elev, max_range, occlusion, illumination, sun_T, node_bounds,
-                 node_info, tri, tri_vid, rho, limits, require_lit):
+def stereo_pairs(mesh, cam, opts, bvh, quality):
     """(K (K - 1) / 2, V) bool: candidate pair ``(a, b)`` maps vertex ``j`` in stereo.
 
     Arguments as in :func:`ideas_hpc.core.mapping.quality_masks.quality_by_spacecraft`
-    (``r_T`` holds the K candidates). Rows are in :func:`pair_index` order.
+    (``cam.r_T_m`` holds the K candidates). Rows are in :func:`pair_index` order.
     """
-    nv = vertices.shape[0]
-    nsc = r_T.shape[0]
-    nimg = r_T.shape[1]
-    NF, NI, sec_eta, check_ang, c_emi, c_inc, c_pha = scan_setup(r_T, dcm_BT, tan_eta, limits)
-    smin = limits[L_SMIN]
-    smax = limits[L_SMAX]
-    cmin = np.cos(smax)
-    cmax = np.cos(smin)
+    nv = mesh.vertices_T_m.shape[0]
+    nsc = cam.r_T_m.shape[0]
+    nimg = cam.r_T_m.shape[1]
+    tree = TimeTree(*scan_tree(cam))
+    tests = QualityTests(*quality_tests(quality))
     out = np.zeros((nsc * (nsc - 1) // 2, nv), dtype=np.bool_)
     nchunk = (nv + _CHUNK - 1) // _CHUNK
     for ch in prange(nchunk):
@@ -67,22 +85,21 @@ def stereo_pairs(vertices, normals, r_T, dcm_BT, image_times, tan_eta, near, far
         cap = np.zeros((nsc * nimg + 1, 5))        # centre xyz, radius, first member
         cstart = np.zeros(nsc + 1, dtype=np.int64)
         for j in range(ch * _CHUNK, min(nv, (ch + 1) * _CHUNK)):
-            _pairs_of_vertex(j, out, stack, lc, U, start, rad, cap, cstart, vertices, normals, r_T, dcm_BT,
-                             image_times, tan_eta, sec_eta, near, far, exact, sin_min_elev,
-                             max_range, occlusion, illumination, sun_T, node_bounds,
-                             node_info, tri, tri_vid, rho, limits, check_ang, c_emi, c_inc,
-                             c_pha, require_lit, NF, NI, smin, smax, cmin, cmax)
+            _pairs_of_vertex(j, out, Scratch(stack, lc, U, start, rad, cap, cstart), mesh, cam,
+                             opts, bvh, tests, tree)
     return out
 
 
 @njit(cache=True)
-def _pairs_of_vertex(j, out, stack, lc, U, start, rad, cap, cstart, vertices, normals, r_T, dcm_BT,
-                     image_times, tan_eta, sec_eta, near, far, exact, sin_min_elev, max_range,
-                     occlusion, illumination, sun_T, node_bounds, node_info, tri, tri_vid, rho,
-                     limits, check_ang, c_emi, c_inc, c_pha, require_lit, NF, NI, smin, smax,
-                     cmin, cmax):
+def _pairs_of_vertex(j, out, scratch, mesh, cam, opts, bvh, tests, tree):
     """Fill column ``j`` of :func:`stereo_pairs` (scratch arrays given by the caller)."""
-    nsc = r_T.shape[0]
+    stack, lc, U, start, rad, cap, cstart = scratch
+    limits = tests.limits
+    smin = limits[L_SMIN]
+    smax = limits[L_SMAX]
+    cmin = np.cos(smax)
+    cmax = np.cos(smin)
+    nsc = cam.r_T_m.shape[0]
     lc[:] = 0
     m = 0
     nc = 0
@@ -90,12 +107,8 @@ def _pairs_of_vertex(j, out, stack, lc, U, start, rad, cap, cstart, vertices, no
     for k in range(nsc):
         start[k] = m
         cstart[k] = nc
-        m, _, _, _, _, _, _, _, _ = _scan(
-            j, k, NF, NI, stack, lc, vertices, normals, r_T,
-            dcm_BT, image_times, tan_eta, sec_eta, near, far, exact, sin_min_elev,
-            max_range, occlusion, illumination, sun_T, node_bounds, node_info, tri,
-            tri_vid, rho, limits, check_ang, c_emi, c_inc, c_pha, require_lit, U, m, True,
-            0, np.inf, np.inf, -1, -1)
+        m = _scan(j, k, tree, stack, lc, mesh, cam, opts, bvh, tests, U,
+                  no_observations(m, True)).m
         # whole-track cap (centre: first direction) and caps of consecutive directions
         r = 0.0
         for x in range(start[k], m):

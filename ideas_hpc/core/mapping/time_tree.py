@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from ideas_hpc.core.mapping.records import Sightings
 from ideas_hpc.core.mapping.segments import segment_hit
 from ideas_hpc.core.mapping.visibility import _seen, _seen_basic
 
@@ -205,6 +206,21 @@ def time_tree(r_T, dcm_BT, leaf):
     return NF, NI
 
 
+@njit(cache=True)
+def scan_tree(cam):
+    """The fields ``(NF, NI, sec_eta)`` of the
+    :class:`~ideas_hpc.core.mapping.records.TimeTree` of a
+    :class:`~ideas_hpc.core.mapping.records.Camera`'s images (leaves of :data:`LEAF`;
+    the secant of the half angle carries a relative 1e-12 margin, as the node bounds).
+
+    Kernels build the record with ``TimeTree(*scan_tree(cam))``: Numba's parfor
+    lowering re-creates a named tuple that a ``prange`` loop reads by the name of
+    the callable that made it, so it must be a call of the class itself.
+    """
+    NF, NI = time_tree(cam.r_T_m, cam.dcm_BT, LEAF)
+    return NF, NI, np.sqrt(1.0 + cam.tan_eta * cam.tan_eta) * (1.0 + 1e-12)
+
+
 #: Relative floating-point slack of the node tests. The per-image tests round
 #: q, r . n and t q_z with errors of a few ulp of |p - r| (resp. |r| |n|);
 #: 1e-10 of those scales is ~1e6 times more than needed.
@@ -212,9 +228,18 @@ _FP = 1e-10
 
 
 @njit(cache=True, inline="always")
-def _classify(NF, k, node, px, py, pz, nx, ny, nz, nabs, tan_eta, sec_eta, near, far,
-              exact):
-    """0: no image of the node can see the vertex, 2: every image sees it, 1: unknown."""
+def _classify(tree, k, node, px, py, pz, nx, ny, nz, nabs, cam):
+    """0: no image of the node can see the vertex, 2: every image sees it, 1: unknown.
+
+    ``tree``: :class:`~ideas_hpc.core.mapping.records.TimeTree` (its ``NF`` may
+    carry inflated bounds), ``cam``: :class:`~ideas_hpc.core.mapping.records.Camera`.
+    """
+    NF = tree.NF
+    sec_eta = tree.sec_eta
+    tan_eta = cam.tan_eta
+    near = cam.near_m
+    far = cam.far_m
+    exact = cam.exact
     dx = px - NF[k, node, 9]
     dy = py - NF[k, node, 10]
     dz = pz - NF[k, node, 11]
@@ -244,18 +269,22 @@ def _classify(NF, k, node, px, py, pz, nx, ny, nz, nabs, tan_eta, sec_eta, near,
 
 
 @njit(cache=True, inline="always")
-def _scan(j, k, NF, NI, stack, image_times, best, early, vertices, normals, r_T, dcm_BT,
-          tan_eta, sec_eta, near, far, exact, strict, sin_min_elev, max_range, occlusion,
-          illumination, sun_T, node_bounds, node_info, tri, tri_vid):
-    """Sightings of vertex ``j`` by spacecraft ``k``: (count, earliest time).
+def _scan(j, k, tree, stack, best, early, mesh, cam, strict, bvh, opts):
+    """Sightings of vertex ``j`` by spacecraft ``k``, as a
+    :class:`~ideas_hpc.core.mapping.records.Sightings` (count, earliest time).
 
     Depth-first over the time tree in image order. ``early``: skip images at
     or after ``best`` and stop at the first hit. ``strict``: the node test only
     prunes (culling and clipping are necessary conditions), images of
-    accepted nodes still go through :func:`_seen`, whose occlusion query
-    starts at the face that blocked the scan's previous image
+    accepted nodes still go through :func:`_seen` with the options of
+    ``opts`` (a :class:`~ideas_hpc.core.mapping.records.Strict`), whose
+    occlusion query starts at the face that blocked the scan's previous image
     (:func:`~ideas_hpc.core.mapping.segments.segment_hit`; issue 19 item 5).
     """
+    NI = tree.NI
+    vertices = mesh.vertices_T_m
+    normals = mesh.normals_T
+    image_times = cam.times_s
     px = vertices[j, 0]
     py = vertices[j, 1]
     pz = vertices[j, 2]
@@ -274,8 +303,7 @@ def _scan(j, k, NF, NI, stack, image_times, best, early, vertices, normals, r_T,
         i1 = NI[node, 1]
         if early and image_times[i0] >= best:
             continue
-        cls = _classify(NF, k, node, px, py, pz, nx, ny, nz, nabs, tan_eta, sec_eta,
-                        near, far, exact)
+        cls = _classify(tree, k, node, px, py, pz, nx, ny, nz, nabs, cam)
         if cls == 0:
             continue
         if cls == 2 and not strict:
@@ -295,22 +323,20 @@ def _scan(j, k, NF, NI, stack, image_times, best, early, vertices, normals, r_T,
             if strict:
                 # occlusion last, starting at the face that blocked the previous
                 # image (any crossed face answers the any-hit query: same answer)
-                hit = _seen(j, k, i, vertices, normals, r_T, dcm_BT, tan_eta, near, far,
-                            exact, sin_min_elev, max_range, False, illumination, sun_T,
-                            node_bounds, node_info, tri, tri_vid)
-                if hit and occlusion:
-                    f = segment_hit(node_bounds, node_info, tri, tri_vid, px, py, pz,
+                hit = _seen(j, k, i, mesh, cam, opts, bvh, False, opts.illumination)
+                if hit and opts.occlusion:
+                    r_T = cam.r_T_m
+                    f = segment_hit(bvh, px, py, pz,
                                     r_T[k, i, 0] - px, r_T[k, i, 1] - py, r_T[k, i, 2] - pz,
                                     1.0, np.int64(j), hint)
                     if f >= 0:
                         hint = f
                         hit = False
             else:
-                hit = _seen_basic(px, py, pz, nx, ny, nz, k, i, r_T, dcm_BT, tan_eta,
-                                  near, far, exact)
+                hit = _seen_basic(px, py, pz, nx, ny, nz, k, i, cam)
             if hit:
                 cnt += 1
                 best = min(best, image_times[i])
                 if early:
                     break
-    return cnt, best
+    return Sightings(cnt, best)

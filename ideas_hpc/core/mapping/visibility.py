@@ -48,10 +48,25 @@ from ideas_hpc.core.mapping.bvh import segment_blocked
 
 
 @njit(cache=True, inline="always")
-def _seen(j, k, i, vertices, normals, r_T, dcm_BT, tan_eta, near, far, exact,
-          sin_min_elev, max_range, occlusion, illumination, sun_T,
-          node_bounds, node_info, tri, tri_vid):
-    """True when vertex ``j`` is seen by spacecraft ``k`` in image ``i`` (all tests)."""
+def _seen(j, k, i, mesh, cam, opts, bvh, occlusion, illumination):
+    """True when vertex ``j`` is seen by spacecraft ``k`` in image ``i`` (all tests).
+
+    ``mesh``, ``cam``, ``opts`` (:class:`~ideas_hpc.core.mapping.records.Strict`),
+    ``bvh``: :mod:`ideas_hpc.core.mapping.records`; ``occlusion`` and
+    ``illumination`` switch those tests (callers pass ``opts``' flags or turn one off).
+    """
+    vertices = mesh.vertices_T_m
+    normals = mesh.normals_T
+    r_T = cam.r_T_m
+    dcm_BT = cam.dcm_BT
+    tan_eta = cam.tan_eta
+    near = cam.near_m
+    far = cam.far_m
+    exact = cam.exact
+    sin_min_elev = opts.sin_min_elev
+    max_range = opts.max_range_m
+    sun_T = opts.sun_T
+    node_bounds, node_info, tri, tri_vid = bvh
     px = vertices[j, 0]
     py = vertices[j, 1]
     pz = vertices[j, 2]
@@ -105,8 +120,14 @@ def _seen(j, k, i, vertices, normals, r_T, dcm_BT, tan_eta, near, far, exact,
 
 
 @njit(cache=True, inline="always")
-def _seen_basic(px, py, pz, nx, ny, nz, k, i, r_T, dcm_BT, tan_eta, near, far, exact):
+def _seen_basic(px, py, pz, nx, ny, nz, k, i, cam):
     """Culling + clipping of one (vertex, spacecraft, image), as in :func:`_seen`."""
+    r_T = cam.r_T_m
+    dcm_BT = cam.dcm_BT
+    tan_eta = cam.tan_eta
+    near = cam.near_m
+    far = cam.far_m
+    exact = cam.exact
     rx = r_T[k, i, 0]
     ry = r_T[k, i, 1]
     rz = r_T[k, i, 2]

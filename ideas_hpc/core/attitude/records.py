@@ -1,0 +1,68 @@
+"""Records the attitude kernels take (issue 21 item 4).
+
+Named tuples of (3,) float64 arrays and float64 scalars, passed to compiled code
+as one tuple each (see :mod:`ideas_hpc.core.mapping.records`). The boundary
+(:mod:`ideas_hpc.attitude.simulate`) builds them once with exactly these types.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+
+class ControlGains(NamedTuple):
+    """Sliding-mode controller gains (``core.control``, SPEC section 5)."""
+
+    #: (3,) float64, ``K_P``, 1/s.
+    k_p: np.ndarray
+    #: (3,) float64, ``K_I``, 1/s^2.
+    k_i: np.ndarray
+    #: (3,) float64, reaching gain, rad/s^2.
+    eta: np.ndarray
+    #: (3,) float64, boundary-layer slope, s/rad (already capped for the step).
+    phi: np.ndarray
+    #: The MRP error integral only accumulates while ``|ds| < int_limit`` (``inf``: always).
+    int_limit: float
+
+
+class Wheels(NamedTuple):
+    """The spacecraft's inertias and reaction-wheel limits."""
+
+    #: (3,) float64, ``[I_RW]`` principal moments, kg m^2.
+    I_rw_kgm2: np.ndarray
+    #: (3,) float64, wheel spin inertias, kg m^2.
+    J_s_kgm2: np.ndarray
+    #: Torque limit, N m.
+    u_max_Nm: float
+    #: Wheel momentum limit, N m s.
+    h_max_Nms: float
+
+
+class Ring(NamedTuple):
+    """One spacecraft's attitude reference (``core.maneuvers.reference_into``)."""
+
+    #: 0 Nadir Pointing, 1 FoV Sweeping.
+    mode: int
+    #: (3,) float64, MRP of the ring frame ``[R T]``.
+    sigma_RT: np.ndarray
+    #: (3, 3) float64, ring frame DCM ``[R T]``.
+    dcm_RT: np.ndarray
+    #: Target spin rate, rad/s.
+    spin_rate: float
+    #: FoV sweep amplitude, rad.
+    theta_max: float
+    #: FoV sweep period, s.
+    period_s: float
+
+
+class Initial(NamedTuple):
+    """Initial states of ``S x N`` spacecraft."""
+
+    #: (S, N, 3) float64, ``sigma_BN`` (MRP).
+    sigma_BN: np.ndarray
+    #: (S, N, 3) float64, ``omega_BN_B``, rad/s.
+    omega_BN_B: np.ndarray
+    #: (S, N, 3) float64, wheel speeds, rad/s.
+    wheel_rad_s: np.ndarray
