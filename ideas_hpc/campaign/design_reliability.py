@@ -97,8 +97,8 @@ def _validate(c, setup, theta, need, w, exact, client):
     return Validation(rows, w, need, mc.failure_probability, d.confidence, exact, c.config.seed)
 
 
-def _tolerant(nominal_bank, rel: ReliabilityDesigner, target, eps, d, sep) -> list:
-    """(k, N_k, P_bank) of the k-failure-tolerant designs on the nominal bank, k = 1..K_MARKED."""
+def _tolerant_designs(nominal_bank, target, eps, d, sep) -> list:
+    """(k, ExactResult) of the k-failure-tolerant designs on the nominal bank, k = 1..K_MARKED."""
     out = []
     for k in range(1, K_MARKED + 1):
         if k >= d.n_max:
@@ -110,8 +110,13 @@ def _tolerant(nominal_bank, rel: ReliabilityDesigner, target, eps, d, sep) -> li
             break
         if r.n > 24:
             break
-        out.append((k, r.n, float(rel.ev([r.indices])[0]), r.indices))
+        out.append((k, r))
     return out
+
+
+def _tolerant(designs, rel: ReliabilityDesigner) -> list:
+    """(k, N_k, P_bank, indices) of the k-failure-tolerant designs, P on the scenario bank."""
+    return [(k, r.n, float(rel.ev([r.indices])[0]), r.indices) for k, r in designs]
 
 
 def scenario_store_path(out) -> str | None:
@@ -144,20 +149,26 @@ def design_reliable(c, setup, client, *, bank_store: str | None = None):
     client = phase_client(client)   # the job's one cluster (None: in this process)
     exact = continuous_off(mc, setup)
     s_n = 1 if exact else d.scenarios
+    target, eps = float(nominal.attrs["target_coverage"]), d.eps_tol_pct / 100.0
+    sep = c.config.swarm.min_separation_m
+    # the tolerant designs (single-threaded HiGHS) on one worker while the other
+    # builds the bank: their ~17 s no longer wait for it (same designs)
+    tolerant = (client.submit(_tolerant_designs, nominal.bank, target, eps, d, sep, pure=False)
+                if client is not None else None)
     t0 = time.perf_counter()
     fresh = bank_store is not None and not Path(bank_store).exists()
     bank = build_scenario_bank(setup, d.grid_step_rad, mc, seed=c.config.seed, n_scenarios=s_n,
                                client=client, store=bank_store, progress=progress.on())
     t_bank = time.perf_counter() - t0
     try:
-        return _design_on_bank(c, setup, client, nominal, bank, t_bank, exact)
+        return _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant)
     except InputError:
         if fresh:    # bad input leaves no store: the bank this run made goes too
             shutil.rmtree(bank_store, ignore_errors=True)
         raise
 
 
-def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact):
+def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=None):
     d, mc = c.config.design, c.config.monte_carlo
     p, p_f = float(d.success_probability), float(mc.failure_probability)
     eps = d.eps_tol_pct / 100.0
@@ -201,6 +212,7 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact):
         curve.append((n, pb, rel.upper(n), v.p_hat, v.lower, sw))
         if pb >= CURVE_TOP and n >= chosen.n:
             break
-    tolerant = _tolerant(nominal.bank, rel, target, eps, d, sep)
+    tolerant = _tolerant(tolerant.result() if tolerant is not None else
+                         _tolerant_designs(nominal.bank, target, eps, d, sep), rel)
     return reliability_dataset(c, nominal, bank, res, chosen, chosen_val, curve, tolerant,
                                stepped=stepped, need=need, exact=exact, t_bank=t_bank)
