@@ -184,19 +184,3 @@ def test_redundancy_polish_keeps_the_target_and_no_swap_adds_overlap(seed):
                 continue
             if bank.coverage([s])[0] >= need:
                 assert twice(s) <= twice(out) + 1e-12
-
-
-@pytest.mark.parametrize("seed", range(10))
-def test_ring_low_equals_the_full_bounds_first_size(seed):
-    # the fast first-size search must give the full programme's n_bound for any need
-    from ideas_hpc.design.ring_bound import ring_low
-    rng = np.random.default_rng(100 + seed)
-    k = int(rng.integers(12, 40))
-    bank = _circle_bank(seed, k=k, v=int(rng.integers(30, 120)))
-    red = reduce_problem(bank.masks, bank.areas, merge_candidates=False)
-    m = int(rng.integers(0, 3))
-    reach = float(red.weight.sum())
-    for frac in (1.0, 0.999, 0.99, 0.97, 0.9, 0.7):
-        need = frac * reach
-        rb = ring_bound(bank, red, m, 8, need)
-        assert ring_low(bank, red, m, 8, need) == rb.n_bound(need), (frac, m)

@@ -45,7 +45,7 @@ from ideas_hpc.core.design.reliability import swarm_coverages, swarm_probabiliti
 from ideas_hpc.errors import InputError
 from ideas_hpc.design.bank import CandidateBank, reduce_problem
 from ideas_hpc.design.reliability_stats import failure_upper_bound
-from ideas_hpc.design.ring_bound import ring_bound_applies, ring_low
+from ideas_hpc.design.ring_bound import ring_bound
 from ideas_hpc.design.scenario_mip import ScenarioMIP
 
 #: Largest swarm whose 2^N failure subsets are enumerated.
@@ -194,8 +194,9 @@ class ReliabilityDesigner:
                 bank = CandidateBank(theta=step * np.arange(self.c_n), masks=self.ev.rows[s],
                                      areas=areas, step_rad=step, d_sep_m=1.0)
                 red = reduce_problem(bank.masks, areas, merge_candidates=False)
-                if ring_bound_applies(bank, red):
-                    low = ring_low(bank, red, self.m, int(n_max), self.ev.need)
+                rb = ring_bound(bank, red, self.m, int(n_max), self.ev.need)
+                if rb is not None:
+                    low = rb.n_bound(self.ev.need)
                     lows[s] = int(n_max) + 1 if low is None else max(1, low)
             self._lows = lows
         return self._lows

@@ -30,8 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ideas_hpc.core.design.ring_gaps import (gap_matrix_of, ring_gap_bound, ring_gap_low,
-                                             ring_gap_swarm)
+from ideas_hpc.core.design.ring_gaps import gap_matrix_of, ring_gap_bound, ring_gap_swarm
 from ideas_hpc.design.bank import CandidateBank, Reduced
 
 #: Largest grid on which the O(N K^3) bound is computed (0.25 deg).
@@ -98,19 +97,6 @@ def ring_bound(bank: CandidateBank, red: Reduced, m: int, n_max: int,
     computed[0] = True
     return RingBound(upper=np.where(computed, np.minimum(upper, reach), np.nan)[
         :int(np.flatnonzero(computed)[-1]) + 1], tot=tot, M=M, m=int(m), reach=reach)
-
-
-def ring_low(bank: CandidateBank, red: Reduced, m: int, n_max: int, need: float) -> int | None:
-    """Fewest grid candidates the ring-gap bound allows to reach ``need``: the same
-    as ``ring_bound(bank, red, m, n_max, need).n_bound(need)`` (None: not within
-    ``n_max`` or :func:`ring_bound_applies` false), computed over fewer first members
-    (:func:`ideas_hpc.core.design.ring_gaps.ring_gap_low`)."""
-    if not ring_bound_applies(bank, red):
-        return None
-    M = gap_matrix(red.cover, red.weight)
-    reach = float(red.weight.sum())
-    n = int(ring_gap_low(M, int(n_max), int(m), float(reach - need + 1e-12)))
-    return None if n > int(n_max) else n
 
 
 def swap_search(bank: CandidateBank, start, m: int, *, need: float | None = None,

@@ -116,6 +116,39 @@ def _band_min(a, b, lo, hi):
     return min(min(b0, b1), min(b2, b3))
 
 
+@njit(cache=True)
+def _arc_ends(M):
+    """``E[j, i] = M[i, j - i]`` for ``i < j`` (inf elsewhere): the weight missed by a gap
+    from member ``i`` to member ``j``, contiguous in ``i``."""
+    K = M.shape[0]
+    E = np.full((K, K), np.inf)
+    for j in range(K):
+        for i in range(j):
+            E[j, i] = M[i, j - i]
+    return E
+
+
+@njit(cache=True, fastmath={"nnan", "nsz"})
+def _layer_row(ps, cs, E, M, s, n, m):
+    """Row ``s`` of layer ``n`` of the shortest path: ``cs[j]`` (least missed weight of
+    ``n`` members from ``s`` to ``j``) from the previous layer's row ``ps``;
+    returns the least miss of the closed ring (the last gap back to ``s + K``)."""
+    K = M.shape[0]
+    cs[s] = np.inf
+    least = np.inf
+    for j in range(s + 1, K):
+        if n == 2:      # ps is 0 at s and inf elsewhere: the minimum is E[j, s]
+            best = E[j, s] if s < j - m else np.inf
+        else:
+            best = _band_min(ps, E[j], s, j - m)
+        cs[j] = best
+        if s + K - j > m:
+            v = best + M[j, s + K - j]
+            if v < least:
+                least = v
+    return least
+
+
 @njit(parallel=True, cache=True, fastmath={"nnan", "nsz"})
 def ring_gap_bound(M, n_max, m, stop_miss, extra):
     """Least gap-missed weight of every swarm size, per first member.
@@ -155,10 +188,7 @@ def ring_gap_bound(M, n_max, m, stop_miss, extra):
     tot = np.full((n_max + 1, K), np.inf)
     if n_max < 1:
         return tot
-    E = np.full((K, K), np.inf)
-    for j in prange(K):
-        for i in range(j):
-            E[j, i] = M[i, j - i]
+    E = _arc_ends(M)
     # two layers of the shortest path, one row per first member s
     prev = np.full((K, K), np.inf)
     cur = np.full((K, K), np.inf)
@@ -172,18 +202,8 @@ def ring_gap_bound(M, n_max, m, stop_miss, extra):
         return tot
     for n in range(2, n_max + 1):
         for s in prange(K):
-            cur[s, s] = np.inf
-            ps = prev[s]
-            for j in range(s + 1, K):
-                if n == 2:      # prev[s] is 0 at s and inf elsewhere: the minimum is E[j, s]
-                    best = E[j, s] if s < j - m else np.inf
-                else:
-                    best = _band_min(ps, E[j], np.int64(s), np.int64(j) - m)
-                cur[s, j] = best
-                if s + K - j > m:
-                    v = best + M[j, s + K - j]
-                    if v < tot[n, s]:
-                        tot[n, s] = v
+            tot[n, s] = _layer_row(prev[s], cur[s], E, M, np.int64(s), np.int64(n),
+                                   np.int64(m))
         prev, cur = cur, prev
         low = np.inf
         for s in range(K):
@@ -234,67 +254,3 @@ def ring_gap_swarm(M, n, m, s):
         out[k - 1] = j
         j = P[k, j]
     return out, best
-
-
-@njit(parallel=True, cache=True, fastmath={"nnan", "nsz"})
-def ring_gap_low(M, n_max, m, stop_miss):
-    """Fewest members whose least gap-missed weight is ``<= stop_miss`` (``n_max + 1``: none).
-
-    The same answer as the first row ``n`` of :func:`ring_gap_bound` with
-    ``min_s tot[n, s] <= stop_miss``, with fewer first members: a swarm with
-    no member in ``[0, G)`` has a gap of at least ``G + 1`` steps, so it
-    misses at least ``min_i M[i, G + 1]`` (``M`` is non-decreasing in ``d``);
-    with ``G`` the smallest such that this exceeds ``stop_miss``, only swarms
-    with a member in ``[0, G)`` can reach it, and their rows ``s < G`` of the
-    shortest path are the full computation's (each row depends on its own
-    ``s`` only).
-    """
-    K = M.shape[0]
-    if n_max < 1:
-        return n_max + 1
-    low = np.inf
-    for s in range(K):
-        low = min(low, M[s, K])
-    if low <= stop_miss:
-        return 1
-    G = K
-    for g in range(1, K):
-        least = np.inf
-        for i in range(K):
-            least = min(least, M[i, g + 1])
-        if least > stop_miss:
-            G = g
-            break
-    E = np.full((K, K), np.inf)
-    for j in prange(K):
-        for i in range(j):
-            E[j, i] = M[i, j - i]
-    prev = np.full((G, K), np.inf)
-    cur = np.full((G, K), np.inf)
-    for s in range(G):
-        prev[s, s] = 0.0
-    best_n = np.full(G, np.inf)
-    block = 32
-    for n in range(2, n_max + 1):
-        # blocks of first members, so that a size that reaches stop_miss stops at
-        # the first block holding a witness (the last size needs no full layer)
-        for b0 in range(0, G, block):
-            for s in prange(b0, min(G, b0 + block)):
-                cur[s, s] = np.inf
-                best_n[s] = np.inf
-                ps = prev[s]
-                for j in range(s + 1, K):
-                    if n == 2:
-                        best = E[j, s] if s < j - m else np.inf
-                    else:
-                        best = _band_min(ps, E[j], np.int64(s), np.int64(j) - m)
-                    cur[s, j] = best
-                    if s + K - j > m:
-                        v = best + M[j, s + K - j]
-                        if v < best_n[s]:
-                            best_n[s] = v
-            for s in range(b0, min(G, b0 + block)):
-                if best_n[s] <= stop_miss:
-                    return n
-        prev, cur = cur, prev
-    return n_max + 1
