@@ -43,8 +43,8 @@ from numba import njit, prange
 
 from ideas_hpc.core.mapping.time_tree import _FP, _classify, scan_tree
 from ideas_hpc.core.mapping.coverage import _is_strict
-from ideas_hpc.core.mapping.segments import face_blocks_cone, segment_hit
-from ideas_hpc.core.mapping.visibility import _seen
+from ideas_hpc.core.mapping.segments import face_blocks_cone
+from ideas_hpc.core.mapping.visibility import _seen, _seen_hint
 from ideas_hpc.core.mapping.records import TimeTree
 
 #: Bound on ||C'||_2 for the flown rotation matrices (checked by the boundary layer).
@@ -239,27 +239,6 @@ def deviation_start(r_nom, dcm_nom, r_T, dcm_BT, bc, br):
 
 
 @njit(cache=True, inline="always")
-def _seen_hint(j, k, i, hint, mesh, cam, opts, bvh):
-    """:func:`~ideas_hpc.core.mapping.visibility._seen` with the occlusion query started at face
-    ``hint[0]`` (updated to the face that blocks, if any): the same answer."""
-    if not _seen(j, k, i, mesh, cam, opts, bvh, False, opts.illumination):
-        return False
-    if not opts.occlusion:
-        return True
-    vertices = mesh.vertices_T_m
-    r_T = cam.r_T_m
-    px = vertices[j, 0]
-    py = vertices[j, 1]
-    pz = vertices[j, 2]
-    f = segment_hit(bvh, px, py, pz, r_T[k, i, 0] - px,
-                    r_T[k, i, 1] - py, r_T[k, i, 2] - pz, 1.0, j, hint[0])
-    if f >= 0:
-        hint[0] = f
-        return False
-    return True
-
-
-@njit(cache=True, inline="always")
 def _below_elevation(NF, k, node, px, py, pz, nx, ny, nz, nabs, sin_min_elev, max_range):
     """True when every image of the node fails the elevation or the range test.
 
@@ -288,7 +267,7 @@ def _scan_range(j, k, a, b, tree, stack, hint, mesh, cam, strict, opts, bvh):
     with margin is skipped (:func:`~ideas_hpc.core.mapping.time_tree._classify`), and so
     is a node whose sight lines all lie in a cone the last blocking face
     ``hint[0]`` covers (:func:`~ideas_hpc.core.mapping.segments.face_blocks_cone`); leaf
-    images are tested one by one (:func:`_seen_hint`).
+    images are tested one by one (:func:`~ideas_hpc.core.mapping.visibility._seen_hint`).
     """
     NF = tree.NF
     NI = tree.NI
@@ -342,7 +321,8 @@ def _scan_range(j, k, a, b, tree, stack, hint, mesh, cam, strict, opts, bvh):
             sp += 1
             continue
         for i in range(max(i0, a), min(i1, b)):
-            if _seen_hint(j, k, i, hint, mesh, cam, opts, bvh):
+            seen, hint[0] = _seen_hint(j, k, i, hint[0], mesh, cam, opts, bvh)
+            if seen:
                 return True
     return False
 

@@ -22,8 +22,7 @@ import numpy as np
 from numba import njit, prange
 
 from ideas_hpc.core.mapping.records import Sightings
-from ideas_hpc.core.mapping.segments import segment_hit
-from ideas_hpc.core.mapping.visibility import _seen, _seen_basic
+from ideas_hpc.core.mapping.visibility import _seen_basic, _seen_hint
 
 
 # ------------------------------------------------------------ time coherence
@@ -276,10 +275,11 @@ def _scan(j, k, tree, stack, best, early, mesh, cam, strict, bvh, opts):
     Depth-first over the time tree in image order. ``early``: skip images at
     or after ``best`` and stop at the first hit. ``strict``: the node test only
     prunes (culling and clipping are necessary conditions), images of
-    accepted nodes still go through :func:`_seen` with the options of
-    ``opts`` (a :class:`~ideas_hpc.core.mapping.records.Strict`), whose
+    accepted nodes still go through
+    :func:`~ideas_hpc.core.mapping.visibility._seen_hint` with the options of
+    ``opts`` (a :class:`~ideas_hpc.core.mapping.records.Strict`): the
     occlusion query starts at the face that blocked the scan's previous image
-    (:func:`~ideas_hpc.core.mapping.segments.segment_hit`; issue 19 item 5).
+    (issue 19 item 5).
     """
     NI = tree.NI
     vertices = mesh.vertices_T_m
@@ -321,17 +321,8 @@ def _scan(j, k, tree, stack, best, early, mesh, cam, strict, bvh, opts):
             if early and image_times[i] >= best:
                 break
             if strict:
-                # occlusion last, starting at the face that blocked the previous
-                # image (any crossed face answers the any-hit query: same answer)
-                hit = _seen(j, k, i, mesh, cam, opts, bvh, False, opts.illumination)
-                if hit and opts.occlusion:
-                    r_T = cam.r_T_m
-                    f = segment_hit(bvh, px, py, pz,
-                                    r_T[k, i, 0] - px, r_T[k, i, 1] - py, r_T[k, i, 2] - pz,
-                                    1.0, np.int64(j), hint)
-                    if f >= 0:
-                        hint = f
-                        hit = False
+                # occlusion starts at the face that blocked the previous image
+                hit, hint = _seen_hint(j, k, i, hint, mesh, cam, opts, bvh)
             else:
                 hit = _seen_basic(px, py, pz, nx, ny, nz, k, i, cam)
             if hit:

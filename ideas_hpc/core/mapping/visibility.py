@@ -45,6 +45,7 @@ import numpy as np
 from numba import njit
 
 from ideas_hpc.core.mapping.bvh import segment_blocked
+from ideas_hpc.core.mapping.segments import segment_hit
 
 
 @njit(cache=True, inline="always")
@@ -144,3 +145,27 @@ def _seen_basic(px, py, pz, nx, ny, nz, k, i, cam):
     lim = tan_eta * qz
     return (cul & (qz > 0.0) & (abs(qx) <= lim) & (abs(qy) <= lim)
             & (qz >= near) & (qz <= far))
+
+
+@njit(cache=True, inline="always")
+def _seen_hint(j, k, i, hint, mesh, cam, opts, bvh):
+    """:func:`_seen` with the occlusion query started at face ``hint`` (-1: none).
+
+    Returns ``(seen, hint)``, ``hint`` updated to the face that blocks, if any.
+    Consecutive images of a scan are usually blocked by the same face, and any
+    crossed face answers the any-hit query, so ``seen`` is exactly ``_seen``'s.
+    """
+    if not _seen(j, k, i, mesh, cam, opts, bvh, False, opts.illumination):
+        return False, hint
+    if not opts.occlusion:
+        return True, hint
+    vertices = mesh.vertices_T_m
+    r_T = cam.r_T_m
+    px = vertices[j, 0]
+    py = vertices[j, 1]
+    pz = vertices[j, 2]
+    f = segment_hit(bvh, px, py, pz, r_T[k, i, 0] - px,
+                    r_T[k, i, 1] - py, r_T[k, i, 2] - pz, 1.0, np.int64(j), hint)
+    if f >= 0:
+        return False, f
+    return True, hint
