@@ -197,18 +197,25 @@ def workload_section(shape, tree, scene, eps):
     nrm = np.ascontiguousarray(shape.vertex_normals_T)
     te, sin_e = math.tan(setup.eta_rad), math.sin(opts.min_elevation)
     geo = (setup.eta_rad, setup.near_m, setup.far_m)
-    args = (v, nrm, r, C, te, setup.near_m, setup.far_m, True, sin_e, np.inf, True, False,
-            np.zeros((1, 3)), *tree)
-    sub = tuple(a[:2] if a is r or a is C else a for a in args)
     observed_per_spacecraft(shape, r[:2], C[:2], *geo, options=opts)
     free = dataclasses.replace(opts, occlusion=False)
     observed_per_spacecraft(shape, r[:2], C[:2], *geo, options=free)
-    nsc, nv = r.shape[0], v.shape[0]
-    rows = (np.full((nsc, nv), -1, dtype=np.int64), np.full((nsc, nv, 2), -1, dtype=np.int64),
-            np.zeros((nsc, nv)), np.full(nsc, r.shape[1], dtype=np.int64), np.zeros(nsc))
-    perturbed_rows(*(a[:2] for a in rows), *sub)
+    nsc, nv, nimg = r.shape[0], v.shape[0], r.shape[1]
+    from ideas_hpc.core.mapping.records import Nominal
+    from ideas_hpc.mapping.coverage import _camera, _mesh, _strict_args
+
+    # no witness, every image in the window, deviations within budget from image 0
+    none = np.full((nsc, nv), -1, dtype=np.int64)
+    win = np.empty((nsc, nv, 2), dtype=np.int64)
+    win[..., 0], win[..., 1] = 0, nimg - 1
+    nominal = Nominal(none, np.zeros((nsc, nv)), np.zeros((nsc, nv)), win, none,
+                      np.zeros(nsc, dtype=np.int64), np.zeros(nsc, dtype=np.int64), r, C)
+    strict, bvh = _strict_args(shape, opts, None, nimg)
+    recs = (_mesh(shape), _camera(r, C, np.zeros(nimg), te, setup.near_m, setup.far_m, True),
+            strict, bvh)
+    perturbed_rows(nominal, *recs)
     t_old, m_old = best_of(lambda: observed_per_spacecraft(shape, r, C, *geo, options=opts), 2)
-    t_new, m_new = best_of(lambda: perturbed_rows(*rows, *args), 2)
+    t_new, m_new = best_of(lambda: perturbed_rows(nominal, *recs), 2)
     t_free, _ = best_of(lambda: observed_per_spacecraft(shape, r, C, *geo, options=free), 2)
     assert np.array_equal(m_old, m_new)
     js = np.arange(0, shape.n_vertices, 8)

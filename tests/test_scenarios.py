@@ -163,7 +163,7 @@ def test_closed_loop_rows_include_the_convergence(eros1708):
     r_img, dcm = eng.flight(pert)
     from ideas_hpc.core.mapping.scenario_rows import deviation_start
     r_nom, dcm_nom = eng.nominal()
-    i_ok, _ = deviation_start(r_nom, dcm_nom, r_img, dcm, *eng.budget)
+    i_ok, _, _ = deviation_start(r_nom, dcm_nom, r_img, dcm, *eng.budget)
     assert np.all(i_ok > 0)                     # converging: outside the budget at first
     fast = eng.rows(r_img, dcm)
     np.testing.assert_array_equal(fast, full_rows(setup, theta, None, eng.r0_T, eng.v0_T, pert))

@@ -21,14 +21,17 @@ import numpy as np
 from ideas_hpc.design.candidates import rows_from_views
 from ideas_hpc.core.mapping import scenario_rows as _k
 from ideas_hpc.core.mapping.coverage import first_image_by_spacecraft
+from ideas_hpc.core.mapping.scenario_proofs import BC_ANY, windows, witness_proofs
 from ideas_hpc.flyby.flight import FlybySetup, Perturbation, open_loop_views
 from ideas_hpc.core.mapping.records import Nominal
 from ideas_hpc.mapping.coverage import _camera, _check_geometry, _mesh, _strict_args
 
 #: Head room on the pilot's deviations (speed only).
 HEADROOM = 1.5
-#: Per process: engine token -> nominal positions and ideal DCMs (see RowEngine.nominal).
+#: Per process: engine token -> nominal positions and ideal DCMs (see RowEngine.nominal),
+#: and the kernels' records of that flight (RowEngine._static).
 _NOMINAL: dict = {}
+_STATIC: dict = {}
 #: Largest ``||C C^T - I||_F`` accepted for the perturbed DCMs (the kernels assume
 #: ``||C||_2 <= 1 + 1e-9``); anything worse takes the full recomputation.
 ORTHO_TOL = 1e-10
@@ -42,9 +45,11 @@ class RowEngine:
     theta: np.ndarray
     r0_T: np.ndarray
     v0_T: np.ndarray
-    witness: np.ndarray | None = None      # (K, V) int64
+    witness: np.ndarray | None = None      # (K, V) int32
+    slack_q: np.ndarray | None = None      # (K, V) float32, m
+    radius: np.ndarray | None = None       # (K, V) float32, m
     window: np.ndarray | None = None       # (K, V, 2) int32
-    margin: np.ndarray | None = None       # (K, V) m
+    unseen_any: np.ndarray | None = None   # (K, V) int32
     budget: tuple = (0.0, 0.0)             # (Frobenius, m)
 
     @property
@@ -64,6 +69,16 @@ class RowEngine:
 
     token: str = field(default_factory=lambda: uuid.uuid4().hex)
 
+    def _static(self):
+        """The kernels' records of the nominal flight, validated once per process."""
+        got = _STATIC.get(self.token)
+        if got is None:
+            got = self._args(*self.nominal())
+            while len(_STATIC) >= 2:
+                _STATIC.pop(next(iter(_STATIC)))
+            _STATIC[self.token] = got
+        return got
+
     def nominal(self):
         """Positions and ideal camera DCMs of the nominal flight at the images.
 
@@ -81,12 +96,12 @@ class RowEngine:
         return got
 
     def prepare(self, pilot: Perturbation | None) -> "RowEngine":
-        """Witnesses, budget from the pilot perturbation, reachability."""
+        """The budget (from the pilot perturbation), then the proofs: windows and witnesses."""
         if not self.fast:
             return self
         r_img, dcm = self.nominal()
-        mesh, cam, opts, bvh = self._args(r_img, dcm)
-        self.witness = first_image_by_spacecraft(mesh, cam, opts, bvh).astype(np.int32)  # shipped
+        mesh, cam, opts, bvh = self._static()
+        first = first_image_by_spacecraft(mesh, cam, opts, bvh)
         if pilot is not None:
             rp, dp = self.flight(pilot)
             dev_r = np.linalg.norm(rp - r_img, axis=2)
@@ -96,8 +111,15 @@ class RowEngine:
             bc = HEADROOM * float(np.percentile(dev_c[:, half:].max(axis=1), 99))
             self.budget = (bc, br)
         bc, br = self.budget
-        window, self.margin = _k.reachable(mesh, cam, opts, float(bc), float(br))
+        window = windows(mesh, cam, opts, bvh, float(bc), float(br), True)
+        witness, slack_q, radius = witness_proofs(first, window, mesh, cam, opts, bvh, float(bc),
+                                                  float(br))
+        # shipped to every worker: float32 rounded down (a proof may only shrink)
+        self.slack_q, self.radius = _down32(slack_q), _down32(radius)
+        self.witness = witness.astype(np.int32)
         self.window = window.astype(np.int32)
+        self.unseen_any = windows(mesh, cam, opts, bvh, BC_ANY, float(br), False)[:, :, 0] \
+            .astype(np.int32)
         return self
 
     def flight(self, pert: Perturbation):
@@ -109,16 +131,36 @@ class RowEngine:
 
     def rows(self, r_img, dcm) -> np.ndarray:
         """(K, V) bool rows of a perturbed flight, identical to the full recomputation."""
-        if not self.fast or not _orthonormal(dcm):
-            sun = self.setup.sun_T() if self.setup.coverage.needs_sun else None
-            return rows_from_views(self.setup, r_img, dcm, sun)
-        bc, br = self.budget
+        if not self.fast:
+            return self._full(r_img, dcm)
+        r = np.ascontiguousarray(r_img, dtype=np.float64)
+        c = np.ascontiguousarray(dcm, dtype=np.float64)
         r_nom, dcm_nom = self.nominal()
-        mesh, cam, opts, bvh = self._args(r_img, dcm)
-        i_ok, dev = _k.deviation_start(r_nom, dcm_nom, cam.r_T_m, cam.dcm_BT, float(bc),
-                                       float(br))
-        nominal = Nominal(self.witness, self.window, self.margin, i_ok, dev)
+        if r.shape != r_nom.shape or c.shape != dcm_nom.shape:
+            return self._full(r_img, dcm)
+        bc, br = self.budget
+        i_ok, i_pos, ortho = _k.deviation_start(r_nom, dcm_nom, r, c, float(bc), float(br))
+        # the proofs need near-orthonormal DCMs; anything else (or non-finite
+        # input, which the full path rejects by name) takes the validated full path
+        if not ortho <= ORTHO_TOL or not np.isfinite(r).all():
+            return self._full(r_img, dcm)
+        mesh, cam0, opts, bvh = self._static()
+        cam = cam0._replace(r_T_m=r, dcm_BT=c)
+        nominal = Nominal(self.witness, self.slack_q, self.radius, self.window, self.unseen_any,
+                          i_ok, i_pos, r_nom, dcm_nom)
         return _k.perturbed_rows(nominal, mesh, cam, opts, bvh)
+
+    def _full(self, r_img, dcm) -> np.ndarray:
+        sun = self.setup.sun_T() if self.setup.coverage.needs_sun else None
+        return rows_from_views(self.setup, r_img, dcm, sun)
+
+
+def _down32(x: np.ndarray) -> np.ndarray:
+    """``x`` as float32, each value rounded toward -inf."""
+    y = x.astype(np.float32)
+    up = y.astype(np.float64) > x
+    y[up] = np.nextafter(y[up], np.float32(-np.inf))
+    return y
 
 
 def rows_setup(setup: FlybySetup) -> FlybySetup:
@@ -133,7 +175,3 @@ def full_rows(setup: FlybySetup, theta, periods, r0_T, v0_T, pert: Perturbation)
     r_img, dcm, _, _ = open_loop_views(rows_setup(setup), theta, periods, r0_T, v0_T, pert)
     sun = setup.sun_T() if setup.coverage.needs_sun else None
     return rows_from_views(setup, r_img, dcm, sun)
-
-
-def _orthonormal(dcm) -> bool:
-    return bool(_k.orthonormality_error(np.ascontiguousarray(dcm, dtype=np.float64)) <= ORTHO_TOL)

@@ -145,18 +145,26 @@ class Observations(NamedTuple):
 
 
 class Nominal(NamedTuple):
-    """What :func:`ideas_hpc.core.mapping.scenario_rows.perturbed_rows` knows of the nominal flight and the budget."""
+    """What :func:`ideas_hpc.core.mapping.scenario_rows.perturbed_rows` knows of the
+    nominal flight and the budget (:mod:`ideas_hpc.core.mapping.scenario_proofs`)."""
 
-    #: (N, V) int64, first nominal image that sees the vertex (-1: none).
+    #: (N, V) int, nominal image that sees the vertex most robustly (-1: none).
     witness: np.ndarray
-    #: (N, V, 2) int64, first and last image that could see it within the budget.
+    #: (N, V) float64, the witness's proof: camera-coordinate slack and position radius, m.
+    slack_q_m: np.ndarray
+    radius_m: np.ndarray
+    #: (N, V, 2) int, first and last image a camera within the budget might see it at.
     window: np.ndarray
-    #: (N, V) float64, smallest position deviation that could let the window see it, m.
-    margin_m: np.ndarray
-    #: (N,) int64, first image from which the deviation stays within the budget.
+    #: (N, V) int, first image any attitude might see it at (positions within the budget).
+    unseen_any: np.ndarray
+    #: (N,) int64, first image from which the deviation stays within the budget, and
+    #: the same for the position deviation alone.
     i_ok: np.ndarray
-    #: (N,) float64, largest position deviation from ``i_ok`` on, m.
-    dev_m: np.ndarray
+    i_pos: np.ndarray
+    #: (N, n_img, 3) and (N, n_img, 3, 3) float64, the nominal flight's positions (m)
+    #: and camera DCMs at the images.
+    r_nom_T_m: np.ndarray
+    dcm_nom_BT: np.ndarray
 
 
 @njit(cache=True, inline="always")

@@ -1,36 +1,25 @@
 """Exact per-candidate rows of a perturbed flight, re-testing only what can change (issue 20).
 
 A scenario moves every candidate's camera by a small deviation from its
-nominal flight: positions ``r'_i = r_i + dr_i`` and camera DCMs
-``C'_i = C_i + dC_i`` at the images. For a vertex ``p``, the camera
-coordinates move by (same derivation as :mod:`ideas_hpc.core.mapping.time_tree`)
+nominal flight. With a *budget* ``(B_C, B_r)`` (DCM and position deviation)
+fixed before any scenario, :mod:`ideas_hpc.core.mapping.scenario_proofs` proves
+once, on the nominal flight, what every flight within the budget sees or
+cannot see: per (candidate, vertex) a witness image with its proof, and a
+window of images outside which no camera within the budget sees the vertex
+(and a wider one for any attitude). :func:`perturbed_rows` then decides each
+(candidate, vertex) of a scenario exactly. Let ``i_ok`` be the first image
+from which the candidate's deviation stays within the budget (e.g. after the
+closed-loop attitude has converged) and ``i_pos`` the same for the position
+deviation alone (:func:`deviation_start`).
 
-    q'_i - q_i = (C'_i - C_i)(p - r_i) + C'_i (r_i - r'_i),
-    |q'_i - q_i| <= B_C |p - r_i| + s' B_r,
-
-with ``B_C >= ||C'_i - C_i||_F``, ``B_r >= |r'_i - r_i|`` and
-``s' >= ||C'_i||_2`` (1 + 1e-9 for the rotation matrices flown here, checked
-by the caller). Culling, clipping and the field of view are linear or
-|linear| in ``q`` (gradient norms 1 and ``sec eta``); the exact culling
-``(r - p) . n``, the elevation ``(r - p) . n >= |r - p| sin e_min`` and the
-range ``|r - p| <= max_range`` move by at most ``|n| B_r``, ``(|n| + |sin
-e_min|) B_r`` and ``B_r``. Illumination does not depend on the spacecraft.
-
-So with a *budget* ``(B_C, B_r)`` fixed before any scenario:
-
-* :func:`ideas_hpc.core.mapping.coverage.first_image_by_spacecraft` (the nominal witness)
-  gives, per (candidate, vertex), the first nominal
-  image that sees the vertex (-1: unseen), and :func:`reachable` whether any
-  image could pass culling, clipping, field of view, elevation and range for
-  some deviation within the budget (a superset test with floating-point slack);
-* :func:`perturbed_rows` then decides each (candidate, vertex) of a scenario
-  exactly: a nominally seen vertex is first tested at its witness image in
-  the perturbed flight (one exact test: a hit settles it); a vertex that is
-  not reachable stays unseen in every image where the deviation is within
-  the budget, so only the images before ``i_ok`` (the first image from which
-  the candidate's deviation stays within budget, e.g. after the closed-loop
-  attitude has converged) are scanned; anything else gets the full exact scan
-  of :func:`ideas_hpc.core.mapping.time_tree._scan` on the perturbed flight.
+* a nominally seen vertex whose witness proof holds for the flown camera's
+  deviation at the witness image (position and DCM) is seen without a test;
+  otherwise it is tested exactly at its witness image (a hit settles it);
+* anything not settled is scanned exactly
+  (:func:`~ideas_hpc.core.mapping.visibility._seen_hint` over the perturbed
+  flight's time tree): every image before ``min(i_pos, i_ok)``, the images of
+  ``[i_pos, i_ok)`` in its any-attitude window, and those from ``i_ok`` on in
+  its budget window.
 
 Every answer is either an exact test on the perturbed flight or a proof from
 the bounds, so rows equal a full recomputation bit for bit.
@@ -41,222 +30,73 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from ideas_hpc.core.mapping.time_tree import _FP, _classify, scan_tree
 from ideas_hpc.core.mapping.coverage import _is_strict
-from ideas_hpc.core.mapping.segments import face_blocks_cone
-from ideas_hpc.core.mapping.visibility import _seen, _seen_hint
 from ideas_hpc.core.mapping.records import TimeTree
-
-#: Bound on ||C'||_2 for the flown rotation matrices (checked by the boundary layer).
-S_MAX = 1.0 + 1e-9
-
-
-@njit(cache=True, inline="always")
-def _required(vtx, k, i, cam, sec_eta, opts, bc, br):
-    """Smallest position deviation (m) with which a camera within ``bc`` of image ``i``
-    could pass culling, clipping, field of view, elevation and range (inf: none).
-
-    Each test is ``slack >= -(its change bound)``, linear in the deviation (module
-    docstring), solved for it; ``br`` (the budget) only sizes the floating-point
-    slack, and the result is shrunk by a relative and absolute 1e-9 so that it
-    never exceeds the exact value. ``vtx`` is ``(px, py, pz, nx, ny, nz, |n|)`` (m, T).
-    """
-    px, py, pz, nx, ny, nz, nabs = vtx
-    r_T = cam.r_T_m
-    dcm_BT = cam.dcm_BT
-    tan_eta = cam.tan_eta
-    near = cam.near_m
-    far = cam.far_m
-    exact = cam.exact
-    sin_min_elev = opts.sin_min_elev
-    max_range = opts.max_range_m
-    rx = r_T[k, i, 0]
-    ry = r_T[k, i, 1]
-    rz = r_T[k, i, 2]
-    dx = px - rx
-    dy = py - ry
-    dz = pz - rz
-    dn = np.sqrt(dx * dx + dy * dy + dz * dz)
-    fp = _FP * (dn + br + np.sqrt(rx * rx + ry * ry + rz * rz))
-    los_n = -(dx * nx + dy * ny + dz * nz)
-    cul = los_n if exact else rx * nx + ry * ny + rz * nz
-    if nabs > 0.0:
-        need = (-cul - fp * nabs) / nabs
-    else:
-        need = 0.0 if cul >= 0.0 else np.inf
-    qz = dcm_BT[k, i, 2, 0] * dx + dcm_BT[k, i, 2, 1] * dy + dcm_BT[k, i, 2, 2] * dz
-    qx = dcm_BT[k, i, 0, 0] * dx + dcm_BT[k, i, 0, 1] * dy + dcm_BT[k, i, 0, 2] * dz
-    qy = dcm_BT[k, i, 1, 0] * dx + dcm_BT[k, i, 1, 1] * dy + dcm_BT[k, i, 1, 2] * dz
-    base = bc * dn + fp                     # delta = base + S_MAX * deviation
-    need = max(need, (near - qz - base) / S_MAX, (qz - far - base) / S_MAX)
-    fov = max(abs(qx), abs(qy)) - tan_eta * qz - (1.0 + tan_eta) * fp
-    need = max(need, (fov / sec_eta - base) / S_MAX)
-    if sin_min_elev > -1.0 or max_range < np.inf:
-        need = max(need, dn - max_range - fp,
-                   (dn * sin_min_elev - los_n - 2.0 * fp) / (nabs + abs(sin_min_elev)))
-    return max(0.0, need * (1.0 - 1e-9) - 1e-9)
-
-
-@njit(cache=True, inline="always")
-def _could(vtx, k, i, cam, sec_eta, opts, bc, br):
-    """False when no camera within ``(bc, br)`` of image ``i`` can pass the geometric tests."""
-    return _required(vtx, k, i, cam, sec_eta, opts, bc, br) <= br
-
-
-@njit(cache=True, inline="always")
-def _extreme(tree, stack, k, vtx, cam, opts, bc, br, last):
-    """First (``last``: last) image that :func:`_could` see the vertex ``vtx`` (as in
-    :func:`_required`), -1 if none. ``tree`` carries the budget-inflated bounds."""
-    NI = tree.NI
-    sec_eta = tree.sec_eta
-    px, py, pz, nx, ny, nz, nabs = vtx
-    sp = 1
-    stack[0] = NI.shape[0] - 1
-    while sp > 0:
-        sp -= 1
-        node = stack[sp]
-        if _classify(tree, k, node, px, py, pz, nx, ny, nz, nabs, cam) == 0:
-            continue
-        if NI[node, 2] >= 0:
-            first, second = NI[node, 3], NI[node, 2]     # pushed second, popped first
-            if last:
-                first, second = NI[node, 2], NI[node, 3]
-            if first >= 0:
-                stack[sp] = first
-                sp += 1
-            if second >= 0:
-                stack[sp] = second
-                sp += 1
-            continue
-        n = NI[node, 1] - NI[node, 0]
-        for h in range(n):
-            i = NI[node, 1] - 1 - h if last else NI[node, 0] + h
-            if _could(vtx, k, i, cam, sec_eta, opts, bc, br):
-                return i
-    return -1
-
-
-@njit(cache=True, parallel=True)
-def reachable(mesh, cam, opts, bc, br):
-    """(N, V, 2) int64: first and last image at which a camera within the budget could
-    see vertex j (-1, -1: none), and (N, V) the smallest position deviation (m, with
-    the DCM deviation ``bc``) that could let any image of that window see it
-    (:func:`_required`; inf when none).
-
-    ``mesh``, ``cam`` (the nominal flight) and ``opts`` (only the elevation and
-    range are read) as in :func:`ideas_hpc.core.mapping.coverage.coverage_vertices`.
-    ``bc`` (Frobenius norm of the DCM deviation) and ``br`` (m, position
-    deviation) is the budget; outside the window no camera within it passes
-    culling, clipping, field of view, elevation and range (module docstring).
-    The nominal time tree prunes with its node bounds inflated by the budget.
-    """
-    vertices = mesh.vertices_T_m
-    normals = mesh.normals_T
-    nv = vertices.shape[0]
-    nsc = cam.r_T_m.shape[0]
-    tree = TimeTree(*scan_tree(cam))
-    NF = tree.NF
-    for k in range(nsc):
-        for node in range(tree.NI.shape[0]):
-            NF[k, node, 14] = (NF[k, node, 14] + br) * S_MAX * (1.0 + 1e-12)
-            NF[k, node, 13] = (NF[k, node, 13] + bc) * (1.0 + 1e-12)
-    sec_eta = tree.sec_eta
-    out = np.full((nsc, nv, 2), -1, dtype=np.int64)
-    margin = np.full((nsc, nv), np.inf)
-    for j in prange(nv):
-        stack = np.empty(128, dtype=np.int64)
-        px = vertices[j, 0]
-        py = vertices[j, 1]
-        pz = vertices[j, 2]
-        nx = normals[j, 0]
-        ny = normals[j, 1]
-        nz = normals[j, 2]
-        nabs = np.sqrt(nx * nx + ny * ny + nz * nz)
-        vtx = (px, py, pz, nx, ny, nz, nabs)
-        for k in range(nsc):
-            lo = _extreme(tree, stack, k, vtx, cam, opts, bc, br, False)
-            if lo >= 0:
-                hi = _extreme(tree, stack, k, vtx, cam, opts, bc, br, True)
-                out[k, j, 0] = lo
-                out[k, j, 1] = hi
-                m = np.inf
-                for i in range(lo, hi + 1):
-                    m = min(m, _required(vtx, k, i, cam, sec_eta, opts, bc, br))
-                margin[k, j] = m
-    return out, margin
-
-
-@njit(cache=True, parallel=True)
-def orthonormality_error(dcm_BT):
-    """Largest ``||C C^T - I||_F`` over (N, n_img, 3, 3) DCMs (``||C||_2 <= sqrt(1 + it)``)."""
-    nsc = dcm_BT.shape[0]
-    nimg = dcm_BT.shape[1]
-    worst = np.zeros(nsc)
-    for k in prange(nsc):
-        w = 0.0
-        for i in range(nimg):
-            g = 0.0
-            for a in range(3):
-                for c in range(3):
-                    t = (dcm_BT[k, i, a, 0] * dcm_BT[k, i, c, 0]
-                         + dcm_BT[k, i, a, 1] * dcm_BT[k, i, c, 1]
-                         + dcm_BT[k, i, a, 2] * dcm_BT[k, i, c, 2])
-                    if a == c:
-                        t -= 1.0
-                    g += t * t
-            w = max(w, np.sqrt(g))
-        worst[k] = w
-    return worst.max() if nsc > 0 else 0.0
+from ideas_hpc.core.mapping.scenario_proofs import S_MAX
+from ideas_hpc.core.mapping.segments import face_blocks_cone
+from ideas_hpc.core.mapping.time_tree import _below_elevation, _classify, scan_tree
+from ideas_hpc.core.mapping.visibility import _seen, _seen_hint
 
 
 @njit(cache=True, parallel=True)
 def deviation_start(r_nom, dcm_nom, r_T, dcm_BT, bc, br):
-    """(N,) int64 first image from which every image's deviation is within ``(bc, br)``
-    (``n_img`` when the last image is already outside), and (N,) the largest position
-    deviation (m) from that image on."""
+    """How far a flight ``(r_T, dcm_BT)`` strays from the nominal ``(r_nom, dcm_nom)``.
+
+    Returns (N,) int64 ``i_ok``, the first image from which every image's deviation
+    is within the budget ``(bc, br)`` (``n_img`` when the last image is already
+    outside); (N,) int64 ``i_pos``, the same for the position deviation alone;
+    (N,) the largest position deviation (m) from ``i_ok`` on; and the largest
+    ``||C C^T - I||_F`` of the flown DCMs, which bounds ``||C||_2 <= sqrt(1 + it)``
+    for the proofs (inf when one is a reflection, NaN when one is not finite).
+    """
     nsc = r_T.shape[0]
     nimg = r_T.shape[1]
     out = np.empty(nsc, dtype=np.int64)
-    dev = np.zeros(nsc)
+    out_pos = np.empty(nsc, dtype=np.int64)
+    ortho = np.zeros(nsc)
     for k in prange(nsc):
         i_ok = 0
-        dmax = 0.0
+        i_pos = 0
+        worst = 0.0
         for i in range(nimg - 1, -1, -1):
             dc = 0.0
             for a in range(3):
                 for b in range(3):
                     dc += (dcm_BT[k, i, a, b] - dcm_nom[k, i, a, b]) ** 2
-            dr = np.sqrt((r_T[k, i, 0] - r_nom[k, i, 0]) ** 2
-                         + (r_T[k, i, 1] - r_nom[k, i, 1]) ** 2
-                         + (r_T[k, i, 2] - r_nom[k, i, 2]) ** 2)
-            if not (np.sqrt(dc) <= bc and dr <= br):
+            g = 0.0
+            for a in range(3):
+                for b in range(3):
+                    t = (dcm_BT[k, i, a, 0] * dcm_BT[k, i, b, 0]
+                         + dcm_BT[k, i, a, 1] * dcm_BT[k, i, b, 1]
+                         + dcm_BT[k, i, a, 2] * dcm_BT[k, i, b, 2])
+                    if a == b:
+                        t -= 1.0
+                    g += t * t
+            det = (dcm_BT[k, i, 0, 0] * (dcm_BT[k, i, 1, 1] * dcm_BT[k, i, 2, 2]
+                                         - dcm_BT[k, i, 1, 2] * dcm_BT[k, i, 2, 1])
+                   - dcm_BT[k, i, 0, 1] * (dcm_BT[k, i, 1, 0] * dcm_BT[k, i, 2, 2]
+                                           - dcm_BT[k, i, 1, 2] * dcm_BT[k, i, 2, 0])
+                   + dcm_BT[k, i, 0, 2] * (dcm_BT[k, i, 1, 0] * dcm_BT[k, i, 2, 1]
+                                           - dcm_BT[k, i, 1, 1] * dcm_BT[k, i, 2, 0]))
+            if not det > 0.0:
+                g = np.inf                   # a reflection (or NaN): not a rotation
+            if not g <= worst:
+                worst = g                    # NaN sticks
+            dr = _distance(r_T, r_nom, k, i)
+            if i_ok == 0 and not (np.sqrt(dc) <= bc and dr <= br):
                 i_ok = i + 1
-                break
-            dmax = max(dmax, dr)
+            if i_pos == 0 and not dr <= br:
+                i_pos = i + 1
         out[k] = i_ok
-        dev[k] = dmax
-    return out, dev
+        out_pos[k] = i_pos
+        ortho[k] = np.sqrt(worst)
+    return out, out_pos, ortho.max() if nsc > 0 else 0.0
 
 
 @njit(cache=True, inline="always")
-def _below_elevation(NF, k, node, px, py, pz, nx, ny, nz, nabs, sin_min_elev, max_range):
-    """True when every image of the node fails the elevation or the range test.
-
-    With ``|r_k - r_m| <= e_r``: ``(r_k - p) . n <= (r_m - p) . n + |n| e_r`` and
-    ``|r_k - p| >= |r_m - p| - e_r``.
-    """
-    vx = NF[k, node, 9] - px
-    vy = NF[k, node, 10] - py
-    vz = NF[k, node, 11] - pz
-    dist = np.sqrt(vx * vx + vy * vy + vz * vz)
-    er = NF[k, node, 14]
-    fp = _FP * (dist + er + NF[k, node, 12])
-    if dist - er - fp > max_range:
-        return True
-    if sin_min_elev <= 0.0:
-        return False
-    los_hi = vx * nx + vy * ny + vz * nz + nabs * er + fp
-    return los_hi < (dist - er - fp) * sin_min_elev
+def _distance(r_a, r_b, k, i):
+    return np.sqrt((r_a[k, i, 0] - r_b[k, i, 0]) ** 2 + (r_a[k, i, 1] - r_b[k, i, 1]) ** 2
+                   + (r_a[k, i, 2] - r_b[k, i, 2]) ** 2)
 
 
 @njit(cache=True, inline="always")
@@ -327,40 +167,75 @@ def _scan_range(j, k, a, b, tree, stack, hint, mesh, cam, strict, opts, bvh):
     return False
 
 
+@njit(cache=True, inline="always")
+def _proven(nominal, vertices, j, cam, k, w):
+    """The witness proof of :func:`~ideas_hpc.core.mapping.scenario_proofs.witness_proofs`
+    holds for the flown camera ``cam`` of candidate ``k`` at its witness image ``w``."""
+    r_T = cam.r_T_m
+    d = _distance(r_T, nominal.r_nom_T_m, k, w)
+    if not d < nominal.radius_m[k, j]:
+        return False
+    c = 0.0
+    for a in range(3):
+        for b in range(3):
+            c += (cam.dcm_BT[k, w, a, b] - nominal.dcm_nom_BT[k, w, a, b]) ** 2
+    dx = vertices[j, 0] - r_T[k, w, 0]
+    dy = vertices[j, 1] - r_T[k, w, 1]
+    dz = vertices[j, 2] - r_T[k, w, 2]
+    dist = np.sqrt(dx * dx + dy * dy + dz * dz)
+    return (np.sqrt(c) * (dist + d) * (1.0 + 1e-12) + S_MAX * d) * (1.0 + 1e-12) \
+        < nominal.slack_q_m[k, j]
+
+
 @njit(cache=True, parallel=True)
 def perturbed_rows(nominal, mesh, cam, opts, bvh):
     """(N, V) bool rows of the perturbed flight ``cam`` (module docstring).
 
-    ``nominal`` is a :class:`~ideas_hpc.core.mapping.records.Nominal`: ``witness`` (N, V) from
-    :func:`~ideas_hpc.core.mapping.coverage.first_image_by_spacecraft`, ``window`` (N, V, 2) and ``margin`` (N, V) from
-    :func:`reachable` with the budget, ``i_ok`` and ``dev`` (N,) from
-    :func:`deviation_start` with the same budget (a window is skipped when the
-    candidate's largest deviation from ``i_ok`` on is below the margin); other
-    arguments as :func:`ideas_hpc.core.mapping.coverage.observed_by_spacecraft`,
-    for the perturbed flight. A (candidate, vertex) not settled by its
-    witness image is scanned exactly over the images before ``i_ok`` and over
-    its window from ``i_ok`` on (:func:`_scan_range`).
+    ``nominal`` is a :class:`~ideas_hpc.core.mapping.records.Nominal`: ``witness``,
+    ``slack_q_m`` and ``radius_m`` (N, V) from
+    :func:`~ideas_hpc.core.mapping.scenario_proofs.witness_proofs`, ``window``
+    (N, V, 2) and ``unseen_any`` (N, V) from
+    :func:`~ideas_hpc.core.mapping.scenario_proofs.windows` with the budget and
+    with any attitude, ``i_ok`` and ``i_pos`` (N,) from :func:`deviation_start`
+    with the same budget, and the nominal flight; other arguments as
+    :func:`ideas_hpc.core.mapping.coverage.observed_by_spacecraft`, for the
+    perturbed flight. A (candidate, vertex) not settled by its witness is
+    scanned exactly (:func:`_scan_range`).
     """
-    witness, window, margin, i_ok, dev = nominal
+    witness = nominal.witness
+    window = nominal.window
+    unseen_any = nominal.unseen_any
+    i_ok = nominal.i_ok
+    i_pos = nominal.i_pos
+    vertices = mesh.vertices_T_m
     nv = mesh.vertices_T_m.shape[0]
     nsc = cam.r_T_m.shape[0]
     tree = TimeTree(*scan_tree(cam))
     strict = _is_strict(opts)
     mask = np.zeros((nsc, nv), dtype=np.bool_)
-    for j in prange(nv):
+    # candidate-major: one candidate's flight, time tree and rows stay in cache
+    for k in prange(nsc):
         stack = np.empty(128, dtype=np.int64)
         hint = np.full(1, -1, dtype=np.int64)
-        for k in range(nsc):
+        for j in range(nv):
             w = witness[k, j]
-            if w >= 0 and _seen(j, k, w, mesh, cam, opts, bvh, opts.occlusion,
-                                opts.illumination):
+            if w >= 0 and (_proven(nominal, vertices, j, cam, k, w)
+                           or _seen(j, k, w, mesh, cam, opts, bvh, opts.occlusion,
+                                    opts.illumination)):
                 mask[k, j] = True
                 continue
             hint[0] = -1
-            seen = _scan_range(j, k, 0, i_ok[k], tree, stack, hint, mesh, cam, strict, opts,
-                               bvh)
-            if not seen and window[k, j, 0] >= 0 and not dev[k] < margin[k, j]:
-                seen = _scan_range(j, k, max(window[k, j, 0], i_ok[k]), window[k, j, 1] + 1,
-                                   tree, stack, hint, mesh, cam, strict, opts, bvh)
+            # before i_ok: every image until i_pos, then from what positions allow
+            seen = _scan_range(j, k, 0, min(i_pos[k], i_ok[k]), tree, stack, hint, mesh, cam,
+                               strict, opts, bvh)
+            a = max(i_pos[k], unseen_any[k, j])
+            if not seen and unseen_any[k, j] >= 0 and a < i_ok[k]:
+                seen = _scan_range(j, k, a, i_ok[k], tree, stack, hint, mesh, cam, strict, opts,
+                                   bvh)
+            # from i_ok: in both windows (either proof holds there)
+            if not seen and window[k, j, 0] >= 0 and unseen_any[k, j] >= 0:
+                seen = _scan_range(j, k, max(window[k, j, 0], i_ok[k], unseen_any[k, j]),
+                                   window[k, j, 1] + 1, tree, stack, hint, mesh, cam, strict,
+                                   opts, bvh)
             mask[k, j] = seen
     return mask

@@ -331,3 +331,24 @@ def _scan(j, k, tree, stack, best, early, mesh, cam, strict, bvh, opts):
                 if early:
                     break
     return Sightings(cnt, best)
+
+
+@njit(cache=True, inline="always")
+def _below_elevation(NF, k, node, px, py, pz, nx, ny, nz, nabs, sin_min_elev, max_range):
+    """True when every image of the node fails the elevation or the range test.
+
+    With ``|r_k - r_m| <= e_r``: ``(r_k - p) . n <= (r_m - p) . n + |n| e_r`` and
+    ``|r_k - p| >= |r_m - p| - e_r``.
+    """
+    vx = NF[k, node, 9] - px
+    vy = NF[k, node, 10] - py
+    vz = NF[k, node, 11] - pz
+    dist = np.sqrt(vx * vx + vy * vy + vz * vz)
+    er = NF[k, node, 14]
+    fp = _FP * (dist + er + NF[k, node, 12])
+    if dist - er - fp > max_range:
+        return True
+    if sin_min_elev <= 0.0:
+        return False
+    los_hi = vx * nx + vy * ny + vz * nz + nabs * er + fp
+    return los_hi < (dist - er - fp) * sin_min_elev
