@@ -44,8 +44,8 @@ def deviation_start(r_nom, dcm_nom, r_T, dcm_BT, bc, br):
 
     Returns (N,) int64 ``i_ok``, the first image from which every image's deviation
     is within the budget ``(bc, br)`` (``n_img`` when the last image is already
-    outside); (N,) int64 ``i_pos``, the same for the position deviation alone;
-    (N,) the largest position deviation (m) from ``i_ok`` on; and the largest
+    outside); (N,) int64 ``i_pos``, the same for the position deviation alone; and
+    the largest
     ``||C C^T - I||_F`` of the flown DCMs, which bounds ``||C||_2 <= sqrt(1 + it)``
     for the proofs (inf when one is a reflection, NaN when one is not finite).
     """
