@@ -185,7 +185,7 @@ def workload_section(shape, tree, scene, eps):
 
     from ideas_hpc.config.campaign_tables import load
     from ideas_hpc.design.candidates import _views
-    from ideas_hpc.flyby.flight import setup_from_campaign
+    from ideas_hpc.campaign.setup import setup_from_campaign
     from ideas_hpc.mapping.coverage import compute_coverage, observed_per_spacecraft
 
     root = Path(__file__).resolve().parent.parent

@@ -16,7 +16,8 @@ from ideas_hpc.config.campaign_tables import load
 from ideas_hpc.core.dynamics.encounter import dcm_NS, pointing_demand
 from ideas_hpc.flyby.encounter import phase_angle
 from ideas_hpc.errors import InputError
-from ideas_hpc.flyby.flight import fly, setup_from_campaign, target
+from ideas_hpc.flyby.flight import fly, target
+from ideas_hpc.campaign.setup import setup_from_campaign
 
 BASE = """
 kind = "flyby"

@@ -284,7 +284,8 @@ def test_design_campaigns_take_a_requirement_and_refuse_stereo_they_cannot_score
 def test_arrival_scan_matches_flybys_at_each_epoch():
     from ideas_hpc.campaign.scan import arrival_scan
     from ideas_hpc.config.campaign_tables import load
-    from ideas_hpc.flyby.flight import fly, setup_from_campaign
+    from ideas_hpc.flyby.flight import fly
+    from ideas_hpc.campaign.setup import setup_from_campaign
 
     sets = ["body.name=\"ellipsoid\"", "flyby.tf_s=60", "flyby.z_start_km=-3",
             "flyby.z_stop_km=3", "coverage.mode=\"exact\"", "coverage.require_lit=true",
