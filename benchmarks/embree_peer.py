@@ -195,7 +195,7 @@ def workload_section(shape, tree, scene, eps):
     opts = setup.coverage
     v = np.ascontiguousarray(shape.vertices_T)
     nrm = np.ascontiguousarray(shape.vertex_normals_T)
-    te, sin_e = math.tan(setup.eta_rad), math.sin(opts.min_elevation)
+    te, sin_e = math.tan(setup.eta_rad), math.sin(opts.min_elevation_rad)
     geo = (setup.eta_rad, setup.near_m, setup.far_m)
     args = (v, nrm, r, C, te, setup.near_m, setup.far_m, True, sin_e, np.inf, True, False,
             np.zeros((1, 3)), *tree)

@@ -245,7 +245,7 @@ def test_pointing_the_wheels_cannot_follow_is_reported():
     t = np.arange(0.0, 20.0, 0.1)
     bn = Rotation.from_rotvec(np.outer(0.2 * np.sin(t), [0.0, 1.0, 0.0])).as_matrix()
     bn = np.ascontiguousarray(np.stack([np.broadcast_to(np.eye(3), bn.shape), bn]))
-    weak = SpacecraftModel(u_max=1e-4)
+    weak = SpacecraftModel(u_max_N_m=1e-4)
     out = pointing_check(bn, 0.1, weak)
     assert out["pointing_feasible"].tolist() == [True, False]
     assert out["summary"].startswith("WARNING") and "spacecraft [1]" in out["summary"]

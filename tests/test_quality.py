@@ -12,8 +12,9 @@ import pytest
 
 from ideas_hpc.body.analytic import sphere_mesh
 from ideas_hpc.core.mapping import quality as cq
+from ideas_hpc.config.model_fields import COVERAGE_FIELDS
 from ideas_hpc.mapping.options import coverage_options_from_config
-from ideas_hpc.errors import InputError
+from ideas_hpc.errors import InputError, config_fields
 from ideas_hpc.mapping.coverage import compute_coverage
 from ideas_hpc.mapping.options import CoverageOptions
 from test_coverage import look_at
@@ -189,7 +190,7 @@ def test_requirement_config_keys():
                          ({"max_resolution_m": -1}, "coverage.max_resolution_m"),
                          ({"stereo_min_deg": 50}, "coverage.stereo_min_deg"),
                          ({"pixel_pitch_um": 7}, "coverage.focal_length_mm")]:
-        with pytest.raises(InputError) as ei:
+        with pytest.raises(InputError) as ei, config_fields(COVERAGE_FIELDS):  # as the campaign
             coverage_options_from_config(table)
         assert ei.value.field == field, (table, ei.value.field)
 

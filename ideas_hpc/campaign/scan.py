@@ -57,8 +57,8 @@ def arrival_scan(setup, theta, periods=None, epochs=None) -> xr.Dataset:
     opts = setup.coverage if setup.coverage.wants_quality else replace(setup.coverage,
                                                                        quality=True)
     base = fly(setup.with_(coverage=replace(opts, quality=False, require_lit=False,
-                                            max_resolution=None, max_emission=None,
-                                            max_incidence=None, max_phase=None,
+                                            max_resolution_m=None, max_emission_rad=None,
+                                            max_incidence_rad=None, max_phase_rad=None,
                                             require_stereo=False, illumination=False)),
                theta, periods, counts=False)
     a = setup.body.shape.vertex_areas

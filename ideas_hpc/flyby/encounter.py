@@ -249,10 +249,10 @@ def pointing_check(dcm_BN, dt: float, spacecraft) -> dict:
     """
     rate, tq, h = pointing_demand(np.ascontiguousarray(dcm_BN, dtype=np.float64), float(dt),
                                   np.ascontiguousarray(spacecraft.inertia_rw))
-    ok = (tq <= spacecraft.u_max) & (h <= spacecraft.h_max)
+    ok = (tq <= spacecraft.u_max_N_m) & (h <= spacecraft.h_max_N_m_s)
     head = (f"pointing: peak rate {math.degrees(rate.max()):.3g} deg/s, torque "
-            f"{tq.max() * 1e3:.3g} mN m (wheel limit {spacecraft.u_max * 1e3:g}), momentum "
-            f"{h.max() * 1e3:.3g} mN m s (limit {spacecraft.h_max * 1e3:g})")
+            f"{tq.max() * 1e3:.3g} mN m (wheel limit {spacecraft.u_max_N_m * 1e3:g}), momentum "
+            f"{h.max() * 1e3:.3g} mN m s (limit {spacecraft.h_max_N_m_s * 1e3:g})")
     if ok.all():
         summary = head + ": the wheels can follow"
     else:
