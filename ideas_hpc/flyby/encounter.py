@@ -245,7 +245,7 @@ def pointing_check(dcm_BN, dt: float, spacecraft) -> dict:
 
     Returns a dict of (N,) arrays ``pointing_rate`` (rad/s), ``pointing_torque``
     (N m), ``pointing_momentum`` (N m s), ``pointing_feasible`` (bool: torque
-    <= ``u_max`` and momentum <= ``h_max``) and the one-line ``summary``.
+    <= ``u_max_N_m`` and momentum <= ``h_max_N_m_s``) and the one-line ``summary``.
     """
     rate, tq, h = pointing_demand(np.ascontiguousarray(dcm_BN, dtype=np.float64), float(dt),
                                   np.ascontiguousarray(spacecraft.inertia_rw))
