@@ -49,13 +49,14 @@ def _run(tmp_path, campaign, capsys, *args) -> str:
 
 TARGETING = [("tolerance_m = 0.01", "tolerance_m = 1e-5"),
              ("max_iterations = 25", "max_iterations = 1")]
+FLYBY_EDITS = [ELLIPSOID, ('mode = "simulated"', 'mode = "ideal"'),
+               ("angles_rad = [0.2, 1.7, 2.4, 2.9, 3.3, 3.5, 5.6, 6.0]",
+                "angles_rad = [0.2, 3.3]")] + TARGETING
 FLYBY_APPEND = "\n[flyby]\ntolerance_m = 1e-5\nmax_iterations = 1\n"
 
 
 @pytest.mark.parametrize("base,edits,append,args", [
-    ("eros-flyby.toml", [ELLIPSOID, ('mode = "simulated"', 'mode = "ideal"'),
-                         ("angles_rad = [0.2, 1.7, 2.4, 2.9, 3.3, 3.5, 5.6, 6.0]",
-                          "angles_rad = [0.2, 3.3]")] + TARGETING, "", []),
+    ("eros-flyby.toml", FLYBY_EDITS, "", []),
     ("eros-monte-carlo.toml", [ELLIPSOID], FLYBY_APPEND, ["--workers", "1"]),
     ("eros-nadir-ga.toml", [ELLIPSOID], FLYBY_APPEND, ["--workers", "1"]),
 ], ids=["flyby", "monte-carlo", "design-ga"])
@@ -92,3 +93,15 @@ def test_ring_spacing_names_the_angles_line(tmp_path, capsys):
     text = _run(tmp_path, p, capsys)
     assert f"{p}:{_line(p, 'angles_rad')}: swarm.angles_rad: spacecraft 0 and 1" in text
     assert "the minimum is swarm.min_separation_km = 1" in text, text
+
+
+def test_scan_names_the_file_key(tmp_path):
+    """The arrival scan flies the setup outside ``run``: same key (no file line, as before)."""
+    from ideas_hpc.campaign.scan import scan_file
+    from ideas_hpc.errors import InputError
+
+    p = _campaign(tmp_path, "eros-flyby.toml", FLYBY_EDITS)
+    with pytest.raises(InputError) as ei:
+        scan_file(p, n=1)
+    assert ei.value.field == "flyby.max_iterations"
+    assert "raise flyby.max_iterations (now 1)" in ei.value.message
