@@ -18,6 +18,7 @@ from ideas_hpc.flyby.encounter import phase_angle
 from ideas_hpc.errors import InputError
 from ideas_hpc.flyby.flight import fly, target
 from ideas_hpc.campaign.setup import setup_from_campaign
+from ideas_hpc.config.model_fields import flyby_errors
 
 BASE = """
 kind = "flyby"
@@ -187,10 +188,13 @@ def test_phase_angle_sets_the_approach(tmp_path):
      "max_iterations = 2", "flyby.max_iterations"),
 ])
 def test_bad_encounter_names_the_field(tmp_path, flyby, field):
-    with pytest.raises(InputError) as exc:
+    """Targeting names the setup's parameter; the campaign layer (``flyby_errors``, as in
+    ``run_file``) the file's key."""
+    with pytest.raises(InputError) as exc, flyby_errors():
         s = _setup(tmp_path, flyby, rate=1.0, dt=1.0)
         target(s, [0.0, 1.0])
     assert exc.value.field == field and "\n" not in str(exc.value)
+    assert "`" not in exc.value.message
 
 
 def test_pointing_demand_of_a_sweep_matches_euler():
