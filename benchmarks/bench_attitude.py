@@ -189,7 +189,7 @@ def main():
     s0, w0, W0 = (a[None].copy() for a in initial_conditions(1, 0, THETA.size))
     args = (0, rt, W, np.ones(THETA.size), 0.0,
             ControlGains(k_p, k_i, eta, phi, float(g.int_limit)),
-            Wheels(sc.inertia_rw, sc.J_s, float(sc.u_max), float(sc.h_max)), DT)
+            Wheels(sc.inertia_rw, sc.J_s, float(sc.u_max_N_m), float(sc.h_max_N_m_s)), DT)
     init = Initial(s0, w0, W0)
     no_table = np.empty((THETA.size, 0, 9))  # NP reads no track reference
     simulate_batch(*args, 10, (1, 2), init, no_table)  # compile / load cache
@@ -217,7 +217,7 @@ def main():
     for _ in range(3):  # best of 3, like the compiled timing (the machine is shared)
         t0 = time.perf_counter()
         sig_np = numpy_run(x0, n_np, rt, k_p, k_i, eta, phi, g.int_limit, sc.inertia_rw,
-                           sc.J_s, sc.u_max, sc.h_max)
+                           sc.J_s, sc.u_max_N_m, sc.h_max_N_m_s)
         t_np = min(t_np, time.perf_counter() - t0)
     us_np = t_np / (THETA.size * n_np) * 1e6
     diff = np.abs(np.transpose(sig_np, (1, 0, 2)) - out[0][0, :, :n_np]).max()

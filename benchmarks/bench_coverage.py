@@ -243,7 +243,8 @@ def quality_section():
     sun /= np.linalg.norm(sun, axis=1)[:, None]
     strict = CoverageOptions(mode="exact", occlusion=True, illumination=True)
     qual = CoverageOptions(mode="exact", occlusion=True, require_lit=True,
-                           max_emission=math.radians(60.0), max_incidence=math.radians(70.0),
+                           max_emission_rad=math.radians(60.0),
+                           max_incidence_rad=math.radians(70.0),
                            require_stereo=True)
     for o in (strict, qual):      # compile, and build the BVH once (cached per shape)
         compute_coverage(shape, r[:, :20], C[:, :20], t[:20], ETA, NEAR, FAR, options=o,

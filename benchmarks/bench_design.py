@@ -28,7 +28,7 @@ from ideas_hpc.config.campaign_tables import load  # noqa: E402
 from ideas_hpc.design import (build_bank, coverage_curve, failure_tolerant,  # noqa: E402
                               min_swarm)
 from ideas_hpc.design.candidates import candidate_masks  # noqa: E402
-from ideas_hpc.flyby.flight import setup_from_campaign  # noqa: E402
+from ideas_hpc.campaign.setup import setup_from_campaign  # noqa: E402
 from ideas_hpc.design.ga.genetic import run_nadir_ga  # noqa: E402
 from ideas_hpc.design.ga.swarm_eval import nadir_keys  # noqa: E402
 

@@ -29,7 +29,8 @@ import xarray as xr  # noqa: E402
 
 from ideas_hpc.campaign.run import run_file  # noqa: E402
 from ideas_hpc.config.campaign_tables import load  # noqa: E402
-from ideas_hpc.flyby.flight import fly, setup_from_campaign  # noqa: E402
+from ideas_hpc.flyby.flight import fly  # noqa: E402
+from ideas_hpc.campaign.setup import setup_from_campaign  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 CAMPAIGN = ROOT / "campaigns" / "eros-nadir-ga.toml"

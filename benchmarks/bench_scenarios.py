@@ -34,7 +34,8 @@ import numpy as np
 
 from ideas_hpc.config.campaign_tables import load
 from ideas_hpc.body.datapath import have_data_file
-from ideas_hpc.flyby.flight import Perturbation, setup_from_campaign
+from ideas_hpc.flyby.flight import Perturbation
+from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.montecarlo.scenario_rows import full_rows
 from ideas_hpc.montecarlo.scenarios import draw_world, grid_theta, row_engine
 from ideas_hpc.seeds import SCENARIO_STREAM

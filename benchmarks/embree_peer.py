@@ -185,7 +185,7 @@ def workload_section(shape, tree, scene, eps):
 
     from ideas_hpc.config.campaign_tables import load
     from ideas_hpc.design.candidates import _views
-    from ideas_hpc.flyby.flight import setup_from_campaign
+    from ideas_hpc.campaign.setup import setup_from_campaign
     from ideas_hpc.mapping.coverage import compute_coverage, observed_per_spacecraft
 
     root = Path(__file__).resolve().parent.parent
@@ -195,7 +195,7 @@ def workload_section(shape, tree, scene, eps):
     opts = setup.coverage
     v = np.ascontiguousarray(shape.vertices_T)
     nrm = np.ascontiguousarray(shape.vertex_normals_T)
-    te, sin_e = math.tan(setup.eta_rad), math.sin(opts.min_elevation)
+    te, sin_e = math.tan(setup.eta_rad), math.sin(opts.min_elevation_rad)
     geo = (setup.eta_rad, setup.near_m, setup.far_m)
     observed_per_spacecraft(shape, r[:2], C[:2], *geo, options=opts)
     free = dataclasses.replace(opts, occlusion=False)

@@ -185,9 +185,9 @@ def _twin_step(mode, t, x, z, theta, period, g: Gains, sc: SpacecraftModel, dt):
     wd_cmd = -k_p * dsd - k_i * ds - eta * np.clip(phi * sv, -1, 1) + wdr_b - np.cross(w, wr_b)
     hb = I * w + J * (x[6:9] + w)
     u = -I * wd_cmd - np.cross(w, hb)
-    u = np.clip(u, -sc.u_max, sc.u_max)
-    u[(J * x[6:9] >= sc.h_max) & (u > 0)] = 0.0
-    u[(J * x[6:9] <= -sc.h_max) & (u < 0)] = 0.0
+    u = np.clip(u, -sc.u_max_N_m, sc.u_max_N_m)
+    u[(J * x[6:9] >= sc.h_max_N_m_s) & (u > 0)] = 0.0
+    u[(J * x[6:9] <= -sc.h_max_N_m_s) & (u < 0)] = 0.0
 
     def f(y):
         sg, om, wh = y[:3], y[3:6], y[6:9]
@@ -226,9 +226,9 @@ def test_twin_of_one_closed_loop_step(mode, seed):
         rt = dcm_RT(theta, np.eye(3))
         ring = Ring(mode, mrp.mrp_from_dcm(rt), rt, W_EROS, THETA_MAX, period)
         closed_loop_step(t, xc, zc, ring, ControlGains(k_p, k_i, eta, phi, float(g.int_limit)),
-                         Wheels(SC.inertia_rw, SC.J_s, float(SC.u_max), float(SC.h_max)),
+                         Wheels(SC.inertia_rw, SC.J_s, float(SC.u_max_N_m), float(SC.h_max_N_m_s)),
                          np.zeros(3), 0.1, np.empty(9), u, err, np.empty((5, 9)))
-        np.testing.assert_allclose(u, ut, rtol=0, atol=1e-12 * SC.u_max)
+        np.testing.assert_allclose(u, ut, rtol=0, atol=1e-12 * SC.u_max_N_m)
         np.testing.assert_allclose(err[:3], dst, atol=1e-12)
         np.testing.assert_allclose(err[3:], dwt, atol=1e-12)
         np.testing.assert_allclose(xc[:6], xt[:6], atol=1e-12)
@@ -250,9 +250,9 @@ def _np_closed_loop(n_samples, seed):
           f"max |u| {r.max_torque.max():.4g} N m, max |J_s Omega| {r.max_momentum.max():.4g} N m s")
     assert late120 < 1e-3
     assert at600 < 1e-5
-    assert r.max_torque.max() <= SC.u_max * (1 + 1e-12)
-    assert r.max_momentum.max() <= SC.h_max
-    assert np.abs(r.wheel_torque).max() <= SC.u_max * (1 + 1e-12)
+    assert r.max_torque.max() <= SC.u_max_N_m * (1 + 1e-12)
+    assert r.max_momentum.max() <= SC.h_max_N_m_s
+    assert np.abs(r.wheel_torque).max() <= SC.u_max_N_m * (1 + 1e-12)
     # camera frame after convergence equals the ideal one
     late = r.image_times >= 590
     ideal = ideal_dcm_BT(THETA_PAPER, W_EROS, r.image_times[late])
@@ -297,8 +297,8 @@ def test_fov_sweep_tracks_within_one_percent():
     late = r.image_times >= 200.0
     dz = np.einsum("sitj,itj->sit", r.dcm_BT[:, :, late, 2], ideal[:, late, 2])
     assert np.arccos(np.clip(dz, -1, 1)).max() < 0.01 * THETA_MAX
-    assert r.max_torque.max() <= SC.u_max * (1 + 1e-12)
-    assert r.max_momentum.max() <= SC.h_max
+    assert r.max_torque.max() <= SC.u_max_N_m * (1 + 1e-12)
+    assert r.max_momentum.max() <= SC.h_max_N_m_s
 
 
 def test_perfect_start_stays_on_reference():
@@ -328,9 +328,9 @@ def test_initial_conditions_reproducible_and_in_range():
 
 def test_config_parsing():
     g = gains_from_config({"preset": "fov", "eta": [0.5, 0.4, 0.4]})
-    assert g.k_p == (4.0, 0.4, 0.4) and g.eta == (0.5, 0.4, 0.4)
+    assert g.k_p_per_s == (4.0, 0.4, 0.4) and g.eta_rad_per_s2 == (0.5, 0.4, 0.4)
     g = gains_from_config({"k_p": 0.4, "k_i": 0.01})
-    assert g.k_p == (0.4, 0.4, 0.4)
+    assert g.k_p_per_s == (0.4, 0.4, 0.4)
     assert gains_from_config("np") == GAIN_PRESETS["np"]
     assert gains_from_config({"preset": "np", "int_limit": "inf"}).int_limit == math.inf
     sc = spacecraft_from_config({"mass": 5.0, "inertia": np.diag([0.1, 0.1, 0.02]).tolist()})
@@ -352,11 +352,14 @@ def test_result_to_dataset():
 
 
 @pytest.mark.parametrize("call,field", [
-    (lambda: spacecraft_from_config({"inertia": [0.03, -0.03, 0.006]}), "spacecraft.inertia"),
+    # the model's own field names (the campaign layer maps them: test below) ...
+    (lambda: spacecraft_from_config({"inertia": [0.03, -0.03, 0.006]}), "inertia_kg_m2"),
+    (lambda: spacecraft_from_config({"u_max": -0.007}), "u_max_N_m"),
+    (lambda: spacecraft_from_config({"h_max": -1}), "h_max_N_m_s"),
+    (lambda: gains_from_config(Gains(k_p_per_s=0.4, k_i_per_s2=-1.0)), "k_i_per_s2"),
+    # ... and the table's keys where the table itself is wrong
     (lambda: spacecraft_from_config({"inertia": [[1, 0, 0], [0, 1, 0], [0, 0, -1]]}),
      "spacecraft.inertia"),
-    (lambda: spacecraft_from_config({"u_max": -0.007}), "spacecraft.u_max"),
-    (lambda: spacecraft_from_config({"h_max": -1}), "spacecraft.h_max"),
     (lambda: gains_from_config({"k_p": -0.4, "k_i": 0.01}), "controller.k_p"),
     (lambda: gains_from_config({"preset": "np", "k_i": [0.01, -1, 0]}), "controller.k_i"),
     (lambda: gains_from_config({"preset": "np", "eta": -0.5}), "controller.eta"),
@@ -377,6 +380,22 @@ def test_bad_input_names_field(call, field):
     assert field in str(ei.value)
 
 
+@pytest.mark.parametrize("table,key", [
+    ({"inertia": [0.03, -0.03, 0.006]}, "spacecraft.inertia"),
+    ({"u_max": -0.007}, "spacecraft.u_max"), ({"h_max": -1}, "spacecraft.h_max"),
+    ({"mass": 0.0}, "spacecraft.mass"), ({"wheel_radius": -1.0}, "spacecraft.wheel_radius"),
+    ({"size": [0.1, 0.0, 0.3]}, "spacecraft.size"),
+])
+def test_campaign_layer_names_the_spacecraft_key(table, key):
+    """The config layer's map (an explicit table of keys) puts the file's key back."""
+    from ideas_hpc.config.model_fields import SPACECRAFT_FIELDS
+    from ideas_hpc.errors import config_fields
+
+    with pytest.raises(InputError) as ei, config_fields(SPACECRAFT_FIELDS):
+        spacecraft_from_config(table)
+    assert ei.value.field == key
+
+
 def test_wheel_limits():
     from ideas_hpc.core.attitude.rigid_body import wheel_limits_into
     J = SC.J_s
@@ -391,9 +410,9 @@ def test_wheel_limits():
 def test_momentum_limit_holds_in_closed_loop():
     # a tiny momentum limit that the acquisition must hit: wheel momentum may pass
     # h_max by at most the one held step (u_max dt plus the body-rate coupling)
-    sc = SpacecraftModel(h_max=0.002)
+    sc = SpacecraftModel(h_max_N_m_s=0.002)
     r = simulate_attitude(THETA_PAPER[:4], W_EROS, 60.0, spacecraft=sc, seed=3, n_samples=2)
     hw = np.abs(r.wheel_speed * sc.wheel_spin_inertia)
-    assert hw.max() > 0.9 * sc.h_max  # the limit was reached
-    assert r.max_momentum.max() <= sc.h_max + 1.05 * sc.u_max * 0.1
-    assert r.max_torque.max() <= sc.u_max * (1 + 1e-12)
+    assert hw.max() > 0.9 * sc.h_max_N_m_s  # the limit was reached
+    assert r.max_momentum.max() <= sc.h_max_N_m_s + 1.05 * sc.u_max_N_m * 0.1
+    assert r.max_torque.max() <= sc.u_max_N_m * (1 + 1e-12)

@@ -16,7 +16,8 @@ from ideas_hpc.config.campaign_tables import load
 from ideas_hpc.core.design.union import population_coverage
 from ideas_hpc.errors import InputError
 from ideas_hpc.design.candidates import candidate_masks
-from ideas_hpc.flyby.flight import fly, setup_from_campaign
+from ideas_hpc.flyby.flight import fly
+from ideas_hpc.campaign.setup import setup_from_campaign
 
 ROOT = Path(__file__).resolve().parent.parent
 CAMPAIGNS = ROOT / "campaigns"

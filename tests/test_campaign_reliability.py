@@ -14,7 +14,7 @@ from ideas_hpc.campaign.report_reliability import bank_answer
 from ideas_hpc.campaign.run import run_file
 from ideas_hpc.config.campaign_tables import load
 from ideas_hpc.design import build_bank
-from ideas_hpc.flyby.flight import setup_from_campaign
+from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.plots import figures
 from report_numbers import lines_for, printed, printed_int
 

@@ -15,8 +15,9 @@ from ideas_hpc.core.mapping import bvh as cbvh
 from ideas_hpc.core.mapping import coverage as ccov
 from ideas_hpc.core.mapping.records import Bvh, Camera, Mesh, Strict
 from coverage_tiles import coverage_counts_tiles
-from ideas_hpc.errors import InputError
+from ideas_hpc.errors import InputError, config_fields
 from ideas_hpc.mapping.coverage import compute_coverage, observed_per_spacecraft
+from ideas_hpc.config.model_fields import COVERAGE_FIELDS
 from ideas_hpc.mapping.options import CoverageOptions, coverage_options_from_config
 
 R_SPHERE = 1000.0
@@ -188,8 +189,8 @@ def test_brute_force_tile_pruning(medium_body, cfg, narrow):
 def test_brute_force_strict_elevation_range(small_body, cfg, elev, rng_frac):
     r, C, times, eta, near, far, exact, active = cfg
     max_range = rng_frac * 5000.0
-    opts = CoverageOptions(mode="exact" if exact else "paper", min_elevation=elev,
-                           max_ground_resolution=max_range * 0.55e-6 / 0.08)
+    opts = CoverageOptions(mode="exact" if exact else "paper", min_elevation_rad=elev,
+                           max_ground_resolution_m=max_range * 0.55e-6 / 0.08)
     obs, first, count, _ = brute_force(small_body, r, C, times, eta, near, far, exact, active,
                                        min_elev=elev, max_range=opts.max_range)
     res = compute_coverage(small_body, r, C, times, eta, near, far, options=opts, active=active)
@@ -258,7 +259,7 @@ def test_sphere_min_elevation_cap(sphere):
     eta = math.asin(0.25) + 0.05
     r, C, t = _one_view(d, eta)
     res = compute_coverage(sphere, r, C, t, eta, 1e-4, 1e7,
-                           options=CoverageOptions(mode="exact", min_elevation=eps))
+                           options=CoverageOptions(mode="exact", min_elevation_rad=eps))
     lam = math.acos(R_SPHERE * math.cos(eps) / d) - eps
     assert abs(res.coverage - (1 - math.cos(lam)) / 2) <= 0.01
     x = sphere.vertices_T[:, 0] / R_SPHERE
@@ -274,7 +275,7 @@ def test_sphere_ground_resolution_cap(sphere):
     r, C, t = _one_view(d, eta)
     X = 0.55e-6 * rho / 0.08
     res = compute_coverage(sphere, r, C, t, eta, 1e-4, 1e7,
-                           options=CoverageOptions(mode="exact", max_ground_resolution=X))
+                           options=CoverageOptions(mode="exact", max_ground_resolution_m=X))
     c0 = (R_SPHERE**2 + d**2 - rho**2) / (2 * R_SPHERE * d)
     assert abs(res.coverage - (1 - c0) / 2) <= 0.01
 
@@ -605,8 +606,8 @@ def test_options_from_config():
                                       "min_elevation_deg": 5.0, "max_ground_resolution_m": 1.0,
                                       "wavelength_um": 0.55, "aperture_cm": 8.0})
     assert o.mode == "exact" and o.occlusion and not o.illumination
-    assert o.min_elevation == pytest.approx(math.radians(5.0))
-    assert o.wavelength == pytest.approx(0.55e-6) and o.aperture == pytest.approx(0.08)
+    assert o.min_elevation_rad == pytest.approx(math.radians(5.0))
+    assert o.wavelength_m == pytest.approx(0.55e-6) and o.aperture_m == pytest.approx(0.08)
     # paper sizing (SPEC section 2): X D / lambda = 145.454 km
     assert o.max_range == pytest.approx(145.4545e3, rel=1e-5)
     assert coverage_options_from_config({}) == CoverageOptions()
@@ -616,9 +617,12 @@ def test_options_from_config():
                          ({"min_elevation_deg": 95.0}, "coverage.min_elevation_deg"),
                          ({"aperture_cm": -1.0}, "coverage.aperture_cm"),
                          ({"wavelength_um": "x"}, "coverage.wavelength_um")):
-        with pytest.raises(InputError) as ei:
+        with pytest.raises(InputError) as ei, config_fields(COVERAGE_FIELDS):  # as the campaign
             coverage_options_from_config(table)
         assert ei.value.field == field
+    with pytest.raises(InputError) as ei:   # the model names its own field, in SI
+        coverage_options_from_config({"min_elevation_deg": 95.0})
+    assert ei.value.field == "min_elevation_rad"
     with pytest.raises(InputError) as ei:
         coverage_options_from_config({"bogus": 1}, prefix="mapping.")
     assert ei.value.field == "mapping.bogus"

@@ -18,7 +18,7 @@ from ideas_hpc.config.campaign_tables import load
 from ideas_hpc.design import (CandidateBank, build_bank, coverage_curve, failure_tolerant,
                               max_coverage, min_swarm, worst_failure)
 from ideas_hpc.errors import InputError
-from ideas_hpc.flyby.flight import setup_from_campaign
+from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.design.ga.genetic import separate_angles
 
 ROOT = Path(__file__).resolve().parent.parent

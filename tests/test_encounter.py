@@ -16,7 +16,9 @@ from ideas_hpc.config.campaign_tables import load
 from ideas_hpc.core.dynamics.encounter import dcm_NS, pointing_demand
 from ideas_hpc.flyby.encounter import phase_angle
 from ideas_hpc.errors import InputError
-from ideas_hpc.flyby.flight import fly, setup_from_campaign, target
+from ideas_hpc.flyby.flight import fly, target
+from ideas_hpc.campaign.setup import setup_from_campaign
+from ideas_hpc.config.model_fields import flyby_errors
 
 BASE = """
 kind = "flyby"
@@ -186,10 +188,13 @@ def test_phase_angle_sets_the_approach(tmp_path):
      "max_iterations = 2", "flyby.max_iterations"),
 ])
 def test_bad_encounter_names_the_field(tmp_path, flyby, field):
-    with pytest.raises(InputError) as exc:
+    """Targeting names the setup's parameter; the campaign layer (``flyby_errors``, as in
+    ``run_file``) the file's key."""
+    with pytest.raises(InputError) as exc, flyby_errors():
         s = _setup(tmp_path, flyby, rate=1.0, dt=1.0)
         target(s, [0.0, 1.0])
     assert exc.value.field == field and "\n" not in str(exc.value)
+    assert "`" not in exc.value.message
 
 
 def test_pointing_demand_of_a_sweep_matches_euler():
@@ -244,7 +249,7 @@ def test_pointing_the_wheels_cannot_follow_is_reported():
     t = np.arange(0.0, 20.0, 0.1)
     bn = Rotation.from_rotvec(np.outer(0.2 * np.sin(t), [0.0, 1.0, 0.0])).as_matrix()
     bn = np.ascontiguousarray(np.stack([np.broadcast_to(np.eye(3), bn.shape), bn]))
-    weak = SpacecraftModel(u_max=1e-4)
+    weak = SpacecraftModel(u_max_N_m=1e-4)
     out = pointing_check(bn, 0.1, weak)
     assert out["pointing_feasible"].tolist() == [True, False]
     assert out["summary"].startswith("WARNING") and "spacecraft [1]" in out["summary"]

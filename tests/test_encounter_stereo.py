@@ -40,7 +40,7 @@ def encounter(tmp_path_factory):
                "d_sep_km = 31.2\nbefore_km = 20.0\nafter_km = 20.0", res=4, mu=0.0,
                spin_period=1e15)
     opts = dataclasses.replace(s.coverage, quality=True, require_stereo=True,
-                               stereo_min=S_MIN, stereo_max=S_MAX)
+                               stereo_min_rad=S_MIN, stereo_max_rad=S_MAX)
     s = s.with_(eta_rad=math.radians(80.0), near_m=1.0, far_m=1e9, maneuver="track", coverage=opts)
     return s, fly(s, [0.0, 1.0])
 

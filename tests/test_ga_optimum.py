@@ -22,7 +22,7 @@ import pytest
 from ideas_hpc.config.campaign_tables import load
 from ideas_hpc.design import min_swarm
 from ideas_hpc.design.bank import build_bank
-from ideas_hpc.flyby.flight import setup_from_campaign
+from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.design.ga.local_search import GridCover
 
 CAMPAIGN = Path(__file__).resolve().parent.parent / "campaigns" / "eros-nadir-ga.toml"

@@ -57,8 +57,8 @@ def brute_masks(shape, r, C, eta, near, far, opts, sun=None):
             ok = ((los_n > 0.0) if opts.mode == "exact" else (n @ r[k, i] >= 0.0))
             ok &= (q[:, 2] > 0.0) & (np.abs(q[:, 0]) <= t * q[:, 2]) \
                 & (np.abs(q[:, 1]) <= t * q[:, 2]) & (q[:, 2] >= near) & (q[:, 2] <= far)
-            if opts.min_elevation is not None:
-                ok &= los_n >= rng * math.sin(opts.min_elevation)
+            if opts.min_elevation_rad is not None:
+                ok &= los_n >= rng * math.sin(opts.min_elevation_rad)
             ok &= rng <= opts.max_range
             if opts.illumination:
                 ok &= n @ sun[i] > 0.0
@@ -83,7 +83,7 @@ def _dumbbell():
     return build_shape(v, f, name="dumbbell", source="test: two ellipsoids")
 
 
-STRICT = CoverageOptions(mode="exact", occlusion=True, min_elevation=math.radians(5.0))
+STRICT = CoverageOptions(mode="exact", occlusion=True, min_elevation_rad=math.radians(5.0))
 
 
 @pytest.mark.parametrize("opts", [STRICT, CoverageOptions(mode="exact", occlusion=True),
@@ -102,7 +102,7 @@ def test_dumbbell_masks_and_counts_equal_brute_force(opts):
     np.testing.assert_array_equal(cov.times_seen, count)
     # occlusion decides a share of the pairs: the test can fail on it
     free, _ = brute_masks(shape, r, C, eta, near, far,
-                          CoverageOptions(mode=opts.mode, min_elevation=opts.min_elevation))
+                          CoverageOptions(mode=opts.mode, min_elevation_rad=opts.min_elevation_rad))
     assert (free & ~ref).sum() > 100
 
 
@@ -117,7 +117,7 @@ def test_eros_masks_and_counts_equal_brute_force(eros1708):
     sun /= np.linalg.norm(sun)
     suns = np.broadcast_to(sun, (r.shape[1], 3))
     for opts in (STRICT, CoverageOptions(mode="exact", occlusion=True, illumination=True,
-                                         min_elevation=math.radians(5.0))):
+                                         min_elevation_rad=math.radians(5.0))):
         s = suns if opts.illumination else None
         ref, count = brute_masks(shape, r, C, eta, near, far, opts, sun=suns)
         got = observed_per_spacecraft(shape, r, C, eta, near, far, options=opts, sun_T=s)
@@ -129,5 +129,5 @@ def test_eros_masks_and_counts_equal_brute_force(eros1708):
             np.testing.assert_array_equal(cov.observed, ref.any(axis=0))
             np.testing.assert_array_equal(cov.times_seen, count if counts else count > 0)
         free, _ = brute_masks(shape, r, C, eta, near, far,
-                              CoverageOptions(mode="exact", min_elevation=opts.min_elevation))
+                              CoverageOptions(mode="exact", min_elevation_rad=opts.min_elevation_rad))
         assert (free & ~ref).sum() > 100

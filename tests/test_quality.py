@@ -12,8 +12,9 @@ import pytest
 
 from ideas_hpc.body.analytic import sphere_mesh
 from ideas_hpc.core.mapping import quality as cq
+from ideas_hpc.config.model_fields import COVERAGE_FIELDS
 from ideas_hpc.mapping.options import coverage_options_from_config
-from ideas_hpc.errors import InputError
+from ideas_hpc.errors import InputError, config_fields
 from ideas_hpc.mapping.coverage import compute_coverage
 from ideas_hpc.mapping.options import CoverageOptions
 from test_coverage import look_at
@@ -189,7 +190,7 @@ def test_requirement_config_keys():
                          ({"max_resolution_m": -1}, "coverage.max_resolution_m"),
                          ({"stereo_min_deg": 50}, "coverage.stereo_min_deg"),
                          ({"pixel_pitch_um": 7}, "coverage.focal_length_mm")]:
-        with pytest.raises(InputError) as ei:
+        with pytest.raises(InputError) as ei, config_fields(COVERAGE_FIELDS):  # as the campaign
             coverage_options_from_config(table)
         assert ei.value.field == field, (table, ei.value.field)
 
@@ -284,7 +285,8 @@ def test_design_campaigns_take_a_requirement_and_refuse_stereo_they_cannot_score
 def test_arrival_scan_matches_flybys_at_each_epoch():
     from ideas_hpc.campaign.scan import arrival_scan
     from ideas_hpc.config.campaign_tables import load
-    from ideas_hpc.flyby.flight import fly, setup_from_campaign
+    from ideas_hpc.flyby.flight import fly
+    from ideas_hpc.campaign.setup import setup_from_campaign
 
     sets = ["body.name=\"ellipsoid\"", "flyby.tf_s=60", "flyby.z_start_km=-3",
             "flyby.z_stop_km=3", "coverage.mode=\"exact\"", "coverage.require_lit=true",

@@ -29,7 +29,7 @@ def quality_oracle(shape, r, C, t, eta, near, far, opts, sun, active=None):
     N, I = r.shape[:2]
     tree = cbvh.build_bvh(p, shape.faces)
     tan = math.tan(eta)
-    sin_e = -2.0 if opts.min_elevation is None else math.sin(opts.min_elevation)
+    sin_e = -2.0 if opts.min_elevation_rad is None else math.sin(opts.min_elevation_rad)
     act = np.ones(N, bool) if active is None else active
     lim = opts.limits
     obs = np.zeros((N, I, V), bool)
@@ -139,14 +139,14 @@ def eros_views(N=5, I=30, seed=3):
 
 CASES = {
     "exact-occl-all-limits": dict(mode="exact", occlusion=True, require_lit=True,
-                                  max_resolution=0.6, max_emission=60 * DEG,
-                                  max_incidence=75 * DEG, max_phase=110 * DEG,
+                                  max_resolution_m=0.6, max_emission_rad=60 * DEG,
+                                  max_incidence_rad=75 * DEG, max_phase_rad=110 * DEG,
                                   require_stereo=True),
     "paper-quality-only": dict(quality=True),
     "illum-elev-stereo-detector": dict(mode="exact", occlusion=True, illumination=True,
-                                       min_elevation=10 * DEG, require_stereo=True,
-                                       stereo_min=5 * DEG, stereo_max=25 * DEG,
-                                       pixel_pitch=7e-6, focal_length=0.5),
+                                       min_elevation_rad=10 * DEG, require_stereo=True,
+                                       stereo_min_rad=5 * DEG, stereo_max_rad=25 * DEG,
+                                       pixel_pitch_m=7e-6, focal_length_m=0.5),
 }
 
 
@@ -178,8 +178,8 @@ def test_quality_matches_brute_force_on_eros(eros1708, case):
         assert 0 < q.mapped.sum() < res.observed.sum()
         assert res.coverage < res.coverage_seen
     # observed, first_seen and counts are those of the coverage kernels
-    plain = dataclasses.replace(opts, quality=False, require_lit=False, max_resolution=None,
-                                max_emission=None, max_incidence=None, max_phase=None,
+    plain = dataclasses.replace(opts, quality=False, require_lit=False, max_resolution_m=None,
+                                max_emission_rad=None, max_incidence_rad=None, max_phase_rad=None,
                                 require_stereo=False)
     base = compute_coverage(shape, r, C, t, eta, 1e-3, 1e6, options=plain, sun_T=sun,
                             active=active)

@@ -147,7 +147,8 @@ def test_recipe_objective(tmp_path, monkeypatch):
 def run_toy(c, out, **_):
     """Toy kind: a flyby of the first spacecraft of ``swarm.angles_rad`` only."""
     from ideas_hpc.campaign import datasets
-    from ideas_hpc.flyby.flight import fly, setup_from_campaign
+    from ideas_hpc.flyby.flight import fly
+    from ideas_hpc.campaign.setup import setup_from_campaign
 
     setup = setup_from_campaign(c)
     res = fly(setup, c.config.swarm.angles_rad[:1])

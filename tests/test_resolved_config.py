@@ -127,3 +127,28 @@ def test_resume_of_an_old_store_still_refuses_real_changes(old_store, override, 
     with pytest.raises(InputError) as ei:
         run_file(FLYBY, out=old_store, overrides=TINY + [override], resume=True)
     assert message in str(ei.value)
+
+
+def test_models_keep_the_names_stores_record():
+    """The model fields carry units (``min_elevation_rad``, ``mass_kg``, ``k_p_per_s``); a
+    store records them under the names it always has, so its hash and ``--resume`` of
+    older stores do not change. Oracle: the names as written by stores before the rename,
+    and the values converted by hand."""
+    import math
+
+    rc = resolved_config(load(FLYBY, ["coverage.min_elevation_deg=7", "spacecraft.mass=5",
+                                      "controller.k_p=[1, 2, 3]"]))
+    m = rc["models"]
+    assert set(m["coverage"]) == {
+        "mode", "occlusion", "illumination", "min_elevation", "max_ground_resolution",
+        "wavelength", "aperture", "pixel_pitch", "focal_length", "quality", "require_lit",
+        "max_resolution", "max_emission", "max_incidence", "max_phase", "require_stereo",
+        "stereo_min", "stereo_max"}
+    assert set(m["spacecraft"]) == {"mass", "size", "wheel_mass", "wheel_radius", "u_max",
+                                    "h_max", "inertia"}
+    assert set(m["gains"]) == {"k_p", "k_i", "eta", "phi", "int_limit", "phi_dt_max"}
+    assert m["coverage"]["min_elevation"] == pytest.approx(math.radians(7.0))
+    assert m["coverage"]["aperture"] == pytest.approx(0.08)   # the instrument's 8 cm
+    assert m["spacecraft"]["mass"] == 5.0 and m["gains"]["k_p"] == [1.0, 2.0, 3.0]
+    assert rc.defaults["models.spacecraft.u_max"] == 0.007
+    assert rc.defaults["models.coverage.stereo_max"] == pytest.approx(math.radians(40.0))

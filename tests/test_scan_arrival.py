@@ -14,7 +14,7 @@ import xarray as xr
 from ideas_hpc.campaign.run import run_file
 from ideas_hpc.config.campaign_tables import load
 from ideas_hpc.cli import main
-from ideas_hpc.flyby.flight import setup_from_campaign
+from ideas_hpc.campaign.setup import setup_from_campaign
 
 FLYBY = Path(__file__).resolve().parent.parent / "campaigns" / "eros-flyby.toml"
 EPOCH0 = 3600.0

@@ -9,7 +9,8 @@ import pytest
 
 from ideas_hpc.config.campaign_tables import load
 from ideas_hpc.design.bank import build_bank
-from ideas_hpc.flyby.flight import Perturbation, fly_open_loop, setup_from_campaign
+from ideas_hpc.flyby.flight import Perturbation, fly_open_loop
+from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.montecarlo.scenarios import (build_scenario_bank, draw_world, fly_members,
                                             nominal_start)
 from ideas_hpc.seeds import SCENARIO_STREAM, VALIDATION_STREAM

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from ideas_hpc.config.campaign_tables import load
-from ideas_hpc.flyby.flight import setup_from_campaign
+from ideas_hpc.campaign.setup import setup_from_campaign
 from test_campaign_mc import MC, SHORT
 
 

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from ideas_hpc.errors import InputError
+from ideas_hpc.config.model_fields import flyby_errors
 from ideas_hpc.flyby.swarm_geometry import check_separation, closest_pair
 
 
@@ -43,7 +44,11 @@ def test_wrap_around_and_same_track():
 def test_check_separation_names_field_pair_and_distance():
     with pytest.raises(InputError) as ei:
         check_separation([0.2, 1.7, 0.2001], 155.9e3, 1e3)
-    e = ei.value
-    assert e.field == "swarm.angles_rad" and "spacecraft 0 and 2" in e.message
-    assert "0.01559 km apart" in e.message and "swarm.min_separation_km = 1" in e.message
+    e = ei.value   # the flyby layer names its own parameters ...
+    assert e.field == "theta" and "spacecraft 0 and 2" in e.message
+    assert "0.01559 km apart" in e.message and "`min_separation` = 1" in e.message
+    with pytest.raises(InputError) as ei, flyby_errors():   # ... the config layer the file's keys
+        check_separation([0.2, 1.7, 0.2001], 155.9e3, 1e3)
+    assert ei.value.field == "swarm.angles_rad"
+    assert "; the minimum is swarm.min_separation_km = 1" in ei.value.message
     check_separation([0.2, 1.7], 155.9e3, 1e3)  # far apart: accepted

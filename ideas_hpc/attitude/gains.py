@@ -31,37 +31,43 @@ CONTROLLER_SCHEMA = {
 class Gains:
     """Sliding-mode gains (SPEC section 5), per body axis.
 
+    The physical gains carry their unit in the name; ``int_limit`` (an MRP
+    norm) and ``phi_dt_max`` (the product ``eta phi dt``) are dimensionless
+    and stay unitless. The ``[controller]`` keys are ``k_p``, ``k_i``, ``eta``,
+    ``phi``, ``int_limit``, ``phi_dt_max`` (:data:`ideas_hpc.config.model_fields.GAINS_FIELDS`).
+
     Attributes
     ----------
-    k_p : tuple of 3 floats
+    k_p_per_s : tuple of 3 floats
         ``K_P``, 1/s.
-    k_i : tuple of 3 floats
+    k_i_per_s2 : tuple of 3 floats
         ``K_I``, 1/s^2.
-    eta : float or tuple of 3 floats
+    eta_rad_per_s2 : float or tuple of 3 floats
         Reaching gain, rad/s^2.
-    phi : float or tuple of 3 floats
+    phi_s_per_rad : float or tuple of 3 floats
         Boundary-layer slope, s/rad.
     int_limit : float
-        The error integral accumulates only while ``|sigma_B/R| < int_limit``
-        (conditional integration, module docstring); ``inf`` = SPEC as written.
+        Dimensionless: the error integral accumulates only while
+        ``|sigma_B/R| < int_limit`` (conditional integration, module docstring);
+        ``inf`` = SPEC as written.
     phi_dt_max : float
-        Cap on ``eta phi dt`` for the sampled law (module docstring);
-        ``inf`` = no cap.
+        Dimensionless cap on ``eta phi dt`` for the sampled law (module
+        docstring); ``inf`` = no cap.
     """
 
-    k_p: tuple
-    k_i: tuple
-    eta: float | tuple = 0.5
-    phi: float | tuple = 100.0
+    k_p_per_s: tuple
+    k_i_per_s2: tuple
+    eta_rad_per_s2: float | tuple = 0.5
+    phi_s_per_rad: float | tuple = 100.0
     int_limit: float = 0.005
     phi_dt_max: float = 1.0
 
     def arrays(self, dt: float):
         """``(k_p, k_i, eta, phi_eff)`` as (3,) float64 (``phi`` capped for ``dt``)."""
-        k_p = np.broadcast_to(np.asarray(self.k_p, float), (3,)).copy()
-        k_i = np.broadcast_to(np.asarray(self.k_i, float), (3,)).copy()
-        eta = np.broadcast_to(np.asarray(self.eta, float), (3,)).copy()
-        phi = np.broadcast_to(np.asarray(self.phi, float), (3,)).copy()
+        k_p = np.broadcast_to(np.asarray(self.k_p_per_s, float), (3,)).copy()
+        k_i = np.broadcast_to(np.asarray(self.k_i_per_s2, float), (3,)).copy()
+        eta = np.broadcast_to(np.asarray(self.eta_rad_per_s2, float), (3,)).copy()
+        phi = np.broadcast_to(np.asarray(self.phi_s_per_rad, float), (3,)).copy()
         if math.isfinite(self.phi_dt_max):
             with np.errstate(divide="ignore"):
                 cap = np.where(eta > 0, self.phi_dt_max / (eta * dt), np.inf)
@@ -71,21 +77,24 @@ class Gains:
 
 #: Table 5 (NP) and Table 6 (FoV) of the paper.
 GAIN_PRESETS = {
-    "np": Gains(k_p=(0.4, 0.4, 0.4), k_i=(0.01, 0.01, 0.01), eta=0.5, phi=100.0),
-    "fov": Gains(k_p=(4.0, 0.4, 0.4), k_i=(1.0, 0.01, 0.01), eta=0.5, phi=100.0),
+    "np": Gains(k_p_per_s=(0.4, 0.4, 0.4), k_i_per_s2=(0.01, 0.01, 0.01), eta_rad_per_s2=0.5,
+                phi_s_per_rad=100.0),
+    "fov": Gains(k_p_per_s=(4.0, 0.4, 0.4), k_i_per_s2=(1.0, 0.01, 0.01), eta_rad_per_s2=0.5,
+                 phi_s_per_rad=100.0),
 }
+#: ``[controller]`` keys -> :class:`Gains` fields.
+_FIELD_OF_KEY = {"k_p": "k_p_per_s", "k_i": "k_i_per_s2", "eta": "eta_rad_per_s2",
+                 "phi": "phi_s_per_rad", "int_limit": "int_limit", "phi_dt_max": "phi_dt_max"}
 
 
-def validate_gains(g: Gains, prefix: str = "controller.") -> Gains:
-    """Check a :class:`Gains`; raise :class:`InputError` naming the field."""
-    _vec3(g.k_p, prefix + "k_p")
-    _vec3(g.k_i, prefix + "k_i")
-    _vec3(g.eta, prefix + "eta")
-    _vec3(g.phi, prefix + "phi")
+def validate_gains(g: Gains) -> Gains:
+    """Check a :class:`Gains`; raise :class:`InputError` naming its field (``k_p_per_s``)."""
+    for name in ("k_p_per_s", "k_i_per_s2", "eta_rad_per_s2", "phi_s_per_rad"):
+        _vec3(getattr(g, name), name)
     for key in ("int_limit", "phi_dt_max"):
         v = getattr(g, key)
         if isinstance(v, bool) or not isinstance(v, (int, float)) or math.isnan(v) or v <= 0:
-            raise InputError(f"must be positive (inf allowed), got {v!r}", field=prefix + key)
+            raise InputError(f"must be positive (inf allowed), got {v!r}", field=key)
     return g
 
 
@@ -95,12 +104,14 @@ def gains_from_config(table, prefix: str = "controller.") -> Gains:
     A table may name a ``preset`` (or ``gains``) and override ``k_p``, ``k_i``,
     ``eta``, ``phi`` (scalar or 3-vector), ``int_limit``, ``phi_dt_max``;
     without a preset all of ``k_p`` and ``k_i`` must be given. Any other key
-    is an error naming it.
+    is an error naming it (``prefix + key``); a value :func:`validate_gains`
+    refuses names the :class:`Gains` field, which the campaign layer maps to the
+    file's key (:data:`ideas_hpc.config.model_fields.GAINS_FIELDS`).
     """
     if table is None:
         return GAIN_PRESETS["np"]
     if isinstance(table, Gains):
-        return validate_gains(table, prefix)
+        return validate_gains(table)
     if isinstance(table, str):
         if table not in GAIN_PRESETS:
             raise InputError(f"unknown gain preset {table!r}; known: {sorted(GAIN_PRESETS)}",
@@ -125,11 +136,11 @@ def gains_from_config(table, prefix: str = "controller.") -> Gains:
     for key in ("k_p", "k_i", "eta", "phi"):
         if key in table:
             v = _vec3(table[key], prefix + key)
-            kw[key] = v if key in ("k_p", "k_i") or len(set(v)) > 1 else v[0]
+            kw[_FIELD_OF_KEY[key]] = v if key in ("k_p", "k_i") or len(set(v)) > 1 else v[0]
     for key in ("int_limit", "phi_dt_max"):
         if key in table:
             v = table[key]
             if isinstance(v, str) and v.lower() in ("inf", "none", "off"):
                 v = math.inf
-            kw[key] = v
-    return validate_gains(replace(base, **kw), prefix)
+            kw[_FIELD_OF_KEY[key]] = v
+    return validate_gains(replace(base, **kw))

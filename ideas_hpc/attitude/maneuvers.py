@@ -167,12 +167,13 @@ def store_figure(maneuver_attr, what: str, default: int) -> int:
     return default
 
 
-def campaign_maneuver(key: str, field: str = "attitude.maneuver") -> Maneuver:
-    """The :class:`Maneuver` whose campaign name is ``key``; ``InputError`` naming ``field``."""
+def campaign_maneuver(key: str) -> Maneuver:
+    """The :class:`Maneuver` whose campaign name is ``key``; else an ``InputError`` naming
+    ``maneuver`` (the campaign layer maps it to ``attitude.maneuver``)."""
     for m in MANEUVERS.values():
         if m.campaign_name == key:
             return m
-    raise InputError(f"must be one of {', '.join(CAMPAIGN_NAMES)}; got {key!r}", field=field)
+    raise InputError(f"must be one of {', '.join(CAMPAIGN_NAMES)}; got {key!r}", field="maneuver")
 
 
 def get_maneuver(mode) -> Maneuver:

@@ -234,7 +234,7 @@ def simulate_attitude(theta, spin_rate, t_f, *, mode="np", periods=None, theta_m
     table = _ref_table(ref_table, n, n_steps)
     out = simulate_batch(man.code, _ring_dcms(th, dcm_TS), ws, p, tm,
                          ControlGains(k_p, k_i, eta, phi, float(g.int_limit)),
-                         Wheels(sc.inertia_rw, sc.J_s, float(sc.u_max), float(sc.h_max)),
+                         Wheels(sc.inertia_rw, sc.J_s, float(sc.u_max_N_m), float(sc.h_max_N_m_s)),
                          dt, n_steps, (int(decimate), int(img_every)), Initial(s0, w0, W0), table)
     sig, om, wh, tq, dcm, mu, mh = out
     times = np.arange(0, n_steps + 1, decimate) * dt

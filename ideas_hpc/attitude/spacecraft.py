@@ -15,15 +15,17 @@ def _opt(kind: str, doc: str, **kw) -> Field:
     return Field(kind, None, nullable=True, doc=doc, **kw)
 
 
-#: The ``[spacecraft]`` table (SI); ranges are checked by :func:`validate_spacecraft`.
+#: The ``[spacecraft]`` table (SI) -> :class:`SpacecraftModel` fields (``si``); ranges are
+#: checked by :func:`validate_spacecraft`.
 SPACECRAFT_SCHEMA = {
-    "mass": _opt("float", "kg"),
-    "size": _opt("floats", "3 lengths, m", length=3),
-    "wheel_mass": _opt("float", "kg"),
-    "wheel_radius": _opt("float", "m"),
-    "u_max": _opt("float", "N m"),
-    "h_max": _opt("float", "N m s"),
-    "inertia": _opt("any", "3 principal moments or a diagonal 3x3 matrix, kg m^2"),
+    "mass": _opt("float", "kg", si="mass_kg"),
+    "size": _opt("floats", "3 lengths, m", length=3, si="size_m"),
+    "wheel_mass": _opt("float", "kg", si="wheel_mass_kg"),
+    "wheel_radius": _opt("float", "m", si="wheel_radius_m"),
+    "u_max": _opt("float", "N m", si="u_max_N_m"),
+    "h_max": _opt("float", "N m s", si="h_max_N_m_s"),
+    "inertia": _opt("any", "3 principal moments or a diagonal 3x3 matrix, kg m^2",
+                    si="inertia_kg_m2"),
 }
 
 
@@ -31,51 +33,52 @@ SPACECRAFT_SCHEMA = {
 class SpacecraftModel:
     """Rigid spacecraft with three reaction wheels on its principal axes (SPEC section 5).
 
-    Attributes (SI)
+    Attributes (SI, the unit in the name; ``[spacecraft]`` keys drop it:
+    :data:`ideas_hpc.config.model_fields.SPACECRAFT_FIELDS`)
     ---------------
-    mass : float
+    mass_kg : float
         Hub mass, kg (4).
-    size : tuple of 3 floats
+    size_m : tuple of 3 floats
         Box edges along body x, y, z, m ((0.1, 0.1, 0.3): z along the 30 cm side).
-    wheel_mass : float
+    wheel_mass_kg : float
         kg (0.24).
-    wheel_radius : float
+    wheel_radius_m : float
         m (0.029).
-    u_max : float
+    u_max_N_m : float
         Wheel torque limit, N m (0.007).
-    h_max : float
+    h_max_N_m_s : float
         Wheel momentum limit ``|J_s Omega|``, N m s (0.05).
-    inertia : tuple of 3 floats or None
+    inertia_kg_m2 : tuple of 3 floats or None
         Hub principal moments, kg m^2; ``None`` means the uniform box.
     """
 
-    mass: float = 4.0
-    size: tuple = (0.1, 0.1, 0.3)
-    wheel_mass: float = 0.24
-    wheel_radius: float = 0.029
-    u_max: float = 0.007
-    h_max: float = 0.05
-    inertia: tuple | None = None
+    mass_kg: float = 4.0
+    size_m: tuple = (0.1, 0.1, 0.3)
+    wheel_mass_kg: float = 0.24
+    wheel_radius_m: float = 0.029
+    u_max_N_m: float = 0.007
+    h_max_N_m_s: float = 0.05
+    inertia_kg_m2: tuple | None = None
 
     @property
     def inertia_hub(self) -> np.ndarray:
         """Hub principal moments, kg m^2: uniform box ``m/12 (b^2 + c^2)`` unless given."""
-        if self.inertia is not None:
-            return np.array(self.inertia, dtype=np.float64)
-        a, b, c = self.size
-        m = self.mass
+        if self.inertia_kg_m2 is not None:
+            return np.array(self.inertia_kg_m2, dtype=np.float64)
+        a, b, c = self.size_m
+        m = self.mass_kg
         return np.array([m / 12 * (b * b + c * c), m / 12 * (a * a + c * c),
                          m / 12 * (a * a + b * b)])
 
     @property
     def wheel_spin_inertia(self) -> float:
         """``J_s = m r^2 / 2`` (uniform disc), kg m^2."""
-        return 0.5 * self.wheel_mass * self.wheel_radius ** 2
+        return 0.5 * self.wheel_mass_kg * self.wheel_radius_m ** 2
 
     @property
     def wheel_transverse_inertia(self) -> float:
         """``J_t = m r^2 / 4`` (thin uniform disc about a diameter), kg m^2."""
-        return 0.25 * self.wheel_mass * self.wheel_radius ** 2
+        return 0.25 * self.wheel_mass_kg * self.wheel_radius_m ** 2
 
     @property
     def J_s(self) -> np.ndarray:
@@ -92,30 +95,32 @@ class SpacecraftModel:
         return self.inertia_hub + 2.0 * self.wheel_transverse_inertia
 
 
-def validate_spacecraft(sc: SpacecraftModel, prefix: str = "spacecraft.") -> SpacecraftModel:
-    """Check a :class:`SpacecraftModel`; raise :class:`InputError` naming the field."""
-    _pos_float(sc.mass, prefix + "mass")
-    _pos_float(sc.wheel_mass, prefix + "wheel_mass", allow_zero=True)
-    _pos_float(sc.wheel_radius, prefix + "wheel_radius")
-    if sc.wheel_mass == 0.0:
+def validate_spacecraft(sc: SpacecraftModel) -> SpacecraftModel:
+    """Check a :class:`SpacecraftModel`; raise :class:`InputError` naming its field
+    (``mass_kg``; the campaign layer maps it to the file's key)."""
+    _pos_float(sc.mass_kg, "mass_kg")
+    _pos_float(sc.wheel_mass_kg, "wheel_mass_kg", allow_zero=True)
+    _pos_float(sc.wheel_radius_m, "wheel_radius_m")
+    if sc.wheel_mass_kg == 0.0:
         raise InputError("wheel mass must be positive (J_s = m r^2 / 2 > 0)",
-                         field=prefix + "wheel_mass")
-    _pos_float(sc.u_max, prefix + "u_max", allow_zero=True)
-    _pos_float(sc.h_max, prefix + "h_max", allow_zero=True)
-    if sc.inertia is None:
-        size = np.asarray(sc.size, dtype=float)
+                         field="wheel_mass_kg")
+    _pos_float(sc.u_max_N_m, "u_max_N_m", allow_zero=True)
+    _pos_float(sc.h_max_N_m_s, "h_max_N_m_s", allow_zero=True)
+    if sc.inertia_kg_m2 is None:
+        size = np.asarray(sc.size_m, dtype=float)
         if size.shape != (3,) or not np.all(np.isfinite(size)) or np.any(size <= 0):
-            raise InputError(f"must be three positive lengths in m, got {sc.size!r}",
-                             field=prefix + "size")
+            raise InputError(f"must be three positive lengths in m, got {sc.size_m!r}",
+                             field="size_m")
     else:
-        i = np.asarray(sc.inertia, dtype=float)
+        i = np.asarray(sc.inertia_kg_m2, dtype=float)
         if i.shape != (3,) or not np.all(np.isfinite(i)) or np.any(i <= 0.0):
             raise InputError(f"inertia is not positive definite: principal moments "
-                             f"{sc.inertia!r} (kg m^2) must all be > 0", field=prefix + "inertia")
+                             f"{sc.inertia_kg_m2!r} (kg m^2) must all be > 0",
+                             field="inertia_kg_m2")
         s = np.sort(i)
         if s[0] + s[1] < s[2] * (1 - 1e-12):
-            raise InputError(f"principal moments {sc.inertia!r} violate the triangle "
-                             "inequality of a rigid body", field=prefix + "inertia")
+            raise InputError(f"principal moments {sc.inertia_kg_m2!r} violate the triangle "
+                             "inequality of a rigid body", field="inertia_kg_m2")
     return sc
 
 
@@ -132,12 +137,15 @@ def spacecraft_from_config(table, prefix: str = "spacecraft.") -> SpacecraftMode
     ``u_max`` (N m), ``h_max`` (N m s), ``inertia`` (3 principal moments or a
     3x3 matrix, kg m^2; a matrix must be diagonal because the wheels sit on the
     principal axes). Any other key is an error naming it (SRP mass and area
-    live in ``[dynamics]``).
+    live in ``[dynamics]``), as is a bad inertia matrix (``prefix + "inertia"``); a
+    value :func:`validate_spacecraft` refuses names the :class:`SpacecraftModel`
+    field, which the campaign layer maps to the file's key
+    (:data:`ideas_hpc.config.model_fields.SPACECRAFT_FIELDS`).
     """
     table = dict(table or {})
     values = validate(table, SPACECRAFT_SCHEMA, prefix)  # the one field mechanism
-    kw = {k: (tuple(v) if k == "size" else v) for k, v in values.items()
-          if v is not None and k != "inertia"}
+    kw = {SPACECRAFT_SCHEMA[k].si_name(k): (tuple(v) if k == "size" else v)
+          for k, v in values.items() if v is not None and k != "inertia"}
     if "inertia" in table:
         try:
             m = np.asarray(table["inertia"], dtype=float)
@@ -158,5 +166,5 @@ def spacecraft_from_config(table, prefix: str = "spacecraft.") -> SpacecraftMode
         if m.shape != (3,):
             raise InputError(f"must be 3 principal moments or a 3x3 matrix, got shape "
                              f"{m.shape}", field=prefix + "inertia")
-        kw["inertia"] = tuple(float(v) for v in m)
-    return validate_spacecraft(SpacecraftModel(**kw), prefix)
+        kw["inertia_kg_m2"] = tuple(float(v) for v in m)
+    return validate_spacecraft(SpacecraftModel(**kw))

@@ -28,7 +28,8 @@ from ideas_hpc.design.stereo import scorer as stereo_scorer
 from ideas_hpc.engine.job_cluster import JobCluster, phase_client, visibility_tests
 from ideas_hpc.errors import InputError
 from ideas_hpc.design.candidates import candidate_masks
-from ideas_hpc.flyby.flight import fly, setup_from_campaign, target
+from ideas_hpc.flyby.flight import fly, target
+from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.campaign import precompile
 from ideas_hpc.montecarlo.verify import verify_swarm
 from ideas_hpc.campaign import datasets

@@ -32,11 +32,13 @@ from ideas_hpc.engine.variables import with_attrs
 from ideas_hpc.campaign.design_exact import checked_setup, ga_gap
 from ideas_hpc.config.campaign_tables import Campaign
 from ideas_hpc.config.design_checks import DESIGNER_FIELDS
+from ideas_hpc.config.model_fields import FLYBY_FIELDS
 from ideas_hpc.campaign.vocabulary import requirement_line
 
 
-#: The GA's parameter names -> the campaign file's keys (with every designer's).
-GA_FIELDS = {**DESIGNER_FIELDS, "population": "design.population",
+#: The GA's parameter names -> the campaign file's keys (with every designer's and the
+#: flyby layer's: the GA flies setups).
+GA_FIELDS = {**FLYBY_FIELDS, **DESIGNER_FIELDS, "population": "design.population",
              "generations": "design.generations", "p_min": "design.p_min_min"}
 
 

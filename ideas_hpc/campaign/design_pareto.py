@@ -41,7 +41,8 @@ from ideas_hpc.design.bank import grid_size, separation_steps
 from ideas_hpc.design.pareto.objectives import OBJECTIVES, bank_needs, check_objectives, evaluate
 from ideas_hpc.design.pareto.nsga2 import run_pareto
 from ideas_hpc.engine.job_cluster import JobCluster, visibility_tests
-from ideas_hpc.flyby.flight import setup_from_campaign, target
+from ideas_hpc.flyby.flight import target
+from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.campaign import datasets
 from ideas_hpc.config.design_checks import STEP_KEY, designer_errors
 

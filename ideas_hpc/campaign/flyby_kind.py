@@ -9,7 +9,8 @@ from pathlib import Path
 import xarray as xr
 
 from ideas_hpc.flyby.encounter import pointing_profile
-from ideas_hpc.flyby.flight import fly, setup_from_campaign
+from ideas_hpc.flyby.flight import fly
+from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.campaign import datasets
 from ideas_hpc.engine.variables import with_attrs
 from ideas_hpc.config.campaign_tables import Campaign

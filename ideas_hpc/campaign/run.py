@@ -21,6 +21,7 @@ from ideas_hpc.errors import InputError
 from ideas_hpc.progress import enabled as progress_enabled
 from ideas_hpc.campaign.kinds import KINDS
 from ideas_hpc.config.campaign_tables import SCHEMA, Campaign, load, resolved_config
+from ideas_hpc.config.model_fields import flyby_errors
 
 
 def _log(msg: str) -> None:
@@ -36,7 +37,7 @@ def run_file(path, *, out=None, overrides=None, workers=None, scheduler=None, re
     """
     c = load(path, overrides)
     try:
-        with progress_enabled(progress):
+        with flyby_errors(), progress_enabled(progress):   # flyby-layer names -> file keys
             return _run(c, out=out, workers=workers, scheduler=scheduler, resume=resume,
                         cluster=cluster, slurm_config=slurm_config, progress=progress)
     except InputError as exc:

@@ -18,7 +18,9 @@ from dataclasses import replace
 import numpy as np
 import xarray as xr
 
-from ideas_hpc.flyby.flight import fly, setup_from_campaign
+from ideas_hpc.flyby.flight import fly
+from ideas_hpc.campaign.setup import setup_from_campaign
+from ideas_hpc.config.model_fields import flyby_errors
 from ideas_hpc.mapping.coverage import compute_coverage
 
 SCAN_ATTRS = {
@@ -55,8 +57,8 @@ def arrival_scan(setup, theta, periods=None, epochs=None) -> xr.Dataset:
     opts = setup.coverage if setup.coverage.wants_quality else replace(setup.coverage,
                                                                        quality=True)
     base = fly(setup.with_(coverage=replace(opts, quality=False, require_lit=False,
-                                            max_resolution=None, max_emission=None,
-                                            max_incidence=None, max_phase=None,
+                                            max_resolution_m=None, max_emission_rad=None,
+                                            max_incidence_rad=None, max_phase_rad=None,
                                             require_stereo=False, illumination=False)),
                theta, periods, counts=False)
     a = setup.body.shape.vertex_areas
@@ -82,6 +84,7 @@ def arrival_scan(setup, theta, periods=None, epochs=None) -> xr.Dataset:
     return ds
 
 
+@flyby_errors()   # flyby-layer errors under the file's keys
 def scan_file(path, overrides=None, *, n: int = 24, span_h: float | None = None,
               out=None) -> xr.Dataset:
     """Scan ``n`` arrival epochs over ``span_h`` hours (default: one rotation period)

@@ -17,7 +17,6 @@ the phase angle unreachable at that declination.
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import numpy as np
 import xarray as xr
@@ -25,7 +24,9 @@ import xarray as xr
 from ideas_hpc.design.candidates import candidate_masks
 from ideas_hpc.flyby.encounter import Encounter, approach_angles
 from ideas_hpc.errors import InputError
-from ideas_hpc.flyby.flight import fly, setup_from_campaign
+from ideas_hpc.flyby.flight import fly
+from ideas_hpc.campaign.setup import setup_from_campaign
+from ideas_hpc.config.model_fields import flyby_errors
 from ideas_hpc.units import DEG
 
 SCAN_ATTRS = {
@@ -69,9 +70,8 @@ def encounter_scan(setup, fb, decs_rad, phases_rad, *, step_rad: float = 10 * DE
     for i, dec in enumerate(decs):
         for j, ph in enumerate(phases):
             try:
-                speed, ra, _ = approach_angles(replace(fb, v_inf_m_s=None, approach_ra_rad=None,
-                                                       approach_dec_rad=float(dec),
-                                                       phase_angle_rad=float(ph)), sun)
+                speed, ra, _ = approach_angles(speed_m_s=fb.speed_m_s, dec_rad=float(dec),
+                                               phase_angle_rad=float(ph), sun_T_ca=sun)
             except InputError:
                 continue
             s = setup.with_(encounter=Encounter(speed, ra, float(dec), t_ca))
@@ -94,6 +94,7 @@ def encounter_scan(setup, fb, decs_rad, phases_rad, *, step_rad: float = 10 * DE
     return ds
 
 
+@flyby_errors()   # flyby-layer errors under the file's keys
 def scan_encounter_file(path, overrides=None, *, decs_deg=None, phases_deg=None,
                         step_deg: float = 10.0, out=None, plot=None) -> xr.Dataset:
     """Scan a campaign's encounter over ``decs_deg`` x ``phases_deg``; print a table."""

@@ -78,6 +78,8 @@ from ideas_hpc.flyby.sizing import INSTRUMENT_DEFAULTS as _CAM
 from ideas_hpc.config.design_checks import (DESIGNER_FIELDS, check_stereo_design,
                                            resolve_angle_step)
 from ideas_hpc.config.encounter_table import ENCOUNTER, check_encounter
+from ideas_hpc.config.model_fields import (COVERAGE_FIELDS, GAINS_FIELDS, SPACECRAFT_FIELDS,
+                                           STORED_NAMES, flyby_errors, stored_fields)
 from ideas_hpc.campaign.kinds import KINDS as REGISTRY
 from ideas_hpc.config.design_table import DESIGN, MC_SCHEMA, reliability_checks, verify_samples
 
@@ -284,7 +286,8 @@ def validate_campaign(source: CampaignSource) -> Campaign:
     try:
         values = validate(source.data, SCHEMA)
         config = resolve_angle_step(typed_config(values))
-        _cross_checks(config)
+        with flyby_errors():   # the maneuver registry names `maneuver`
+            _cross_checks(config)
         extras = build_models(source.data, config)
     except InputError as exc:
         raise source.locate(exc) from None
@@ -312,15 +315,16 @@ def build_models(raw: dict, config: CampaignConfig) -> dict:
     ctrl = _sub_table(raw, "controller")
     if not ctrl:
         ctrl = {"preset": campaign_maneuver(config.attitude.maneuver).gains}
-    coverage = coverage_options_from_config(cov, prefix="coverage.")
+    with config_fields(COVERAGE_FIELDS):   # the models' field names -> the file's keys
+        coverage = coverage_options_from_config(cov, prefix="coverage.")
     if coverage.require_stereo and config.kind.startswith("design"):
         check_stereo_design(config, raw.get("design"))
-    return {
-        "force_model": force_model_from_config(_sub_table(raw, "dynamics"), prefix="dynamics."),
-        "spacecraft": spacecraft_from_config(_sub_table(raw, "spacecraft"), prefix="spacecraft."),
-        "gains": gains_from_config(ctrl, prefix="controller."),
-        "coverage": coverage,
-    }
+    with config_fields(SPACECRAFT_FIELDS):
+        sc = spacecraft_from_config(_sub_table(raw, "spacecraft"), prefix="spacecraft.")
+    with config_fields(GAINS_FIELDS):
+        gains = gains_from_config(ctrl, prefix="controller.")
+    return {"force_model": force_model_from_config(_sub_table(raw, "dynamics"), prefix="dynamics."),
+            "spacecraft": sc, "gains": gains, "coverage": coverage}
 
 
 def load(path, overrides: list[str] | None = None) -> Campaign:
@@ -352,11 +356,12 @@ def _model_defaults(extras: dict) -> dict[str, Any]:
     out: dict[str, Any] = {}
     for name, model in extras.items():
         if dataclasses.is_dataclass(model):
-            for f in dataclasses.fields(model):
+            for f in dataclasses.fields(model):    # under the stored names
+                key = f"models.{name}.{STORED_NAMES.get(name, {}).get(f.name, f.name)}"
                 if f.default is not dataclasses.MISSING:
-                    out[f"models.{name}.{f.name}"] = f.default
+                    out[key] = f.default
                 elif f.default_factory is not dataclasses.MISSING:
-                    out[f"models.{name}.{f.name}"] = f.default_factory()
+                    out[key] = f.default_factory()
     return out
 
 
@@ -366,7 +371,8 @@ def resolved_config(c: Campaign) -> dict[str, Any]:
     Every schema key with its value or default in the file's units
     (:func:`ideas_hpc.config.fields.with_defaults`), and under ``models`` the
     resolved sub-models of ``[dynamics]``, ``[spacecraft]``, ``[controller]``
-    and ``[coverage]`` (SI, every default of their modules written out). So a
+    and ``[coverage]`` (SI, every default of their modules written out, under the
+    names of :data:`~ideas_hpc.config.model_fields.STORED_NAMES`). So a
     changed default changes the hash, and ``--resume`` names the field. The
     :data:`EXECUTION_KNOBS` are left out: they do not change the numbers.
     Every store writer (flyby, designs, Monte Carlo) uses this one function.
@@ -376,7 +382,7 @@ def resolved_config(c: Campaign) -> dict[str, Any]:
     from ideas_hpc.engine.store_meta import config_json  # the engine's canonical JSON, for one hash
 
     out = json.loads(config_json(with_defaults(c.raw, SCHEMA)))
-    out["models"] = json.loads(config_json({k: dataclasses.asdict(v) if
+    out["models"] = json.loads(config_json({k: stored_fields(k, dataclasses.asdict(v)) if
                                             dataclasses.is_dataclass(v) else v
                                             for k, v in c.extras.items()}))
     for dotted in EXECUTION_KNOBS:

@@ -22,6 +22,7 @@ import warnings
 
 from ideas_hpc.design.bank import grid_size
 from ideas_hpc.design.stereo import check_grid
+from ideas_hpc.config.model_fields import FLYBY_FIELDS
 from ideas_hpc.errors import InputError, config_fields
 from ideas_hpc.units import DEG
 
@@ -48,10 +49,11 @@ def _warn_alias() -> None:
 
 @contextlib.contextmanager
 def designer_errors(c=None):
-    """Re-raise a designer's :class:`InputError` under the file's key
-    (:data:`DESIGNER_FIELDS`), with its file and line when the campaign ``c`` is given."""
+    """Re-raise a designer's (or the flyby layer's) :class:`InputError` under the file's key
+    (:data:`DESIGNER_FIELDS`, :data:`~ideas_hpc.config.model_fields.FLYBY_FIELDS`), with
+    its file and line when the campaign ``c`` is given."""
     try:
-        with config_fields(DESIGNER_FIELDS):
+        with config_fields({**FLYBY_FIELDS, **DESIGNER_FIELDS}):   # designs fly setups too
             yield
     except InputError as exc:
         if c is None or exc.file is not None or not exc.field:

@@ -62,61 +62,73 @@ class Encounter:
         return self.speed_m_s * self.dcm_NS[:, 2]
 
 
-def approach_angles(fb, sun_T_ca=None) -> tuple[float, float, float]:
-    """``(speed m/s, ra rad, dec rad)`` from the ``[flyby]`` encounter keys (SI table).
+def approach_angles(v_inf_T_m_s=None, speed_m_s=None, ra_rad=None, dec_rad=None,
+                    phase_angle_rad=None, sun_T_ca=None) -> tuple[float, float, float]:
+    """``(speed m/s, ra rad, dec rad)`` of the approach, from plain SI inputs.
 
-    ``phase_angle`` (the Sun-body-spacecraft angle on approach, between the Sun
-    direction ``s`` and ``-v_inf``) fixes the right ascension for the given
-    declination: ``-u . s = cos(alpha)`` with ``u = (cos d cos a, cos d sin a, sin d)``
-    gives ``cos d rho cos(a - psi) = -cos(alpha) - sin d s_z`` (``rho, psi``: the
-    polar form of ``s_x, s_y``); of the two roots the one east of the Sun's
-    meridian, ``a = psi + acos(...)``, is taken.
+    Parameters
+    ----------
+    v_inf_T_m_s : (3,) array_like or None
+        Asymptotic relative velocity in T, m/s; when given it fixes everything.
+    speed_m_s : float or None
+        ``|v_inf|``, m/s (default 10 km/s).
+    ra_rad, dec_rad : float or None
+        Approach right ascension and declination in T, rad (defaults 0 and pi/2).
+    phase_angle_rad : float or None
+        Sun-body-spacecraft angle on approach, rad; replaces ``ra_rad``.
+    sun_T_ca : (3,) array_like
+        Body -> Sun direction in T at closest approach (with ``phase_angle_rad``).
+
+    ``phase_angle`` (between the Sun direction ``s`` and ``-v_inf``) fixes the
+    right ascension for the given declination: ``-u . s = cos(alpha)`` with
+    ``u = (cos d cos a, cos d sin a, sin d)`` gives ``cos d rho cos(a - psi) =
+    -cos(alpha) - sin d s_z`` (``rho, psi``: the polar form of ``s_x, s_y``); of
+    the two roots the one east of the Sun's meridian, ``a = psi + acos(...)``,
+    is taken. Errors name these parameters (``v_inf_T_m_s``, ``phase_angle_rad``).
     """
-    if fb.v_inf_m_s is not None:
-        v = np.asarray(fb.v_inf_m_s, dtype=np.float64)
+    if v_inf_T_m_s is not None:
+        v = np.asarray(v_inf_T_m_s, dtype=np.float64)
         speed = float(np.linalg.norm(v))
         if speed <= 0.0:
-            raise InputError("must not be the zero vector", field="flyby.v_inf_km_s")
+            raise InputError("must not be the zero vector", field="v_inf_T_m_s")
         return speed, math.atan2(v[1], v[0]), math.asin(max(-1.0, min(1.0, v[2] / speed)))
-    speed = fb.speed_m_s if fb.speed_m_s is not None else DEFAULT_SPEED_M_S
-    dec = fb.approach_dec_rad if fb.approach_dec_rad is not None else 0.5 * math.pi
-    if fb.phase_angle_rad is None:
-        return speed, fb.approach_ra_rad or 0.0, dec
+    speed = speed_m_s if speed_m_s is not None else DEFAULT_SPEED_M_S
+    dec = dec_rad if dec_rad is not None else 0.5 * math.pi
+    if phase_angle_rad is None:
+        return speed, ra_rad or 0.0, dec
     s = np.asarray(sun_T_ca, dtype=np.float64)
     rho = math.hypot(s[0], s[1])
-    rhs = -math.cos(fb.phase_angle_rad) - math.sin(dec) * s[2]
+    rhs = -math.cos(phase_angle_rad) - math.sin(dec) * s[2]
     lim = math.cos(dec) * rho
     if abs(rhs) > lim * (1 + 1e-12) or lim == 0.0:
         lo = math.degrees(math.acos(min(1.0, -math.sin(dec) * s[2] + lim)))
         hi = math.degrees(math.acos(max(-1.0, -math.sin(dec) * s[2] - lim)))
-        raise InputError(f"{math.degrees(fb.phase_angle_rad):g} deg cannot be reached at "
+        raise InputError(f"{math.degrees(phase_angle_rad):g} deg cannot be reached at "
                          f"declination {math.degrees(dec):g} deg with the Sun at this epoch "
-                         f"(reachable: {lo:.1f} to {hi:.1f} deg)", field="flyby.phase_angle_deg")
+                         f"(reachable: {lo:.1f} to {hi:.1f} deg)", field="phase_angle_rad")
     a = math.atan2(s[1], s[0]) + math.acos(max(-1.0, min(1.0, rhs / lim)))
     return speed, math.remainder(a, 2 * math.pi), dec
 
 
-def approach_speed(fb) -> float:
-    """``|v_inf|`` (m/s) from the ``[flyby]`` table (SI)."""
-    if fb.v_inf_m_s is not None:
-        return float(np.linalg.norm(fb.v_inf_m_s))
-    return fb.speed_m_s if fb.speed_m_s is not None else DEFAULT_SPEED_M_S
+def approach_speed(v_inf_T_m_s=None, speed_m_s=None) -> float:
+    """``|v_inf|`` (m/s): of ``v_inf_T_m_s`` when given, else ``speed_m_s`` or 10 km/s."""
+    if v_inf_T_m_s is not None:
+        return float(np.linalg.norm(v_inf_T_m_s))
+    return speed_m_s if speed_m_s is not None else DEFAULT_SPEED_M_S
 
 
-def window_s(fb, image_dt: float) -> tuple[float, float]:
+def window_s(speed_m_s: float, image_dt_s: float, before_s=None, after_s=None,
+             before_m=None, after_m=None) -> tuple[float, float]:
     """``(before, after)`` closest approach, s, on the image grid (at least one image period).
 
-    From ``before_s``/``after_s`` or, by default, ``before_km``/``after_km`` at
-    the approach speed (30 km each).
+    From ``before_s``/``after_s`` or, by default, ``before_m``/``after_m`` (m) at
+    the approach speed ``speed_m_s`` (30 km each when neither is given).
     """
-    speed = approach_speed(fb)
     out = []
-    for side in ("before", "after"):
-        t = getattr(fb, f"{side}_s")
+    for t, d in ((before_s, before_m), (after_s, after_m)):
         if t is None:
-            d = getattr(fb, f"{side}_m")
-            t = (d if d is not None else DEFAULT_WINDOW_M) / speed
-        out.append(max(1, round(t / image_dt)) * image_dt)
+            t = (d if d is not None else DEFAULT_WINDOW_M) / speed_m_s
+        out.append(max(1, round(t / image_dt_s)) * image_dt_s)
     return out[0], out[1]
 
 
@@ -158,13 +170,13 @@ def target_encounter(setup, theta, *, raise_on_failure: bool = True) -> Targetin
     except InputError as exc:
         if exc.field == "r0_T":
             raise InputError(f"{exc.message}: the imaging window starts inside the body's "
-                             "bounding sphere; start it further out (flyby.before_km or before_s) "
-                             "with the ring outside R_max (flyby.d_sep_km)",
-                             field="flyby.before_km") from None
+                             "bounding sphere; start it further out (`before_m` or before_s) "
+                             "with the ring outside R_max (`d_sep_m`)",
+                             field="before_m") from None
         if exc.field == "r_target_T":
             raise InputError(f"{exc.message}: the ring passes inside the body's bounding "
-                             f"sphere; increase flyby.d_sep_km (now {setup.d_sep_m / 1e3:.4g} km)",
-                             field="flyby.d_sep_km") from None
+                             f"sphere; increase `d_sep_m` (now {setup.d_sep_m / 1e3:.4g} km)",
+                             field="d_sep_m") from None
         raise
     v0 = np.where(np.isfinite(arc.v0_T), arc.v0_T, 0.0)
     times, pos, vel = propagate_swarm(setup.body, r0, v0, setup.t0_s, setup.tf_s,
@@ -233,14 +245,14 @@ def pointing_check(dcm_BN, dt: float, spacecraft) -> dict:
 
     Returns a dict of (N,) arrays ``pointing_rate`` (rad/s), ``pointing_torque``
     (N m), ``pointing_momentum`` (N m s), ``pointing_feasible`` (bool: torque
-    <= ``u_max`` and momentum <= ``h_max``) and the one-line ``summary``.
+    <= ``u_max_N_m`` and momentum <= ``h_max_N_m_s``) and the one-line ``summary``.
     """
     rate, tq, h = pointing_demand(np.ascontiguousarray(dcm_BN, dtype=np.float64), float(dt),
                                   np.ascontiguousarray(spacecraft.inertia_rw))
-    ok = (tq <= spacecraft.u_max) & (h <= spacecraft.h_max)
+    ok = (tq <= spacecraft.u_max_N_m) & (h <= spacecraft.h_max_N_m_s)
     head = (f"pointing: peak rate {math.degrees(rate.max()):.3g} deg/s, torque "
-            f"{tq.max() * 1e3:.3g} mN m (wheel limit {spacecraft.u_max * 1e3:g}), momentum "
-            f"{h.max() * 1e3:.3g} mN m s (limit {spacecraft.h_max * 1e3:g})")
+            f"{tq.max() * 1e3:.3g} mN m (wheel limit {spacecraft.u_max_N_m * 1e3:g}), momentum "
+            f"{h.max() * 1e3:.3g} mN m s (limit {spacecraft.h_max_N_m_s * 1e3:g})")
     if ok.all():
         summary = head + ": the wheels can follow"
     else:

@@ -27,15 +27,13 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ideas_hpc.attitude import Gains, Maneuver, SpacecraftModel, campaign_maneuver, initial_conditions
-from ideas_hpc.body.bodies import Body, load_body
-from ideas_hpc.flyby.encounter import (Encounter, approach_angles, endpoints_encounter, target_encounter,
-                        window_s)
+from ideas_hpc.body.bodies import Body
+from ideas_hpc.flyby.encounter import Encounter, endpoints_encounter, target_encounter
 from ideas_hpc.errors import InputError
 from ideas_hpc.flyby.camera import camera_at_images, misaligned, misalignment_dcms
 from ideas_hpc.mapping.coverage import CoverageResult, compute_coverage
 from ideas_hpc.mapping.options import CoverageOptions
-from ideas_hpc.flyby.sizing import Sizing, size_flyby
-from ideas_hpc.flyby.swarm_geometry import check_separation
+from ideas_hpc.flyby.sizing import Sizing
 from ideas_hpc.dynamics.force_model import ForceModel
 from ideas_hpc.dynamics.trajectory import (TargetingError, TargetingResult, propagate_swarm,
                                            ring_states, sun_direction_T, target_swarm)
@@ -103,83 +101,8 @@ class FlybySetup:
 
     def with_(self, **kw) -> "FlybySetup":
         if isinstance(kw.get("maneuver"), str):      # a campaign name
-            kw["maneuver"] = campaign_maneuver(kw["maneuver"], field="maneuver")
+            kw["maneuver"] = campaign_maneuver(kw["maneuver"])
         return replace(self, **kw)
-
-
-def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
-    """Resolve a validated :class:`~ideas_hpc.config.campaign_tables.Campaign` to a setup.
-
-    ``maneuver`` (a campaign name of :data:`~ideas_hpc.attitude.MANEUVERS`) overrides
-    ``attitude.maneuver`` (the FoV design kind sweeps whatever the file says).
-    """
-    cfg = c.config
-    b = cfg.body
-    params = b.params
-    if isinstance(params, dict):
-        from ideas_hpc.body.params import params_from_mapping
-        try:
-            params = params_from_mapping(params, prefix="body.params.")
-        except InputError as exc:
-            raise c.source.locate(exc) from None
-    try:
-        body = load_body(b.name, data_path=b.data_path, resolution=b.resolution,
-                         params=params)
-        body.require_params()
-    except InputError as exc:
-        if exc.field in (None, "body", "body.params", "data_path"):
-            f = {"data_path": "body.data_path", None: "body.name"}.get(exc.field, exc.field)
-            msg = f"{exc.message}: {exc.file}" if exc.file else exc.message
-            raise c.error(msg, "body.name" if f == "body" else f) from None
-        raise c.source.locate(exc) from None
-    inst = cfg.instrument
-    sizing = size_flyby(r_max=body.shape.r_max, r_min=body.shape.r_min,
-                        ground_resolution=inst.ground_resolution_m,
-                        aperture=inst.aperture_m, wavelength=inst.wavelength_m,
-                        min_elevation=inst.min_elevation_rad, near=inst.near_field_m)
-    man = campaign_maneuver(maneuver or cfg.attitude.maneuver)
-    eta = inst.half_angle_rad
-    if eta is None:
-        eta = man.half_angle(sizing.eta_nadir)
-    fb = cfg.flyby
-    att = cfg.attitude
-    ex = c.extras
-    d_sep = fb.d_sep_m if fb.d_sep_m is not None else sizing.d_sep
-    sw = cfg.swarm
-    if sw.angles_rad and fb.configuration == "ring":
-        try:
-            check_separation(sw.angles_rad, d_sep, sw.min_separation_m)
-        except InputError as exc:
-            raise c.source.locate(exc) from None
-    t0, tf, enc = fb.t0_s, fb.tf_s, None
-    if fb.geometry == "encounter":
-        t0, tf, enc = _encounter_window(c, body, inst)
-    return FlybySetup(
-        body=body, sizing=sizing, t0_s=t0, tf_s=tf, dt_s=fb.dt_s,
-        image_dt_s=1.0 / inst.image_rate_hz,
-        d_sep_m=d_sep,
-        z_start_m=fb.z_start_m, z_stop_m=fb.z_stop_m, configuration=fb.configuration,
-        helix_rise_m=fb.helix_rise_m, eta_rad=eta, near_m=sizing.near, far_m=sizing.far,
-        theta_max_rad=att.theta_max_rad if att.theta_max_rad is not None else sizing.theta_max,
-        maneuver=man, attitude_mode=att.mode, decimate=att.decimate,
-        tol_m=fb.tolerance_m, max_iter=fb.max_iterations, seed=cfg.seed,
-        force_model=ex["force_model"], spacecraft=ex["spacecraft"],
-        gains=ex["gains"], coverage=ex["coverage"], p_min_s=cfg.design.p_min_s,
-        epoch_s=fb.epoch_s, encounter=enc)
-
-
-def _encounter_window(c, body, inst):
-    """``(t0, tf, Encounter)`` of ``flyby.geometry = "encounter"`` (SPEC section 7c)."""
-    fb = c.config.flyby
-    img = 1.0 / inst.image_rate_hz
-    try:
-        before, after = window_s(fb, img)
-        t_ca = fb.t0_s + before
-        sun = sun_direction_T(body.params, [fb.epoch_s + t_ca])[0]
-        speed, ra, dec = approach_angles(fb, sun)
-    except InputError as exc:
-        raise c.source.locate(exc) from None
-    return fb.t0_s, t_ca + after, Encounter(speed, ra, dec, t_ca)
 
 
 def endpoints(setup: FlybySetup, theta) -> tuple[np.ndarray, np.ndarray]:
@@ -198,7 +121,8 @@ def target(setup: FlybySetup, theta, *, raise_on_failure: bool = True) -> Target
     """Target the swarm ``theta`` (rad) from its start to its arrival point.
 
     A failure the user can fix becomes an :class:`~ideas_hpc.errors.InputError`
-    naming the campaign field to change (:func:`targeting_input_error`).
+    naming the setup parameter to change (:func:`targeting_input_error`; the
+    campaign layer maps it to the file's key, :data:`ideas_hpc.config.model_fields.FLYBY_FIELDS`).
     """
     th = np.asarray(theta, dtype=np.float64).ravel()
     try:
@@ -214,22 +138,24 @@ def target(setup: FlybySetup, theta, *, raise_on_failure: bool = True) -> Target
         if exc.field not in ("r0_T", "r_target_T"):
             raise
         raise InputError(f"{exc.message}: the flyby starts or ends too close to the body; "
-                         "move flyby.z_start_km / flyby.z_stop_km further out",
-                         field="flyby.z_start_km" if exc.field == "r0_T"
-                         else "flyby.z_stop_km") from None
+                         "move `z_start_m` / `z_stop_m` further out",
+                         field="z_start_m" if exc.field == "r0_T" else "z_stop_m") from None
 
 
 def targeting_input_error(exc: TargetingError, setup: FlybySetup, theta) -> InputError:
-    """One line for a failed targeting: the worst spacecraft, its miss, the field to change.
+    """One line for a failed targeting: the worst spacecraft, its miss, the parameter to change.
 
     The cause is read off the failed spacecraft's last trajectory and miss history:
 
     * it came within ``R_max`` of the body's centre (or the integrator gave up):
-      the flyby is too close, ``flyby.d_sep_km``;
+      the flyby is too close, ``d_sep_m``;
     * it used every iteration but the miss stopped shrinking over the last
       three (Newton converges quadratically until integration noise): the
-      tolerance is tighter than the integration allows, ``flyby.tolerance_m``;
-    * otherwise it ran out of iterations, ``flyby.max_iterations``.
+      tolerance is tighter than the integration allows, ``tol_m``;
+    * otherwise it ran out of iterations, ``max_iter``.
+
+    The error names the :class:`FlybySetup` parameter (field, and between
+    backticks in the message); the campaign layer maps it to the file's key.
     """
     res = exc.result
     failed = np.asarray(exc.failed, dtype=int)
@@ -248,13 +174,12 @@ def targeting_input_error(exc: TargetingError, setup: FlybySetup, theta) -> Inpu
     if closest <= r_max or not np.all(np.isfinite(hist)) or n < setup.max_iter:
         where = (f"its path comes within {closest / 1e3:.3g} km of the body's centre"
                  if np.isfinite(closest) else "its integration broke off near the body")
-        return InputError(head + f"{where} (R_max {r_max / 1e3:.3g} km): increase flyby.d_sep_km "
-                          f"(now {setup.d_sep_m / 1e3:.4g} km)", field="flyby.d_sep_km")
+        return InputError(head + f"{where} (R_max {r_max / 1e3:.3g} km): increase `d_sep_m` "
+                          f"(now {setup.d_sep_m / 1e3:.4g} km)", field="d_sep_m")
     if n >= 4 and np.min(hist[-3:]) >= 0.5 * np.min(hist[:-3]):
         return InputError(head + f"the miss stalls near {np.min(hist):.3g} m: loosen "
-                          "flyby.tolerance_m", field="flyby.tolerance_m")
-    return InputError(head + f"raise flyby.max_iterations (now {setup.max_iter})",
-                      field="flyby.max_iterations")
+                          "`tol_m`", field="tol_m")
+    return InputError(head + f"raise `max_iter` (now {setup.max_iter})", field="max_iter")
 
 
 @dataclass(frozen=True)
@@ -310,7 +235,7 @@ def fly(setup: FlybySetup, theta, periods=None, *, sample: int = 0, ics=None,
     """
     th = np.asarray(theta, dtype=np.float64).ravel()
     if th.size == 0:
-        raise InputError("needs at least one spacecraft", field="swarm.angles_rad")
+        raise InputError("needs at least one spacecraft", field="theta")
     tgt = target(setup, th, raise_on_failure=raise_on_failure)
     r_img = np.ascontiguousarray(tgt.position_T[:, ::setup.image_every])
     if ics is None and setup.attitude_mode == "simulated":

@@ -53,14 +53,14 @@ def closest_pair(theta, d_sep: float) -> tuple[int, int, float]:
     return min(a, b), max(a, b), 2.0 * d_sep * math.sin(0.5 * gap)
 
 
-def check_separation(theta, d_sep: float, min_separation: float,
-                     field: str = "swarm.angles_rad") -> None:
+def check_separation(theta, d_sep: float, min_separation: float) -> None:
     """Refuse a swarm with two spacecraft closer than ``min_separation`` (m).
 
     Raises
     ------
     InputError
-        Naming ``field``, the pair, their angles and their distance in km.
+        Naming ``theta`` (field), the pair, their angles, their distance and
+        ``min_separation`` in km (the campaign layer maps both names to its keys).
     """
     i, j, d = closest_pair(theta, d_sep)
     if i < 0 or d >= min_separation:
@@ -69,7 +69,7 @@ def check_separation(theta, d_sep: float, min_separation: float,
     what = "share the same track" if d == 0.0 else f"are {d / 1e3:.4g} km apart"
     raise InputError(f"spacecraft {i} and {j} (angles {th[i]:.6g} and {th[j]:.6g} rad) {what} on "
                      f"the ring of radius {d_sep / 1e3:.4g} km; the minimum is "
-                     f"swarm.min_separation_km = {min_separation / 1e3:g}", field=field)
+                     f"`min_separation` = {min_separation / 1e3:g}", field="theta")
 
 
 def min_separation_angle(min_separation: float, d_sep: float) -> float:

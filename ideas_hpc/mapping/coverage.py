@@ -211,7 +211,7 @@ def _strict_args(shape, options: CoverageOptions, sun_T, n_img) -> tuple[Strict,
         s = np.zeros((1, 3))
     tree = occlusion_structure(shape) if (options.occlusion or options.needs_sun) \
         else _EMPTY_TREE
-    sin_e = -2.0 if options.min_elevation is None else math.sin(options.min_elevation)
+    sin_e = -2.0 if options.min_elevation_rad is None else math.sin(options.min_elevation_rad)
     return Strict(float(sin_e), float(options.max_range), bool(options.occlusion),
                   bool(options.illumination), s), tree
 

@@ -41,7 +41,7 @@ from ideas_hpc.units import CM, DEG, MM, UM
 
 _MODES = ("paper", "exact")
 _BOOLS = ("occlusion", "illumination", "quality", "require_lit", "require_stereo")
-_ANGLES = ("max_emission", "max_incidence", "max_phase")
+_ANGLES = ("max_emission_rad", "max_incidence_rad", "max_phase_rad")
 
 
 @dataclass(frozen=True)
@@ -56,45 +56,45 @@ class CoverageOptions:
         Self-occlusion: the segment vertex -> spacecraft crosses no face.
     illumination : bool
         Vertex lit by the Sun (``n . s > 0``) and not shadowed; needs ``sun_T``.
-    min_elevation : float or None
+    min_elevation_rad : float or None
         Minimum elevation of the spacecraft above the local horizontal, rad.
-    max_ground_resolution : float or None
+    max_ground_resolution_m : float or None
         Largest ground sample ``lambda * range / D`` accepted, m.
-    wavelength, aperture : float
+    wavelength_m, aperture_m : float
         lambda (m) and D (m) for the ground resolution.
-    pixel_pitch, focal_length : float or None
+    pixel_pitch_m, focal_length_m : float or None
         Detector pixel pitch and focal length, m; when both are set the
         quality pass uses ``pitch / focal length`` instead of ``lambda / D``.
     quality : bool
         Compute the per-vertex quality variables (implied by any requirement).
     require_lit : bool
-    max_resolution : float or None
+    max_resolution_m : float or None
         Largest effective ground sample ``rho * range / cos(emission)``, m.
-    max_emission, max_incidence, max_phase : float or None
+    max_emission_rad, max_incidence_rad, max_phase_rad : float or None
         rad.
     require_stereo : bool
-    stereo_min, stereo_max : float
+    stereo_min_rad, stereo_max_rad : float
         Convergence angle range of a stereo pair, rad (default 10-40 deg).
     """
 
     mode: str = "paper"
     occlusion: bool = False
     illumination: bool = False
-    min_elevation: float | None = None
-    max_ground_resolution: float | None = None
-    wavelength: float = WAVELENGTH
-    aperture: float = APERTURE
-    pixel_pitch: float | None = None
-    focal_length: float | None = None
+    min_elevation_rad: float | None = None
+    max_ground_resolution_m: float | None = None
+    wavelength_m: float = WAVELENGTH
+    aperture_m: float = APERTURE
+    pixel_pitch_m: float | None = None
+    focal_length_m: float | None = None
     quality: bool = False
     require_lit: bool = False
-    max_resolution: float | None = None
-    max_emission: float | None = None
-    max_incidence: float | None = None
-    max_phase: float | None = None
+    max_resolution_m: float | None = None
+    max_emission_rad: float | None = None
+    max_incidence_rad: float | None = None
+    max_phase_rad: float | None = None
     require_stereo: bool = False
-    stereo_min: float = math.radians(10.0)
-    stereo_max: float = math.radians(40.0)
+    stereo_min_rad: float = math.radians(10.0)
+    stereo_max_rad: float = math.radians(40.0)
 
     def __post_init__(self):
         if self.mode not in _MODES:
@@ -103,20 +103,20 @@ class CoverageOptions:
             if not isinstance(getattr(self, name), (bool, np.bool_)):
                 raise InputError(f"must be true or false, got {getattr(self, name)!r}",
                                  field=name)
-        if self.min_elevation is not None:
-            e = _finite(self.min_elevation, "min_elevation")
+        if self.min_elevation_rad is not None:
+            e = _finite(self.min_elevation_rad, "min_elevation_rad")
             if not 0.0 <= e < math.pi / 2:
                 raise InputError(f"must be in [0, 90) deg, got {math.degrees(e):g} deg",
-                                 field="min_elevation")
-        for name in ("max_ground_resolution", "max_resolution", "pixel_pitch",
-                     "focal_length"):
+                                 field="min_elevation_rad")
+        for name in ("max_ground_resolution_m", "max_resolution_m", "pixel_pitch_m",
+                     "focal_length_m"):
             if getattr(self, name) is not None and _finite(getattr(self, name), name) <= 0.0:
                 raise InputError("must be > 0", field=name)
-        if (self.pixel_pitch is None) != (self.focal_length is None):
+        if (self.pixel_pitch_m is None) != (self.focal_length_m is None):
             raise InputError("pixel_pitch and focal_length go together",
-                             field="pixel_pitch" if self.pixel_pitch is None
-                             else "focal_length")
-        for name in ("wavelength", "aperture"):
+                             field="pixel_pitch_m" if self.pixel_pitch_m is None
+                             else "focal_length_m")
+        for name in ("wavelength_m", "aperture_m"):
             if _finite(getattr(self, name), name) <= 0.0:
                 raise InputError(f"must be > 0, got {getattr(self, name)!r}", field=name)
         for name in _ANGLES:
@@ -124,25 +124,25 @@ class CoverageOptions:
             if v is not None and not 0.0 < _finite(v, name) <= math.pi:
                 raise InputError(f"must be in (0, 180] deg, got {math.degrees(v):g} deg",
                                  field=name)
-        lo = _finite(self.stereo_min, "stereo_min")
-        hi = _finite(self.stereo_max, "stereo_max")
+        lo = _finite(self.stereo_min_rad, "stereo_min_rad")
+        hi = _finite(self.stereo_max_rad, "stereo_max_rad")
         if not 0.0 < lo < hi <= math.pi:
             raise InputError(f"need 0 < stereo_min < stereo_max <= 180 deg, got "
                              f"{math.degrees(lo):g}, {math.degrees(hi):g} deg",
-                             field="stereo_max" if hi > math.pi else "stereo_min")
+                             field="stereo_max_rad" if hi > math.pi else "stereo_min_rad")
 
     @property
     def strict(self) -> bool:
         """True when any option beyond the paper's culling + clipping is on."""
-        return (self.occlusion or self.illumination or self.min_elevation is not None
-                or self.max_ground_resolution is not None)
+        return (self.occlusion or self.illumination or self.min_elevation_rad is not None
+                or self.max_ground_resolution_m is not None)
 
     @property
     def requirement(self) -> bool:
         """True when a coverage requirement (issue 14) is set."""
         return (self.require_lit or self.require_stereo
                 or any(getattr(self, n) is not None
-                       for n in ("max_resolution",) + _ANGLES))
+                       for n in ("max_resolution_m",) + _ANGLES))
 
     @property
     def wants_quality(self) -> bool:
@@ -156,23 +156,23 @@ class CoverageOptions:
     @property
     def max_range(self) -> float:
         """Largest range allowed by the ground resolution, ``X D / lambda`` (m)."""
-        if self.max_ground_resolution is None:
+        if self.max_ground_resolution_m is None:
             return math.inf
-        return self.max_ground_resolution * self.aperture / self.wavelength
+        return self.max_ground_resolution_m * self.aperture_m / self.wavelength_m
 
     @property
     def rho(self) -> float:
         """Angular ground sample, rad: ``pitch / focal length`` or ``lambda / D``."""
-        if self.pixel_pitch is not None:
-            return self.pixel_pitch / self.focal_length
-        return self.wavelength / self.aperture
+        if self.pixel_pitch_m is not None:
+            return self.pixel_pitch_m / self.focal_length_m
+        return self.wavelength_m / self.aperture_m
 
     @property
     def limits(self) -> np.ndarray:
         """``[X_max, e_max, i_max, g_max, s_min, s_max]`` for the quality kernel (inf: none)."""
-        v = [self.max_resolution] + [getattr(self, n) for n in _ANGLES]
+        v = [self.max_resolution_m] + [getattr(self, n) for n in _ANGLES]
         return np.array([math.inf if x is None else float(x) for x in v]
-                        + [float(self.stereo_min), float(self.stereo_max)])
+                        + [float(self.stereo_min_rad), float(self.stereo_max_rad)])
 
 
 def _finite(value, field: str) -> float:
@@ -189,21 +189,21 @@ COVERAGE_SCHEMA = {
     "mode": _opt("str", "mode", choices=_MODES),
     "occlusion": _opt("bool", "occlusion"),
     "illumination": _opt("bool", "illumination"),
-    "min_elevation_deg": _opt("float", "min_elevation", DEG),
-    "max_ground_resolution_m": _opt("float", "max_ground_resolution"),
-    "wavelength_um": _opt("float", "wavelength", UM),
-    "aperture_cm": _opt("float", "aperture", CM),
-    "pixel_pitch_um": _opt("float", "pixel_pitch", UM),
-    "focal_length_mm": _opt("float", "focal_length", MM),
+    "min_elevation_deg": _opt("float", "min_elevation_rad", DEG),
+    "max_ground_resolution_m": _opt("float", "max_ground_resolution_m"),
+    "wavelength_um": _opt("float", "wavelength_m", UM),
+    "aperture_cm": _opt("float", "aperture_m", CM),
+    "pixel_pitch_um": _opt("float", "pixel_pitch_m", UM),
+    "focal_length_mm": _opt("float", "focal_length_m", MM),
     "quality": _opt("bool", "quality"),
     "require_lit": _opt("bool", "require_lit"),
-    "max_resolution_m": _opt("float", "max_resolution"),
-    "max_emission_deg": _opt("float", "max_emission", DEG),
-    "max_incidence_deg": _opt("float", "max_incidence", DEG),
-    "max_phase_deg": _opt("float", "max_phase", DEG),
+    "max_resolution_m": _opt("float", "max_resolution_m"),
+    "max_emission_deg": _opt("float", "max_emission_rad", DEG),
+    "max_incidence_deg": _opt("float", "max_incidence_rad", DEG),
+    "max_phase_deg": _opt("float", "max_phase_rad", DEG),
     "require_stereo": _opt("bool", "require_stereo"),
-    "stereo_min_deg": _opt("float", "stereo_min", DEG),
-    "stereo_max_deg": _opt("float", "stereo_max", DEG),
+    "stereo_min_deg": _opt("float", "stereo_min_rad", DEG),
+    "stereo_max_deg": _opt("float", "stereo_max_rad", DEG),
 }
 
 
@@ -216,14 +216,12 @@ def coverage_options_from_config(table: dict, prefix: str = "coverage.") -> Cove
     quality pass and requirement: ``quality``, ``require_lit``,
     ``require_stereo`` (bool), ``max_resolution_m``, ``max_emission_deg``,
     ``max_incidence_deg``, ``max_phase_deg``, ``stereo_min_deg``,
-    ``stereo_max_deg``. Unknown keys and bad values raise :class:`InputError`
-    naming ``prefix + key``.
+    ``stereo_max_deg``. Unknown keys and wrong types raise :class:`InputError`
+    naming ``prefix + key``; a value :class:`CoverageOptions` refuses names its
+    field (``min_elevation_rad``), which the campaign layer maps to the file's key
+    (:data:`ideas_hpc.config.model_fields.COVERAGE_FIELDS`).
     """
     values = validate(table, COVERAGE_SCHEMA, prefix)   # one mechanism for every table
     given = table or {}
-    kw = {COVERAGE_SCHEMA[k].si_name(k): values[k] for k in COVERAGE_SCHEMA if k in given}
-    try:
-        return CoverageOptions(**kw)
-    except InputError as exc:
-        inv = {f.si_name(k): k for k, f in COVERAGE_SCHEMA.items()}
-        raise InputError(exc.message, field=prefix + inv.get(exc.field, exc.field)) from None
+    return CoverageOptions(**{COVERAGE_SCHEMA[k].si_name(k): values[k]
+                              for k in COVERAGE_SCHEMA if k in given})

@@ -1,0 +1,94 @@
+"""A campaign's flyby setup: the validated file resolved to a :class:`FlybySetup` (SI).
+
+The campaign layer builds the setup: it loads the body, sizes the flyby, picks
+the maneuver, checks the ring spacing and, for ``flyby.geometry = "encounter"``,
+resolves the approach and the imaging window (SPEC sections 2-3, 7c). The flyby
+layer below names its own parameters in errors (``d_sep_m``, ``phase_angle_rad``);
+:func:`ideas_hpc.config.model_fields.flyby_errors` turns them into the file's keys
+with their file and line.
+"""
+
+from __future__ import annotations
+
+from ideas_hpc.attitude import campaign_maneuver
+from ideas_hpc.body.bodies import load_body
+from ideas_hpc.config.model_fields import flyby_errors
+from ideas_hpc.dynamics.trajectory import sun_direction_T
+from ideas_hpc.errors import InputError
+from ideas_hpc.flyby.encounter import Encounter, approach_angles, approach_speed, window_s
+from ideas_hpc.flyby.flight import FlybySetup
+from ideas_hpc.flyby.sizing import size_flyby
+from ideas_hpc.flyby.swarm_geometry import check_separation
+
+
+def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
+    """Resolve a validated :class:`~ideas_hpc.config.campaign_tables.Campaign` to a setup.
+
+    ``maneuver`` (a campaign name of :data:`~ideas_hpc.attitude.MANEUVERS`) overrides
+    ``attitude.maneuver`` (the FoV design kind sweeps whatever the file says).
+    """
+    cfg = c.config
+    b = cfg.body
+    params = b.params
+    if isinstance(params, dict):
+        from ideas_hpc.body.params import params_from_mapping
+        try:
+            params = params_from_mapping(params, prefix="body.params.")
+        except InputError as exc:
+            raise c.source.locate(exc) from None
+    try:
+        body = load_body(b.name, data_path=b.data_path, resolution=b.resolution,
+                         params=params)
+        body.require_params()
+    except InputError as exc:
+        if exc.field in (None, "body", "body.params", "data_path"):
+            f = {"data_path": "body.data_path", None: "body.name"}.get(exc.field, exc.field)
+            msg = f"{exc.message}: {exc.file}" if exc.file else exc.message
+            raise c.error(msg, "body.name" if f == "body" else f) from None
+        raise c.source.locate(exc) from None
+    inst = cfg.instrument
+    sizing = size_flyby(r_max=body.shape.r_max, r_min=body.shape.r_min,
+                        ground_resolution=inst.ground_resolution_m,
+                        aperture=inst.aperture_m, wavelength=inst.wavelength_m,
+                        min_elevation=inst.min_elevation_rad, near=inst.near_field_m)
+    with flyby_errors(c):
+        man = campaign_maneuver(maneuver or cfg.attitude.maneuver)
+    eta = inst.half_angle_rad
+    if eta is None:
+        eta = man.half_angle(sizing.eta_nadir)
+    fb = cfg.flyby
+    att = cfg.attitude
+    ex = c.extras
+    d_sep = fb.d_sep_m if fb.d_sep_m is not None else sizing.d_sep
+    sw = cfg.swarm
+    if sw.angles_rad and fb.configuration == "ring":
+        with flyby_errors(c):
+            check_separation(sw.angles_rad, d_sep, sw.min_separation_m)
+    t0, tf, enc = fb.t0_s, fb.tf_s, None
+    if fb.geometry == "encounter":
+        with flyby_errors(c):
+            t0, tf, enc = _encounter_window(fb, body, 1.0 / inst.image_rate_hz)
+    return FlybySetup(
+        body=body, sizing=sizing, t0_s=t0, tf_s=tf, dt_s=fb.dt_s,
+        image_dt_s=1.0 / inst.image_rate_hz,
+        d_sep_m=d_sep,
+        z_start_m=fb.z_start_m, z_stop_m=fb.z_stop_m, configuration=fb.configuration,
+        helix_rise_m=fb.helix_rise_m, eta_rad=eta, near_m=sizing.near, far_m=sizing.far,
+        theta_max_rad=att.theta_max_rad if att.theta_max_rad is not None else sizing.theta_max,
+        maneuver=man, attitude_mode=att.mode, decimate=att.decimate,
+        tol_m=fb.tolerance_m, max_iter=fb.max_iterations, seed=cfg.seed,
+        force_model=ex["force_model"], spacecraft=ex["spacecraft"],
+        gains=ex["gains"], coverage=ex["coverage"], p_min_s=cfg.design.p_min_s,
+        epoch_s=fb.epoch_s, encounter=enc)
+
+
+def _encounter_window(fb, body, image_dt_s: float):
+    """``(t0, tf, Encounter)`` of ``flyby.geometry = "encounter"`` (SPEC section 7c) from the
+    typed ``[flyby]`` table ``fb`` (SI)."""
+    speed = approach_speed(fb.v_inf_m_s, fb.speed_m_s)
+    before, after = window_s(speed, image_dt_s, fb.before_s, fb.after_s, fb.before_m, fb.after_m)
+    t_ca = fb.t0_s + before
+    sun = sun_direction_T(body.params, [fb.epoch_s + t_ca])[0]
+    speed, ra, dec = approach_angles(fb.v_inf_m_s, fb.speed_m_s, fb.approach_ra_rad,
+                                     fb.approach_dec_rad, fb.phase_angle_rad, sun)
+    return fb.t0_s, t_ca + after, Encounter(speed, ra, dec, t_ca)
