@@ -26,7 +26,7 @@ from ideas_hpc.core.mapping.records import Camera, Nominal
 from ideas_hpc.core.mapping.scenario_proofs import BC_ANY, S_MAX
 from ideas_hpc.core.mapping.scenario_rows import _proven
 from ideas_hpc.core.mapping.visibility import _seen
-from ideas_hpc.flyby.flight import setup_from_campaign
+from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.montecarlo.scenario_rows import RowEngine
 from ideas_hpc.montecarlo.scenarios import grid_theta, nominal_start
 
