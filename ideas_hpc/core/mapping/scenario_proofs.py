@@ -58,24 +58,22 @@ BC_ANY = 2.0 * np.sqrt(3.0) * S_MAX * (1.0 + 1e-12)
 
 
 @njit(cache=True, inline="always")
-def _required(vtx, k, i, cam, sec_eta, opts, bc, br):
-    """Smallest position deviation (m) with which a camera within ``bc`` of image ``i``
-    could pass culling, clipping, field of view, elevation and range (inf: none).
+def _vertex(mesh, j):
+    """``(px, py, pz, nx, ny, nz, |n|)`` of vertex ``j`` (m, frame T)."""
+    p = mesh.vertices_T_m
+    n = mesh.normals_T
+    return (p[j, 0], p[j, 1], p[j, 2], n[j, 0], n[j, 1], n[j, 2],
+            np.sqrt(n[j, 0] * n[j, 0] + n[j, 1] * n[j, 1] + n[j, 2] * n[j, 2]))
 
-    Each test is ``slack >= -(its change bound)``, linear in the deviation (module
-    docstring), solved for it; ``br`` (the budget) only sizes the floating-point
-    slack, and the result is shrunk by a relative and absolute 1e-9 so that it
-    never exceeds the exact value. ``vtx`` is ``(px, py, pz, nx, ny, nz, |n|)`` (m, T).
-    """
-    px, py, pz, nx, ny, nz, nabs = vtx
+
+@njit(cache=True, inline="always")
+def _camera_coords(vtx, k, i, cam, br):
+    """Image ``i``'s view of the vertex ``vtx = (px, py, pz, nx, ny, nz, |n|)`` (m, T):
+    ``(|p - r|, floating-point allowance sized for deviations up to br, (r - p) . n,
+    the culling value (exact or paper), q_x, q_y, q_z)``, all m."""
+    px, py, pz, nx, ny, nz, _ = vtx
     r_T = cam.r_T_m
     dcm_BT = cam.dcm_BT
-    tan_eta = cam.tan_eta
-    near = cam.near_m
-    far = cam.far_m
-    exact = cam.exact
-    sin_min_elev = opts.sin_min_elev
-    max_range = opts.max_range_m
     rx = r_T[k, i, 0]
     ry = r_T[k, i, 1]
     rz = r_T[k, i, 2]
@@ -85,17 +83,34 @@ def _required(vtx, k, i, cam, sec_eta, opts, bc, br):
     dn = np.sqrt(dx * dx + dy * dy + dz * dz)
     fp = _FP * (dn + br + np.sqrt(rx * rx + ry * ry + rz * rz))
     los_n = -(dx * nx + dy * ny + dz * nz)
-    cul = los_n if exact else rx * nx + ry * ny + rz * nz
+    cul = los_n if cam.exact else rx * nx + ry * ny + rz * nz
+    qx = dcm_BT[k, i, 0, 0] * dx + dcm_BT[k, i, 0, 1] * dy + dcm_BT[k, i, 0, 2] * dz
+    qy = dcm_BT[k, i, 1, 0] * dx + dcm_BT[k, i, 1, 1] * dy + dcm_BT[k, i, 1, 2] * dz
+    qz = dcm_BT[k, i, 2, 0] * dx + dcm_BT[k, i, 2, 1] * dy + dcm_BT[k, i, 2, 2] * dz
+    return dn, fp, los_n, cul, qx, qy, qz
+
+
+@njit(cache=True, inline="always")
+def _required(vtx, k, i, cam, sec_eta, opts, bc, br):
+    """Smallest position deviation (m) with which a camera within ``bc`` of image ``i``
+    could pass culling, clipping, field of view, elevation and range (inf: none).
+
+    Each test is ``slack >= -(its change bound)``, linear in the deviation (module
+    docstring), solved for it; ``br`` (the budget) only sizes the floating-point
+    slack, and the result is shrunk by a relative and absolute 1e-9 so that it
+    never exceeds the exact value. ``vtx`` is ``(px, py, pz, nx, ny, nz, |n|)`` (m, T).
+    """
+    nabs = vtx[6]
+    sin_min_elev = opts.sin_min_elev
+    max_range = opts.max_range_m
+    dn, fp, los_n, cul, qx, qy, qz = _camera_coords(vtx, k, i, cam, br)
     if nabs > 0.0:
         need = (-cul - fp * nabs) / nabs
     else:
         need = 0.0 if cul >= 0.0 else np.inf
-    qz = dcm_BT[k, i, 2, 0] * dx + dcm_BT[k, i, 2, 1] * dy + dcm_BT[k, i, 2, 2] * dz
-    qx = dcm_BT[k, i, 0, 0] * dx + dcm_BT[k, i, 0, 1] * dy + dcm_BT[k, i, 0, 2] * dz
-    qy = dcm_BT[k, i, 1, 0] * dx + dcm_BT[k, i, 1, 1] * dy + dcm_BT[k, i, 1, 2] * dz
     base = bc * dn + fp                     # delta = base + S_MAX * deviation
-    need = max(need, (near - qz - base) / S_MAX, (qz - far - base) / S_MAX)
-    fov = max(abs(qx), abs(qy)) - tan_eta * qz - (1.0 + tan_eta) * fp
+    need = max(need, (cam.near_m - qz - base) / S_MAX, (qz - cam.far_m - base) / S_MAX)
+    fov = max(abs(qx), abs(qy)) - cam.tan_eta * qz - (1.0 + cam.tan_eta) * fp
     need = max(need, (fov / sec_eta - base) / S_MAX)
     if sin_min_elev > -1.0 or max_range < np.inf:
         need = max(need, dn - max_range - fp,
@@ -120,22 +135,11 @@ def _slacks(vtx, k, i, cam, sec_eta, opts, br):
     Floating-point allowances are sized for ``d <= br``; both are shrunk by a
     relative and absolute 1e-9 (-inf: some test fails already).
     """
-    px, py, pz, nx, ny, nz, nabs = vtx
-    r_T = cam.r_T_m
-    dcm_BT = cam.dcm_BT
-    tan_eta = cam.tan_eta
+    nabs = vtx[6]
     sin_min_elev = opts.sin_min_elev
     max_range = opts.max_range_m
-    rx = r_T[k, i, 0]
-    ry = r_T[k, i, 1]
-    rz = r_T[k, i, 2]
-    dx = px - rx
-    dy = py - ry
-    dz = pz - rz
-    dn = np.sqrt(dx * dx + dy * dy + dz * dz)
-    fp = _FP * (dn + br + np.sqrt(rx * rx + ry * ry + rz * rz))
-    los_n = -(dx * nx + dy * ny + dz * nz)
-    cul = los_n if cam.exact else rx * nx + ry * ny + rz * nz
+    tan_eta = cam.tan_eta
+    dn, fp, los_n, cul, qx, qy, qz = _camera_coords(vtx, k, i, cam, br)
     if nabs > 0.0:
         rad = (cul - fp * nabs) / nabs
     else:
@@ -143,9 +147,6 @@ def _slacks(vtx, k, i, cam, sec_eta, opts, br):
     if sin_min_elev > -1.0 or max_range < np.inf:
         rad = min(rad, max_range - dn - fp,
                   (los_n - dn * sin_min_elev - 2.0 * fp) / (nabs + abs(sin_min_elev)))
-    qz = dcm_BT[k, i, 2, 0] * dx + dcm_BT[k, i, 2, 1] * dy + dcm_BT[k, i, 2, 2] * dz
-    qx = dcm_BT[k, i, 0, 0] * dx + dcm_BT[k, i, 0, 1] * dy + dcm_BT[k, i, 0, 2] * dz
-    qy = dcm_BT[k, i, 1, 0] * dx + dcm_BT[k, i, 1, 1] * dy + dcm_BT[k, i, 1, 2] * dz
     fov = tan_eta * qz - max(abs(qx), abs(qy)) - (1.0 + tan_eta) * fp
     slack = min(qz - cam.near_m - fp, cam.far_m - qz - fp, fov / sec_eta - fp)
     return slack * (1.0 - 1e-9) - 1e-9, rad * (1.0 - 1e-9) - 1e-9, dn
@@ -173,9 +174,7 @@ def witness_proofs(first, window, mesh, cam, opts, bvh, bc, br):
     radius whose cone of sight lines no face meets
     (:func:`~ideas_hpc.core.mapping.bvh.cone_clear`). Unseen: (-1, -inf, 0).
     """
-    vertices = mesh.vertices_T_m
-    normals = mesh.normals_T
-    nv = vertices.shape[0]
+    nv = mesh.vertices_T_m.shape[0]
     nsc = cam.r_T_m.shape[0]
     r_T = cam.r_T_m
     sec_eta = np.sqrt(1.0 + cam.tan_eta * cam.tan_eta) * (1.0 + 1e-12)
@@ -183,13 +182,8 @@ def witness_proofs(first, window, mesh, cam, opts, bvh, bc, br):
     slack_q = np.full((nsc, nv), -np.inf)
     radius = np.zeros((nsc, nv))
     for j in prange(nv):
-        px = vertices[j, 0]
-        py = vertices[j, 1]
-        pz = vertices[j, 2]
-        nx = normals[j, 0]
-        ny = normals[j, 1]
-        nz = normals[j, 2]
-        vtx = (px, py, pz, nx, ny, nz, np.sqrt(nx * nx + ny * ny + nz * nz))
+        vtx = _vertex(mesh, j)
+        px, py, pz = vtx[0], vtx[1], vtx[2]
         for k in range(nsc):
             w = first[k, j]
             if w < 0:
@@ -305,9 +299,7 @@ def windows(mesh, cam, opts, bvh, bc, br, both):
     the last) with its node bounds inflated by the budget; a node whose
     sight-line cone the last blocking face covers is skipped whole.
     """
-    vertices = mesh.vertices_T_m
-    normals = mesh.normals_T
-    nv = vertices.shape[0]
+    nv = mesh.vertices_T_m.shape[0]
     nsc = cam.r_T_m.shape[0]
     tree = TimeTree(*scan_tree(cam))
     NF = tree.NF
@@ -318,11 +310,7 @@ def windows(mesh, cam, opts, bvh, bc, br, both):
     out = np.full((nsc, nv, 2), -1, dtype=np.int64)
     for j in prange(nv):
         stack = np.empty(128, dtype=np.int64)
-        nx = normals[j, 0]
-        ny = normals[j, 1]
-        nz = normals[j, 2]
-        vtx = (vertices[j, 0], vertices[j, 1], vertices[j, 2], nx, ny, nz,
-               np.sqrt(nx * nx + ny * ny + nz * nz))
+        vtx = _vertex(mesh, j)
         for k in range(nsc):
             lo = _walk(tree, stack, k, j, vtx, cam, opts, bvh, (bc, br), False)
             out[k, j, 0] = lo
