@@ -44,6 +44,9 @@ CASES = {
                                                    "run.workers=0"]),
     "design-pareto": ("campaigns/eros-pareto.toml", ["design.population=8",
                                                      "design.generations=3", "run.workers=0"]),
+    # the stereo pair formulation (a few minutes per revision)
+    "design-stereo": ("campaigns/eros-stereo-design.toml", ["design.verify_samples=4",
+                                                            "run.workers=0"]),
 }
 
 
