@@ -351,3 +351,6 @@ def test_scan_encounter_cli_table_and_plot(tmp_path, capsys):
                  "--out", str(tmp_path / "scan.nc")])
     out = capsys.readouterr().out
     assert code in (0, None) and "ring coverage %" in out and (tmp_path / "scan.png").stat().st_size
+    import xarray as xr
+    with xr.open_dataset(tmp_path / "scan.nc") as ds:      # the figure's title names it
+        assert ds.attrs["shape_model"]

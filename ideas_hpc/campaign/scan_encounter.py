@@ -88,7 +88,8 @@ def encounter_scan(setup, fb, decs_rad, phases_rad, *, step_rad: float = 10 * DE
                             "phase": ("phase", phases, {"units": "rad",
                                                         "long_name": "phase angle"})},
                     attrs={"step_rad": float(step_rad), "speed_m_s": setup.encounter.speed_m_s,
-                           "d_sep_m": float(setup.d_sep_m)})
+                           "d_sep_m": float(setup.d_sep_m),
+                           "shape_model": setup.body.shape.name})
     for name, attrs in SCAN_ATTRS.items():
         ds[name].attrs.update(attrs)
     return ds

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ideas_hpc.plots.figures import plt, save_png
+from ideas_hpc.plots.figures import body_name, plt, save_png
 
 
 def scan_map(ds, path) -> "Path":  # noqa: F821
@@ -15,7 +15,7 @@ def scan_map(ds, path) -> "Path":  # noqa: F821
     ph = np.degrees(ds["phase"].values)
     cov = 100.0 * ds["ring_coverage"].values
     n = ds["n_greedy"].values
-    fig, ax = plt.subplots(figsize=(1.4 * ph.size + 2.5, 0.7 * dec.size + 1.8))
+    fig, ax = plt.subplots(figsize=(max(1.4 * ph.size + 2.5, 5.0), 0.7 * dec.size + 2.0))
     im = ax.imshow(np.ma.masked_invalid(cov), origin="lower", aspect="auto", cmap="viridis")
     for i in range(dec.size):
         for j in range(ph.size):
@@ -27,7 +27,7 @@ def scan_map(ds, path) -> "Path":  # noqa: F821
     ax.set_yticks(range(dec.size), [f"{d:g}" for d in dec])
     ax.set_xlabel("phase angle, deg")
     ax.set_ylabel("approach declination, deg")
-    ax.set_title(f"ring coverage at {ds.attrs['speed_m_s'] / 1e3:g} km/s, "
+    ax.set_title(f"ring coverage at {ds.attrs['speed_m_s'] / 1e3:g} km/s,\n"
                  f"d_sep {ds.attrs['d_sep_m'] / 1e3:.4g} km (blank: unreachable)", fontsize=9)
     fig.colorbar(im, ax=ax, label="ring coverage, %")
-    return save_png(fig, path)
+    return save_png(fig, path, body=body_name(ds))
