@@ -28,10 +28,9 @@ from ideas_hpc.mapping.coverage import _camera, _check_geometry, _mesh, _strict_
 
 #: Head room on the pilot's deviations (speed only).
 HEADROOM = 1.5
-#: Per process: engine token -> nominal positions and ideal DCMs (see RowEngine.nominal),
-#: and the kernels' records of that flight (RowEngine._static).
+#: Per process: engine token -> its nominal flight and that flight's kernel records
+#: (RowEngine._cached).
 _NOMINAL: dict = {}
-_STATIC: dict = {}
 #: Largest ``||C C^T - I||_F`` accepted for the perturbed DCMs (the kernels assume
 #: ``||C||_2 <= 1 + 1e-9``); anything worse takes the full recomputation.
 ORTHO_TOL = 1e-10
@@ -56,44 +55,41 @@ class RowEngine:
     def fast(self) -> bool:
         return not self.setup.coverage.requirement
 
-    def _args(self, r_img, dcm):
-        setup = self.setup
-        shape = setup.body.shape
-        r, c, tan_eta, near, far, _ = _check_geometry(shape, r_img, dcm, setup.eta_rad,
-                                                      setup.near_m, setup.far_m)
-        sun = setup.sun_T() if setup.coverage.needs_sun else None
-        opts, bvh = _strict_args(shape, setup.coverage, sun, r.shape[1])
-        cam = _camera(r, c, np.zeros(r.shape[1]), tan_eta, near, far,
-                      setup.coverage.mode == "exact")
-        return _mesh(shape), cam, opts, bvh
-
     token: str = field(default_factory=lambda: uuid.uuid4().hex)
 
-    def _static(self):
-        """The kernels' records of the nominal flight, validated once per process."""
-        got = _STATIC.get(self.token)
-        if got is None:
-            got = self._args(*self.nominal())
-            while len(_STATIC) >= 2:
-                _STATIC.pop(next(iter(_STATIC)))
-            _STATIC[self.token] = got
-        return got
-
-    def nominal(self):
-        """Positions and ideal camera DCMs of the nominal flight at the images.
-
-        Large and cheap to recompute, so never shipped: each process keeps the
-        last engines' (by ``token``), since every chunk task unpickles its own copy."""
+    def _cached(self) -> dict:
+        """This process's nominal flight of the engine (by ``token``): large and cheap to
+        recompute, so never shipped; each process keeps the last two engines', since
+        every chunk task unpickles its own copy."""
         got = _NOMINAL.get(self.token)
         if got is None:
             ideal = self.setup.with_(attitude_mode="ideal")
             r_img, dcm, _, _ = open_loop_views(ideal, self.theta, None, self.r0_T, self.v0_T,
                                                Perturbation())
-            got = (r_img, dcm)
+            got = {"flight": (r_img, dcm)}
             while len(_NOMINAL) >= 2:
                 _NOMINAL.pop(next(iter(_NOMINAL)))
             _NOMINAL[self.token] = got
         return got
+
+    def nominal(self):
+        """Positions and ideal camera DCMs of the nominal flight at the images."""
+        return self._cached()["flight"]
+
+    def _static(self):
+        """The kernels' records of the nominal flight, validated once per process."""
+        got = self._cached()
+        if "records" not in got:
+            setup = self.setup
+            shape = setup.body.shape
+            r, c, tan_eta, near, far, _ = _check_geometry(shape, *got["flight"], setup.eta_rad,
+                                                          setup.near_m, setup.far_m)
+            sun = setup.sun_T() if setup.coverage.needs_sun else None
+            opts, bvh = _strict_args(shape, setup.coverage, sun, r.shape[1])
+            cam = _camera(r, c, np.zeros(r.shape[1]), tan_eta, near, far,
+                          setup.coverage.mode == "exact")
+            got["records"] = (_mesh(shape), cam, opts, bvh)
+        return got["records"]
 
     def prepare(self, pilot: Perturbation | None) -> "RowEngine":
         """The budget (from the pilot perturbation), then the proofs: windows and witnesses."""

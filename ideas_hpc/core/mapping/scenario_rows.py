@@ -34,7 +34,8 @@ from ideas_hpc.core.mapping.coverage import _is_strict
 from ideas_hpc.core.mapping.records import TimeTree
 from ideas_hpc.core.mapping.scenario_proofs import S_MAX
 from ideas_hpc.core.mapping.segments import face_blocks_cone
-from ideas_hpc.core.mapping.time_tree import _below_elevation, _classify, scan_tree
+from ideas_hpc.core.mapping.time_tree import (_below_elevation, _classify, dcm_gap2, gap,
+                                              gram_error2, scan_tree)
 from ideas_hpc.core.mapping.visibility import _seen, _seen_hint
 
 
@@ -45,9 +46,9 @@ def deviation_start(r_nom, dcm_nom, r_T, dcm_BT, bc, br):
     Returns (N,) int64 ``i_ok``, the first image from which every image's deviation
     is within the budget ``(bc, br)`` (``n_img`` when the last image is already
     outside); (N,) int64 ``i_pos``, the same for the position deviation alone; and
-    the largest
-    ``||C C^T - I||_F`` of the flown DCMs, which bounds ``||C||_2 <= sqrt(1 + it)``
-    for the proofs (inf when one is a reflection, NaN when one is not finite).
+    the largest ``||C C^T - I||_F`` of the flown DCMs, which bounds ``||C||_2 <=
+    sqrt(1 + it)`` for the proofs (inf when one is a reflection, NaN when one is
+    not finite).
     """
     nsc = r_T.shape[0]
     nimg = r_T.shape[1]
@@ -59,19 +60,8 @@ def deviation_start(r_nom, dcm_nom, r_T, dcm_BT, bc, br):
         i_pos = 0
         worst = 0.0
         for i in range(nimg - 1, -1, -1):
-            dc = 0.0
-            for a in range(3):
-                for b in range(3):
-                    dc += (dcm_BT[k, i, a, b] - dcm_nom[k, i, a, b]) ** 2
-            g = 0.0
-            for a in range(3):
-                for b in range(3):
-                    t = (dcm_BT[k, i, a, 0] * dcm_BT[k, i, b, 0]
-                         + dcm_BT[k, i, a, 1] * dcm_BT[k, i, b, 1]
-                         + dcm_BT[k, i, a, 2] * dcm_BT[k, i, b, 2])
-                    if a == b:
-                        t -= 1.0
-                    g += t * t
+            dc = dcm_gap2(dcm_BT, k, i, dcm_nom, i)
+            g = gram_error2(dcm_BT, k, i)
             det = (dcm_BT[k, i, 0, 0] * (dcm_BT[k, i, 1, 1] * dcm_BT[k, i, 2, 2]
                                          - dcm_BT[k, i, 1, 2] * dcm_BT[k, i, 2, 1])
                    - dcm_BT[k, i, 0, 1] * (dcm_BT[k, i, 1, 0] * dcm_BT[k, i, 2, 2]
@@ -82,7 +72,7 @@ def deviation_start(r_nom, dcm_nom, r_T, dcm_BT, bc, br):
                 g = np.inf                   # a reflection (or NaN): not a rotation
             if not g <= worst:
                 worst = g                    # NaN sticks
-            dr = _distance(r_T, r_nom, k, i)
+            dr = gap(r_T, k, i, r_nom, i)
             if i_ok == 0 and not (np.sqrt(dc) <= bc and dr <= br):
                 i_ok = i + 1
             if i_pos == 0 and not dr <= br:
@@ -91,12 +81,6 @@ def deviation_start(r_nom, dcm_nom, r_T, dcm_BT, bc, br):
         out_pos[k] = i_pos
         ortho[k] = np.sqrt(worst)
     return out, out_pos, ortho.max() if nsc > 0 else 0.0
-
-
-@njit(cache=True, inline="always")
-def _distance(r_a, r_b, k, i):
-    return np.sqrt((r_a[k, i, 0] - r_b[k, i, 0]) ** 2 + (r_a[k, i, 1] - r_b[k, i, 1]) ** 2
-                   + (r_a[k, i, 2] - r_b[k, i, 2]) ** 2)
 
 
 @njit(cache=True, inline="always")
@@ -172,13 +156,10 @@ def _proven(nominal, vertices, j, cam, k, w):
     """The witness proof of :func:`~ideas_hpc.core.mapping.scenario_proofs.witness_proofs`
     holds for the flown camera ``cam`` of candidate ``k`` at its witness image ``w``."""
     r_T = cam.r_T_m
-    d = _distance(r_T, nominal.r_nom_T_m, k, w)
+    d = gap(r_T, k, w, nominal.r_nom_T_m, w)
     if not d < nominal.radius_m[k, j]:
         return False
-    c = 0.0
-    for a in range(3):
-        for b in range(3):
-            c += (cam.dcm_BT[k, w, a, b] - nominal.dcm_nom_BT[k, w, a, b]) ** 2
+    c = dcm_gap2(cam.dcm_BT, k, w, nominal.dcm_nom_BT, w)
     dx = vertices[j, 0] - r_T[k, w, 0]
     dy = vertices[j, 1] - r_T[k, w, 1]
     dz = vertices[j, 2] - r_T[k, w, 2]

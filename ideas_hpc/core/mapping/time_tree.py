@@ -67,6 +67,37 @@ LEAF = 16
 _NF = 17
 
 
+@njit(cache=True, inline="always")
+def gram_error2(dcm, k, i):
+    """``||C C^T - I||_F^2`` of ``C = dcm[k, i]`` (``||C||_2 <= sqrt(1 + its root)``)."""
+    g = 0.0
+    for a in range(3):
+        for c in range(3):
+            s = (dcm[k, i, a, 0] * dcm[k, i, c, 0] + dcm[k, i, a, 1] * dcm[k, i, c, 1]
+                 + dcm[k, i, a, 2] * dcm[k, i, c, 2])
+            if a == c:
+                s -= 1.0
+            g += s * s
+    return g
+
+
+@njit(cache=True, inline="always")
+def dcm_gap2(dcm_a, k, i, dcm_b, m):
+    """``||dcm_a[k, i] - dcm_b[k, m]||_F^2``."""
+    d = 0.0
+    for a in range(3):
+        for c in range(3):
+            d += (dcm_a[k, i, a, c] - dcm_b[k, m, a, c]) ** 2
+    return d
+
+
+@njit(cache=True, inline="always")
+def gap(r_a, k, i, r_b, m):
+    """``|r_a[k, i] - r_b[k, m]|`` (m)."""
+    return np.sqrt((r_a[k, i, 0] - r_b[k, m, 0]) ** 2 + (r_a[k, i, 1] - r_b[k, m, 1]) ** 2
+                   + (r_a[k, i, 2] - r_b[k, m, 2]) ** 2)
+
+
 @njit(cache=True)
 def _time_tree_shape(nimg, leaf):
     """Level offsets of a binary tree over ``ceil(nimg / leaf)`` leaves."""
@@ -153,26 +184,10 @@ def time_tree(r_T, dcm_BT, leaf):
             er = 0.0
             smax = 0.0
             for i in range(i0, i1):
-                g = 0.0  # ||C C^T - I||_F^2
-                for a in range(3):
-                    for c in range(3):
-                        s = (dcm_BT[k, i, a, 0] * dcm_BT[k, i, c, 0]
-                             + dcm_BT[k, i, a, 1] * dcm_BT[k, i, c, 1]
-                             + dcm_BT[k, i, a, 2] * dcm_BT[k, i, c, 2])
-                        if a == c:
-                            s -= 1.0
-                        g += s * s
-                sk = np.sqrt(1.0 + np.sqrt(g)) * grow
+                sk = np.sqrt(1.0 + np.sqrt(gram_error2(dcm_BT, k, i))) * grow
                 smax = max(smax, sk)
-                dc = 0.0
-                for a in range(3):
-                    for c in range(3):
-                        dc += (dcm_BT[k, i, a, c] - dcm_BT[k, m, a, c]) ** 2
-                ec = max(ec, np.sqrt(dc))
-                dr = np.sqrt((r_T[k, i, 0] - r_T[k, m, 0]) ** 2
-                             + (r_T[k, i, 1] - r_T[k, m, 1]) ** 2
-                             + (r_T[k, i, 2] - r_T[k, m, 2]) ** 2)
-                er = max(er, sk * dr)
+                ec = max(ec, np.sqrt(dcm_gap2(dcm_BT, k, i, dcm_BT, m)))
+                er = max(er, sk * gap(r_T, k, i, r_T, m))
             NF[k, b, 13] = ec * grow
             NF[k, b, 14] = er * grow
             NF[k, b, 15] = smax
