@@ -101,6 +101,41 @@ def test_gravity_off_is_a_straight_line(tmp_path):
     np.testing.assert_allclose(np.mod(ang, 2 * np.pi), th, atol=1e-9)
 
 
+def test_ring_figure_draws_the_encounter_ring_in_its_own_plane(tmp_path, monkeypatch):
+    """The design figures' ring of an encounter is the plane normal to v_inf: the flown
+    (gravity-free) ring points at closest approach are d_sep (cos theta e1 + sin theta e2),
+    and the figure says which axes and view it shows; the paper's ring stays x_T, y_T."""
+    import xarray as xr
+
+    from ideas_hpc.plots import design
+    from ideas_hpc.plots.design import ring_plane, ring_view
+
+    s = _setup(tmp_path, "speed_km_s = 10.0\napproach_dec_deg = 35.0\napproach_ra_deg = 70.0\n"
+               "d_sep_km = 60.0\nbefore_km = 40.0\nafter_km = 30.0", mu=0.0)
+    th = np.array([0.3, 2.0, 4.5])
+    tg = target(s, th)
+    i_ca = np.argmin(abs(tg.times - s.encounter.t_ca_s))
+    assert tg.times[i_ca] == pytest.approx(s.encounter.t_ca_s)
+    attrs = {"geometry": "encounter", "approach_ra_rad": math.radians(70.0),
+             "approach_dec_rad": math.radians(35.0), "d_sep_m": 60e3}
+    ds = xr.Dataset({"swarm_angle": ("spacecraft", th)}, attrs=attrs)
+    e1, e2, labels, view = ring_plane(ds)
+    for i, t in enumerate(th):      # T = N at closest approach
+        np.testing.assert_allclose(tg.position_T[i, i_ca],
+                                   60e3 * (math.cos(t) * e1 + math.sin(t) * e2), atol=1e-6)
+    assert labels == ("x_S, km", "y_S, km") and view == "view along v_inf"
+    seen = []
+    save = design.save_png
+    monkeypatch.setattr(design, "save_png", lambda fig, path, **kw: (
+        seen.append((fig.axes[0].get_xlabel(), fig.axes[0].get_title())), save(fig, path, **kw))[1])
+    ring_view(ds, tmp_path / "ring.png")
+    assert (tmp_path / "ring.png").stat().st_size > 0
+    assert seen[0][0] == "x_S, km" and "view along v_inf" in seen[0][1]
+    paper = ring_plane(xr.Dataset(attrs={"d_sep_m": 1.0}))
+    assert paper[2] == ("x_T, km", "y_T, km") and paper[3] == "top view"
+    np.testing.assert_array_equal(np.vstack(paper[:2]), np.eye(3)[:2])
+
+
 def test_point_mass_gives_the_two_body_hyperbola(tmp_path):
     """Slow enough that the path bends by tens of degrees: periapsis and turning agree
     with the conic from the initial state (a = -mu / v_inf^2, e = sqrt(1 + (b v_inf^2 / mu)^2))."""

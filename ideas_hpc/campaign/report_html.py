@@ -99,24 +99,28 @@ def _title(ds, text: str) -> str:
 
 
 def ring_figure(ds):
-    """Top view of the ring (frame T) with the chosen swarm and the body for scale."""
+    """The ring seen normal to its plane (:func:`ideas_hpc.plots.design.ring_plane`) with the
+    chosen swarm and the body for scale."""
     import plotly.graph_objects as go
 
+    from ideas_hpc.plots.design import ring_plane
+
+    e1, e2, (xlabel, ylabel), view = ring_plane(ds)
     d = float(ds.attrs["d_sep_m"]) / KM
     th = np.asarray(ds["swarm_angle"].values, dtype=float)
     phi = np.linspace(0, 2 * np.pi, 361)
     fig = go.Figure()
     if "vertex_position" in ds:
         v = ds["vertex_position"].values / KM
-        fig.add_trace(go.Scatter(x=v[:, 0], y=v[:, 1], mode="markers", name="body",
+        fig.add_trace(go.Scatter(x=v @ e1, y=v @ e2, mode="markers", name="body",
                                  marker=dict(size=2, color="grey")))
     fig.add_trace(go.Scatter(x=d * np.cos(phi), y=d * np.sin(phi), mode="lines",
                              name=f"ring, d_sep {d:.1f} km", line=dict(dash="dash", color="black")))
     fig.add_trace(go.Scatter(x=d * np.cos(th), y=d * np.sin(th), mode="markers+text",
                              name=f"swarm, N = {th.size}", text=[f"{np.degrees(t):.1f}°" for t in th],
                              textposition="top center", marker=dict(size=11, color="crimson")))
-    fig.update_layout(title=_title(ds, "ring and chosen swarm (top view)"), height=520,
-                      xaxis_title="x_T, km", yaxis_title="y_T, km",
+    fig.update_layout(title=_title(ds, f"ring and chosen swarm ({view})"), height=520,
+                      xaxis_title=xlabel, yaxis_title=ylabel,
                       yaxis=dict(scaleanchor="x", scaleratio=1))
     return fig
 

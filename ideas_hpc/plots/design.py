@@ -15,19 +15,40 @@ from ideas_hpc.plots.figures import body_name, plt, save_png
 KM = 1e3
 
 
-def ring_view(ds, path) -> "Path":  # noqa: F821
-    """Top-down view (frame T, looking down +z) of the ring and the chosen swarm angles.
+def ring_plane(ds):
+    """The plane the ring lies in, as the ring figures draw it.
 
-    The body's vertices are projected onto the xy-plane for scale; each chosen
+    Returns ``(e1, e2, labels, view)``: unit axes (frame T, at closest approach for an
+    encounter) whose ``d_sep (cos theta e1 + sin theta e2)`` are the ring points, the
+    axis labels and the view's name. The paper's ring lies in the ``x_T, y_T`` plane
+    (looking down ``+z_T``); an encounter's lies normal to ``v_inf``, in the swarm
+    frame's ``x_S, y_S`` (paper eqs. 7-14; :func:`ideas_hpc.core.dynamics.encounter.dcm_NS`),
+    seen looking along ``v_inf``.
+    """
+    a = ds.attrs
+    if a.get("geometry") == "encounter":
+        from ideas_hpc.core.dynamics.encounter import dcm_NS
+
+        m = dcm_NS(float(a["approach_ra_rad"]), float(a["approach_dec_rad"]))
+        return m[:, 0], m[:, 1], ("x_S, km", "y_S, km"), "view along v_inf"
+    return np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]), ("x_T, km", "y_T, km"), \
+        "top view"
+
+
+def ring_view(ds, path) -> "Path":  # noqa: F821
+    """The ring and the chosen swarm angles, seen normal to the ring's plane (:func:`ring_plane`).
+
+    The body's vertices are projected onto that plane for scale; each chosen
     spacecraft is marked at ``d_sep (cos theta, sin theta)`` with its angle.
     """
     a = ds.attrs
     d = float(a["d_sep_m"]) / KM
     th = np.asarray(ds["swarm_angle"].values, dtype=float)
+    e1, e2, (xlabel, ylabel), view = ring_plane(ds)
     fig, ax = plt.subplots(figsize=(5.6, 5.6))
     if "vertex_position" in ds:
         v = ds["vertex_position"].values / KM
-        ax.scatter(v[:, 0], v[:, 1], s=0.3, c="0.6", label="body (vertices)")
+        ax.scatter(v @ e1, v @ e2, s=0.3, c="0.6", label="body (vertices)")
     phi = np.linspace(0, 2 * np.pi, 361)
     ax.plot(d * np.cos(phi), d * np.sin(phi), "k--", lw=0.8, label=f"ring, d_sep {d:.1f} km")
     ax.scatter(d * np.cos(th), d * np.sin(th), s=60, c="tab:red", zorder=3,
@@ -38,15 +59,15 @@ def ring_view(ds, path) -> "Path":  # noqa: F821
                     ha="center", va="center", fontsize=8)
     status = a.get("solver_status")
     gap = a.get("optimality_gap")
-    title = "chosen swarm (top view)"
+    title = f"chosen swarm ({view})"
     if a.get("validation_outcome") is not None:     # success-probability design
         word = "DEMONSTRATED" if a["validation_outcome"] == "demonstrated" else "NOT demonstrated"
         title += f": requirement {word} by validation"
     elif status is not None:
         title += f": {status}" + ("" if gap is None else f", gap {100 * float(gap):.1f} %")
     ax.set_title(title)
-    ax.set_xlabel("x_T, km")
-    ax.set_ylabel("y_T, km")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
     ax.set_aspect("equal")
     ax.grid(alpha=0.3)
     ax.legend(loc="lower right", fontsize=7)
