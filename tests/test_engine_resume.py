@@ -60,8 +60,9 @@ def reference(tmp_path_factory):
 def _worker_settings():
     import dask
 
-    return ({k: os.environ.get(k) for k in ("MALLOC_MMAP_THRESHOLD_", "MALLOC_TRIM_THRESHOLD_",
-                                             "IDEAS_HPC_TASK_THREADS")},
+    from ideas_hpc.engine.cluster import WORKER_MALLOC_ENV
+
+    return ({k: os.environ.get(k) for k in (*WORKER_MALLOC_ENV, "IDEAS_HPC_TASK_THREADS")},
             {k: dask.config.get(k) for k in ("distributed.admin.tick.interval",
                                              "distributed.worker.memory.monitor-interval",
                                              "distributed.worker.profile.enabled")})

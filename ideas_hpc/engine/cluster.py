@@ -50,10 +50,19 @@ WORKER_ENV = {TASK_THREADS_ENV: "1", "OMP_NUM_THREADS": "1",
 #: glibc's mmap threshold at 128 kB, so every large temporary of a Monte Carlo
 #: sample became a fresh mmap, page-faulted in and unmapped again: chunks ran
 #: 20-30 % slower than in a plain process (0.33-0.38 s vs 0.27-0.29 s per
-#: 8-sample chunk, measured alternately). Arrays below 32 MiB come from the
-#: heap instead, and the heap is trimmed once 64 MiB lie free at its top.
-WORKER_MALLOC_ENV = {"MALLOC_MMAP_THRESHOLD_": str(32 * 2**20),
-                     "MALLOC_TRIM_THRESHOLD_": str(64 * 2**20)}
+#: 8-sample chunk, measured alternately). A 32 MiB mmap threshold fixed the
+#: samples, but a scenario of the success-probability bank allocates about
+#: 570 MB in arrays of 52-155 MB (720 candidates' positions, velocities and
+#: camera DCMs at 3001 images), above any mmap threshold glibc accepts: 127,000
+#: page faults and 0.3-0.4 s of kernel time per scenario. So no allocation is
+#: mmapped, every thread allocates from the one main heap (a worker thread's own
+#: arena cannot hold such arrays and would fall back to mmap), and up to 1 GiB
+#: may lie free at the heap's top before it is trimmed: the next scenario reuses
+#: the same pages. One-thread bank scenarios went from 2.58 to 1.89 s (mean of
+#: 5, two alternating rounds; 0 page faults and no kernel time), same rows.
+WORKER_MALLOC_ENV = {"MALLOC_MMAP_MAX_": "0",
+                     "MALLOC_ARENA_MAX": "1",
+                     "MALLOC_TRIM_THRESHOLD_": str(2**30)}
 
 #: Housekeeping intervals of the local scheduler, nannies and workers. The
 #: defaults (event-loop health tick every 20 ms, memory monitor every 100 ms,
