@@ -126,8 +126,12 @@ def test_ring_figure_draws_the_encounter_ring_in_its_own_plane(tmp_path, monkeyp
     assert labels == ("x_S, km", "y_S, km") and view == "view along v_inf"
     seen = []
     save = design.save_png
-    monkeypatch.setattr(design, "save_png", lambda fig, path, **kw: (
-        seen.append((fig.axes[0].get_xlabel(), fig.axes[0].get_title())), save(fig, path, **kw))[1])
+
+    def keep_labels(fig, path, **kw):
+        seen.append((fig.axes[0].get_xlabel(), fig.axes[0].get_title()))
+        return save(fig, path, **kw)
+
+    monkeypatch.setattr(design, "save_png", keep_labels)
     ring_view(ds, tmp_path / "ring.png")
     assert (tmp_path / "ring.png").stat().st_size > 0
     assert seen[0][0] == "x_S, km" and "view along v_inf" in seen[0][1]

@@ -53,18 +53,25 @@ def ring_view(ds, path) -> "Path":  # noqa: F821
     ax.plot(d * np.cos(phi), d * np.sin(phi), "k--", lw=0.8, label=f"ring, d_sep {d:.1f} km")
     ax.scatter(d * np.cos(th), d * np.sin(th), s=60, c="tab:red", zorder=3,
                label=f"chosen swarm, N = {th.size}")
-    for t in th:
+    # neighbours closer than 4 deg (a 0.5 deg grid puts pairs side by side) alternate
+    # between two label radii instead of printing over each other
+    out = 18.0
+    prev = None
+    for t in np.sort(th):
+        out = 34.0 if prev is not None and t - prev < np.radians(4.0) and out == 18.0 else 18.0
+        prev = t
         ax.annotate(f"{np.degrees(t):.1f}°", (d * np.cos(t), d * np.sin(t)),
-                    textcoords="offset points", xytext=(18 * np.cos(t), 18 * np.sin(t)),
+                    textcoords="offset points", xytext=(out * np.cos(t), out * np.sin(t)),
                     ha="center", va="center", fontsize=8)
     status = a.get("solver_status")
     gap = a.get("optimality_gap")
     title = f"chosen swarm ({view})"
+    # the outcome on a second line: one line was wider than the figure and clipped
     if a.get("validation_outcome") is not None:     # success-probability design
         word = "DEMONSTRATED" if a["validation_outcome"] == "demonstrated" else "NOT demonstrated"
-        title += f": requirement {word} by validation"
+        title += f"\nrequirement {word} by validation"
     elif status is not None:
-        title += f": {status}" + ("" if gap is None else f", gap {100 * float(gap):.1f} %")
+        title += f"\n{status}" + ("" if gap is None else f", gap {100 * float(gap):.1f} %")
     ax.set_title(title)
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
