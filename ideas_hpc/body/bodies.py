@@ -64,7 +64,7 @@ class Body:
 
 
 def load_body(name_or_path, *, data_path=None, resolution: int = 3,
-              params: PhysicalParams | str | None = None) -> Body:
+              params: PhysicalParams | str | None = None, length_unit: str = "km") -> Body:
     """Load a body by name or file path (see the module docstring).
 
     Parameters
@@ -76,6 +76,8 @@ def load_body(name_or_path, *, data_path=None, resolution: int = 3,
         Icosphere subdivisions of the built-in analytic bodies.
     params : PhysicalParams or str, optional
         Overrides the default parameter set (a preset name or an object).
+    length_unit : {'km', 'm'}
+        Length unit of a mesh file read by trimesh (``.tab`` files are km).
     """
     key = str(name_or_path)
     low = key.lower()
@@ -109,7 +111,7 @@ def load_body(name_or_path, *, data_path=None, resolution: int = 3,
         raise InputError(f"{key!r} is a directory, not a shape file (.tab/.obj/.ply/.stl/.off)",
                          field="body")
     if path.suffix and (path.is_file() or "/" in key or "\\" in key):
-        shape = load_shape_file(path)
+        shape = load_shape_file(path, length_unit=length_unit)
         if params is None and shape.name.lower().startswith("eros"):
             params = get_params("eros")
         return Body(shape.name, shape, params, f"shape file {path}")

@@ -113,3 +113,6 @@ def add_commands(sub) -> None:
     e.add_argument("--out", default=None, help="write the scan to this netCDF file")
     e.add_argument("--plot", default=None, help="write the coverage map to this PNG")
     e.set_defaults(handler=_cmd_scan_encounter)
+
+    from ideas_hpc.campaign.body_report import add_body_command
+    add_body_command(sub)

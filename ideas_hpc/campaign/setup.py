@@ -11,6 +11,7 @@ with their file and line.
 from __future__ import annotations
 
 from ideas_hpc.attitude import campaign_maneuver
+from ideas_hpc.campaign.body_checks import check_body, check_grid_step, check_pointing
 from ideas_hpc.body.bodies import load_body
 from ideas_hpc.config.model_fields import flyby_errors
 from ideas_hpc.dynamics.trajectory import sun_direction_T
@@ -38,14 +39,17 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
             raise c.source.locate(exc) from None
     try:
         body = load_body(b.name, data_path=b.data_path, resolution=b.resolution,
-                         params=params)
+                         params=params, length_unit=b.length_unit)
         body.require_params()
+        if isinstance(b.params, dict):
+            body = _default_degree2(body, b.params)
     except InputError as exc:
         if exc.field in (None, "body", "body.params", "data_path"):
             f = {"data_path": "body.data_path", None: "body.name"}.get(exc.field, exc.field)
             msg = f"{exc.message}: {exc.file}" if exc.file else exc.message
             raise c.error(msg, "body.name" if f == "body" else f) from None
         raise c.source.locate(exc) from None
+    check_body(c, body)
     inst = cfg.instrument
     sizing = size_flyby(r_max=body.shape.r_max, r_min=body.shape.r_min,
                         ground_resolution=inst.ground_resolution_m,
@@ -64,6 +68,8 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
     if sw.angles_rad and fb.configuration == "ring":
         with flyby_errors(c):
             check_separation(sw.angles_rad, d_sep, sw.min_separation_m)
+    check_grid_step(c, d_sep)
+    check_pointing(c, eta, d_sep - sizing.r_av)
     t0, tf, enc = fb.t0_s, fb.tf_s, None
     if fb.geometry == "encounter":
         with flyby_errors(c):
@@ -92,3 +98,18 @@ def _encounter_window(fb, body, image_dt_s: float):
     speed, ra, dec = approach_angles(fb.v_inf_m_s, fb.speed_m_s, fb.approach_ra_rad,
                                      fb.approach_dec_rad, fb.phase_angle_rad, sun)
     return fb.t0_s, t_ca + after, Encounter(speed, ra, dec, t_ca)
+
+
+def _default_degree2(body, table: dict):
+    """A ``[body.params]`` table that gives neither ``c20_km2`` nor ``c22_km2`` gets the
+    constant-density values of its mesh (:mod:`ideas_hpc.body.mass_properties`, the
+    values ``ideas-hpc body FILE`` prints) instead of a point mass's zeros."""
+    import dataclasses
+
+    from ideas_hpc.body.mass_properties import mass_properties
+
+    if "c20_km2" in table or "c22_km2" in table:
+        return body
+    props = mass_properties(body.shape.vertices_T, body.shape.faces)
+    params = dataclasses.replace(body.params, c20=props.c20_m2, c22=props.c22_m2)
+    return dataclasses.replace(body, params=params)

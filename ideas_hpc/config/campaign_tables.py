@@ -11,7 +11,9 @@ file and line. Tables and their keys, in the file's units (converted to SI here)
 
 ``[body]`` ``name`` (name or path), ``params`` (preset name or a table of
 :func:`ideas_hpc.body.params.params_from_mapping` keys), ``resolution`` (analytic
-bodies), ``data_path``.
+bodies), ``data_path``, ``length_unit`` (``km`` or ``m``: the unit of an
+OBJ/PLY/STL/OFF mesh; ``.tab`` and DSK files are in km). A custom body is checked
+against its mesh (:mod:`ideas_hpc.campaign.body_checks`, ``ideas-hpc body FILE``).
 
 ``[instrument]`` ``ground_resolution_m``, ``aperture_cm``, ``wavelength_um``,
 ``min_elevation_deg``, ``near_field_mm``, ``image_rate_hz``, ``half_angle_deg``
@@ -90,6 +92,7 @@ BODY = {
     "params": Field("any", None, nullable=True, doc="preset name or table"),
     "resolution": Field("int", 3, lo=1, hi=7),
     "data_path": Field("str", None, nullable=True),
+    "length_unit": Field("str", "km", choices=("km", "m"), doc="unit of an OBJ/PLY/STL/OFF mesh"),
 }
 
 INSTRUMENT = {
