@@ -10,9 +10,13 @@ with their file and line.
 
 from __future__ import annotations
 
+import dataclasses
+
 from ideas_hpc.attitude import campaign_maneuver
 from ideas_hpc.campaign.body_checks import check_body, check_grid_step, check_pointing
 from ideas_hpc.body.bodies import load_body
+from ideas_hpc.body.shape import load_shape_file
+from ideas_hpc.config.spice_table import apply_spice
 from ideas_hpc.config.model_fields import flyby_errors
 from ideas_hpc.dynamics.trajectory import sun_direction_T
 from ideas_hpc.errors import InputError
@@ -41,8 +45,12 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
         body = load_body(b.name, data_path=b.data_path, resolution=b.resolution,
                          params=params, length_unit=b.length_unit)
         body.require_params()
+        if b.shape is not None:     # a mesh (DSK...) for the named body, its parameters kept
+            shape = load_shape_file(b.shape, length_unit=b.length_unit)
+            body = dataclasses.replace(body, shape=shape, note=f"{body.note}; shape {b.shape}")
         if isinstance(b.params, dict):
             body = _default_degree2(body, b.params)
+        body = dataclasses.replace(body, params=apply_spice(body.params, c.extras.get("spice")))
     except InputError as exc:
         if exc.field in (None, "body", "body.params", "data_path"):
             f = {"data_path": "body.data_path", None: "body.name"}.get(exc.field, exc.field)

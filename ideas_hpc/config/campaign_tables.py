@@ -11,9 +11,8 @@ file and line. Tables and their keys, in the file's units (converted to SI here)
 
 ``[body]`` ``name`` (name or path), ``params`` (preset name or a table of
 :func:`ideas_hpc.body.params.params_from_mapping` keys), ``resolution`` (analytic
-bodies), ``data_path``, ``length_unit`` (``km`` or ``m``: the unit of an
-OBJ/PLY/STL/OFF mesh; ``.tab`` and DSK files are in km). A custom body is checked
-against its mesh (:mod:`ideas_hpc.campaign.body_checks`, ``ideas-hpc body FILE``).
+bodies), ``data_path``, ``length_unit`` (:mod:`ideas_hpc.campaign.body_checks`); ``shape``,
+``kernels``, ``spice_body``, ``spice_frame``, ``[flyby] epoch_utc``: :mod:`~ideas_hpc.config.spice_table`.
 
 ``[instrument]`` ``ground_resolution_m``, ``aperture_cm``, ``wavelength_um``,
 ``min_elevation_deg``, ``near_field_mm``, ``image_rate_hz``, ``half_angle_deg``
@@ -56,9 +55,7 @@ in :mod:`ideas_hpc.config.design_table`);
 ``mutation_probability`` and ``time_limit_s`` (the exact reference curve).
 
 ``[monte_carlo]`` ``samples`` and the dispersions (see :data:`MC_SCHEMA`).
-
-``[run]`` ``chunk_size``, ``workers``.
-"""
+``[run]`` ``chunk_size``, ``workers``."""
 
 from __future__ import annotations
 
@@ -80,6 +77,7 @@ from ideas_hpc.flyby.sizing import INSTRUMENT_DEFAULTS as _CAM
 from ideas_hpc.config.design_checks import (DESIGNER_FIELDS, check_stereo_design,
                                            resolve_angle_step)
 from ideas_hpc.config.encounter_table import ENCOUNTER, check_encounter
+from ideas_hpc.config.spice_table import SPICE_BODY, SPICE_FLYBY, resolve_spice
 from ideas_hpc.config.model_fields import (COVERAGE_FIELDS, GAINS_FIELDS, SPACECRAFT_FIELDS,
                                            STORED_NAMES, flyby_errors, stored_fields)
 from ideas_hpc.campaign.kinds import KINDS as REGISTRY
@@ -93,6 +91,7 @@ BODY = {
     "resolution": Field("int", 3, lo=1, hi=7),
     "data_path": Field("str", None, nullable=True),
     "length_unit": Field("str", "km", choices=("km", "m"), doc="unit of an OBJ/PLY/STL/OFF mesh"),
+    **SPICE_BODY,
 }
 
 INSTRUMENT = {
@@ -131,7 +130,7 @@ FLYBY = {
     "epoch_s": Field("float", 0.0, doc="arrival epoch: flyby time 0 is this many seconds "
                                        "after the body's element epoch (sets the Sun "
                                        "direction and the body's rotation phase)"),
-    **ENCOUNTER,
+    **ENCOUNTER, **SPICE_FLYBY,
 }
 
 SWARM = {
@@ -292,6 +291,7 @@ def validate_campaign(source: CampaignSource) -> Campaign:
         with flyby_errors():   # the maneuver registry names `maneuver`
             _cross_checks(config)
         extras = build_models(source.data, config)
+        extras.update(resolve_spice(source.data, config.body.name, source.path))  # {} without
     except InputError as exc:
         raise source.locate(exc) from None
     return Campaign(config=config, raw=source.data, source=source, extras=extras)
