@@ -115,4 +115,6 @@ def add_commands(sub) -> None:
     e.set_defaults(handler=_cmd_scan_encounter)
 
     from ideas_hpc.campaign.body_report import add_body_command
+    from ideas_hpc.campaign.export import add_export_command
     add_body_command(sub)
+    add_export_command(sub)

@@ -1,0 +1,190 @@
+"""``ideas-hpc export STORE``: a flyby store as SPICE kernels and a CSV of images (issue 32).
+
+The store holds the trajectory at the stored steps and the camera attitude at a few
+snapshots; the export re-flies the campaign from the store's resolved config (the
+reproducibility promise), refuses when the re-flown trajectory differs from the stored
+one by more than 1 mm, and writes at full resolution (SPEC section 7e,
+:mod:`ideas_hpc.campaign.spice_writers`):
+
+* ``swarm.bsp``: SPK type 13, each spacecraft relative to the body centre in J2000;
+* ``swarm.bc`` + ``swarm.tsc``: CK type 3 of each camera frame (+z the boresight) at
+  every image, with its SCLK;
+* ``swarm.tf``: the frame kernel naming the camera frames and the body frame
+  ``IDEAS_<ID>_FIXED``, and ``body.tpc``: that frame's orientation (IAU form);
+* ``images.csv``: one row per spacecraft and image: times (flyby s, TDB s past J2000,
+  UTC when a leap-second kernel is known), position (m, J2000, body-centred), the
+  quaternion J2000 -> camera (SPICE's ``m2q`` convention, scalar first), the unit Sun
+  direction (J2000) and whether the image was usable;
+* ``export.tm``: a meta-kernel loading them (and the LSK when known).
+
+Epoch: the store's ``models.spice.epoch_et_s`` (a run from kernels) or ``--epoch-et``
+(TDB s past J2000 of the body's element epoch; default 0). NAIF IDs: spacecraft
+``naif_base - k`` (negative, as NAIF reserves for spacecraft), the body from its SPICE
+name, ``--body-id``, or 2000433 for Eros.
+"""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+
+from ideas_hpc.errors import InputError
+
+EROS_ID = 2000433
+REPRODUCE_TOL_M = 1e-3
+
+
+def add_export_command(sub) -> None:
+    p = sub.add_parser("export", help="write a flyby store as SPICE kernels (SPK, CK, FK, PCK) "
+                                      "and a CSV of every image",
+                       description=__doc__.split("\n\n")[1])
+    p.add_argument("store", help="zarr store of a flyby campaign")
+    p.add_argument("--out", default=None, help="output folder (default: STORE-spice)")
+    p.add_argument("--naif-base", type=int, default=-1000,
+                   help="NAIF ID of spacecraft 0; spacecraft k gets base - k (default -1000)")
+    p.add_argument("--body-id", type=int, default=None, help="NAIF ID of the body")
+    p.add_argument("--epoch-et", type=float, default=None,
+                   help="TDB s past J2000 of the body's element epoch (default 0, or the "
+                        "store's kernel epoch)")
+    p.add_argument("--lsk", default=None, help="leap-second kernel, for the UTC column")
+    p.set_defaults(handler=lambda a: print(export_store(
+        a.store, a.out, naif_base=a.naif_base, body_id=a.body_id, epoch_et=a.epoch_et,
+        lsk=a.lsk)) or 0)
+
+
+def _refly(store: Path, attrs: dict):
+    from ideas_hpc.campaign.setup import setup_from_campaign
+    from ideas_hpc.config.campaign_tables import validate_campaign
+    from ideas_hpc.config.toml_file import CampaignSource
+    from ideas_hpc.flyby.flight import fly
+
+    cfg = dict(attrs["config"])
+    cfg.pop("models", None)
+    src = Path(attrs["campaign_file"]) if attrs.get("campaign_file") else None
+    c = validate_campaign(CampaignSource(data=cfg, path=src))
+    setup = setup_from_campaign(c)
+    sw = c.config.swarm
+    res = fly(setup, sw.angles_rad, setup.maneuver.swarm_periods(sw.sweep_periods_s))
+    return c, setup, res
+
+
+def _body_id(sp, c, spice, body_id):
+    if body_id is not None:
+        return body_id
+    if spice:
+        return int(sp.bods2c(spice["spice_body"]))
+    if str(c.config.body.name).lower().startswith("eros"):
+        return EROS_ID
+    raise InputError(f"body {c.config.body.name!r} has no known NAIF ID; give one",
+                     field="--body-id")
+
+
+def export_store(store, out=None, *, naif_base: int = -1000, body_id: int | None = None,
+                 epoch_et: float | None = None, lsk=None) -> Path:
+    """Write the kernels and the CSV of a flyby store (module docstring); returns the folder."""
+    import xarray as xr
+
+    from ideas_hpc.campaign import spice_writers as w
+    from ideas_hpc.dynamics.trajectory import sun_direction_T
+    from ideas_hpc.engine.store_meta import store_attrs
+    from ideas_hpc.spice import spiceypy
+
+    sp = spiceypy("export")
+    store = Path(store)
+    attrs = store_attrs(store)
+    if attrs.get("kind") != "flyby":
+        raise InputError(f"export reads flyby stores; this one is kind {attrs.get('kind')!r}",
+                         field="store")
+    if naif_base >= 0:
+        raise InputError(f"must be negative (NAIF spacecraft IDs), got {naif_base}",
+                         field="--naif-base")
+    c, setup, res = _refly(store, attrs)
+    tg = res.targeting
+    stored = xr.open_zarr(store)["position"].values
+    flown = tg.position_T[:, ::setup.decimate]
+    gap = float(np.max(np.abs(stored - flown))) if stored.shape == flown.shape else np.inf
+    if not gap <= REPRODUCE_TOL_M:
+        raise InputError(f"re-flying the store's config gives a trajectory {gap:.3g} m away from "
+                         "the stored one (another code version?); re-run the campaign first",
+                         field="store")
+    spice = attrs["config"].get("models", {}).get("spice")
+    et_el = spice["epoch_et_s"] if spice else (epoch_et if epoch_et is not None else 0.0)
+    bid = _body_id(sp, c, spice, body_id)
+    params = setup.body.params
+    n_sc = tg.position_T.shape[0]
+    sc_ids = [naif_base - k for k in range(n_sc)]
+    cams = [f"IDEAS_SC{k}_CAMERA" for k in range(n_sc)]
+    body_frame = f"IDEAS_{bid}_FIXED"
+    out = Path(out) if out else store.with_name(store.name.removesuffix(".zarr") + "-spice")
+    out.mkdir(parents=True, exist_ok=True)
+    dcm_NJ = np.asarray(sp.pxform("J2000", "ECLIPJ2000", 0.0))
+    omega = np.array([0.0, 0.0, params.spin_rate])
+
+    tau = setup.epoch_s + tg.times
+    tj = w.dcm_TN(params, tau) @ dcm_NJ                       # [T J2000] per step
+    r_J = np.einsum("tji,ktj->kti", tj, tg.position_T)
+    v_T = tg.velocity_T + np.cross(omega, tg.position_T)
+    v_J = np.einsum("tji,ktj->kti", tj, v_T)
+    (out / "body.tpc").write_text(w.pck_text(bid, params, et_el, dcm_NJ))
+    (out / "swarm.tf").write_text(w.fk_text(bid, body_frame, sc_ids, cams))
+    t_img = res.image_times
+    et_img = et_el + setup.epoch_s + t_img
+    (out / "swarm.tsc").write_text(w.sclk_text(sc_ids, float(et_img[0])))
+    for name in ("swarm.bsp", "swarm.bc"):
+        (out / name).unlink(missing_ok=True)
+    w.write_spk(sp, out / "swarm.bsp", bid, sc_ids, et_el + tau, r_J, v_J)
+    tj_img = w.dcm_TN(params, setup.epoch_s + t_img) @ dcm_NJ
+    dcm_CJ = np.einsum("kiab,ibc->kiac", res.dcm_BT, tj_img)
+    kernels = [out / "swarm.tsc", out / "swarm.tf", out / "body.tpc"]
+    lsk = lsk or _lsk_of(attrs)
+    for k in kernels:
+        sp.furnsh(str(k))
+    if lsk:
+        sp.furnsh(str(lsk))
+    try:
+        w.write_ck(sp, out / "swarm.bc", sc_ids, et_img, dcm_CJ)
+        utc = [sp.et2utc(float(t), "ISOC", 6) for t in et_img] if lsk else [""] * len(et_img)
+    finally:
+        for k in kernels:
+            sp.unload(str(k))
+        if lsk:
+            sp.unload(str(lsk))
+    if not lsk:
+        print("ideas-hpc: warning: --lsk: no leap-second kernel, the CSV's utc column is empty",
+              flush=True)
+    sun_J = np.einsum("tji,tj->ti", tj_img, sun_direction_T(params, setup.epoch_s + t_img))
+    r_img_J = np.einsum("tji,ktj->kti", tj_img, res.r_img_T)
+    usable = res.extras.get("usable")
+    _write_csv(out / "images.csv", sp, sc_ids, t_img, et_img, utc, r_img_J, dcm_CJ, sun_J, usable)
+    mk = [str(lsk)] if lsk else []
+    mk += [str(out / n) for n in ("swarm.tsc", "swarm.tf", "body.tpc", "swarm.bsp", "swarm.bc")]
+    (out / "export.tm").write_text("\\begindata\nKERNELS_TO_LOAD = (\n"
+                                   + "\n".join(f"  '{k}'" for k in mk) + " )\n\\begintext\n")
+    return out
+
+
+def _lsk_of(attrs: dict):
+    """The leap-second kernel among the store's ``body.kernels``, if any still exists."""
+    ks = (attrs["config"].get("body") or {}).get("kernels") or []
+    ks = [ks] if isinstance(ks, str) else ks
+    for k in ks:
+        if str(k).lower().endswith(".tls") and Path(k).is_file():
+            return k
+    return None
+
+
+def _write_csv(path, sp, sc_ids, t_img, et_img, utc, r_J, dcm_CJ, sun_J, usable) -> None:
+    with open(path, "w", newline="") as fh:
+        out = csv.writer(fh)
+        out.writerow(["spacecraft", "naif_id", "image", "t_s", "et_tdb_s", "utc", "x_m", "y_m",
+                      "z_m", "q0", "q1", "q2", "q3", "sun_x", "sun_y", "sun_z", "usable"])
+        for k, sc in enumerate(sc_ids):
+            for i in range(len(t_img)):
+                q = sp.m2q(np.ascontiguousarray(dcm_CJ[k, i]))
+                ok = True if usable is None else bool(np.asarray(usable)[k, i])
+                out.writerow([k, sc, i, repr(float(t_img[i])), repr(float(et_img[i])), utc[i],
+                              *(repr(float(x)) for x in r_J[k, i]),
+                              *(repr(float(x)) for x in q), *(repr(float(x)) for x in sun_J[i]),
+                              int(ok)])
