@@ -96,3 +96,14 @@ def test_export_refuses_what_it_cannot_write(exported, tmp_path):
     with pytest.raises(InputError) as ei:
         export_store(store, tmp_path / "k")          # the ellipsoid has no NAIF ID
     assert ei.value.field == "--body-id"
+
+
+def test_usable_column_is_the_body_in_view(exported):
+    rows = list(csv.DictReader(open(exported[1] / "images.csv")))
+    assert all(r["usable"] == "1" for r in rows)       # nadir pointing keeps the body in view
+    from ideas_hpc.campaign.export import body_in_view
+    r = np.array([[[100e3, 0.0, 0.0]]])
+    away = np.array([[[[0, 1.0, 0], [0, 0, 1.0], [1.0, 0, 0]]]])   # boresight +x_T: away
+    assert not body_in_view(r, away, 0.05, 17e3)[0, 0]
+    toward = np.array([[[[0, 1.0, 0], [0, 0, -1.0], [-1.0, 0, 0]]]])   # boresight -x_T
+    assert body_in_view(r, toward, 0.05, 17e3)[0, 0]

@@ -14,7 +14,8 @@ one by more than 1 mm, and writes at full resolution (SPEC section 7e,
 * ``images.csv``: one row per spacecraft and image: times (flyby s, TDB s past J2000,
   UTC when a leap-second kernel is known), position (m, J2000, body-centred), the
   quaternion J2000 -> camera (SPICE's ``m2q`` convention, scalar first), the unit Sun
-  direction (J2000) and whether the image was usable;
+  direction (J2000) and whether the image was usable (:func:`body_in_view`: this code has
+  no smear or settle test per image yet);
 * ``export.tm``: a meta-kernel loading them (and the LSK when known).
 
 Epoch: the store's ``models.spice.epoch_et_s`` (a run from kernels) or ``--epoch-et``
@@ -156,13 +157,24 @@ def export_store(store, out=None, *, naif_base: int = -1000, body_id: int | None
               flush=True)
     sun_J = np.einsum("tji,tj->ti", tj_img, sun_direction_T(params, setup.epoch_s + t_img))
     r_img_J = np.einsum("tji,ktj->kti", tj_img, res.r_img_T)
-    usable = res.extras.get("usable")
+    usable = body_in_view(res.r_img_T, res.dcm_BT, setup.eta_rad, setup.body.shape.r_max)
     _write_csv(out / "images.csv", sp, sc_ids, t_img, et_img, utc, r_img_J, dcm_CJ, sun_J, usable)
     mk = [str(lsk)] if lsk else []
     mk += [str(out / n) for n in ("swarm.tsc", "swarm.tf", "body.tpc", "swarm.bsp", "swarm.bc")]
     (out / "export.tm").write_text("\\begindata\nKERNELS_TO_LOAD = (\n"
                                    + "\n".join(f"  '{k}'" for k in mk) + " )\n\\begintext\n")
     return out
+
+
+def body_in_view(r_T, dcm_BT, eta_rad: float, r_max_m: float) -> np.ndarray:
+    """(N, n_img) bool: the body's bounding sphere (radius ``r_max_m``) meets the cone round
+    the camera's square field of view (half angle ``atan(sqrt(2) tan eta)`` to a corner)."""
+    rng = np.linalg.norm(r_T, axis=-1)
+    bore = dcm_BT[..., 2, :]                      # +z_B in T
+    cos_off = np.einsum("kia,kia->ki", bore, -r_T) / rng
+    off = np.arccos(np.clip(cos_off, -1.0, 1.0))
+    half = np.arctan(np.sqrt(2.0) * np.tan(eta_rad))
+    return off <= half + np.arcsin(np.clip(r_max_m / rng, 0.0, 1.0))
 
 
 def _lsk_of(attrs: dict):
