@@ -91,6 +91,11 @@ def _write_kernels(d: Path, state0_km, et0):
     return [str(lsk), str(pck), str(spk)]
 
 
+def _angle(a, b) -> float:
+    """Angle between two vectors, atan2(|a x b|, a . b): accurate near 0, unlike acos."""
+    return math.atan2(float(np.linalg.norm(np.cross(a, b))), float(np.dot(a, b)))
+
+
 def _et_oracle(utc: str) -> float:
     """TDB - UTC = 37 + 32.184 s in 2029, plus a periodic term below 1.7 ms."""
     from datetime import datetime
@@ -124,7 +129,7 @@ def test_kernels_give_the_sun_direction_spice_gives(tmp_path):
         for k in kernels:
             sp.unload(k)
     ref /= np.linalg.norm(ref, axis=1)[:, None]
-    ang = np.arccos(np.clip(np.einsum("ij,ij->i", ours, ref), -1, 1))
+    ang = np.array([_angle(a, b) for a, b in zip(ours, ref)])
     assert np.all(ang < 1e-9), ang
     assert setup.body.params.spin_period == pytest.approx(360.0 / 1639.38864745 * 86400, rel=1e-12)
     # The store's resolved config records what the kernels gave.
@@ -161,3 +166,58 @@ def test_missing_spiceypy_is_one_line_naming_the_key(monkeypatch, tmp_path):
     with pytest.raises(InputError) as ei:
         load_shape_file(p)
     assert ei.value.field == "body.shape" and "ideas_hpc[spice]" in ei.value.message
+
+
+def test_encounter_from_a_spacecraft_spk(tmp_path):
+    """A straight pass (150 km miss, 10 km/s, SPK type 13 relative to Eros in J2000) gives
+    the closest-approach epoch, miss distance and v_inf in IAU_EROS; the flyby places its
+    closest approach at that epoch (Sun direction there as SPICE gives it)."""
+    et_guess = _et_oracle(UTC)
+    r = 1.3 * AU / 1e3
+    v = math.sqrt(MU_SUN / 1e9 / r) * 1.08
+    kernels = _write_kernels(tmp_path, np.array([r * 0.6, r * 0.8, 0.05 * r, -v * 0.78,
+                                                 v * 0.62, 0.09 * v]), et_guess)
+    t_ca = et_guess + 3.3 * 3600.0 + 0.37
+    u = np.array([0.6, -0.48, 0.64]) / np.linalg.norm([0.6, -0.48, 0.64])
+    b = np.cross(u, [0.0, 0.0, 1.0])
+    b *= 150.0 / np.linalg.norm(b)
+    times = t_ca + np.arange(-1.2 * 86400, 1.2 * 86400 + 1, 600.0)
+    states = np.array([np.concatenate([b + 10.0 * u * (t - t_ca), 10.0 * u]) for t in times])
+    spk = tmp_path / "sc.bsp"
+    h = sp.spkopn(str(spk), "sc", 0)
+    sp.spkw13(h, -999, EROS, "J2000", times[0], times[-1], "pass", 3, len(times), states, times)
+    sp.spkcls(h)
+    kernels.append(str(spk))
+    toml = "[" + ", ".join(f'"{k}"' for k in kernels) + "]"
+    camp = tmp_path / "enc.toml"
+    camp.write_text(f"""kind = "flyby"
+[body]
+name = "eros"
+kernels = {toml}
+[flyby]
+geometry = "encounter"
+epoch_utc = "{UTC}"
+spice_spacecraft = "-999"
+[attitude]
+mode = "ideal"
+[swarm]
+angles_rad = [0.0, 3.0]
+""")
+    c = load(camp)
+    val = c.extras["spice"]
+    assert abs(val.ca_et_s - t_ca) < 1e-3
+    assert val.miss_m == pytest.approx(150e3, abs=1e-3)
+    setup = setup_from_campaign(c)
+    assert setup.encounter.speed_m_s == pytest.approx(1e4, rel=1e-9)
+    assert setup.epoch_s + setup.encounter.t_ca_s == pytest.approx(t_ca - val.epoch_et_s, abs=1e-3)
+    for k in kernels:
+        sp.furnsh(k)
+    try:
+        v_T = np.asarray(sp.pxform("J2000", "IAU_EROS", t_ca)) @ (10.0 * u) * 1e3
+        sun = np.asarray(sp.spkpos("SUN", t_ca, "IAU_EROS", "NONE", "EROS")[0])
+    finally:
+        for k in kernels:
+            sp.unload(k)
+    np.testing.assert_allclose(val.v_inf_T_m_s, v_T, rtol=0, atol=1e-6)
+    ours = sun_direction_T(setup.body.params, [setup.epoch_s + setup.encounter.t_ca_s])[0]
+    assert _angle(ours, sun) < 1e-9

@@ -78,10 +78,15 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
             check_separation(sw.angles_rad, d_sep, sw.min_separation_m)
     check_grid_step(c, d_sep)
     check_pointing(c, eta, d_sep - sizing.r_av)
-    t0, tf, enc = fb.t0_s, fb.tf_s, None
+    t0, tf, enc, epoch_s = fb.t0_s, fb.tf_s, None, fb.epoch_s
+    spice = c.extras.get("spice")
+    if spice is not None and spice.v_inf_T_m_s is not None:     # the spacecraft SPK's approach
+        fb = dataclasses.replace(fb, v_inf_m_s=list(spice.v_inf_T_m_s))
     if fb.geometry == "encounter":
         with flyby_errors(c):
             t0, tf, enc = _encounter_window(fb, body, 1.0 / inst.image_rate_hz)
+        if spice is not None and spice.ca_et_s is not None:    # closest approach at its epoch
+            epoch_s = spice.ca_et_s - spice.epoch_et_s - enc.t_ca_s
     return FlybySetup(
         body=body, sizing=sizing, t0_s=t0, tf_s=tf, dt_s=fb.dt_s,
         image_dt_s=1.0 / inst.image_rate_hz,
@@ -93,7 +98,7 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
         tol_m=fb.tolerance_m, max_iter=fb.max_iterations, seed=cfg.seed,
         force_model=ex["force_model"], spacecraft=ex["spacecraft"],
         gains=ex["gains"], coverage=ex["coverage"], p_min_s=cfg.design.p_min_s,
-        epoch_s=fb.epoch_s, encounter=enc)
+        epoch_s=epoch_s, encounter=enc)
 
 
 def _encounter_window(fb, body, image_dt_s: float):

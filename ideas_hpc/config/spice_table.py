@@ -12,7 +12,12 @@ kernel among them) give, at that epoch:
   epoch, so that flyby time 0 is the epoch (``flyby.epoch_s`` counts from it);
 * the pole (RA/Dec in N), the prime-meridian angle ``W0`` (from the ascending node of
   the body equator on the ecliptic to +x of T) and the spin period from the angular
-  velocity of ``[body] spice_frame`` (default ``IAU_<spice_body>``) from the PCK.
+  velocity of ``[body] spice_frame`` (default ``IAU_<spice_body>``) from the PCK;
+* with ``[flyby] spice_spacecraft`` (and ``geometry = "encounter"``), the closest approach
+  of that spacecraft's SPK within a day of the epoch (sampled each minute, refined by
+  Brent's method): its epoch, miss distance and the relative velocity there, in frame
+  T, as ``v_inf`` (the body's gravity bends a fast pass by ~1e-8 rad, SPEC section 7c);
+  the flyby then places its closest approach at that epoch.
 
 The values are kept in :class:`SpiceValues` (``Campaign.extras["spice"]``), which the
 resolved config records under ``models.spice``: a run can be repeated without the
@@ -38,7 +43,11 @@ SPICE_BODY = {
 }
 SPICE_FLYBY = {
     "epoch_utc": Field("str", None, nullable=True, doc="flyby time 0 in UTC (needs body.kernels)"),
+    "spice_spacecraft": Field("str", None, nullable=True,
+                              doc="NAIF name/ID of a spacecraft whose SPK gives the encounter"),
 }
+#: Closest approach is searched this far either side of ``flyby.epoch_utc``, s.
+CA_SEARCH_S = 86400.0
 
 
 @dataclass(frozen=True)
@@ -59,6 +68,9 @@ class SpiceValues:
     pole_dec_rad: float
     prime_meridian_rad: float
     spin_period_s: float
+    ca_et_s: float | None = None
+    miss_m: float | None = None
+    v_inf_T_m_s: tuple | None = None
 
     def params_keys(self) -> dict:
         """The same values as ``[body.params]`` keys in the file's units."""
@@ -161,6 +173,8 @@ def _resolve(raw: dict, body_name: str, base: Path | None) -> SpiceValues | None
         except sp.utils.exceptions.SpiceyError as exc:
             raise InputError(f"no orientation of frame {frame!r} at {utc}: {exc.short}",
                              field="body.spice_frame") from None
+        enc = _closest_approach(sp, flyby, code, frame, et) if flyby.get("spice_spacecraft") \
+            else {}
     finally:
         for f in files:
             sp.unload(f)
@@ -180,7 +194,44 @@ def _resolve(raw: dict, body_name: str, base: Path | None) -> SpiceValues | None
         orbit_a_m=rp_km * 1e3 / (1.0 - e), orbit_e=e, orbit_i_rad=float(el[2]),
         orbit_raan_rad=float(el[3]), orbit_argp_rad=float(el[4]),
         orbit_nu_rad=true_anomaly(float(el[5]), e) % (2.0 * math.pi), pole_ra_rad=ra,
-        pole_dec_rad=dec, prime_meridian_rad=w0, spin_period_s=2.0 * math.pi / rate)
+        pole_dec_rad=dec, prime_meridian_rad=w0, spin_period_s=2.0 * math.pi / rate, **enc)
+
+
+def _closest_approach(sp, flyby: dict, body_code: int, frame: str, et0: float) -> dict:
+    """Closest approach of ``flyby.spice_spacecraft`` to the body within a day of ``et0``."""
+    from scipy.optimize import minimize_scalar
+
+    name = flyby["spice_spacecraft"]
+    if flyby.get("geometry") != "encounter":
+        raise InputError('needs flyby.geometry = "encounter"', field="flyby.spice_spacecraft")
+    given = [k for k in ("v_inf_km_s", "speed_km_s", "approach_dec_deg", "approach_ra_deg",
+                         "phase_angle_deg") if flyby.get(k) is not None]
+    if given:
+        raise InputError(f"gives the approach already: drop flyby.{given[0]}",
+                         field="flyby.spice_spacecraft")
+
+    def dist(t):
+        try:
+            return float(np.linalg.norm(sp.spkpos(name, t, "J2000", "NONE", str(body_code))[0]))
+        except sp.utils.exceptions.SpiceyError as exc:
+            raise InputError(f"no state of {name!r} relative to the body at ET {t:.1f}: "
+                             f"{exc.short}", field="flyby.spice_spacecraft") from None
+
+    grid = et0 + np.arange(-CA_SEARCH_S, CA_SEARCH_S + 1.0, 60.0)
+    d = np.array([dist(t) for t in grid])
+    k = int(np.argmin(d))
+    if k in (0, len(grid) - 1):
+        raise InputError(f"{name!r} has no closest approach within a day of flyby.epoch_utc",
+                         field="flyby.spice_spacecraft")
+    # Offsets from the sampled minimum: Brent's relative tolerance sqrt(eps)|x| on raw ET
+    # (~1e9 s) would stop 10 s away.
+    best = minimize_scalar(lambda s: dist(grid[k] + s), bounds=(-60.0, 60.0), method="bounded",
+                           options={"xatol": 1e-6})
+    et_ca = float(grid[k] + best.x)
+    state = np.asarray(sp.spkezr(name, et_ca, "J2000", "NONE", str(body_code))[0])
+    v_T = np.asarray(sp.pxform("J2000", frame, et_ca)) @ state[3:] * 1e3
+    return {"ca_et_s": et_ca, "miss_m": float(best.fun) * 1e3,
+            "v_inf_T_m_s": tuple(float(x) for x in v_T)}
 
 
 def apply_spice(params, values: SpiceValues | None):
