@@ -187,3 +187,11 @@ def test_body_command_prints_the_convention(eros1708, capsys):
     p = mass_properties(eros1708.shape.vertices_T, eros1708.shape.faces)
     assert f"c20_km2 = {p.c20_m2 / 1e6:.6g}" in out and "unnormalised" in out
     assert f"{eros1708.params.mu / G / p.volume_m3:.4g} kg/m^3" in out
+
+
+def test_example_campaign_file_is_valid(tmp_path, binary_km):
+    """The shipped example validates and passes every check on the mesh its script writes."""
+    obj = _write_obj(tmp_path / "contact_binary.obj", *_maker().contact_binary(3))
+    c = load(ROOT / "campaigns" / "custom-body" / "contact-binary.toml", [f'body.name="{obj}"'])
+    s = setup_from_campaign(c)
+    assert s.body.shape.n_faces == 1280 and s.eta_rad < 0.1 * np.pi / 180
