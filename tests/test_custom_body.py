@@ -195,3 +195,12 @@ def test_example_campaign_file_is_valid(tmp_path, binary_km):
     c = load(ROOT / "campaigns" / "custom-body" / "contact-binary.toml", [f'body.name="{obj}"'])
     s = setup_from_campaign(c)
     assert s.body.shape.n_faces == 1280 and s.eta_rad < 0.1 * np.pi / 180
+
+
+def test_implausible_mass_of_a_builtin_shape_names_the_params():
+    """Eros' shape with a 1e9 kg mass (density 4e-4 kg/m^3): the mesh is right, the mass is not."""
+    c = load(ROOT / "campaigns" / "eros-flyby.toml",
+             ['body.params={mass_kg=1e9, spin_period_h=5.27, a_au=1.457, e=0.222}'])
+    with pytest.raises(InputError) as ei:
+        setup_from_campaign(c)
+    assert ei.value.field == "body.params" and "density" in ei.value.message

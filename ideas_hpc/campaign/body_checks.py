@@ -23,6 +23,7 @@ from __future__ import annotations
 import math
 import sys
 
+from ideas_hpc.body.bodies import BUILTIN
 from ideas_hpc.body.mass_properties import (com_problem, density_problem, implied_density,
                                             mass_properties, mean_radius)
 from ideas_hpc.config.design_checks import step_key
@@ -47,7 +48,8 @@ def check_body(c, body) -> None:
     props = mass_properties(shape.vertices_T, shape.faces)
     problem = density_problem(implied_density(body.params.mu, props.volume_m3))
     if problem:
-        from_file = not str(c.config.body.name).lower().startswith(("eros", "ellipsoid", "sphere"))
+        b = c.config.body
+        from_file = b.shape is not None or str(b.name).lower() not in BUILTIN
         key = "body.length_unit" if from_file else "body.params"
         raise c.error(f"{problem} (body.length_unit = {c.config.body.length_unit!r})", key)
     problem = com_problem(props, mean_radius(props.volume_m3))
