@@ -46,8 +46,7 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
                          params=params, length_unit=b.length_unit)
         body.require_params()
         if b.shape is not None:     # a mesh (DSK...) for the named body, its parameters kept
-            shape = load_shape_file(b.shape, length_unit=b.length_unit)
-            body = dataclasses.replace(body, shape=shape, note=f"{body.note}; shape {b.shape}")
+            body = _replace_shape(c, body, b)
         if isinstance(b.params, dict):
             body = _default_degree2(body, b.params)
         body = dataclasses.replace(body, params=apply_spice(body.params, c.extras.get("spice")))
@@ -117,8 +116,6 @@ def _default_degree2(body, table: dict):
     """A ``[body.params]`` table that gives neither ``c20_km2`` nor ``c22_km2`` gets the
     constant-density values of its mesh (:mod:`ideas_hpc.body.mass_properties`, the
     values ``ideas-hpc body FILE`` prints) instead of a point mass's zeros."""
-    import dataclasses
-
     from ideas_hpc.body.mass_properties import mass_properties
 
     if "c20_km2" in table or "c22_km2" in table:
@@ -126,3 +123,13 @@ def _default_degree2(body, table: dict):
     props = mass_properties(body.shape.vertices_T, body.shape.faces)
     params = dataclasses.replace(body.params, c20=props.c20_m2, c22=props.c22_m2)
     return dataclasses.replace(body, params=params)
+
+
+def _replace_shape(c, body, b):
+    """``body`` with the mesh of ``[body] shape``; its errors name ``body.shape``."""
+    try:
+        shape = load_shape_file(b.shape, length_unit=b.length_unit)
+    except InputError as exc:
+        where = f" ({exc.file}{':' + str(exc.line) if exc.line else ''})" if exc.file else ""
+        raise c.error(f"{exc.message}{where}", "body.shape") from None
+    return dataclasses.replace(body, shape=shape, note=f"{body.note}; shape {b.shape}")
