@@ -13,7 +13,8 @@ from ideas_hpc.attitude.maneuvers import store_figure
 from ideas_hpc.errors import InputError
 from ideas_hpc.plots import figures
 from ideas_hpc.units import DEG, KM
-from ideas_hpc.campaign.report_reliability import reliability_figures, reliability_lines
+from ideas_hpc.campaign.report_reliability import (reliability_figures, reliability_lines,
+                                                   swarm_label)
 from ideas_hpc.campaign.vocabulary import requirement_line, verification_verdict
 
 
@@ -130,12 +131,13 @@ def _design_lines(ds) -> list[str]:
             "proven unless a gap to the proven bound is shown"
         out.append(f"best coverage for N spacecraft ({label}): {pts}")
     if "worst_failure_coverage" in ds:
-        out.append(f"worst case after {a.get('failures_evaluated', 1)} failure(s): "
+        out.append(f"worst case after {a.get('failures_evaluated', 1)} failure(s) "
+                   f"{swarm_label(ds)}: "
                    f"{100 * float(ds['worst_failure_coverage']):.3f} % (failed spacecraft "
                    f"{ds['worst_failure'].values.tolist()})")
     if "verify_coverage" in ds:
         c = 100 * ds["verify_coverage"].values
-        out.append(f"Monte Carlo verification: P(coverage >= threshold "
+        out.append(f"Monte Carlo verification {swarm_label(ds)}: P(coverage >= threshold "
                    f"{100 * a['verify_threshold']:.2f} %)"
                    f" = {100 * a['verify_probability']:.1f} % over {c.size} dispersed samples "
                    f"(min {c.min():.2f} %, 5th percentile {np.percentile(c, 5):.2f} %, median "
