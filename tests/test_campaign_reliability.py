@@ -10,6 +10,7 @@ import pytest
 import xarray as xr
 
 from ideas_hpc.campaign.report import write_report
+from ideas_hpc.campaign.report_html_reliability import reliability_html_figures
 from ideas_hpc.campaign.report_reliability import bank_answer
 from ideas_hpc.campaign.run import run_file
 from ideas_hpc.config.campaign_tables import load
@@ -222,8 +223,22 @@ def test_design_must_step_n_up(free_store, tmp_path):
     first = 200 * (looks_n.size - 1)
     assert f"N = {int(looks_n[-1])} swarm DEMONSTRATED" in cert
     assert f"samples {first}..{first + 199}" in cert and "chose nothing" in cert
-    text = Path(write_report(tmp_path / "s.zarr", tmp_path / "rep")).read_text()
+    text = Path(write_report(tmp_path / "s.zarr", tmp_path / "rep", html=True)).read_text()
     assert cert in text
+    # report --html: the reliability curve and the certified swarm's validation distribution
+    n = int(looks_n[-1])
+    page = (tmp_path / "rep" / "report.html").read_text()
+    curve, val = reliability_html_figures(ds)
+    assert curve.layout.title.text in page and val.layout.title.text in page
+    traces = {t.name: t for t in curve.data}
+    assert np.array_equal(traces["validated P-hat"].x, ds["reliability_n"].values)
+    assert np.allclose(traces["best P on the scenario bank"].y, ds["reliability_vs_n"].values)
+    marks = [a.text for a in curve.layout.annotations]
+    assert f"certified N = {n} (DEMONSTRATED)" in marks and f"bank N = {n0}" in marks
+    assert f"validation of the certified N = {n} swarm (samples {first}..{first + 199})" \
+        in val.layout.title.text
+    assert np.allclose(val.data[0].x, np.sort(ds["validation_probability"].values))
+    assert np.allclose(val.data[1].x, np.sort(100 * ds["validation_coverage"].values))
     printed(text, f"^validation of the N = {int(looks_n[-1])} swarm", hats[-1], lows[-1])
     # the nominal design's worst failure (stored for N0 > 1) names the nominal swarm
     assert n0 > 1 and "worst_failure_coverage" in ds
