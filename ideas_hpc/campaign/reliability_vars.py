@@ -203,7 +203,9 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
     })
     if cert is not None:
         attrs["certificate"] = cert.line()
-    notes = list(nominal.notes) + list(res.notes)
+    # the nominal design's notes describe the nominal swarm, not the reported one (issue 29)
+    notes = [f"nominal design (N = {attrs['nominal_swarm_size']}): {n}" for n in nominal.notes] \
+        + list(res.notes)
     if stepped:
         notes.append(f"design.demonstrate: {steps} until the validation bound reached p = {p:g}"
                      if val.lower >= p else

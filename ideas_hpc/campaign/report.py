@@ -65,11 +65,14 @@ def _summary(ds, figs) -> str:
         lines.extend(_design_lines(ds))
     if "pareto_n" in ds:
         lines.extend(_pareto_lines(ds))
+    flown = (f" of the flown N = {int(ds['best_swarm_size'])} swarm"
+             if "design_method" in ds and "best_swarm_size" in ds else "")
     if "coverage" in ds:
         cov = np.atleast_1d(ds["coverage"].values) * 100
         cnt = np.atleast_1d(ds["coverage_count"].values) * 100
         if cov.size == 1:
-            lines.append(f"coverage: {cov[0]:.3f} % of the area, {cnt[0]:.3f} % of the vertices")
+            lines.append(f"coverage{flown}: {cov[0]:.3f} % of the area, {cnt[0]:.3f} % of the "
+                         "vertices")
         else:
             ok = np.isfinite(cov)
             lines.append(f"coverage over {ok.sum()} samples: mean {cov[ok].mean():.3f} %, min "
@@ -82,7 +85,7 @@ def _summary(ds, figs) -> str:
     if "targeting_miss" in ds:
         m = ds["targeting_miss"].values
         last = np.nanmin(np.where(np.isfinite(m), m, np.inf), axis=-1)
-        lines.append(f"targeting: worst final miss {np.max(last) * 1e3:.3f} mm "
+        lines.append(f"targeting{flown}: worst final miss {np.max(last) * 1e3:.3f} mm "
                      f"(tolerance {a.get('targeting_tolerance_m', float('nan')) * 1e3:.0f} mm)")
     for var, unit, scale in (("sigma_error", "", 1.0), ("wheel_torque", "N m", 1.0),
                              ("wheel_speed", "rpm", figures.RPM)):
