@@ -219,6 +219,12 @@ def test_design_must_step_n_up(free_store, tmp_path):
     assert float(ds["validation_look_confidence"]) == pytest.approx(1 - 0.05 / k)
     assert bool(ds["demonstrated"]) and lows[-1] >= p and np.all(lows[:-1] < p)
     assert ds.attrs["demonstrate_steps"] == f"N stepped up from {n0} to {int(looks_n[-1])}"
+    # 24 scenarios cut no two sample problems of >= 16: no statistical lower bound, said so
+    assert np.isnan(float(ds["statistical_lower_bound"]))
+    for name in ("bank_level", "validation_look_confidence", "validation_look_lower_bound",
+                 "statistical_lower_bound", "validation_first_sample"):
+        assert ds[name].attrs["long_name"]
+    assert float(ds["bank_level"]) == p
     cert = ds.attrs["certificate"]
     first = 200 * (looks_n.size - 1)
     assert f"N = {int(looks_n[-1])} swarm DEMONSTRATED" in cert

@@ -40,7 +40,8 @@ import numpy as np
 from ideas_hpc.core.design.reliability import swarm_probabilities
 from ideas_hpc.design import failure_tolerant
 from ideas_hpc.design.bank import grid_size, separation_steps
-from ideas_hpc.design.certificate import certify, look_confidence, planned_looks
+from ideas_hpc.design.certificate import (certify, group_bounds, look_confidence, planned_looks,
+                                         replicated_lower_bound)
 from ideas_hpc.design.reliability import ReliabilityDesigner, min_swarm_reliable
 from ideas_hpc.design.reliability_stats import lower_confidence_bound
 from ideas_hpc.errors import InputError
@@ -229,9 +230,36 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=Non
             break
     tolerant = _tolerant(tolerant.result() if tolerant is not None else
                          _tolerant_designs(nominal.bank, target, eps, d, sep), rel)
+    stat = None if exact else statistical_bound(rel, p, p_f, d.n_max, d.confidence)
     return reliability_dataset(c, nominal, bank, res, chosen, chosen_val, curve, tolerant,
                                stepped=stepped, need=need, exact=exact, t_bank=t_bank,
-                               cert=cert, level=level)
+                               cert=cert, level=level, stat=stat)
+
+
+#: Sample problems cut from the bank for the statistical lower bound, and the fewest
+#: scenarios each needs.
+STAT_GROUPS, STAT_GROUP_MIN = 8, 16
+
+
+def statistical_bound(rel, p, p_f, n_max, confidence):
+    """A statistical lower bound on the true fewest N (Pagnoncelli, Ahmed & Shapiro 2009,
+    sec. 2; docs/certificate.md): the bank's scenarios cut into M groups, each an
+    independent sample problem at the looser level ``p'' = p - sqrt(ln 10 / (2 S_g))``
+    (the true optimum feasible in each with probability >= 0.9), each bounded by the
+    ring-gap bounds (:func:`~ideas_hpc.design.certificate.group_bounds`). Returns a dict,
+    or None when the bank is too small or has no ring-gap bounds."""
+    lows = rel._lows
+    m = min(STAT_GROUPS, rel.s_n // STAT_GROUP_MIN)
+    if lows is None or m < 2:
+        return None
+    s_g = rel.s_n // m
+    loose = p - math.sqrt(math.log(10.0) / (2.0 * s_g))
+    if loose <= 0.0:
+        return None
+    bounds = group_bounds(lows[:m * s_g], m, loose, p_f, n_max)
+    lb, rank, theta = replicated_lower_bound(bounds, s_g, p, loose, 1.0 - confidence)
+    return {"bound": lb, "rank": rank, "groups": m, "group_scenarios": s_g, "level": loose,
+            "theta": theta, "group_bounds": bounds}
 
 
 def _certify(c, setup, client, bank, res, rel, need, w, exact):

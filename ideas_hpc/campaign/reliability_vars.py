@@ -35,6 +35,7 @@ validation_first_sample         ()                    first validation sample of
 validation_look_confidence      ()                    confidence of each look, 1 - alpha / K
 validation_look_n (_p_hat,      (validation_look,)    each look's swarm size, P-hat, bound and
 _lower_bound, _first_sample)                          first validation sample, in order
+statistical_lower_bound         ()                    lower bound on the true fewest N (docs)
 =============================  ====================  =========================================
 
 The certificate (:mod:`ideas_hpc.design.certificate`, docs/certificate.md) is
@@ -83,7 +84,7 @@ def _look_vars(cert) -> dict:
 
 def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, tolerant, *,
                         stepped, need: float, exact: bool, t_bank: float, cert=None,
-                        level: float | None = None) -> ExactDesign:
+                        level: float | None = None, stat: dict | None = None) -> ExactDesign:
     """The :class:`ExactDesign` of the chosen swarm with the variables of the module docstring."""
     d = c.config.design
     p = float(d.success_probability)
@@ -136,6 +137,8 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
         "validation_first_sample": ((), np.int64(first)),
         "validation_look_confidence": ((), look_conf),
         **_look_vars(cert),
+        "statistical_lower_bound": ((), float("nan") if stat is None or stat["rank"] == 0
+                                    else float(stat["bound"])),
     }, coords={"reliability_n": np.array([r[0] for r in curve], dtype=np.int64),
                "tolerated": np.array([t[0] for t in tolerant], dtype=np.int64)})
     thr = f"coverage >= {100 * need:.3f} %"
@@ -156,6 +159,9 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
           f"P of the reported swarm over its own fresh samples ({BOUND_METHOD}; the look's share "
           f"of 1 - {conf:g}: the certificate)")
     _with(new, "bank_level", "1", "level p' >= p the scenario bank was solved at")
+    _with(new, "statistical_lower_bound", None, f"{100 * conf:g} % statistical lower bound on "
+          "the true fewest N (replicated sample problems cut from the bank, ring-gap bounds; "
+          "NaN: none)")
     _with(new, "validation_look_n", None, "swarm size of each validation look, in order")
     _with(new, "validation_look_p_hat", "1", "P-hat of each look")
     _with(new, "validation_look_lower_bound", "1", "lower bound of each look at "
@@ -203,6 +209,14 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
     })
     if cert is not None:
         attrs["certificate"] = cert.line()
+    if stat is not None:
+        attrs["statistical_lower_bound"] = (
+            f"true fewest N >= {stat['bound']:g} at {100 * conf:g} % confidence: the "
+            f"{stat['rank']}-th smallest of {stat['groups']} sample problems' bounds "
+            f"({stat['group_scenarios']} scenarios each, level {stat['level']:.4f}; "
+            f"{[int(b) for b in stat['group_bounds']]})" if stat["rank"] else
+            f"none at {100 * conf:g} % confidence from {stat['groups']} sample problems of "
+            f"{stat['group_scenarios']} scenarios")
     # the nominal design's notes describe the nominal swarm, not the reported one (issue 29)
     notes = [f"nominal design (N = {attrs['nominal_swarm_size']}): {n}" for n in nominal.notes] \
         + list(res.notes)

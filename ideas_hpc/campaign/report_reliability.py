@@ -70,6 +70,9 @@ def reliability_lines(ds) -> list[str]:
            f"N = {a['nominal_swarm_size']}"]
     if "certificate" in a:
         out.append(str(a["certificate"]))
+    if "statistical_lower_bound" in a:
+        out.append("statistical lower bound (beside the proof on the bank): "
+                   + str(a["statistical_lower_bound"]))
     if "bank_level" in ds and float(ds["bank_level"]) != p:
         out.append(f"bank solved at the stricter level p' = {float(ds['bank_level']):g} "
                    f"(p = {p:g}; docs/certificate.md)")

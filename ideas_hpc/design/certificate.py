@@ -236,3 +236,31 @@ def replicated_lower_bound(optima, s_n: int, p: float, solve_p: float,
     if best_l == 0:
         return -math.inf, 0, theta
     return float(v[best_l - 1]), best_l, theta
+
+
+def group_bounds(lows, n_groups: int, level: float, p_f: float, n_max: int) -> np.ndarray:
+    """Proven lower bounds on the optima of ``n_groups`` independent sample problems cut from
+    one bank: the scenarios split in order into groups (i.i.d. draws, so the groups are
+    independent sample problems), problem ``i`` asking for the fewest N with bank mean >=
+    ``level`` on group ``i``.
+
+    ``lows[s]`` is a proven lower bound on the fewest spacecraft that cover scenario ``s``
+    (the ring-gap bound). On group ``i`` an m-swarm reaches at most the fraction
+    ``U_m = mean(lows <= m)`` of the scenarios with no failure, so any N-swarm has bank
+    mean ``<= UB(N)`` (:func:`~ideas_hpc.design.reliability_stats.failure_upper_bound`) and
+    the problem's optimum is at least the first N with ``UB(N) >= level``
+    (``n_max + 1`` when none). Lower bounds on the optima keep
+    :func:`replicated_lower_bound` valid: a problem in which the true optimum is feasible
+    still has its bound ``<= N*``.
+    """
+    from ideas_hpc.design.reliability_stats import failure_upper_bound
+
+    lows = np.asarray(lows, dtype=np.int64)
+    out = np.full(int(n_groups), int(n_max) + 1, dtype=np.int64)
+    for i, grp in enumerate(np.array_split(lows, int(n_groups))):
+        u = [0.0] + [float(np.mean(grp <= m)) for m in range(1, int(n_max) + 1)]
+        for n in range(1, int(n_max) + 1):
+            if failure_upper_bound(n, u[:n + 1], p_f) >= level - 1e-12:
+                out[i] = n
+                break
+    return out
