@@ -35,11 +35,12 @@ class Synthetic:
         return int(ok[0]) + 1 if ok.size else None
 
     def best_of(self, n):
+        """The bank's best of size n, as a "swarm" of n entries all naming candidate i."""
         i = int(np.argmax(self.bank[n - 1]))
-        return np.array([n - 1, i] + [0] * (n - 2), dtype=np.int64)[:n], self.bank[n - 1, i]
+        return np.full(n, i, dtype=np.int64), self.bank[n - 1, i]
 
     def true_p(self, swarm):
-        return self.truth[swarm[0], swarm[1]] if swarm.size > 1 else self.truth[0, swarm[0]]
+        return self.truth[swarm.size - 1, swarm[0]]
 
 
 def _truth(rng, q, k, spread):
