@@ -10,10 +10,14 @@ import pytest
 import xarray as xr
 
 from ideas_hpc.campaign.report import write_report
+from ideas_hpc.campaign.report_html_reliability import reliability_html_figures
 from ideas_hpc.campaign.report_reliability import bank_answer
 from ideas_hpc.campaign.run import run_file
 from ideas_hpc.config.campaign_tables import load
+from ideas_hpc.core.design.reliability import swarm_probabilities
 from ideas_hpc.design import build_bank
+from ideas_hpc.design.bank import separation_steps
+from ideas_hpc.design.reliability import ReliabilityDesigner, all_swarms
 from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.plots import figures
 from report_numbers import lines_for, printed, printed_int
@@ -40,12 +44,25 @@ def exact_p(masks, w, swarm, need, p_f):
     return out
 
 
-def test_sample_free_design_is_exact(tmp_path):
+# 12 candidates (30 deg): every swarm of the sizes in question is scored, so the bank's
+# answer must be proven (status optimal, gap 0); at 10 deg (20 deg) sizes 5-6 (7) stay unresolved
+BASE20 = [k if not k.startswith("design.angle_step_deg") else "design.angle_step_deg=30"
+          for k in BASE]
+FREE = BASE20 + QUIET + ["design.success_probability=0.9", "monte_carlo.failure_probability=0.05",
+                       "design.scenarios=100", "design.verify_samples=100"]
+
+
+@pytest.fixture(scope="module")
+def free_store(tmp_path_factory):
+    """The sample-free design (continuous dispersions off), shared by two tests."""
+    return run_file(DESIGN, out=tmp_path_factory.mktemp("free") / "r.zarr", overrides=FREE)
+
+
+def test_sample_free_design_is_exact(free_store, tmp_path):
     """Continuous dispersions off: one exact scenario; P-hat is the exact P, and so is its
     bound (exact enumeration over the nominal masks, computed here in numpy)."""
-    sets = BASE + QUIET + ["design.success_probability=0.9", "monte_carlo.failure_probability=0.05",
-                           "design.scenarios=100", "design.verify_samples=100"]
-    ds = xr.open_zarr(run_file(DESIGN, out=tmp_path / "r.zarr", overrides=sets))
+    sets = FREE
+    ds = xr.open_zarr(free_store)
     c = load(DESIGN, sets)
     setup = setup_from_campaign(c)
     bank = build_bank(setup, c.config.design.grid_step_rad)
@@ -59,18 +76,26 @@ def test_sample_free_design_is_exact(tmp_path):
     assert float(ds["validation_lower_bound"]) == pytest.approx(p, abs=1e-12)
     assert bool(ds["demonstrated"]) == (p >= 0.9)
     assert p >= 0.9
-    # the proven bound: no swarm of n - 1 reaches p (the store's upper bound says so)
-    assert float(ds.attrs["optimality_gap"]) == 0.0 or ds.attrs["solver_status"] != "optimal"
+    # one scenario of 12 candidates: the answer is proven, and no swarm of n - 1
+    # reaches p (every one of them scored here, within the design's separation)
+    assert ds.attrs["solver_status"] == "optimal" and float(ds.attrs["optimality_gap"]) == 0.0
+    assert int(ds["proven_bound"]) == n
+    m_sep = separation_steps(bank.step_rad, setup.d_sep_m, c.config.swarm.min_separation_m,
+                             bank.n_candidates)
+    smaller = all_swarms(bank.n_candidates, n - 1, m_sep)
+    assert smaller.shape[0] > 0
+    best_smaller = swarm_probabilities(np.ascontiguousarray(bank.masks[None]), smaller, w,
+                                       need, 0.05).max()
+    assert best_smaller < 0.9
     assert ds["reliability_vs_n"].attrs["units"] == "1"
     assert "long_name" in ds["validation_lower_bound"].attrs
     # the optimisation on the bank and the validation are stored apart (nothing stepped here)
-    assert ds.attrs["solver_status"] in ("optimal", "time_limit", "feasible")
     assert int(ds["bank_swarm_size"]) == n and ds.attrs["demonstrate_steps"] == "none"
     assert float(ds["bank_probability"]) == pytest.approx(p, abs=1e-12)
     assert str(ds["validation_outcome"].values) == ("demonstrated" if p >= 0.9 else
                                                    "not demonstrated")
     with figures.kept() as figs:
-        rep = write_report(tmp_path / "r.zarr", tmp_path / "rep")
+        rep = write_report(free_store, tmp_path / "rep")
     text = Path(rep).read_text()
     printed_int(text, "optimisation on the scenario bank", n, int(ds["proven_bound"]))
     printed(text, "optimisation on the scenario bank", p, 100 * float(ds["optimality_gap"]))
@@ -106,11 +131,15 @@ def test_dispersed_design_stores_validation(tmp_path):
     assert bool(ds["demonstrated"]) == (float(ds["validation_lower_bound"]) >= 0.5)
     assert int(ds["best_swarm_size"]) in ds["reliability_n"].values
     assert ds.attrs["scenario_stream"] != ds.attrs["validation_stream"]
-    # design.demonstrate: stepped up until the bound reaches p, or n_max
-    assert bool(ds["demonstrated"]) or int(ds["best_swarm_size"]) == 8
-    # the optimisation's status, bound and gap are the bank-optimal N's, whatever stepping did
+    # p = 0.5 with swarms of up to 8 of p_f = 0.05: demonstrated, at the first look whose
+    # bound (at its share 0.05 / K) reaches p; every earlier look missed it
     n, n_bank = int(ds["best_swarm_size"]), int(ds["bank_swarm_size"])
-    assert ds.attrs["solver_status"] in ("optimal", "time_limit", "feasible")
+    lows = ds["validation_look_lower_bound"].values
+    assert bool(ds["demonstrated"]) and lows[-1] >= 0.5 and np.all(lows[:-1] < 0.5)
+    assert list(ds["validation_look_n"].values) == list(range(n_bank, n + 1))
+    assert list(ds["validation_look_first_sample"].values) == [24 * j for j in range(lows.size)]
+    # 20 scenarios x 36 candidates: the scenario programme proves the bank's answer
+    assert ds.attrs["solver_status"] == "optimal"
     assert n_bank <= n and float(ds["bank_probability"]) >= 0.5
     assert float(ds["optimality_gap"]) == pytest.approx((n_bank - float(ds["proven_bound"]))
                                                         / n_bank)
@@ -146,3 +175,77 @@ def test_sample_free_design_is_exact_on_a_fast_encounter(tmp_path):
     assert float(ds["reliability_probability"]) == pytest.approx(p, abs=1e-12)
     assert float(ds["validation_p_hat"]) == pytest.approx(p, abs=1e-12)
     assert float(ds["validation_lower_bound"]) == pytest.approx(p, abs=1e-12)
+
+
+def test_design_must_step_n_up(free_store, tmp_path):
+    """design.demonstrate steps N up when it must (issue 34), each look on fresh samples at
+    (1 - confidence) / K (issue 29).
+
+    Setup that forces it: continuous dispersions of 1 mm in position only, so every scenario
+    and every validation sample sees the nominal masks and the per-sample P of a swarm is
+    one number c; p_f is chosen so that the fewest N0 covering spacecraft have c = p exactly.
+    The bank then answers N0, but a bound on M values all equal to c lies below c = p: the
+    first look must fail, and N0 + 1 (P well above p) must be looked at on new samples.
+    """
+    base = BASE20 + QUIET + ["monte_carlo.sigma_position_m=0.001"]
+    c = load(DESIGN, base + ["design.success_probability=0.9"])
+    setup = setup_from_campaign(c)
+    bank = build_bank(setup, c.config.design.grid_step_rad)
+    # the threshold and the plain minimum N0 of the sample-free design of this file
+    free = xr.open_zarr(free_store)
+    need, n0 = free.attrs["reliability_threshold"], int(free["nominal_swarm_size"])
+    p_f = 1.0 - 0.55 ** (1.0 / n0)
+    m_sep = separation_steps(bank.step_rad, setup.d_sep_m, c.config.swarm.min_separation_m,
+                             bank.n_candidates)
+    rel = ReliabilityDesigner(bank.masks[None], bank.areas, need=need, p_f=p_f, sep_steps=m_sep)
+    p = float(rel.best_of(n0)[1])
+    assert 0.5 < p < 0.9 and rel.best_of(n0 - 1)[1] < p
+    sets = base + [f"design.success_probability={p!r}", f"monte_carlo.failure_probability={p_f!r}",
+                   "design.scenarios=24", "design.verify_samples=200", "design.demonstrate=true",
+                   "design.n_max=12"]
+    ds = xr.open_zarr(run_file(DESIGN, out=tmp_path / "s.zarr", overrides=sets))
+    assert ds.attrs["continuous_dispersions"] == "sampled"
+    assert int(ds["bank_swarm_size"]) == n0
+    looks_n = ds["validation_look_n"].values
+    lows = ds["validation_look_lower_bound"].values
+    hats = ds["validation_look_p_hat"].values
+    assert hats[0] == pytest.approx(p, abs=1e-12)          # the premise: every value is c = p
+    assert lows[0] < p                                     # so the first look must fail
+    assert list(looks_n[:2]) == [n0, n0 + 1] and int(ds["best_swarm_size"]) == looks_n[-1]
+    assert list(ds["validation_look_first_sample"].values) == [200 * j
+                                                               for j in range(looks_n.size)]
+    k = min(4, 12 - n0 + 1)
+    assert int(ds["validation_looks_planned"]) == k
+    assert float(ds["validation_look_confidence"]) == pytest.approx(1 - 0.05 / k)
+    assert bool(ds["demonstrated"]) and lows[-1] >= p and np.all(lows[:-1] < p)
+    assert ds.attrs["demonstrate_steps"] == f"N stepped up from {n0} to {int(looks_n[-1])}"
+    # 24 scenarios cut no two sample problems of >= 16: no statistical lower bound, said so
+    assert np.isnan(float(ds["statistical_lower_bound"]))
+    for name in ("bank_level", "validation_look_confidence", "validation_look_lower_bound",
+                 "statistical_lower_bound", "validation_first_sample"):
+        assert ds[name].attrs["long_name"]
+    assert float(ds["bank_level"]) == p
+    cert = ds.attrs["certificate"]
+    first = 200 * (looks_n.size - 1)
+    assert f"N = {int(looks_n[-1])} swarm DEMONSTRATED" in cert
+    assert f"samples {first}..{first + 199}" in cert and "chose nothing" in cert
+    text = Path(write_report(tmp_path / "s.zarr", tmp_path / "rep", html=True)).read_text()
+    assert cert in text
+    # report --html: the reliability curve and the certified swarm's validation distribution
+    n = int(looks_n[-1])
+    page = (tmp_path / "rep" / "report.html").read_text()
+    curve, val = reliability_html_figures(ds)
+    assert curve.layout.title.text in page and val.layout.title.text in page
+    traces = {t.name: t for t in curve.data}
+    assert np.array_equal(traces["validated P-hat"].x, ds["reliability_n"].values)
+    assert np.allclose(traces["best P on the scenario bank"].y, ds["reliability_vs_n"].values)
+    marks = [a.text for a in curve.layout.annotations]
+    assert f"certified N = {n} (DEMONSTRATED)" in marks and f"bank N = {n0}" in marks
+    assert f"validation of the certified N = {n} swarm (samples {first}..{first + 199})" \
+        in val.layout.title.text
+    assert np.allclose(val.data[0].x, np.sort(ds["validation_probability"].values))
+    assert np.allclose(val.data[1].x, np.sort(100 * ds["validation_coverage"].values))
+    printed(text, f"^validation of the N = {int(looks_n[-1])} swarm", hats[-1], lows[-1])
+    # the nominal design's worst failure (stored for N0 > 1) names the nominal swarm
+    assert n0 > 1 and "worst_failure_coverage" in ds
+    assert lines_for(text, f"^worst case.*of the nominal N = {n0} swarm")

@@ -127,17 +127,32 @@ def test_designer_equals_exhaustive_enumeration(seed, p, sep):
     assert res.probability == pytest.approx(
         brute_probability(rows, res.indices, areas, need, p_f), abs=1e-12)
     assert res.probability >= p
-    # without enumeration (programme bound + swap search): sound either way
-    try:
-        alt = min_swarm_reliable(rows, areas, p=p, p_f=p_f, need=need, n_max=n_max,
-                                 sep_steps=sep, time_limit=1000.0, enumerate_budget=0)
-    except InputError as exc:       # the swap search may miss; it must then say so
-        assert "unresolved" in exc.message
-        return
-    assert alt.bound <= n_star <= alt.n
-    assert brute_probability(rows, alt.indices, areas, need, p_f) >= p
-    if alt.status == "optimal":
-        assert alt.n == n_star
+
+
+# Without enumeration (programme bound + swap search). Seeds 6 and 7: the programme's bound
+# closes at the fewest N, so the answer must be proven optimal. Seed 5: UB(5) >= p although
+# no 5-swarm reaches p (the exhaustive oracle says so), so size 5 must stay unresolved.
+@pytest.mark.parametrize("seed,p,sep", [(6, 0.5, 1), (7, 0.6, 0)])
+def test_programme_and_swap_search_prove_the_fewest(seed, p, sep):
+    rows, areas = random_bank(seed, s_n=4, c_n=9, v_n=18)
+    n_star, _ = oracle_min_n(rows, areas, 0.9, 0.1, p, 6, sep)
+    alt = min_swarm_reliable(rows, areas, p=p, p_f=0.1, need=0.9, n_max=6, sep_steps=sep,
+                             time_limit=1000.0, enumerate_budget=0)
+    assert alt.status == "optimal" and alt.gap == 0.0
+    assert alt.n == n_star == alt.bound
+    assert brute_probability(rows, alt.indices, areas, 0.9, 0.1) >= p
+
+
+def test_programme_bound_short_of_proof_says_feasible():
+    rows, areas = random_bank(5, s_n=4, c_n=9, v_n=18)
+    n_star, _ = oracle_min_n(rows, areas, 0.9, 0.1, 0.8, 6, 0)
+    alt = min_swarm_reliable(rows, areas, p=0.8, p_f=0.1, need=0.9, n_max=6, sep_steps=0,
+                             time_limit=1000.0, enumerate_budget=0)
+    assert alt.status == "feasible"
+    assert alt.bound == n_star - 1 and alt.n == n_star           # found, not proven
+    assert alt.gap == pytest.approx(1 / n_star)
+    assert any(str(n_star - 1) in note for note in alt.notes)
+    assert brute_probability(rows, alt.indices, areas, 0.9, 0.1) >= 0.8
 
 
 def test_bound_solver_time_limit_gives_gap():

@@ -101,6 +101,23 @@ def test_member_flights_use_the_validation_stream():
             np.testing.assert_array_equal(got[m, j], fj.coverage.observed)
 
 
+def test_a_later_look_flies_later_validation_samples():
+    """fly_members(first=k): a validation look's own samples k, k+1, ... of the stream (issue
+    29): the same flights as samples k.. of one long run, different from samples 0.."""
+    c, setup = _campaign()
+    mc = c.config.monte_carlo
+    theta = np.deg2rad([0.0, 120.0, 240.0])
+    run = fly_members(setup, theta, None, mc, seed=5, n_samples=3, progress=False)
+    later = fly_members(setup, theta, None, mc, seed=5, n_samples=1, progress=False, first=2)
+    np.testing.assert_array_equal(later[0], run[2])
+    r0, v0 = nominal_start(setup, theta)
+    pert = draw_world(mc, setup, theta, 5, VALIDATION_STREAM, 2)
+    f = fly_open_loop(setup, theta, None, r0, v0, Perturbation(**pert))
+    np.testing.assert_array_equal(later[0].any(axis=0), f.coverage.observed)
+    first = draw_world(mc, setup, theta, 5, VALIDATION_STREAM, 0)
+    assert not np.array_equal(first["position_error_T"], pert["position_error_T"])
+
+
 def test_streams_share_no_seed():
     # Scenario draws, validation draws and Monte Carlo samples (and their
     # children) never share a seed sequence state.

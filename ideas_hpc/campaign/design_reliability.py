@@ -14,7 +14,11 @@ Orchestration only:
    disjoint from the scenarios'), the exact failure-weighted P of each, their
    mean ``P-hat`` and a lower bound at ``design.confidence``
    (:func:`ideas_hpc.design.reliability_stats.lower_confidence_bound`);
-   ``design.demonstrate`` steps N up until the bound reaches p;
+   ``design.demonstrate`` steps N up until the bound reaches p, each look on
+   its own fresh samples and at ``(1 - confidence) / K`` for the K =
+   ``design.demonstrate_looks`` planned looks
+   (:func:`ideas_hpc.design.certificate.certify`, docs/certificate.md);
+   ``design.bank_level`` solves step 3 at a stricter level than p;
 5. the reliability curve for N from ``N0`` to where P >= 0.99 (or ``n_max``),
    with the k-failure-tolerant designs of the nominal bank evaluated on it
    (:mod:`ideas_hpc.campaign.reliability_vars` assembles the store variables).
@@ -36,6 +40,8 @@ import numpy as np
 from ideas_hpc.core.design.reliability import swarm_probabilities
 from ideas_hpc.design import failure_tolerant
 from ideas_hpc.design.bank import grid_size, separation_steps
+from ideas_hpc.design.certificate import (certify, group_bounds, look_confidence, planned_looks,
+                                         replicated_lower_bound)
 from ideas_hpc.design.reliability import ReliabilityDesigner, min_swarm_reliable
 from ideas_hpc.design.reliability_stats import lower_confidence_bound
 from ideas_hpc.errors import InputError
@@ -73,8 +79,9 @@ def continuous_off(mc, setup) -> bool:
 class Validation:
     """The chosen swarm flown through fresh samples (module docstring, step 4)."""
 
-    def __init__(self, rows, w, need, p_f, confidence, exact: bool, seed: int):
+    def __init__(self, rows, w, need, p_f, confidence, exact: bool, seed: int, first: int = 0):
         n = rows.shape[1]
+        self.first = int(first)
         self.per_sample = swarm_probabilities(np.ascontiguousarray(rows),
                                               np.arange(n, dtype=np.int64)[None, :],
                                               w, need, p_f)[0]
@@ -83,18 +90,23 @@ class Validation:
         cov = np.empty(rows.shape[0])
         failed = np.empty(rows.shape[0], dtype=np.int32)
         for k in range(rows.shape[0]):
-            alive = stream_rng(seed, VALIDATION_STREAM, k, STREAM_FAILURES).random(n) >= p_f
+            alive = stream_rng(seed, VALIDATION_STREAM, self.first + k,
+                               STREAM_FAILURES).random(n) >= p_f
             cov[k] = float(w[rows[k, alive].any(axis=0)].sum()) if alive.any() else 0.0
             failed[k] = n - int(alive.sum())
         self.coverage, self.n_failed = cov, failed
 
 
-def _validate(c, setup, theta, need, w, exact, client):
+def _validate(c, setup, theta, need, w, exact, client, *, first=0, confidence=None):
+    """Validation samples ``first .. first + M - 1`` of ``theta``; the bound at ``confidence``
+    (default ``design.confidence``)."""
     d, mc = c.config.design, c.config.monte_carlo
     m = 1 if exact else verify_samples(d)
     rows = fly_members(setup, theta, None, mc, seed=c.config.seed, n_samples=m, client=client,
-                       progress=progress.on())
-    return Validation(rows, w, need, mc.failure_probability, d.confidence, exact, c.config.seed)
+                       progress=progress.on(), first=first)
+    conf = d.confidence if confidence is None else confidence
+    return Validation(rows, w, need, mc.failure_probability, conf, exact, c.config.seed,
+                      first=first)
 
 
 def _tolerant_designs(nominal_bank, target, eps, d, sep) -> list:
@@ -180,26 +192,29 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=Non
     n_grid = grid_size(d.grid_step_rad)
     sep = c.config.swarm.min_separation_m
     m_sep = separation_steps(2 * math.pi / n_grid, setup.d_sep_m, sep, n_grid)
-    with designer_errors(c):
-        res = min_swarm_reliable(bank.rows, bank.areas, p=p, p_f=p_f, need=need, n_max=d.n_max,
-                                 sep_steps=m_sep, time_limit=d.time_limit_s)
+    level = p if d.bank_level is None else float(d.bank_level)
+    try:
+        with designer_errors(c):
+            res = min_swarm_reliable(bank.rows, bank.areas, p=level, p_f=p_f, need=need,
+                                     n_max=d.n_max, sep_steps=m_sep, time_limit=d.time_limit_s)
+    except InputError as exc:
+        if level == p or exc.field != "design.success_probability":
+            raise
+        raise c.error(f"{exc.message} (the stricter level the bank is solved at)",
+                      "design.bank_level") from None
     rel = res.designer
     w = rel.ev.w
-    val = _validate(c, setup, bank.theta[res.indices], need, w, exact, client)
-    chosen, chosen_val, stepped = res, val, []
-    while d.demonstrate and chosen_val.lower < p and chosen.n < d.n_max:
-        n = chosen.n + 1
-        sw, pb = rel.best_of(n)
-        if sw.size != n:
-            break
-        stepped.append((n, pb))
-        v = _validate(c, setup, bank.theta[sw], need, w, exact, client)
-        # status, bound and gap stay the optimisation's (of the bank-optimal res.n):
-        # stepping up is the validation's decision, stored apart (reliability_vars)
-        chosen = type(res)(indices=sw, n=n, probability=pb,
+    cert = _certify(c, setup, client, bank, res, rel, need, w, exact)
+    chosen_val = cert.final.extra
+    stepped = [(lk.n, lk.bank_probability) for lk in cert.looks[1:]]
+    if len(cert.looks) == 1:
+        chosen = res
+    else:       # status, bound and gap stay the optimisation's (of the bank-optimal res.n):
+        sw = cert.final.swarm   # stepping up is the validation's decision (reliability_vars)
+        chosen = type(res)(indices=sw, n=cert.final.n, probability=cert.final.bank_probability,
                            per_scenario=rel.ev.per_scenario([sw])[0], status=res.status,
                            bound=res.bound, gap=res.gap, solve_time=res.solve_time)
-        chosen_val = v
+    looked = {lk.n: lk.extra for lk in cert.looks}
     # the reliability curve: N0 .. first N with P >= CURVE_TOP (or n_max)
     n0 = int(nominal.data["best_swarm_size"])
     curve = []
@@ -207,12 +222,62 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=Non
         sw, pb = (chosen.indices, chosen.probability) if n == chosen.n else rel.best_of(n)
         if sw.size != n:
             break
-        v = chosen_val if n == chosen.n else (
-            val if n == res.n else _validate(c, setup, bank.theta[sw], need, w, exact, client))
-        curve.append((n, pb, rel.upper(n), v.p_hat, v.lower, sw))
+        # the curve reports each N alone at design.confidence (it certifies nothing)
+        v = looked.get(n) or _validate(c, setup, bank.theta[sw], need, w, exact, client)
+        low = v.p_hat if exact else lower_confidence_bound(v.per_sample, d.confidence)
+        curve.append((n, pb, rel.upper(n), v.p_hat, low, sw))
         if pb >= CURVE_TOP and n >= chosen.n:
             break
     tolerant = _tolerant(tolerant.result() if tolerant is not None else
                          _tolerant_designs(nominal.bank, target, eps, d, sep), rel)
+    stat = None if exact else statistical_bound(rel, p, p_f, d.n_max, d.confidence)
     return reliability_dataset(c, nominal, bank, res, chosen, chosen_val, curve, tolerant,
-                               stepped=stepped, need=need, exact=exact, t_bank=t_bank)
+                               stepped=stepped, need=need, exact=exact, t_bank=t_bank,
+                               cert=cert, level=level, stat=stat)
+
+
+#: Sample problems cut from the bank for the statistical lower bound, and the fewest
+#: scenarios each needs.
+STAT_GROUPS, STAT_GROUP_MIN = 8, 16
+
+
+def statistical_bound(rel, p, p_f, n_max, confidence):
+    """A statistical lower bound on the true fewest N (Pagnoncelli, Ahmed & Shapiro 2009,
+    sec. 2; docs/certificate.md): the bank's scenarios cut into M groups, each an
+    independent sample problem at the looser level ``p'' = p - sqrt(ln 10 / (2 S_g))``
+    (the true optimum feasible in each with probability >= 0.9), each bounded by the
+    ring-gap bounds (:func:`~ideas_hpc.design.certificate.group_bounds`). Returns a dict,
+    or None when the bank is too small or has no ring-gap bounds."""
+    lows = rel._lows
+    m = min(STAT_GROUPS, rel.s_n // STAT_GROUP_MIN)
+    if lows is None or m < 2:
+        return None
+    s_g = rel.s_n // m
+    loose = p - math.sqrt(math.log(10.0) / (2.0 * s_g))
+    if loose <= 0.0:
+        return None
+    bounds = group_bounds(lows[:m * s_g], m, loose, p_f, n_max)
+    lb, rank, theta = replicated_lower_bound(bounds, s_g, p, loose, 1.0 - confidence)
+    return {"bound": lb, "rank": rank, "groups": m, "group_scenarios": s_g, "level": loose,
+            "theta": theta, "group_bounds": bounds}
+
+
+def _certify(c, setup, client, bank, res, rel, need, w, exact):
+    """The looks of :func:`ideas_hpc.design.certificate.certify` on validation flights; each
+    look's ``extra`` is its :class:`Validation` (bound at the look's share of the error)."""
+    d = c.config.design
+    k = planned_looks(d.demonstrate, res.n, d.n_max, d.demonstrate_looks, exact)
+    conf_look = look_confidence(d.confidence, k)
+    m = 1 if exact else verify_samples(d)
+
+    def best_of(n):
+        return (res.indices, res.probability) if n == res.n else rel.best_of(n)
+
+    def validate(sw, first, size):
+        v = _validate(c, setup, bank.theta[sw], need, w, exact, client, first=first,
+                      confidence=conf_look)
+        return v.per_sample, v
+
+    return certify(res.n, best_of, validate, p=float(d.success_probability),
+                   confidence=d.confidence, n_max=d.n_max, n_samples=m,
+                   demonstrate=d.demonstrate, max_looks=d.demonstrate_looks, exact=exact)

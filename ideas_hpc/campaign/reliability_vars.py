@@ -29,7 +29,18 @@ validation_coverage, _n_failed  (validation_sample,)  coverage with failures sam
 reliability_vs_n (_upper,       (reliability_n,)      best P on the scenarios (proven upper
 _validated, _lower, _swarm)                           bound), validated P-hat and its bound
 tolerant_swarm_size, _prob.     (tolerated,)          k-failure-tolerant designs on the curve
+bank_level                      ()                    p' the bank was solved at (p by default)
+validation_looks (_planned)     ()                    looks made (planned, K) by the design
+validation_first_sample         ()                    first validation sample of the final look
+validation_look_confidence      ()                    confidence of each look, 1 - alpha / K
+validation_look_n (_p_hat,      (validation_look,)    each look's swarm size, P-hat, bound and
+_lower_bound, _first_sample)                          first validation sample, in order
+statistical_lower_bound         ()                    lower bound on the true fewest N (docs)
 =============================  ====================  =========================================
+
+The certificate (:mod:`ideas_hpc.design.certificate`, docs/certificate.md) is
+``validation_lower_bound``: the final look's bound, on its own fresh samples,
+at the look's share of the error; attr ``certificate`` words it in one line.
 """
 
 from __future__ import annotations
@@ -60,12 +71,29 @@ def bank_line(n: int, probability: float, status: str, bound: float, gap: float)
             f"{100 * gap:.1f} %)")
 
 
+def _look_vars(cert) -> dict:
+    """Per-look variables (dimension ``validation_look``): swarm size, P-hat, bound, first sample."""
+    looks = cert.looks if cert is not None else []
+    rows = [(lk.n, lk.p_hat, lk.lower, lk.first) for lk in looks]
+    dim = ("validation_look",)
+    return {"validation_look_n": (dim, np.array([r[0] for r in rows], np.int64)),
+            "validation_look_p_hat": (dim, np.array([r[1] for r in rows], float)),
+            "validation_look_lower_bound": (dim, np.array([r[2] for r in rows], float)),
+            "validation_look_first_sample": (dim, np.array([r[3] for r in rows], np.int64))}
+
+
 def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, tolerant, *,
-                        stepped, need: float, exact: bool, t_bank: float) -> ExactDesign:
+                        stepped, need: float, exact: bool, t_bank: float, cert=None,
+                        level: float | None = None, stat: dict | None = None) -> ExactDesign:
     """The :class:`ExactDesign` of the chosen swarm with the variables of the module docstring."""
     d = c.config.design
     p = float(d.success_probability)
     conf = float(d.confidence)
+    level = p if level is None else float(level)
+    look_conf = conf if cert is None else float(cert.final.confidence)
+    looks = 1 if cert is None else len(cert.looks)
+    planned = 1 if cert is None else int(cert.planned)
+    first = 0 if cert is None else int(cert.final.first)
     idx = np.asarray(chosen.indices, dtype=np.int64)
     theta = bank.theta[idx]
     width = max(r[0] for r in curve) if curve else idx.size
@@ -103,6 +131,14 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
         "reliability_vs_n_swarm": (("reliability_n", "reliability_slot"), sw),
         "tolerant_swarm_size": (("tolerated",), np.array([t[1] for t in tolerant], np.int64)),
         "tolerant_probability": (("tolerated",), np.array([t[2] for t in tolerant])),
+        "bank_level": ((), level),
+        "validation_looks": ((), np.int64(looks)),
+        "validation_looks_planned": ((), np.int64(planned)),
+        "validation_first_sample": ((), np.int64(first)),
+        "validation_look_confidence": ((), look_conf),
+        **_look_vars(cert),
+        "statistical_lower_bound": ((), float("nan") if stat is None or stat["rank"] == 0
+                                    else float(stat["bound"])),
     }, coords={"reliability_n": np.array([r[0] for r in curve], dtype=np.int64),
                "tolerated": np.array([t[0] for t in tolerant], dtype=np.int64)})
     thr = f"coverage >= {100 * need:.3f} %"
@@ -119,8 +155,25 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
     _with(new, "validation_probability", "1", f"P({thr}) in each validation sample, "
           "failures exact")
     _with(new, "validation_p_hat", "1", "mean of validation_probability")
-    _with(new, "validation_lower_bound", "1", f"{100 * conf:g} % lower confidence bound on P "
-          f"({BOUND_METHOD})")
+    _with(new, "validation_lower_bound", "1", f"{100 * look_conf:.4g} % lower confidence bound on "
+          f"P of the reported swarm over its own fresh samples ({BOUND_METHOD}; the look's share "
+          f"of 1 - {conf:g}: the certificate)")
+    _with(new, "bank_level", "1", "level p' >= p the scenario bank was solved at")
+    _with(new, "statistical_lower_bound", None, f"{100 * conf:g} % statistical lower bound on "
+          "the true fewest N (replicated sample problems cut from the bank, ring-gap bounds; "
+          "NaN: none)")
+    _with(new, "validation_look_n", None, "swarm size of each validation look, in order")
+    _with(new, "validation_look_p_hat", "1", "P-hat of each look")
+    _with(new, "validation_look_lower_bound", "1", "lower bound of each look at "
+          "validation_look_confidence (the last is the certificate)")
+    _with(new, "validation_look_first_sample", None, "first validation sample of each look")
+    _with(new, "validation_looks", None, "validation looks made (one swarm size each)")
+    _with(new, "validation_looks_planned", None, "looks planned from the bank, K; each at "
+          "(1 - confidence) / K")
+    _with(new, "validation_first_sample", None, "index of the final look's first validation "
+          "sample (its samples follow, disjoint from every other look's)")
+    _with(new, "validation_look_confidence", "1", "confidence of each look's bound, "
+          "1 - (1 - confidence) / K")
     _with(new, "demonstrated", "1", "validation lower bound >= required probability")
     _with(new, "validation_coverage", "1", "coverage of each validation flight with failures "
           "sampled")
@@ -129,7 +182,8 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
     _with(new, "reliability_vs_n_upper", "1", "proven upper bound on P of any N spacecraft "
           "(scenario programme)")
     _with(new, "reliability_vs_n_validated", "1", "validated P-hat of that swarm")
-    _with(new, "reliability_vs_n_lower", "1", f"{100 * conf:g} % lower confidence bound")
+    _with(new, "reliability_vs_n_lower", "1", f"{100 * conf:g} % lower confidence bound of each "
+          "N alone (samples from 0, not a certificate)")
     _with(new, "reliability_vs_n_swarm", "rad", "swarm angles of the curve's swarms (NaN: unused)")
     _with(new, "tolerant_swarm_size", None, "spacecraft of the k-failure-tolerant design")
     _with(new, "tolerant_probability", "1", "its P on the scenario bank")
@@ -150,21 +204,39 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
         "demonstrated": int(val.lower >= p), "confidence_bound": BOUND_METHOD,
         "continuous_dispersions": "off (exact)" if exact else "sampled",
         "nominal_swarm_size": int(nominal.data["best_swarm_size"]),
+        "bank_level": level, "validation_looks": looks, "validation_looks_planned": planned,
+        "validation_first_sample": first, "validation_look_confidence": look_conf,
     })
-    notes = list(nominal.notes) + list(res.notes)
+    if cert is not None:
+        attrs["certificate"] = cert.line()
+    if stat is not None:
+        attrs["statistical_lower_bound"] = (
+            f"true fewest N >= {stat['bound']:g} at {100 * conf:g} % confidence: the "
+            f"{stat['rank']}-th smallest of {stat['groups']} sample problems' bounds "
+            f"({stat['group_scenarios']} scenarios each, level {stat['level']:.4f}; "
+            f"{[int(b) for b in stat['group_bounds']]})" if stat["rank"] else
+            f"none at {100 * conf:g} % confidence from {stat['groups']} sample problems of "
+            f"{stat['group_scenarios']} scenarios")
+    # the nominal design's notes describe the nominal swarm, not the reported one (issue 29)
+    notes = [f"nominal design (N = {attrs['nominal_swarm_size']}): {n}" for n in nominal.notes] \
+        + list(res.notes)
     if stepped:
         notes.append(f"design.demonstrate: {steps} until the validation bound reached p = {p:g}"
                      if val.lower >= p else
                      f"design.demonstrate: {steps} (n_max) without demonstrating p")
+    if level != p:
+        notes.append(f"design.bank_level: the bank solved at the stricter level p' = {level:g} "
+                     f"(p = {p:g}) so that its swarm validates at the first look")
     n_val = val.per_sample.size
     samples = "the one exact scenario (continuous dispersions off)" if exact else f"{n_val} fresh samples"
     summary = (f"success-probability design for P({thr}) >= {p:g}: N = {chosen.n}, "
                f"requirement {verdict(val, p)} by validation"
                + (f" (design.demonstrate: {steps})" if stepped else "")
                + f"; P = {chosen.probability:.4f} on {bank.rows.shape[0]} scenarios; "
-               f"validation over {samples}: P-hat = {val.p_hat:.4f}, {100 * conf:g} % lower "
-               f"bound {val.lower:.4f}; "
+               f"validation over {samples}: P-hat = {val.p_hat:.4f}, {100 * look_conf:.4g} % "
+               f"lower bound {val.lower:.4f}; "
                f"{bank_line(res.n, res.probability, res.status, res.bound, res.gap)}; "
-               f"nominal N = {attrs['nominal_swarm_size']}")
+               f"nominal N = {attrs['nominal_swarm_size']}"
+               + (f"\n{attrs['certificate']}" if cert is not None else ""))
     return ExactDesign(theta=theta, data=ds, attrs=attrs, notes=notes, summary=summary,
                        bank=nominal.bank)

@@ -13,7 +13,8 @@ from ideas_hpc.attitude.maneuvers import store_figure
 from ideas_hpc.errors import InputError
 from ideas_hpc.plots import figures
 from ideas_hpc.units import DEG, KM
-from ideas_hpc.campaign.report_reliability import reliability_figures, reliability_lines
+from ideas_hpc.campaign.report_reliability import (reliability_figures, reliability_lines,
+                                                   swarm_label)
 from ideas_hpc.campaign.vocabulary import requirement_line, verification_verdict
 
 
@@ -64,11 +65,14 @@ def _summary(ds, figs) -> str:
         lines.extend(_design_lines(ds))
     if "pareto_n" in ds:
         lines.extend(_pareto_lines(ds))
+    flown = (f" of the flown N = {int(ds['best_swarm_size'])} swarm"
+             if "design_method" in ds and "best_swarm_size" in ds else "")
     if "coverage" in ds:
         cov = np.atleast_1d(ds["coverage"].values) * 100
         cnt = np.atleast_1d(ds["coverage_count"].values) * 100
         if cov.size == 1:
-            lines.append(f"coverage: {cov[0]:.3f} % of the area, {cnt[0]:.3f} % of the vertices")
+            lines.append(f"coverage{flown}: {cov[0]:.3f} % of the area, {cnt[0]:.3f} % of the "
+                         "vertices")
         else:
             ok = np.isfinite(cov)
             lines.append(f"coverage over {ok.sum()} samples: mean {cov[ok].mean():.3f} %, min "
@@ -81,7 +85,7 @@ def _summary(ds, figs) -> str:
     if "targeting_miss" in ds:
         m = ds["targeting_miss"].values
         last = np.nanmin(np.where(np.isfinite(m), m, np.inf), axis=-1)
-        lines.append(f"targeting: worst final miss {np.max(last) * 1e3:.3f} mm "
+        lines.append(f"targeting{flown}: worst final miss {np.max(last) * 1e3:.3f} mm "
                      f"(tolerance {a.get('targeting_tolerance_m', float('nan')) * 1e3:.0f} mm)")
     for var, unit, scale in (("sigma_error", "", 1.0), ("wheel_torque", "N m", 1.0),
                              ("wheel_speed", "rpm", figures.RPM)):
@@ -130,12 +134,13 @@ def _design_lines(ds) -> list[str]:
             "proven unless a gap to the proven bound is shown"
         out.append(f"best coverage for N spacecraft ({label}): {pts}")
     if "worst_failure_coverage" in ds:
-        out.append(f"worst case after {a.get('failures_evaluated', 1)} failure(s): "
+        out.append(f"worst case after {a.get('failures_evaluated', 1)} failure(s) "
+                   f"{swarm_label(ds)}: "
                    f"{100 * float(ds['worst_failure_coverage']):.3f} % (failed spacecraft "
                    f"{ds['worst_failure'].values.tolist()})")
     if "verify_coverage" in ds:
         c = 100 * ds["verify_coverage"].values
-        out.append(f"Monte Carlo verification: P(coverage >= threshold "
+        out.append(f"Monte Carlo verification {swarm_label(ds)}: P(coverage >= threshold "
                    f"{100 * a['verify_threshold']:.2f} %)"
                    f" = {100 * a['verify_probability']:.1f} % over {c.size} dispersed samples "
                    f"(min {c.min():.2f} %, 5th percentile {np.percentile(c, 5):.2f} %, median "

@@ -10,7 +10,9 @@ so that it opens offline:
 * the trade curves (coverage versus N with target and threshold, the Pareto
   front);
 * the coverage distribution of the dispersed samples (Monte Carlo verification
-  or a Monte Carlo campaign) with the threshold.
+  or a Monte Carlo campaign) with the threshold;
+* a success-probability design's reliability curve and validation distribution
+  (:mod:`ideas_hpc.campaign.report_html_reliability`).
 
 The PNG figures of :mod:`ideas_hpc.campaign.report` stay for papers.
 """
@@ -180,13 +182,16 @@ def distribution_figure(ds):
     fig = go.Figure(go.Scatter(x=cov, y=frac, mode="lines+markers", line_shape="hv",
                                name=f"P(coverage >= x), {m} samples"))
     thr = ds.attrs.get("verify_threshold", ds.attrs.get("threshold_coverage"))
-    title = f"coverage of {m} dispersed samples"
+    from ideas_hpc.campaign.report_reliability import swarm_label
+
+    who = f" {swarm_label(ds)}" if name == "verify_coverage" else ""
+    title = f"coverage of {m} dispersed samples{who}"
     if thr is not None:
         t = 100 * float(thr)
         p = float(np.mean(cov >= t - 1e-9))
         fig.add_vline(x=t, line_dash="dashdot", line_color="purple",
                       annotation_text=f"threshold {t:.3f} %")
-        title = f"P(coverage >= {t:.2f} %) = {100 * p:.1f} % over {m} samples"
+        title = f"P(coverage >= {t:.2f} %) = {100 * p:.1f} % over {m} samples{who}"
     fig.update_layout(title=_title(ds, title), xaxis_title="area coverage x, %",
                       yaxis=dict(title="fraction of samples with coverage >= x", range=[0, 1.05]),
                       height=460)
@@ -207,6 +212,9 @@ def figures_of(ds) -> list:
     if "verify_coverage" in ds or ("coverage" in ds and ds["coverage"].ndim == 1
                                    and ds["coverage"].size > 1):
         figs.append(distribution_figure(ds))
+    from ideas_hpc.campaign.report_html_reliability import reliability_html_figures
+
+    figs.extend(reliability_html_figures(ds))
     return figs
 
 

@@ -34,6 +34,15 @@ def bank_answer(ds) -> tuple:
             bound, gap, f"N stepped up from {nb} to {n}" if nb < n else "none")
 
 
+def swarm_label(ds) -> str:
+    """Which swarm the nominal design's lines describe (issue 29): in a success-probability
+    store the nominal design's, not the reported N's."""
+    if "nominal_swarm_size" in ds and "success_probability_required" in ds:
+        return (f"of the nominal N = {int(ds['nominal_swarm_size'])} swarm (nothing goes wrong;"
+                f" not the success-probability design's N = {int(ds['best_swarm_size'])})")
+    return f"of the N = {int(ds['best_swarm_size'])} design" if "best_swarm_size" in ds else ""
+
+
 def reliability_lines(ds) -> list[str]:
     """The requirement, the design's P on the scenarios, the validation and the curve."""
     if "success_probability_required" not in ds:
@@ -50,7 +59,8 @@ def reliability_lines(ds) -> list[str]:
            f"enumerated exactly; {a['n_scenarios']} scenarios, "
            f"{a['verify_samples']} validation samples ({a['continuous_dispersions']})",
            bank_line(n_bank, p_bank, status, bound, gap),
-           f"validation: P-hat = {float(ds['validation_p_hat']):.4f}, {conf:g} % lower bound "
+           f"validation of the N = {n} swarm: P-hat = {float(ds['validation_p_hat']):.4f}, "
+           f"{100 * float(ds['validation_look_confidence']) if 'validation_look_confidence' in ds else conf:.4g} % lower bound "
            f"{float(ds['validation_lower_bound']):.4f} ({a['confidence_bound']}) -> "
            + ("requirement DEMONSTRATED" if ok else "requirement NOT demonstrated"),
            f"success-probability design: N = {n}, requirement "
@@ -58,6 +68,14 @@ def reliability_lines(ds) -> list[str]:
            + (f" (design.demonstrate: {steps})" if steps != "none" else "")
            + f"; P on the scenarios = {float(ds['reliability_probability']):.4f}; nominal "
            f"N = {a['nominal_swarm_size']}"]
+    if "certificate" in a:
+        out.append(str(a["certificate"]))
+    if "statistical_lower_bound" in a:
+        out.append("statistical lower bound (beside the proof on the bank): "
+                   + str(a["statistical_lower_bound"]))
+    if "bank_level" in ds and float(ds["bank_level"]) != p:
+        out.append(f"bank solved at the stricter level p' = {float(ds['bank_level']):g} "
+                   f"(p = {p:g}; docs/certificate.md)")
     pts = [f"{int(n)}: {float(b):.4f} (<= {float(u):.4f}; validated {float(v):.4f}, "
            f">= {float(lo):.4f})" for n, b, u, v, lo in zip(
                ds["reliability_n"].values, ds["reliability_vs_n"].values,

@@ -3,7 +3,8 @@
 
 The success-probability designer (issue 20) reads ``design.success_probability``
 (p, 0 < p < 1), ``design.confidence`` (of the validation's lower bound, in
-(0.5, 1)), ``design.scenarios`` (S, the scenario bank) and ``design.demonstrate``;
+(0.5, 1)), ``design.scenarios`` (S, the scenario bank), ``design.demonstrate`` with
+``design.demonstrate_looks`` and ``design.bank_level`` (issue 29, docs/certificate.md);
 ``design.verify_samples`` (M) defaults to 64, or 256 with p set
 (:func:`verify_samples`). S and M must resolve p: at least ``10 / (1 - p)``.
 """
@@ -40,6 +41,12 @@ DESIGN = {
     "scenarios": Field("int", 256, lo=1, hi=100000,
                        doc="S: scenarios of the continuous dispersions in the design's bank"),
     "demonstrate": Field("bool", False, doc="step N up until validation demonstrates p"),
+    "demonstrate_looks": Field("int", 4, lo=1, hi=20,
+                               doc="most validation looks of design.demonstrate; each flies "
+                                   "fresh samples at (1 - confidence) / looks (docs/certificate.md)"),
+    "bank_level": Field("float", None, nullable=True, lo=0, hi=1, lo_open=True, hi_open=True,
+                        doc="p': solve the scenario bank at this stricter level (>= p) so that "
+                            "its swarm validates at the first look (default: p)"),
     "population": Field("int", 100, lo=2, doc="GA population size"),
     "generations": Field("int", 115, lo=1),
     "n_max": Field("int", 20, lo=1, hi=200),
@@ -81,6 +88,8 @@ def reliability_checks(c) -> None:
     if p is None:
         if d.demonstrate:
             raise InputError("needs design.success_probability", field="design.demonstrate")
+        if d.bank_level is not None:
+            raise InputError("needs design.success_probability", field="design.bank_level")
         return
     if c.kind != "design-nadir":
         raise InputError(f"is for kind 'design-nadir', not {c.kind!r}",
@@ -92,6 +101,9 @@ def reliability_checks(c) -> None:
         raise InputError("replaces design.failures_tolerated (failures enter the probability "
                          "exactly through monte_carlo.failure_probability): set it to 0",
                          field="design.success_probability")
+    if d.bank_level is not None and d.bank_level < p:
+        raise InputError(f"{d.bank_level:g} is below design.success_probability = {p:g}: the "
+                         "bank's level may only be stricter", field="design.bank_level")
     least = math.ceil(10.0 / (1.0 - p) - 1e-9)
     if d.scenarios < least:
         raise InputError(f"{d.scenarios} scenarios cannot resolve p = {p:g}: at least "

@@ -247,13 +247,15 @@ def build_scenario_bank(setup: FlybySetup, step_rad: float, mc, *, seed: int, n_
 
 
 def fly_members(setup: FlybySetup, theta, periods, mc, *, seed: int, n_samples: int,
-                client=None, progress: bool = True, chunk_size: int = 8) -> np.ndarray:
+                client=None, progress: bool = True, chunk_size: int = 8,
+                first: int = 0) -> np.ndarray:
     """(M, N, V) bool: per-member rows of swarm ``theta`` (rad) in ``n_samples`` fresh draws
-    of the continuous dispersions (no failures), stream ``VALIDATION_STREAM``."""
+    of the continuous dispersions (no failures), stream ``VALIDATION_STREAM``, samples
+    ``first .. first + n_samples - 1`` (a validation look's own draws, issue 29)."""
     th = np.asarray(theta, dtype=np.float64).ravel()
     if periods is not None:
         raise NotImplementedError("fly_members: FoV sweeping periods are not supported yet")
     fn = functools.partial(_rows_chunk, engine=row_engine(setup, th, mc, seed, VALIDATION_STREAM),
                            mc=mc, seed=int(seed), stream=VALIDATION_STREAM)
-    return _run_chunks(list(range(int(n_samples))), fn, client, chunk_size, progress,
-                       "validation flights")
+    return _run_chunks(list(range(int(first), int(first) + int(n_samples))), fn, client,
+                       chunk_size, progress, "validation flights")
