@@ -5,7 +5,10 @@ and the test node ids that must catch it. The script applies one mutation, runs
 those tests (``pytest -x -q``), records caught (the tests failed) or missed (they
 passed), and restores the file byte for byte with its original mtime (so Numba's
 on-disk cache of the untouched kernel stays valid). The file is restored on every
-exit path, Ctrl-C included.
+exit path, Ctrl-C included. A mutation of compiled code (``ideas_hpc/core/``) runs
+with an empty ``NUMBA_CACHE_DIR``: Numba's cache checks only a kernel's own file, so
+a kernel in another file that inlines the mutated one would otherwise run its stale
+cached machine code and the mutation would never be tested.
 
 Run from the repository root (a copy of the worktree is wise: the tree is modified
 while it runs)::
@@ -22,6 +25,7 @@ import argparse
 import os
 import subprocess
 import sys
+import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -68,7 +72,7 @@ MUTATIONS: tuple[Mutation, ...] = (
     M("polish_separation_off_by_one", "designers", "ideas_hpc/design/ring_bound.py",
       "ok = (np.minimum(d, k - d) > m).all(axis=1) & (cov >= need)",
       "ok = (np.minimum(d, k - d) >= m).all(axis=1) & (cov >= need)",
-      ("tests/test_ring_bound.py::test_redundancy_polish_keeps_the_target_and_no_swap_adds_overlap",)),
+      ("tests/test_ring_bound.py::test_redundancy_polish_never_breaks_the_separation",)),
     # ---- statistics
     M("betting_no_bet_cap", "statistics", "ideas_hpc/design/reliability_stats.py",
       "return np.minimum(lam, 0.75)", "return lam",
@@ -126,10 +130,15 @@ def run_one(m: Mutation, python: str, timeout: float) -> tuple[str, float]:
     try:
         path.write_text(text.replace(m.old, m.new))
         cmd = [python, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider", *m.tests]
-        try:
-            r = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=timeout)
-        except subprocess.TimeoutExpired:
-            return "caught (timeout)", time.monotonic() - t0
+        env = dict(os.environ)
+        with tempfile.TemporaryDirectory(prefix="mutation-numba-") as cache:
+            if m.path.startswith("ideas_hpc/core/"):
+                env["NUMBA_CACHE_DIR"] = cache
+            try:
+                r = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True,
+                                   timeout=timeout, env=env)
+            except subprocess.TimeoutExpired:
+                return "caught (timeout)", time.monotonic() - t0
         if r.returncode == 1:
             status = "caught"
         elif r.returncode == 0:
