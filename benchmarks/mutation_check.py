@@ -166,12 +166,23 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--only", nargs="*", help="mutation names to run (default: all)")
     ap.add_argument("--list", action="store_true", help="print the mutations and exit")
     ap.add_argument("--timeout", type=float, default=1200.0, help="seconds per mutation")
+    ap.add_argument("--no-baseline", action="store_true",
+                    help="skip the first run of every named test on the unmutated code")
     args = ap.parse_args(argv)
     chosen = [m for m in MUTATIONS if not args.only or m.name in args.only]
     if args.list:
         for m in chosen:
             print(f"{m.area:10s} {m.name:32s} {m.path}  ->  {' '.join(m.tests)}")
         return 0
+    if not args.no_baseline:   # a test that already fails would "catch" every mutation
+        tests = sorted({t for m in chosen for t in m.tests})
+        r = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
+                            *tests], cwd=ROOT, capture_output=True, text=True)
+        if r.returncode != 0:
+            print(r.stdout[-3000:])
+            print("the named tests do not pass on the unmutated code: nothing to measure")
+            return 2
+        print(f"baseline: the {len(tests)} named tests pass on the unmutated code")
     rows = []
     for m in chosen:
         status, dt = run_one(m, sys.executable, args.timeout)
