@@ -9,6 +9,9 @@ from pathlib import Path
 
 import pytest
 
+# Under CI=true a skip is a failure (a missing data path or Chromium must not pass).
+from ci_skips import pytest_runtest_makereport  # noqa: E402,F401  (the hook)
+
 ROOT = Path(__file__).resolve().parent.parent
 _SHARED = ROOT.parent / "shared" / "data"
 if not os.environ.get("IDEAS_HPC_DATA") and _SHARED.is_dir():

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import json
 import os
-import subprocess
 import sys
 from pathlib import Path
 
@@ -25,23 +24,13 @@ PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 sys.path.insert(0, str(ANALYSIS))
 import plotting  # noqa: E402  (analysis/plotting.py)
 
-# A 60 s, +-3 km flight keeps the campaign to seconds on a warm numba cache;
-# every override is a schema field (ideas_hpc/config/campaign_tables.py).
-SMALL = ["--set", "monte_carlo.samples=4", "--set", "run.chunk_size=2",
-         "--set", "flyby.tf_s=60", "--set", "flyby.z_start_km=-3",
-         "--set", "flyby.z_stop_km=3", "--set", "attitude.decimate=10"]
-
-
 @pytest.fixture(scope="module")
 def mc_store(tmp_path_factory):
-    """A finished 4-sample Monte Carlo store, shared by the tests of this module."""
-    out = tmp_path_factory.mktemp("mc") / "small-mc.zarr"
-    cmd = [sys.executable, "-m", "ideas_hpc.cli", "run",
-           str(ROOT / "campaigns" / "eros-monte-carlo.toml"), "--out", str(out),
-           *SMALL, "--workers", "1", "--no-progress"]
-    res = subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, timeout=600)
-    assert res.returncode == 0, res.stderr[-3000:]
-    return out
+    """A finished 4-sample Monte Carlo store: the session's shared one (tests/small_stores.py,
+    also read by the figure, HTML report and store-attribute tests), built once per session."""
+    from small_stores import small_store
+
+    return small_store("monte-carlo", tmp_path_factory.mktemp("small-stores"))
 
 
 def _check_png(path: Path):

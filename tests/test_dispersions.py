@@ -108,6 +108,50 @@ def test_failures_have_their_declared_law(campaign, k_fail, prob):
                                                                  (1 - prob) / DRAWS + 1e-30)
 
 
+def _pattern_law(n, k, prob):
+    """Exact probability of each failure pattern (bit i set: spacecraft i failed): k certain
+    failures on a uniformly chosen k-subset, then each other spacecraft fails independently."""
+    from itertools import combinations
+    from math import comb
+
+    law = np.zeros(2 ** n)
+    for pat in range(2 ** n):
+        failed = {i for i in range(n) if pat >> i & 1}
+        for chosen in combinations(range(n), k):
+            if set(chosen) <= failed:
+                m = len(failed) - k
+                law[pat] += prob ** m * (1 - prob) ** (n - k - m) / comb(n, k)
+    return law
+
+
+@pytest.mark.parametrize("k_fail,prob", [(0, 0.3), (1, 0.3)])
+def test_failures_are_independent(campaign, k_fail, prob):
+    # Marginals alone cannot tell independent failures from a common cause (one uniform for
+    # the whole swarm): the joint rate of two spacecraft, the variance of n_failed and the
+    # frequency of every failure pattern against exact enumeration can.
+    c, setup = campaign
+    mc = dataclasses.replace(c.config.monte_carlo, failures_k=k_fail, failure_probability=prob)
+    draws = 6000
+    v, _ = _draws(mc, setup, seed=23, n=draws)
+    failed = ~v["active"]
+    n = THETA.size
+    law = _pattern_law(n, k_fail, prob)
+    assert law.sum() == pytest.approx(1.0, abs=1e-12)
+    # joint failure of spacecraft 0 and 1 (k = 0: p_f^2 = 0.09; common cause: p_f = 0.3)
+    p01 = sum(law[pat] for pat in range(2 ** n) if pat & 0b11 == 0b11)
+    se01 = np.sqrt(p01 * (1 - p01) / draws)
+    assert abs((failed[:, 0] & failed[:, 1]).mean() - p01) < 5 * se01
+    # Var n_failed: (n - k) p (1 - p) for independent failures
+    var = (n - k_fail) * prob * (1 - prob)
+    assert abs(v["n_failed"].var() - var) < 0.1 * var
+    # every pattern's frequency against the exact law (chi-square, 7 d.o.f.)
+    code = (failed * (1 << np.arange(n))).sum(axis=1)
+    counts = np.bincount(code, minlength=2 ** n)
+    keep = law > 0
+    assert counts[~keep].sum() == 0
+    assert stats.chisquare(counts[keep], law[keep] * draws).pvalue > 1e-3
+
+
 def test_draws_are_reproducible_per_sample_and_pinned(campaign):
     # Sample k alone equals sample k drawn after others; other k and other seeds differ.
     # The pinned numbers guard the stream layout (DISPERSIONS is append-only: an entry

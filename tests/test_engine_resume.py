@@ -83,7 +83,7 @@ def test_local_workers_get_campaign_settings(cluster2):
 
 
 @pytest.mark.skipif(len(os.sched_getaffinity(0)) < 2,
-                    reason="one CPU: Numba's pool has 1 thread anyway")
+                    reason="host: one CPU: Numba's pool has 1 thread anyway")
 def test_local_worker_tasks_run_one_numba_thread(tmp_path):
     # A spawned worker re-imports the launching script before the nanny's env
     # arrives, so a script that imports Numba at the top sized every worker's

@@ -129,6 +129,65 @@ def test_region_write_then_done_flag(tmp_path):
                                rtol=1e-14)
 
 
+class _Killed(Exception):
+    """A kill of the worker between two writes, made deterministic."""
+
+
+def test_fault_between_writes_never_leaves_a_done_chunk_without_data(tmp_path, monkeypatch):
+    # A kill can land between any two of write_chunk_region's writes. Whatever it cuts, a
+    # chunk marked done must hold its data: resume skips done chunks, so a done flag
+    # written ahead of the data leaves a hole (NaN) that resume never fills.
+    from ideas_hpc.engine import chunk_write
+    from ideas_hpc.engine.store_meta import DONE_VAR
+    from toy_stores import SAMPLE_VARS, assert_same_as
+
+    toy = dict(n_samples=12, chunk_size=4, n_vertex=8, n_time=3, work=50, seed=SEED)
+    run_toy_serial(tmp_path / "ref.zarr", **toy)
+    ref = xr.load_dataset(tmp_path / "ref.zarr", engine="zarr")
+    p = tmp_path / "s.zarr"
+    _make(p, n=12, cs=4, nv=8, nt=3)
+    plan = ChunkPlan(12, 4)
+    real = chunk_write._write_chunk
+    calls: list[list[str]] = []
+
+    def chunk(cid):
+        start, stop = plan.bounds(cid)
+        return toy_chunk(cid, start, stop, campaign_seed=SEED, n_vertex=8, n_time=3, work=50)
+
+    def killed_after(n_calls):
+        def write(handles, arrays, chunk_id, sl):
+            if len(calls) >= n_calls:
+                raise _Killed
+            calls.append(sorted(arrays))
+            real(handles, arrays, chunk_id, sl)
+        return write
+
+    # the write order: every data variable first, the done flag alone and last
+    monkeypatch.setattr(chunk_write, "_write_chunk", killed_after(99))
+    write_chunk_region(p, 0, 0, 4, chunk(0))
+    assert calls[-1] == [DONE_VAR]
+    assert {n for c in calls[:-1] for n in c} == set(json.loads(store_attrs(p)["layout"]))
+    n_writes = len(calls)
+    # a kill after all writes but the last (chunk 1), and before the first (chunk 2)
+    for cid, cut in ((1, n_writes - 1), (2, 0)):
+        calls.clear()
+        monkeypatch.setattr(chunk_write, "_write_chunk", killed_after(cut))
+        with pytest.raises(_Killed):
+            write_chunk_region(p, cid, *plan.bounds(cid), chunk(cid))
+    monkeypatch.setattr(chunk_write, "_write_chunk", real)
+    done = done_mask(p)
+    ds = xr.load_dataset(p, engine="zarr")
+    for cid in np.flatnonzero(done):
+        sl = slice(*plan.bounds(cid))
+        for name in SAMPLE_VARS:
+            np.testing.assert_array_equal(ds[name].values[sl], ref[name].values[sl],
+                                          err_msg=f"chunk {cid} done without its {name}")
+    # resume: redo the chunks not marked done; the store equals the uninterrupted one
+    for cid in np.flatnonzero(~done):
+        write_chunk_region(p, int(cid), *plan.bounds(cid), chunk(cid))
+    assert_same_as(ref, p)
+
+
 def test_region_write_rejects_bad_chunks(tmp_path):
     p = tmp_path / "s.zarr"
     _make(p, n=10, cs=4, nv=8, nt=3)

@@ -54,7 +54,7 @@ def test_bound_is_the_least_gap_miss_and_never_above_the_truth(seed, m):
     rb = ring_bound(bank, red, m, 5)
     w = bank.areas / bank.areas.sum()
     seen = bank.masks.any(axis=0)
-    for n in range(2, 6):
+    for n in range(1, 6):
         best_gap, best_true = np.inf, -1.0
         for s in itertools.combinations(range(k), n):
             s = np.array(s)
@@ -164,15 +164,29 @@ def test_redundancy_polish_keeps_the_target_and_no_swap_adds_overlap(seed):
 
     bank = _circle_bank(seed, k=20, v=80)
     need = bank.reach - 0.05
-    start = min_swarm(bank, target=bank.reach, eps_tol=0.05, n_max=10).indices
     m = 1
     w = bank.areas / bank.areas.sum()
     twice = lambda s: w[bank.masks[list(s)].sum(axis=0) >= 2].sum()   # noqa: E731
-    d = np.abs(start[:, None] - start[None, :])
-    if (np.minimum(d, 20 - d)[np.triu_indices(start.size, 1)] <= m).any():
-        m = 0
+
+    def separated(s):
+        s = np.asarray(s)
+        dd = np.abs(s[:, None] - s[None, :])
+        return not (np.minimum(dd, 20 - dd)[np.triu_indices(s.size, 1)] <= m).any()
+
+    # the start: the first smallest swarm with grid distances > m reaching need (brute force),
+    # so the separation is held throughout, never dropped
+    start = None
+    for size in range(1, 11):
+        combos = np.array(list(itertools.combinations(range(20), size)))
+        ok = [c for c, cov in zip(combos, bank.masks[combos].any(axis=1) @ w)
+              if cov >= need and separated(c)]
+        if ok:
+            start = ok[0]
+            break
+    assert start is not None
     out = redundancy_polish(bank, start, m, need)
     assert out.size == start.size and bank.coverage([out])[0] >= need - 1e-12
+    assert separated(out)
     assert twice(out) >= twice(start) - 1e-15
     for p in range(out.size):                     # brute force: a local optimum
         for c in range(20):
@@ -184,3 +198,21 @@ def test_redundancy_polish_keeps_the_target_and_no_swap_adds_overlap(seed):
                 continue
             if bank.coverage([s])[0] >= need:
                 assert twice(s) <= twice(out) + 1e-12
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_redundancy_polish_never_breaks_the_separation(seed):
+    # Spread members and a loose target: overlap is gained by moving members together,
+    # so every swap the polish wants runs into the separation (grid distances > m).
+    from ideas_hpc.design.ring_bound import redundancy_polish
+
+    bank = _circle_bank(seed, k=20, v=80)
+    w = bank.areas / bank.areas.sum()
+    twice = lambda s: w[bank.masks[list(s)].sum(axis=0) >= 2].sum()   # noqa: E731
+    start, m = np.array([0, 5, 10, 15]), 1
+    need = w[bank.masks[start].any(axis=0)].sum() - 0.3
+    out = redundancy_polish(bank, start, m, need)
+    assert twice(out) > twice(start)                 # the polish did move members
+    assert out.size == start.size and w[bank.masks[out].any(axis=0)].sum() >= need - 1e-12
+    d = np.abs(out[:, None] - out[None, :])
+    assert (np.minimum(d, 20 - d)[np.triu_indices(out.size, 1)] > m).all(), out

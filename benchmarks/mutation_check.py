@@ -1,0 +1,198 @@
+"""Mutation check: does the test suite catch small, realistic bugs? (issue 34)
+
+Each mutation names a file, a text that occurs exactly once in it, its replacement,
+and the test node ids that must catch it. The script applies one mutation, runs
+those tests (``pytest -x -q``), records caught (the tests failed) or missed (they
+passed), and restores the file byte for byte with its original mtime (so Numba's
+on-disk cache of the untouched kernel stays valid). The file is restored on every
+exit path, Ctrl-C included. A mutation of compiled code (``ideas_hpc/core/``) runs
+with an empty ``NUMBA_CACHE_DIR``: Numba's cache checks only a kernel's own file, so
+a kernel in another file that inlines the mutated one would otherwise run its stale
+cached machine code and the mutation would never be tested.
+
+Run from the repository root (a copy of the worktree is wise: the tree is modified
+while it runs)::
+
+    PYTHONPATH=$PWD IDEAS_HPC_DATA=../shared/data python benchmarks/mutation_check.py
+    python benchmarks/mutation_check.py --only targeting_stm_transposed --list
+
+Exit status 1 when a mutation is missed or does not apply.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+@dataclass(frozen=True)
+class Mutation:
+    name: str
+    area: str           # designers, statistics, store, kernels
+    path: str           # relative to the repository root
+    old: str            # occurs exactly once in the file
+    new: str
+    tests: tuple[str, ...]
+
+
+M = Mutation
+MUTATIONS: tuple[Mutation, ...] = (
+    # ---- kernels
+    M("targeting_stm_transposed", "kernels", "ideas_hpc/core/dynamics/targeting.py",
+      "prv[i, j] = y[6 + 6 * i + 3 + j]", "prv[j, i] = y[6 + 6 * i + 3 + j]",
+      ("tests/test_targeting.py::test_newton_converges_quadratically",)),
+    M("sliding_mode_sd2_cross_sign", "kernels", "ideas_hpc/core/attitude/control.py",
+      "sd2 = 0.25 * (q * e2 + 2.0 * (d3 * e1 - d1 * e3)",
+      "sd2 = 0.25 * (q * e2 + 2.0 * (d3 * e1 + d1 * e3)",
+      ("tests/test_sliding_surface.py",)),
+    M("mrp_shadow_threshold", "kernels", "ideas_hpc/core/attitude/mrp.py",
+      "    if s2 > 1.0:\n        return -sigma / s2", "    if s2 > 1.5:\n        return -sigma / s2",
+      ("tests/test_mrp.py",)),
+    M("gravity_c22_factor", "kernels", "ideas_hpc/core/dynamics/gravity.py",
+      "q0 = -0.5 * c20 + 3.0 * c22", "q0 = -0.5 * c20 + 1.5 * c22",
+      ("tests/test_gravity.py::test_degree2_matches_closed_form_spec_u2",)),
+    M("elevation_mask_sign", "kernels", "ideas_hpc/core/mapping/visibility.py",
+      "if not los_n >= rng * sin_min_elev:", "if not los_n >= -rng * sin_min_elev:",
+      ("tests/test_coverage.py::test_brute_force_strict_elevation_range",)),
+    M("union_skips_first_member", "kernels", "ideas_hpc/core/design/union.py",
+      "            if k < 0:\n                continue", "            if k < 0 or s == 0:\n                continue",
+      ("tests/test_campaign_design.py::test_population_coverage_matches_numpy",)),
+    # ---- designers
+    M("ring_bound_optimistic_single", "designers", "ideas_hpc/core/design/ring_gaps.py",
+      "tot[1, s] = M[s, K]", "tot[1, s] = 0.5 * M[s, K]",
+      ("tests/test_ring_bound.py::test_bound_is_the_least_gap_miss_and_never_above_the_truth",)),
+    M("polish_separation_off_by_one", "designers", "ideas_hpc/design/ring_bound.py",
+      "ok = (np.minimum(d, k - d) > m).all(axis=1) & (cov >= need)",
+      "ok = (np.minimum(d, k - d) >= m).all(axis=1) & (cov >= need)",
+      ("tests/test_ring_bound.py::test_redundancy_polish_never_breaks_the_separation",)),
+    M("pareto_equal_rows_dominate", "designers", "ideas_hpc/design/pareto/nsga2.py",
+      "lt = (f[:, None, :] < f[None, :, :]).any(axis=2)",
+      "lt = (f[:, None, :] <= f[None, :, :]).any(axis=2)",
+      ("tests/test_pareto.py::test_non_dominated_against_brute_force",)),
+    M("pareto_repair_separation_narrow", "designers", "ideas_hpc/design/pareto/nsga2.py",
+      "free[(i + np.arange(-m, m + 1)) % k] = False",
+      "free[(i + np.arange(-m + 1, m)) % k] = False",
+      ("tests/test_pareto.py::test_repair_gives_distinct_separated_swarms",)),
+    # ---- statistics
+    M("betting_no_bet_cap", "statistics", "ideas_hpc/design/reliability_stats.py",
+      "return np.minimum(lam, 0.75)", "return lam",
+      ("tests/test_betting_bound.py::test_bound_on_bernoulli_data_is_near_the_exact_one",)),
+    M("betting_alpha_is_confidence", "statistics", "ideas_hpc/design/reliability_stats.py",
+      "    alpha = 1.0 - confidence\n    lam = _log_capital", "    alpha = confidence\n    lam = _log_capital",
+      ("tests/test_betting_bound.py::test_coverage_at_the_edges",)),
+    M("failure_bound_binomial_swapped", "statistics", "ideas_hpc/design/reliability_stats.py",
+      "p_f ** j * (1.0 - p_f) ** (n - j)", "p_f ** (n - j) * (1.0 - p_f) ** j",
+      ("tests/test_betting_bound.py::test_failure_bound_against_enumeration",)),
+    M("failures_common_cause", "statistics", "ideas_hpc/montecarlo/dispersions.py",
+      "active &= bern >= mc.failure_probability", "active &= bern[0] >= mc.failure_probability",
+      ("tests/test_dispersions.py::test_failures_are_independent",)),
+    M("failures_one_draw_per_scenario", "statistics", "ideas_hpc/montecarlo/dispersions.py",
+      "bern = rng.uniform(0.0, 1.0, n)", "bern = rng.uniform(0.0, 1.0)",
+      ("tests/test_dispersions.py::test_failures_are_independent",)),
+    M("reflectivity_law", "statistics", "ideas_hpc/montecarlo/dispersions.py",
+      "lo + (hi - lo) * u", "lo + hi * u",
+      ("tests/test_dispersions.py::test_dispersions_have_their_declared_distributions",)),
+    # ---- store
+    M("done_flag_before_data", "store", "ideas_hpc/engine/chunk_write.py",
+      "    _write_chunk(handles, out, chunk_id, slice(int(start), int(stop)))\n"
+      "    _write_chunk(handles, {DONE_VAR: np.ones(1, dtype=bool)}, chunk_id,\n"
+      "                 slice(chunk_id, chunk_id + 1))  # last: the chunk is complete\n",
+      "    _write_chunk(handles, {DONE_VAR: np.ones(1, dtype=bool)}, chunk_id,\n"
+      "                 slice(chunk_id, chunk_id + 1))\n"
+      "    _write_chunk(handles, out, chunk_id, slice(int(start), int(stop)))\n",
+      ("tests/test_engine_store.py::test_fault_between_writes_never_leaves_a_done_chunk_without_data",)),
+    M("done_flag_with_data", "store", "ideas_hpc/engine/chunk_write.py",
+      "    _write_chunk(handles, out, chunk_id, slice(int(start), int(stop)))\n",
+      "    out[DONE_VAR] = np.ones(1, dtype=bool)\n"
+      "    _write_chunk(handles, out, chunk_id, slice(int(start), int(stop)))\n",
+      ("tests/test_engine_store.py::test_fault_between_writes_never_leaves_a_done_chunk_without_data",)),
+    M("config_hash_key_order", "store", "ideas_hpc/engine/store_meta.py",
+      "sort_keys=True, separators", "sort_keys=False, separators",
+      ("tests/test_engine_store.py::test_config_hash_is_order_independent_and_sensitive",)),
+    M("chunk_plan_drops_last_sample", "store", "ideas_hpc/engine/store_meta.py",
+      "return start, min(start + self.chunk_size, self.n_samples)",
+      "return start, min(start + self.chunk_size, self.n_samples - 1)",
+      ("tests/test_engine_store.py::test_chunk_plan_partitions_samples",)),
+)
+
+
+def _restore(path: Path, text: bytes, stat: os.stat_result) -> None:
+    path.write_bytes(text)
+    os.utime(path, ns=(stat.st_atime_ns, stat.st_mtime_ns))
+
+
+def run_one(m: Mutation, python: str, timeout: float) -> tuple[str, float]:
+    """Apply ``m``, run its tests, restore; returns (``caught``/``missed``/..., seconds)."""
+    path = ROOT / m.path
+    original = path.read_bytes()
+    stat = path.stat()
+    text = original.decode()
+    if text.count(m.old) != 1:
+        return f"not applied ({text.count(m.old)} matches)", 0.0
+    t0 = time.monotonic()
+    try:
+        path.write_text(text.replace(m.old, m.new))
+        cmd = [python, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider", *m.tests]
+        env = dict(os.environ)
+        with tempfile.TemporaryDirectory(prefix="mutation-numba-") as cache:
+            if m.path.startswith("ideas_hpc/core/"):
+                env["NUMBA_CACHE_DIR"] = cache
+            try:
+                r = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True,
+                                   timeout=timeout, env=env)
+            except subprocess.TimeoutExpired:
+                return "caught (timeout)", time.monotonic() - t0
+        if r.returncode == 1:
+            status = "caught"
+        elif r.returncode == 0:
+            status = "MISSED"
+        else:   # 2-5: collection error, usage, no tests: not a catch by a test
+            status = f"error (pytest exit {r.returncode})"
+        return status, time.monotonic() - t0
+    finally:
+        _restore(path, original, stat)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--only", nargs="*", help="mutation names to run (default: all)")
+    ap.add_argument("--list", action="store_true", help="print the mutations and exit")
+    ap.add_argument("--timeout", type=float, default=1200.0, help="seconds per mutation")
+    ap.add_argument("--no-baseline", action="store_true",
+                    help="skip the first run of every named test on the unmutated code")
+    args = ap.parse_args(argv)
+    chosen = [m for m in MUTATIONS if not args.only or m.name in args.only]
+    if args.list:
+        for m in chosen:
+            print(f"{m.area:10s} {m.name:32s} {m.path}  ->  {' '.join(m.tests)}")
+        return 0
+    if not args.no_baseline:   # a test that already fails would "catch" every mutation
+        tests = sorted({t for m in chosen for t in m.tests})
+        r = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
+                            *tests], cwd=ROOT, capture_output=True, text=True)
+        if r.returncode != 0:
+            print(r.stdout[-3000:])
+            print("the named tests do not pass on the unmutated code: nothing to measure")
+            return 2
+        print(f"baseline: the {len(tests)} named tests pass on the unmutated code")
+    rows = []
+    for m in chosen:
+        status, dt = run_one(m, sys.executable, args.timeout)
+        rows.append((m, status))
+        print(f"| {m.area} | {m.name} | {' '.join(t.split('/')[-1] for t in m.tests)} | "
+              f"{status} | {dt:.0f} s |", flush=True)
+    bad = [m.name for m, s in rows if not s.startswith("caught")]
+    print(f"{len(rows) - len(bad)}/{len(rows)} caught" + (f"; not caught: {bad}" if bad else ""))
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
