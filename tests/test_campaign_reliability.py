@@ -12,7 +12,7 @@ import xarray as xr
 from ideas_hpc.campaign.report import write_report
 from ideas_hpc.campaign.report_reliability import bank_answer
 from ideas_hpc.campaign.run import run_file
-from ideas_hpc.config.campaign_tables import load
+from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.design import build_bank
 from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.plots import figures

@@ -18,12 +18,12 @@ import xarray as xr
 from ideas_hpc.attitude import maneuvers
 from ideas_hpc.campaign import kinds
 from ideas_hpc.campaign.run import run_file
-from ideas_hpc.config.campaign_tables import load
+from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.core.attitude.maneuvers import FOV_MODE
 from ideas_hpc.design.pareto import objectives
 from ideas_hpc.errors import InputError
 from ideas_hpc.montecarlo import dispersions
-from ideas_hpc.config.fields import Field
+from ideas_hpc.fields import Field
 from ideas_hpc.engine.variables import StoreVar
 
 CAMPAIGNS = Path(__file__).resolve().parent.parent / "campaigns"
@@ -170,7 +170,7 @@ def test_recipe_kind(tmp_path, monkeypatch):
 # --- One angle step for every designer (issue 21 item 2)
 
 def test_one_angle_step_key_keeps_each_default_and_the_alias_warns_once(monkeypatch):
-    from ideas_hpc.config import design_checks as design_table
+    from ideas_hpc.campaign.schema import design_checks as design_table
 
     monkeypatch.setattr(design_table, "_warned", [])
     exact = load(CAMPAIGNS / "eros-design.toml", ['body.name="ellipsoid"']).config.design

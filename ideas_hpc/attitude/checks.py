@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from ideas_hpc.errors import InputError
-from ideas_hpc.config.fields import number
+from ideas_hpc.fields import number
 
 
 def pos_float(value, name, *, allow_zero=False):

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ideas_hpc.errors import InputError
-from ideas_hpc.config.fields import Field, validate
+from ideas_hpc.fields import Field, validate
 from ideas_hpc.attitude.checks import pos_float as _pos_float
 
 def _opt(kind: str, doc: str, **kw) -> Field:

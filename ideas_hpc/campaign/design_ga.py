@@ -30,9 +30,9 @@ from ideas_hpc.flyby.swarm_geometry import min_separation_angle
 from ideas_hpc.campaign import datasets
 from ideas_hpc.engine.variables import with_attrs
 from ideas_hpc.campaign.design_exact import checked_setup, ga_gap
-from ideas_hpc.config.campaign_tables import Campaign
-from ideas_hpc.config.design_checks import DESIGNER_FIELDS
-from ideas_hpc.config.model_fields import FLYBY_FIELDS
+from ideas_hpc.campaign.schema.campaign_tables import Campaign
+from ideas_hpc.campaign.schema.design_checks import DESIGNER_FIELDS
+from ideas_hpc.campaign.schema.model_fields import FLYBY_FIELDS
 from ideas_hpc.campaign.vocabulary import requirement_line
 
 

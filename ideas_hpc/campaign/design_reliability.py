@@ -44,9 +44,9 @@ from ideas_hpc.engine.job_cluster import phase_client
 from ideas_hpc.montecarlo.scenarios import build_scenario_bank, fly_members
 from ideas_hpc.seeds import VALIDATION_STREAM, stream_rng
 from ideas_hpc.campaign.design_exact import design_exact
-from ideas_hpc.config.design_checks import designer_errors
+from ideas_hpc.campaign.schema.design_checks import designer_errors
 from ideas_hpc.campaign.reliability_vars import reliability_dataset
-from ideas_hpc.config.design_table import verify_samples
+from ideas_hpc.campaign.schema.design_table import verify_samples
 
 #: Purpose word of the validation's sampled failures (the histogram only; the
 #: probabilities enumerate failures exactly): ``(VALIDATION_STREAM, m, 3)``.

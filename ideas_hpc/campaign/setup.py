@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from ideas_hpc.attitude import campaign_maneuver
 from ideas_hpc.body.bodies import load_body
-from ideas_hpc.config.model_fields import flyby_errors
+from ideas_hpc.campaign.schema.model_fields import flyby_errors
 from ideas_hpc.dynamics.trajectory import sun_direction_T
 from ideas_hpc.errors import InputError
 from ideas_hpc.flyby.encounter import Encounter, approach_angles, approach_speed, window_s

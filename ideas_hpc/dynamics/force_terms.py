@@ -24,7 +24,7 @@ from ideas_hpc.core.dynamics import forces as _cf
 from ideas_hpc.core.dynamics.gravity import polyhedron_precompute
 from ideas_hpc.core.dynamics.harmonics import sh_derivative_tables, sh_unnormalise
 from ideas_hpc.errors import InputError
-from ideas_hpc.config.fields import number
+from ideas_hpc.fields import number
 
 #: 30 x 10 x 10 cm box (SPEC section 4): total surface area / 4, m^2.
 BOX_AREA = (4 * 0.30 * 0.10 + 2 * 0.10 * 0.10) / 4.0

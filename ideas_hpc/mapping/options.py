@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ideas_hpc.errors import InputError
-from ideas_hpc.config.fields import Field, number, validate
+from ideas_hpc.fields import Field, number, validate
 from ideas_hpc.flyby.sizing import APERTURE, WAVELENGTH
 from ideas_hpc.units import CM, DEG, MM, UM
 

@@ -33,7 +33,7 @@ from ideas_hpc.attitude import initial_conditions
 from ideas_hpc.core.dynamics.frames import dcm_RT
 from ideas_hpc.core.attitude.mrp import mrp_from_dcm
 from ideas_hpc.errors import InputError
-from ideas_hpc.config.fields import Field
+from ideas_hpc.fields import Field
 from ideas_hpc.seeds import sample_rng
 from ideas_hpc.engine.variables import StoreVar
 from ideas_hpc.units import DEG, MM

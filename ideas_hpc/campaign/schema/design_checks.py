@@ -22,7 +22,7 @@ import warnings
 
 from ideas_hpc.design.bank import grid_size
 from ideas_hpc.design.stereo import check_grid
-from ideas_hpc.config.model_fields import FLYBY_FIELDS
+from ideas_hpc.campaign.schema.model_fields import FLYBY_FIELDS
 from ideas_hpc.errors import InputError, config_fields
 from ideas_hpc.units import DEG
 

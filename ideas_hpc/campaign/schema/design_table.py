@@ -14,7 +14,7 @@ import math
 
 from ideas_hpc.errors import InputError
 from ideas_hpc.montecarlo.dispersions import dispersion_keys
-from ideas_hpc.config.fields import Field, LiveTable
+from ideas_hpc.fields import Field, LiveTable
 from ideas_hpc.units import DEG, MINUTE
 
 #: Validation samples when ``design.verify_samples`` is not given.

@@ -67,21 +67,21 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ideas_hpc.attitude.maneuvers import CAMPAIGN_NAMES, campaign_maneuver
-from ideas_hpc.config.toml_file import CampaignSource, load_campaign
+from ideas_hpc.campaign.schema.toml_file import CampaignSource, load_campaign
 from ideas_hpc.design.pareto.objectives import check_objectives
 from ideas_hpc.errors import InputError, config_fields
 from ideas_hpc.montecarlo.dispersions import check_dispersions
-from ideas_hpc.config.fields import (Field, live_typed_table, schema_defaults, to_typed,
+from ideas_hpc.fields import (Field, live_typed_table, schema_defaults, to_typed,
                                      typed_table, validate, with_defaults)
 from ideas_hpc.units import CM, DEG, KM, MINUTE, MM, UM
 from ideas_hpc.flyby.sizing import INSTRUMENT_DEFAULTS as _CAM
-from ideas_hpc.config.design_checks import (DESIGNER_FIELDS, check_stereo_design,
+from ideas_hpc.campaign.schema.design_checks import (DESIGNER_FIELDS, check_stereo_design,
                                            resolve_angle_step)
-from ideas_hpc.config.encounter_table import ENCOUNTER, check_encounter
-from ideas_hpc.config.model_fields import (COVERAGE_FIELDS, GAINS_FIELDS, SPACECRAFT_FIELDS,
+from ideas_hpc.campaign.schema.encounter_table import ENCOUNTER, check_encounter
+from ideas_hpc.campaign.schema.model_fields import (COVERAGE_FIELDS, GAINS_FIELDS, SPACECRAFT_FIELDS,
                                            STORED_NAMES, flyby_errors, stored_fields)
 from ideas_hpc.campaign.kinds import KINDS as REGISTRY
-from ideas_hpc.config.design_table import DESIGN, MC_SCHEMA, reliability_checks, verify_samples
+from ideas_hpc.campaign.schema.design_table import DESIGN, MC_SCHEMA, reliability_checks, verify_samples
 
 KINDS = REGISTRY.keys()   # live: a kind registered later is a valid choice
 
