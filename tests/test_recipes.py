@@ -16,7 +16,7 @@ import pytest
 import xarray as xr
 
 from ideas_hpc.attitude import maneuvers
-from ideas_hpc.campaign import kinds
+from ideas_hpc.campaign.schema import kinds
 from ideas_hpc.campaign.run import run_file
 from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.core.attitude.maneuvers import FOV_MODE

@@ -19,7 +19,7 @@ from ideas_hpc.engine.lock import StoreLock
 from ideas_hpc.engine.single import check_existing, write_complete
 from ideas_hpc.errors import InputError
 from ideas_hpc.progress import enabled as progress_enabled
-from ideas_hpc.campaign.kinds import KINDS
+from ideas_hpc.campaign.schema.kinds import KINDS
 from ideas_hpc.campaign.schema.campaign_tables import SCHEMA, Campaign, load, resolved_config
 from ideas_hpc.campaign.schema.model_fields import flyby_errors
 

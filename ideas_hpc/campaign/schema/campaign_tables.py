@@ -80,7 +80,7 @@ from ideas_hpc.campaign.schema.design_checks import (DESIGNER_FIELDS, check_ster
 from ideas_hpc.campaign.schema.encounter_table import ENCOUNTER, check_encounter
 from ideas_hpc.campaign.schema.model_fields import (COVERAGE_FIELDS, GAINS_FIELDS, SPACECRAFT_FIELDS,
                                            STORED_NAMES, flyby_errors, stored_fields)
-from ideas_hpc.campaign.kinds import KINDS as REGISTRY
+from ideas_hpc.campaign.schema.kinds import KINDS as REGISTRY
 from ideas_hpc.campaign.schema.design_table import DESIGN, MC_SCHEMA, reliability_checks, verify_samples
 
 KINDS = REGISTRY.keys()   # live: a kind registered later is a valid choice
