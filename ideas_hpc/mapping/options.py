@@ -36,7 +36,7 @@ import numpy as np
 
 from ideas_hpc.errors import InputError
 from ideas_hpc.fields import Field, number, validate
-from ideas_hpc.flyby.sizing import APERTURE, WAVELENGTH
+from ideas_hpc.instrument import APERTURE, WAVELENGTH
 from ideas_hpc.units import CM, DEG, MM, UM
 
 _MODES = ("paper", "exact")

@@ -74,7 +74,7 @@ from ideas_hpc.montecarlo.dispersions import check_dispersions
 from ideas_hpc.fields import (Field, live_typed_table, schema_defaults, to_typed,
                                      typed_table, validate, with_defaults)
 from ideas_hpc.units import CM, DEG, KM, MINUTE, MM, UM
-from ideas_hpc.flyby.sizing import INSTRUMENT_DEFAULTS as _CAM
+from ideas_hpc.instrument import INSTRUMENT_DEFAULTS as _CAM
 from ideas_hpc.campaign.schema.design_checks import (DESIGNER_FIELDS, check_stereo_design,
                                            resolve_angle_step)
 from ideas_hpc.campaign.schema.encounter_table import ENCOUNTER, check_encounter
