@@ -16,7 +16,8 @@ from ideas_hpc.core.attitude.maneuvers import reference_dcm_BT
 from ideas_hpc.errors import InputError
 from ideas_hpc.seeds import sample_rng
 from ideas_hpc.units import RPM
-from ideas_hpc.attitude.checks import check_theta, init_array, pos_float, steps
+from ideas_hpc.attitude.checks import check_theta, init_array, steps
+from ideas_hpc.fields import number
 from ideas_hpc.attitude.gains import gains_from_config
 from ideas_hpc.attitude.maneuvers import P_MIN_DEFAULT, maneuver_args
 from ideas_hpc.attitude.spacecraft import default_spacecraft, validate_spacecraft
@@ -209,9 +210,9 @@ def simulate_attitude(theta, spin_rate, t_f, *, mode="np", periods=None, theta_m
     ws = float(spin_rate)
     if not math.isfinite(ws):
         raise InputError("must be finite (rad/s)", field="spin_rate")
-    dt = pos_float(dt, "dt")
-    image_dt = pos_float(image_dt, "image_dt")
-    t_f = pos_float(t_f, "t_f")
+    dt = number(dt, "dt", lo=0.0, lo_open=True)
+    image_dt = number(image_dt, "image_dt", lo=0.0, lo_open=True)
+    t_f = number(t_f, "t_f", lo=0.0, lo_open=True)
     n_steps = steps(t_f, dt, "t_f")
     img_every = steps(image_dt, dt, "image_dt")
     if isinstance(decimate, bool) or int(decimate) != decimate or decimate < 1:

@@ -7,8 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ideas_hpc.errors import InputError
-from ideas_hpc.fields import Field, validate
-from ideas_hpc.attitude.checks import pos_float as _pos_float
+from ideas_hpc.fields import Field, number, validate
 
 def _opt(kind: str, doc: str, **kw) -> Field:
     # None: not given, the SpacecraftModel default applies (defaults live there only)
@@ -98,14 +97,14 @@ class SpacecraftModel:
 def validate_spacecraft(sc: SpacecraftModel) -> SpacecraftModel:
     """Check a :class:`SpacecraftModel`; raise :class:`InputError` naming its field
     (``mass_kg``; the campaign layer maps it to the file's key)."""
-    _pos_float(sc.mass_kg, "mass_kg")
-    _pos_float(sc.wheel_mass_kg, "wheel_mass_kg", allow_zero=True)
-    _pos_float(sc.wheel_radius_m, "wheel_radius_m")
+    number(sc.mass_kg, "mass_kg", lo=0.0, lo_open=True)
+    number(sc.wheel_mass_kg, "wheel_mass_kg", lo=0.0)
+    number(sc.wheel_radius_m, "wheel_radius_m", lo=0.0, lo_open=True)
     if sc.wheel_mass_kg == 0.0:
         raise InputError("wheel mass must be positive (J_s = m r^2 / 2 > 0)",
                          field="wheel_mass_kg")
-    _pos_float(sc.u_max_N_m, "u_max_N_m", allow_zero=True)
-    _pos_float(sc.h_max_N_m_s, "h_max_N_m_s", allow_zero=True)
+    number(sc.u_max_N_m, "u_max_N_m", lo=0.0)
+    number(sc.h_max_N_m_s, "h_max_N_m_s", lo=0.0)
     if sc.inertia_kg_m2 is None:
         size = np.asarray(sc.size_m, dtype=float)
         if size.shape != (3,) or not np.all(np.isfinite(size)) or np.any(size <= 0):
