@@ -2,7 +2,7 @@
 
 A schema is a dict of :class:`Field` (or nested dicts for sub-tables). Values
 are checked once, converted to SI with ``Field.to_si``, and defaults filled
-in. Every error names the dotted field; :class:`~ideas_hpc.config.toml_file.CampaignSource`
+in. Every error names the dotted field; :class:`~ideas_hpc.campaign.schema.toml_file.CampaignSource`
 adds the file and line.
 """
 

@@ -33,7 +33,7 @@ class SpacecraftModel:
     """Rigid spacecraft with three reaction wheels on its principal axes (SPEC section 5).
 
     Attributes (SI, the unit in the name; ``[spacecraft]`` keys drop it:
-    :data:`ideas_hpc.config.model_fields.SPACECRAFT_FIELDS`)
+    :data:`ideas_hpc.campaign.schema.model_fields.SPACECRAFT_FIELDS`)
     ---------------
     mass_kg : float
         Hub mass, kg (4).
@@ -139,7 +139,7 @@ def spacecraft_from_config(table, prefix: str = "spacecraft.") -> SpacecraftMode
     live in ``[dynamics]``), as is a bad inertia matrix (``prefix + "inertia"``); a
     value :func:`validate_spacecraft` refuses names the :class:`SpacecraftModel`
     field, which the campaign layer maps to the file's key
-    (:data:`ideas_hpc.config.model_fields.SPACECRAFT_FIELDS`).
+    (:data:`ideas_hpc.campaign.schema.model_fields.SPACECRAFT_FIELDS`).
     """
     table = dict(table or {})
     values = validate(table, SPACECRAFT_SCHEMA, prefix)  # the one field mechanism

@@ -1,6 +1,6 @@
 """Run a campaign file of any kind and write its zarr store (SPEC sections 7-9).
 
-The kind comes from the registry (:mod:`ideas_hpc.campaign.kinds`). Every kind
+The kind comes from the registry (:mod:`ideas_hpc.campaign.schema.kinds`). Every kind
 writes through the engine: ``monte-carlo`` runs its chunks there; ``flyby`` and
 the designs compute their result in one piece, which the engine writes as a
 one-chunk store (:mod:`ideas_hpc.engine.single`): atomically, with the same

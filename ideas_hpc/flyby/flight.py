@@ -122,7 +122,7 @@ def target(setup: FlybySetup, theta, *, raise_on_failure: bool = True) -> Target
 
     A failure the user can fix becomes an :class:`~ideas_hpc.errors.InputError`
     naming the setup parameter to change (:func:`targeting_input_error`; the
-    campaign layer maps it to the file's key, :data:`ideas_hpc.config.model_fields.FLYBY_FIELDS`).
+    campaign layer maps it to the file's key, :data:`ideas_hpc.campaign.schema.model_fields.FLYBY_FIELDS`).
     """
     th = np.asarray(theta, dtype=np.float64).ravel()
     try:

@@ -219,7 +219,7 @@ def coverage_options_from_config(table: dict, prefix: str = "coverage.") -> Cove
     ``stereo_max_deg``. Unknown keys and wrong types raise :class:`InputError`
     naming ``prefix + key``; a value :class:`CoverageOptions` refuses names its
     field (``min_elevation_rad``), which the campaign layer maps to the file's key
-    (:data:`ideas_hpc.config.model_fields.COVERAGE_FIELDS`).
+    (:data:`ideas_hpc.campaign.schema.model_fields.COVERAGE_FIELDS`).
     """
     values = validate(table, COVERAGE_SCHEMA, prefix)   # one mechanism for every table
     given = table or {}

@@ -3,7 +3,7 @@
 Each entry of :data:`DISPERSIONS` says what one dispersion draws, how it turns
 into a :class:`~ideas_hpc.flyby.flight.Perturbation` of the flyby, and which store
 variables record it (name, dims, units), and which ``[monte_carlo]`` keys it
-reads (``keys``: :class:`~ideas_hpc.config.fields.Field` s, with its cross-check
+reads (``keys``: :class:`~ideas_hpc.fields.Field` s, with its cross-check
 ``check``). The campaign's ``[monte_carlo]`` table, the Monte Carlo kind's store
 layout, its per-sample draws and its perturbations are built from this list and
 nothing else, so a new dispersion is one entry here (plus, if it perturbs
@@ -209,7 +209,7 @@ def draw_sample(mc, seed: int, k: int, theta: np.ndarray, setup) -> tuple[dict, 
     """Every dispersion of sample ``k``, in declared order.
 
     ``mc`` is the validated ``[monte_carlo]`` table
-    (:class:`~ideas_hpc.config.campaign_tables.MonteCarlo`: SI values under SI names).
+    (:class:`~ideas_hpc.campaign.schema.campaign_tables.MonteCarlo`: SI values under SI names).
 
     Returns
     -------

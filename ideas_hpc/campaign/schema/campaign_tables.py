@@ -1,6 +1,6 @@
 """The campaign file schema (SPEC sections 7-9), validated once at load.
 
-One mechanism (:class:`ideas_hpc.config.fields.Field`) validates every table once
+One mechanism (:class:`ideas_hpc.fields.Field`) validates every table once
 into a frozen dataclass with SI values under SI names (:class:`CampaignConfig`:
 ``c.config.instrument.aperture_m``, ``c.config.design.p_min_s``); the file
 keys keep their user units (``aperture_cm``) and errors name them with the
@@ -25,7 +25,7 @@ turn of swarm angle), ``d_sep_km`` (default from the sizing), ``tolerance_m``,
 ``max_iterations``, ``dt_s`` (attitude step and trajectory sampling),
 ``epoch_s`` (arrival epoch after the body's element epoch: the Sun direction at
 flyby time ``t`` is the ephemeris at ``epoch_s + t``); ``geometry = "encounter"`` and its
-keys: :mod:`ideas_hpc.config.encounter_table`.
+keys: :mod:`ideas_hpc.campaign.schema.encounter_table`.
 
 ``[swarm]`` ``angles_rad`` and ``sweep_periods_min`` (flyby and Monte Carlo),
 ``min_separation_km`` (closest allowed distance between two spacecraft on the
@@ -44,7 +44,7 @@ the owning modules' ``*_from_config`` (see their docstrings).
 (Monte Carlo verification of the design with the ``[monte_carlo]`` dispersions)
 (exact designer); ``success_probability``, ``confidence``, ``scenarios``,
 ``demonstrate`` (the success-probability designer, issue 20; tables and checks
-in :mod:`ideas_hpc.config.design_table`);
+in :mod:`ideas_hpc.campaign.schema.design_table`);
 (GA) ``population``, ``generations``, ``n_max``, ``eps_tol_pct``,
 ``angle_step_rad``, ``p_min_min``, ``p_max_min``, ``period_step_min``,
 ``parents``, ``elitism``, ``mutation_probability``, ``stall_generations``;
@@ -205,7 +205,7 @@ class CampaignConfig:
 
 
 def typed_config(values: dict) -> CampaignConfig:
-    """:class:`CampaignConfig` from :func:`~ideas_hpc.config.fields.validate`'s output."""
+    """:class:`CampaignConfig` from :func:`~ideas_hpc.fields.validate`'s output."""
     tables = {k: to_typed(live_typed_table(cls, SCHEMA[k], __name__), values[k], SCHEMA[k])
               for k, cls in TABLES.items()}
     return CampaignConfig(kind=values["kind"], seed=values["seed"],
@@ -369,10 +369,10 @@ def resolved_config(c: Campaign) -> dict[str, Any]:
     """The campaign as run, with nothing implicit: what a store records and hashes.
 
     Every schema key with its value or default in the file's units
-    (:func:`ideas_hpc.config.fields.with_defaults`), and under ``models`` the
+    (:func:`ideas_hpc.fields.with_defaults`), and under ``models`` the
     resolved sub-models of ``[dynamics]``, ``[spacecraft]``, ``[controller]``
     and ``[coverage]`` (SI, every default of their modules written out, under the
-    names of :data:`~ideas_hpc.config.model_fields.STORED_NAMES`). So a
+    names of :data:`~ideas_hpc.campaign.schema.model_fields.STORED_NAMES`). So a
     changed default changes the hash, and ``--resume`` names the field. The
     :data:`EXECUTION_KNOBS` are left out: they do not change the numbers.
     Every store writer (flyby, designs, Monte Carlo) uses this one function.

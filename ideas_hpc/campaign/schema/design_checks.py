@@ -50,7 +50,7 @@ def _warn_alias() -> None:
 @contextlib.contextmanager
 def designer_errors(c=None):
     """Re-raise a designer's (or the flyby layer's) :class:`InputError` under the file's key
-    (:data:`DESIGNER_FIELDS`, :data:`~ideas_hpc.config.model_fields.FLYBY_FIELDS`), with
+    (:data:`DESIGNER_FIELDS`, :data:`~ideas_hpc.campaign.schema.model_fields.FLYBY_FIELDS`), with
     its file and line when the campaign ``c`` is given."""
     try:
         with config_fields({**FLYBY_FIELDS, **DESIGNER_FIELDS}):   # designs fly setups too

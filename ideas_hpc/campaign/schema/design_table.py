@@ -1,5 +1,5 @@
 """The ``[design]`` and ``[monte_carlo]`` tables and their cross-checks (split from
-:mod:`ideas_hpc.config.campaign_tables`).
+:mod:`ideas_hpc.campaign.schema.campaign_tables`).
 
 The success-probability designer (issue 20) reads ``design.success_probability``
 (p, 0 < p < 1), ``design.confidence`` (of the validation's lower bound, in

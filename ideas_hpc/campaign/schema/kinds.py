@@ -7,7 +7,7 @@ one-chunk store (:mod:`ideas_hpc.engine.single`); a chunked kind plans its
 chunks and runs them on the engine itself (:func:`ideas_hpc.engine.run_campaign`).
 Functions are imported when the kind runs, so the registry costs nothing and
 has no import cycle. A new kind is a module with its run function and one
-entry here (plus its keys in :mod:`ideas_hpc.config.campaign_tables` if it has any).
+entry here (plus its keys in :mod:`ideas_hpc.campaign.schema.campaign_tables` if it has any).
 A kind whose ``design.method`` picks a different entry lists it in ``methods``
 (method -> module and function), so this table alone says which function runs.
 """
