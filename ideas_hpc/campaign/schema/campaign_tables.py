@@ -253,14 +253,15 @@ def _cross_checks(c: CampaignConfig) -> None:
     if d.failures_tolerated >= d.n_max:
         raise InputError(f"must be < design.n_max ({d.n_max}): {d.failures_tolerated} "
                          "failures would leave no spacecraft", field="design.failures_tolerated")
-    if c.kind in ("flyby", "monte-carlo", "design-fov"):
-        if not sw.angles_rad and not (c.kind == "design-fov" and d.nadir_store):
+    kind = REGISTRY[c.kind]
+    if kind.swarm != "designed":
+        if not sw.angles_rad and not (kind.swarm == "file-angles" and d.nadir_store):
             raise InputError(f"is required for kind {c.kind!r}", field="swarm.angles_rad")
         if (sw.sweep_periods_s is not None and sw.angles_rad is not None
                 and len(sw.sweep_periods_s) != len(sw.angles_rad)):
             raise InputError(f"has {len(sw.sweep_periods_s)} periods for "
                              f"{len(sw.angles_rad)} spacecraft", field="swarm.sweep_periods_min")
-    if campaign_maneuver(c.attitude.maneuver).sweeps and c.kind in ("flyby", "monte-carlo"):
+    if campaign_maneuver(c.attitude.maneuver).sweeps and kind.swarm == "file":
         if sw.sweep_periods_s is None:
             raise InputError(f"is required for attitude.maneuver = {c.attitude.maneuver!r}",
                              field="swarm.sweep_periods_min")
@@ -317,7 +318,7 @@ def build_models(raw: dict, config: CampaignConfig) -> dict:
         ctrl = {"preset": campaign_maneuver(config.attitude.maneuver).gains}
     with config_fields(COVERAGE_FIELDS):   # the models' field names -> the file's keys
         coverage = coverage_options_from_config(cov, prefix="coverage.")
-    if coverage.require_stereo and config.kind.startswith("design"):
+    if coverage.require_stereo and REGISTRY[config.kind].designs:
         check_stereo_design(config, raw.get("design"))
     with config_fields(SPACECRAFT_FIELDS):
         sc = spacecraft_from_config(_sub_table(raw, "spacecraft"), prefix="spacecraft.")

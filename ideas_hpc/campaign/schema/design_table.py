@@ -14,6 +14,7 @@ import math
 
 from ideas_hpc.errors import InputError
 from ideas_hpc.montecarlo.dispersions import dispersion_keys
+from ideas_hpc.campaign.schema.kinds import KINDS
 from ideas_hpc.fields import Field, LiveTable
 from ideas_hpc.units import DEG, MINUTE
 
@@ -82,8 +83,9 @@ def reliability_checks(c) -> None:
         if d.demonstrate:
             raise InputError("needs design.success_probability", field="design.demonstrate")
         return
-    if c.kind != "design-nadir":
-        raise InputError(f"is for kind 'design-nadir', not {c.kind!r}",
+    if not KINDS[c.kind].success_probability:
+        able = ", ".join(repr(k.name) for k in KINDS.values() if k.success_probability)
+        raise InputError(f"is for kind {able}, not {c.kind!r}",
                          field="design.success_probability")
     if d.method != "exact":
         raise InputError("is supported by the exact designer only (design.method = 'exact'), "
