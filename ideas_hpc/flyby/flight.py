@@ -82,6 +82,9 @@ class FlybySetup:
     p_min_s: float = 18.0
     epoch_s: float = 0.0
     encounter: Encounter | None = None   # None: the paper's geometry (ideas_hpc.flyby.encounter)
+    #: Disturbance torques on every spacecraft (ideas_hpc.attitude.torque_terms);
+    #: read by the simulated attitude only.
+    torques: tuple = ()
 
     @property
     def image_every(self) -> int:
