@@ -94,7 +94,7 @@ def limit_task_threads() -> int | None:
     return n
 
 
-def _run_chunk(store_path: str, chunk_fn: ChunkFn, chunk_id: int, start: int,
+def run_chunk(store_path: str, chunk_fn: ChunkFn, chunk_id: int, start: int,
                stop: int, gate: str | None = None) -> tuple[int, int, float, float]:
     """The task: compute one chunk, write its region, then its done flag.
 
@@ -199,7 +199,7 @@ def _submit_all(client, path: Path, chunk_fn: ChunkFn, todo, summary: RunSummary
     # the chunk function once per worker, not once per task: a scenario bank's
     # carries its row engine (about 12 MB), which every task would otherwise ship
     fn = client.scatter(chunk_fn, broadcast=True, hash=False) if todo else chunk_fn
-    futures = [client.submit(_run_chunk, str(path), fn, cid, start, stop, gate,
+    futures = [client.submit(run_chunk, str(path), fn, cid, start, stop, gate,
                              key=f"chunk-{cid}-{tag}", pure=False, retries=retries)
                for cid, start, stop in todo]
     bar = tqdm(total=summary.n_chunks, initial=summary.chunks_skipped, unit="chunk",
@@ -237,7 +237,7 @@ def _run_all_here(path: Path, chunk_fn: ChunkFn, todo, summary: RunSummary, prog
         for cid, start, stop in todo:
             for attempt in range(retries + 1):
                 try:
-                    _cid, n, t_c, t_w = _run_chunk(str(path), chunk_fn, cid, start, stop, gate)
+                    _cid, n, t_c, t_w = run_chunk(str(path), chunk_fn, cid, start, stop, gate)
                 except Exception as exc:  # noqa: BLE001 - recorded like a failed dask task
                     if attempt < retries:
                         continue
