@@ -39,21 +39,38 @@ def bar(total: int, desc: str | None, unit: str = "chunk"):
 
 
 def map_chunks(fn, chunks: list, client=None, *, desc: str | None, unit: str = "chunk",
-               retries: int = 0) -> list:
-    """``[fn(c) for c in chunks]``, on the client's workers when given, with a bar."""
-    with bar(len(chunks), desc, unit) as b:
+               retries: int = 0, sizes: list | None = None, scatter: bool = False) -> list:
+    """``[fn(c) for c in chunks]``, on the client's workers when given, with a bar.
+
+    The one way the one-piece phases map work over dask or in this process.
+    ``sizes``: each chunk's count in ``unit`` for the bar (default 1 each);
+    ``scatter``: ship ``fn`` to every worker once rather than with every task
+    (a function that carries a large state, a scenario bank's row engine).
+    Results come back in the order of ``chunks`` whatever the completion order.
+    """
+    sizes = [1] * len(chunks) if sizes is None else list(sizes)
+    with bar(sum(sizes), desc, unit) as b:
         if client is None:
             out = []
-            for c in chunks:
+            for c, n in zip(chunks, sizes):
                 out.append(fn(c))
-                b.update(1)
+                b.update(n)
             return out
         from distributed import as_completed
 
-        futures = client.map(fn, chunks, pure=False, retries=retries)
-        for _ in as_completed(futures):
-            b.update(1)
+        if scatter:
+            fn_f = client.scatter(fn, broadcast=True, hash=False)
+            futures = client.map(_apply, chunks, fn=fn_f, pure=False, retries=retries)
+        else:
+            futures = client.map(fn, chunks, pure=False, retries=retries)
+        size = {f.key: n for f, n in zip(futures, sizes)}
+        for f in as_completed(futures):
+            b.update(size[f.key])
         return client.gather(futures)
+
+
+def _apply(chunk, fn):
+    return fn(chunk)
 
 
 def steps(items, desc: str, unit: str = "step"):
