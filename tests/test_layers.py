@@ -168,3 +168,57 @@ def test_edge_reader_sees_relative_and_lazy_imports(tmp_path, monkeypatch):
     assert _edges() == {("core", "campaign"): {"core/k.py"}}
     with pytest.raises(AssertionError, match="core .* imports campaign"):
         test_no_import_runs_up()
+
+
+def test_no_kind_name_is_compared_outside_the_kinds_registry():
+    """Kinds declare capabilities (``campaign/schema/kinds.py``); code reads those, so a
+    new kind needs no edit elsewhere. A comparison with a registered kind's name is refused."""
+    from ideas_hpc.campaign.schema.kinds import KINDS
+
+    names = set(KINDS)
+    hits = []
+    roots = (PACKAGE, PACKAGE.parent / "analysis")
+    for f in (p for r in roots for p in r.rglob("*.py")):
+        if f.name == "kinds.py":
+            continue
+        for node in ast.walk(ast.parse(f.read_text(), str(f))):
+            if isinstance(node, ast.Compare):
+                consts = [c for c in ast.walk(node) if isinstance(c, ast.Constant)]
+            elif isinstance(node, ast.Call) and getattr(node.func, "attr", "") == "startswith":
+                consts = [c for c in node.args if isinstance(c, ast.Constant)]
+                consts = [c for c in consts if any(n.startswith(str(c.value)) for n in names)
+                          and str(c.value) not in ("",)]
+                hits += [f"{f.name}:{node.lineno}" for c in consts
+                         if isinstance(node.func.value, ast.Attribute)
+                         and node.func.value.attr == "kind"]
+                continue
+            else:
+                continue
+            hits += [f"{f.name}:{node.lineno}" for c in consts if c.value in names
+                     and c.value != "flyby" or (c.value == "flyby" and _is_kind(node))]
+    assert not hits, f"kind names compared outside the registry: {hits}"
+
+
+def _is_kind(node) -> bool:
+    """A comparison that reads a ``kind`` (``flyby`` is also a table's name)."""
+    return any(isinstance(n, ast.Attribute) and n.attr == "kind"
+               or isinstance(n, ast.Name) and n.id == "kind" for n in ast.walk(node))
+
+
+def test_no_module_imports_another_folders_private_names():
+    """A name with a leading underscore stays in its folder: the layers above get a
+    public name for what they share (``engine.runner.run_chunk``,
+    ``mapping.coverage.mesh_record``)."""
+    modules = _modules()
+    hits = []
+    for f in modules.values():
+        for node in ast.walk(ast.parse(f.read_text(), str(f))):
+            if not isinstance(node, ast.ImportFrom):
+                continue
+            for name, alias in zip(_imported(f, node, modules), node.names):
+                if not alias.name.startswith("_") or alias.name.endswith("__") \
+                        or name.endswith("." + alias.name):
+                    continue         # a public name, or a module (``import x as _x``)
+                if name in modules and _unit(modules[name]) != _unit(f):
+                    hits.append(f"{f.relative_to(PACKAGE)}:{node.lineno} {alias.name}")
+    assert not hits, f"private names imported from another folder: {hits}"
