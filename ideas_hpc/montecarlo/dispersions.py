@@ -67,6 +67,11 @@ class Dispersion:
     ``designer``
         ``"scenario"``: drawn into every scenario; ``"exact"``: not drawn, the
         designer handles it exactly (failures are enumerated).
+    ``applies(setup) -> bool``
+        Whether a flight of this setup reads its values at all (``None``:
+        always); the initial attitude only matters to a simulated attitude. A
+        scenario leaves out the perturbation of an entry that does not apply
+        (and, on a stream of its own, its draws).
 
     ``level`` and ``active`` have no default: an entry that does not say is
     refused when it is declared, not flown as something it is not.
@@ -82,6 +87,7 @@ class Dispersion:
     level: str | None = None
     active: Callable | None = None
     designer: str = "scenario"
+    applies: Callable | None = None
 
     def __post_init__(self):
         if self.level not in LEVELS:
@@ -180,7 +186,8 @@ DISPERSIONS: tuple[Dispersion, ...] = (
                       Field("bool", True, doc="random initial attitude, rates, wheels")),),
                level="spacecraft",
                active=lambda mc, setup: setup.attitude_mode == "simulated"
-               and mc.attitude_dispersion),
+               and mc.attitude_dispersion,
+               applies=lambda setup: setup.attitude_mode == "simulated"),
     Dispersion("gravity", _gravity,
                lambda v: {"params_override": {"mu": v["mu"], "c20": v["c20"], "c22": v["c22"]}},
                (StoreVar("c20", (), np.float64, "m^2", "C20 (dispersed)"),

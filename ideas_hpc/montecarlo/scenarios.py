@@ -84,17 +84,21 @@ def draw_world(mc, setup: FlybySetup, theta: np.ndarray, seed: int, stream: int,
     in the Monte Carlo kind (``stream="sample"``: the initial attitude, rates
     and wheel speeds, or the undispersed start when
     ``monte_carlo.attitude_dispersion`` is off), from purpose
-    ``STREAM_ATTITUDE``. No failures (``designer="exact"``).
+    ``STREAM_ATTITUDE``. No failures (``designer="exact"``), and nothing of an
+    entry that does not apply to ``setup`` (the attitude of an ideal-attitude flight).
     """
     n = theta.size
     rngs = {level: stream_rng(seed, stream, k, word) for level, word in LEVEL_STREAMS.items()}
     pert: dict = {}
     for d in _dispersions.DISPERSIONS:
-        if d.designer != "scenario":
+        flown = d.applies is None or d.applies(setup)
+        if d.designer != "scenario" or (not flown and d.stream != "child"):
             continue
         rng = rngs[d.level] if d.stream == "child" else stream_rng(seed, stream, k,
                                                                      STREAM_ATTITUDE)
-        v = d.draw(rng, n, mc, setup, theta)
+        v = d.draw(rng, n, mc, setup, theta)   # a shared stream draws all the same
+        if not flown:
+            continue
         for key, val in d.perturb(v).items():
             if isinstance(val, dict):
                 pert.setdefault(key, {}).update(val)
