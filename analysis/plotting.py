@@ -22,6 +22,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 
+from ideas_hpc.campaign.schema.kinds import KINDS  # noqa: E402
 from ideas_hpc.plots.figures import save_png  # noqa: E402
 
 #: Wheel torque limit of the paper's spacecraft, N m (SPEC section 5); a store
@@ -36,8 +37,9 @@ def open_store(path) -> xr.Dataset:
     """Open a Monte Carlo store lazily; refuse anything that is not one."""
     ds = xr.open_zarr(str(path))
     kind = ds.attrs.get("kind")
-    if kind != "monte-carlo":
-        raise ValueError(f"{path}: kind is {kind!r}, not a 'monte-carlo' store")
+    if not getattr(KINDS.get(kind), "samples", False):
+        able = ", ".join(repr(k.name) for k in KINDS.values() if k.samples)
+        raise ValueError(f"{path}: kind is {kind!r}, not a {able} store")
     if "chunk_done" in ds and not bool(ds["chunk_done"].all()):
         missing = int((~ds["chunk_done"].values).sum())
         raise ValueError(f"{path}: {missing} chunk(s) not written yet (run with --resume)")

@@ -20,7 +20,7 @@ import numpy as np
 
 from ideas_hpc.attitude import GAIN_PRESETS, default_spacecraft, initial_conditions
 from ideas_hpc.core.attitude.batch import simulate_batch
-from ideas_hpc.core.attitude.records import ControlGains, Initial, Wheels
+from ideas_hpc.core.attitude.records import ControlGains, Initial, StepTables, Wheels
 from ideas_hpc.core.dynamics.frames import dcm_RT
 
 W = 2 * math.pi / (5.270 * 3600)
@@ -191,7 +191,8 @@ def main():
             ControlGains(k_p, k_i, eta, phi, float(g.int_limit)),
             Wheels(sc.inertia_rw, sc.J_s, float(sc.u_max_N_m), float(sc.h_max_N_m_s)), DT)
     init = Initial(s0, w0, W0)
-    no_table = np.empty((THETA.size, 0, 9))  # NP reads no track reference
+    # NP reads no track reference; no disturbance torque
+    no_table = StepTables(np.empty((THETA.size, 0, 9)), np.empty((THETA.size, 0, 3)))
     simulate_batch(*args, 10, (1, 2), init, no_table)  # compile / load cache
     n_sc_steps = THETA.size * N_STEPS
     # the machine is shared: time with all numba threads and with one (a thread

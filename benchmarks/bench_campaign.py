@@ -33,8 +33,8 @@ import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 
 from ideas_hpc.campaign.montecarlo import _prepare, mc_chunk, mc_template  # noqa: E402
-from ideas_hpc.config.campaign_tables import resolved_config  # noqa: E402
-from ideas_hpc.config.campaign_tables import load  # noqa: E402
+from ideas_hpc.campaign.schema.campaign_tables import resolved_config  # noqa: E402
+from ideas_hpc.campaign.schema.campaign_tables import load  # noqa: E402
 from ideas_hpc.engine.cluster import local_cluster  # noqa: E402
 from ideas_hpc.engine.runner import run_campaign  # noqa: E402
 

@@ -24,7 +24,7 @@ os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 import numpy as np  # noqa: E402
 
-from ideas_hpc.config.campaign_tables import load  # noqa: E402
+from ideas_hpc.campaign.schema.campaign_tables import load  # noqa: E402
 from ideas_hpc.design import (build_bank, coverage_curve, failure_tolerant,  # noqa: E402
                               min_swarm)
 from ideas_hpc.design.candidates import candidate_masks  # noqa: E402

@@ -28,7 +28,7 @@ import numpy as np  # noqa: E402
 import xarray as xr  # noqa: E402
 
 from ideas_hpc.campaign.run import run_file  # noqa: E402
-from ideas_hpc.config.campaign_tables import load  # noqa: E402
+from ideas_hpc.campaign.schema.campaign_tables import load  # noqa: E402
 from ideas_hpc.flyby.flight import fly  # noqa: E402
 from ideas_hpc.campaign.setup import setup_from_campaign  # noqa: E402
 

@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ideas_hpc.config.campaign_tables import load
+from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.body.datapath import have_data_file
 from ideas_hpc.flyby.flight import Perturbation
 from ideas_hpc.campaign.setup import setup_from_campaign

@@ -183,7 +183,7 @@ def workload_section(shape, tree, scene, eps):
     import dataclasses
     from pathlib import Path
 
-    from ideas_hpc.config.campaign_tables import load
+    from ideas_hpc.campaign.schema.campaign_tables import load
     from ideas_hpc.design.candidates import _views
     from ideas_hpc.campaign.setup import setup_from_campaign
     from ideas_hpc.mapping.coverage import compute_coverage, observed_per_spacecraft

@@ -26,7 +26,7 @@ def _add_size(sub) -> None:
     g.add_argument("--r-av", type=float, metavar="KM", help="given mean radius, km")
     g.add_argument("--paper", action="store_true",
                    help="use the paper's R_max/R_min (17.670/3.222 km) to reproduce its tables")
-    from ideas_hpc.flyby.sizing import INSTRUMENT_DEFAULTS as cam
+    from ideas_hpc.instrument import INSTRUMENT_DEFAULTS as cam
 
     p.add_argument("--resolution", type=float, default=cam["ground_resolution_m"], metavar="M",
                    help=f"ground resolution X, m (default {cam['ground_resolution_m']:g})")

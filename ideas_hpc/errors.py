@@ -52,17 +52,6 @@ class DataNotFoundError(InputError, FileNotFoundError):
     """A named data set (shape model, gravity field) was not found on the data path."""
 
 
-def positive_number(value, field: str) -> float:
-    """``float(value)`` if it is a finite number > 0, else an :class:`InputError` naming ``field``."""
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"must be a number, got {value!r}", field=field) from None
-    if not math.isfinite(x) or x <= 0.0:
-        raise InputError(f"must be > 0, got {value!r}", field=field)
-    return x
-
-
 @contextlib.contextmanager
 def config_fields(names: dict | None = None, prefix: str = ""):
     """Re-raise a model's or designer's :class:`InputError` under the file's keys.

@@ -39,21 +39,69 @@ def bar(total: int, desc: str | None, unit: str = "chunk"):
 
 
 def map_chunks(fn, chunks: list, client=None, *, desc: str | None, unit: str = "chunk",
-               retries: int = 0) -> list:
-    """``[fn(c) for c in chunks]``, on the client's workers when given, with a bar."""
-    with bar(len(chunks), desc, unit) as b:
+               retries: int = 0, sizes: list | None = None, scatter: bool = False,
+               errors: str = "raise", done: int = 0) -> list:
+    """``[fn(c) for c in chunks]``, on the client's workers when given, with a bar.
+
+    The one way every phase maps work over dask or in this process (the
+    candidate rows, the GA's masks, the verification, the scenario bank, the
+    engine's chunks). ``retries``: how many times a chunk that raised is run
+    again (by dask, or here). ``sizes``: each chunk's count in ``unit`` for
+    the bar (default 1 each); ``done``: units already done before (a resumed
+    store). ``scatter``: ship ``fn`` to every worker once rather than with every
+    task (a function that carries a large state, a scenario bank's row engine).
+    ``errors="return"``: a chunk that still fails gives its exception in place
+    of its result, and the others run on (``"raise"``: the first failure raises).
+    Results come back in the order of ``chunks`` whatever the completion order.
+    """
+    if errors not in ("raise", "return"):
+        raise ValueError(f"errors must be 'raise' or 'return', got {errors!r}")
+    sizes = [1] * len(chunks) if sizes is None else list(sizes)
+    with bar(done + sum(sizes), desc, unit) as b:
+        b.update(done)
         if client is None:
-            out = []
-            for c in chunks:
-                out.append(fn(c))
-                b.update(1)
-            return out
+            return [_here(fn, c, retries, errors, b, n) for c, n in zip(chunks, sizes)]
         from distributed import as_completed
 
-        futures = client.map(fn, chunks, pure=False, retries=retries)
-        for _ in as_completed(futures):
-            b.update(1)
-        return client.gather(futures)
+        if scatter:
+            fn_f = client.scatter(fn, broadcast=True, hash=False)
+            futures = client.map(_apply, chunks, fn=fn_f, pure=False, retries=retries)
+        else:
+            futures = client.map(fn, chunks, pure=False, retries=retries)
+        index = {f.key: i for i, f in enumerate(futures)}
+        out: list = [None] * len(futures)
+        try:
+            for f in as_completed(futures):
+                i = index[f.key]
+                if f.status == "finished":
+                    out[i] = f.result()
+                elif errors == "return":
+                    out[i] = f.exception()
+                else:
+                    f.result()          # raises the task's error
+                b.update(sizes[i])
+        except BaseException:
+            client.cancel(futures)
+            raise
+        return out
+
+
+def _here(fn, chunk, retries, errors, b, n):
+    for attempt in range(retries + 1):
+        try:
+            out = fn(chunk)
+        except Exception as exc:  # noqa: BLE001 - retried, then raised or returned
+            if attempt < retries:
+                continue
+            if errors == "raise":
+                raise
+            out = exc
+        b.update(n)
+        return out
+
+
+def _apply(chunk, fn):
+    return fn(chunk)
 
 
 def steps(items, desc: str, unit: str = "step"):

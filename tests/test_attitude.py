@@ -388,7 +388,7 @@ def test_bad_input_names_field(call, field):
 ])
 def test_campaign_layer_names_the_spacecraft_key(table, key):
     """The config layer's map (an explicit table of keys) puts the file's key back."""
-    from ideas_hpc.config.model_fields import SPACECRAFT_FIELDS
+    from ideas_hpc.campaign.schema.model_fields import SPACECRAFT_FIELDS
     from ideas_hpc.errors import config_fields
 
     with pytest.raises(InputError) as ei, config_fields(SPACECRAFT_FIELDS):

@@ -12,7 +12,7 @@ import pytest
 import xarray as xr
 
 from ideas_hpc.campaign.run import run_file
-from ideas_hpc.config.campaign_tables import load
+from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.core.design.union import population_coverage
 from ideas_hpc.errors import InputError
 from ideas_hpc.design.candidates import candidate_masks

@@ -15,7 +15,7 @@ import xarray as xr
 from gates import Gate, wait_until
 from ideas_hpc.campaign.montecarlo import run_sample
 from ideas_hpc.campaign.run import run_file
-from ideas_hpc.config.campaign_tables import load
+from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.engine.chunk_write import done_mask
 from ideas_hpc.errors import InputError
 
@@ -142,7 +142,7 @@ def test_mc_store_holds_the_resolved_config(one_worker):
     """The engine path records the same fully resolved config as the flyby path."""
     import json
 
-    from ideas_hpc.config.campaign_tables import resolved_config
+    from ideas_hpc.campaign.schema.campaign_tables import resolved_config
 
     stored = json.loads(xr.open_zarr(one_worker).attrs["config"])
     assert stored == resolved_config(load(MC, SHORT))

@@ -13,7 +13,7 @@ from ideas_hpc.campaign.report import write_report
 from ideas_hpc.campaign.report_html_reliability import reliability_html_figures
 from ideas_hpc.campaign.report_reliability import bank_answer
 from ideas_hpc.campaign.run import run_file
-from ideas_hpc.config.campaign_tables import load
+from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.core.design.reliability import swarm_probabilities
 from ideas_hpc.design import build_bank
 from ideas_hpc.design.bank import separation_steps

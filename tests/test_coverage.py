@@ -17,7 +17,7 @@ from ideas_hpc.core.mapping.records import Bvh, Camera, Mesh, Strict
 from coverage_tiles import coverage_counts_tiles
 from ideas_hpc.errors import InputError, config_fields
 from ideas_hpc.mapping.coverage import compute_coverage, observed_per_spacecraft
-from ideas_hpc.config.model_fields import COVERAGE_FIELDS
+from ideas_hpc.campaign.schema.model_fields import COVERAGE_FIELDS
 from ideas_hpc.mapping.options import CoverageOptions, coverage_options_from_config
 
 R_SPHERE = 1000.0

@@ -18,7 +18,7 @@ import pytest
 
 from ideas_hpc.body.mass_properties import implied_density, mass_properties
 from ideas_hpc.campaign.setup import setup_from_campaign
-from ideas_hpc.config.campaign_tables import load
+from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.constants import G
 from ideas_hpc.errors import InputError
 

@@ -14,7 +14,7 @@ import pytest
 import xarray as xr
 
 from design_oracle import (best_triple, min_tolerant_size, pair_coverage, subset_coverage)
-from ideas_hpc.config.campaign_tables import load
+from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.design import (CandidateBank, build_bank, coverage_curve, failure_tolerant,
                               max_coverage, min_swarm, worst_failure)
 from ideas_hpc.errors import InputError
@@ -179,7 +179,7 @@ def test_bad_design_input_names_the_field():
 def test_designer_errors_map_to_the_file_keys():
     """The designers name their own parameters; the campaign layer's map gives the file's
     keys, in the field and in the message (the user's line is unchanged)."""
-    from ideas_hpc.config.design_checks import designer_errors
+    from ideas_hpc.campaign.schema.design_checks import designer_errors
 
     bank = _toy(1)
     cases = [(dict(n_max=1), "design.n_max"), (dict(min_separation=1e9), "swarm.min_separation_km"),

@@ -12,7 +12,7 @@ from scipy import stats
 
 from ideas_hpc.attitude import initial_conditions
 
-from ideas_hpc.config.campaign_tables import load
+from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.montecarlo.dispersions import (DISPERSION_ORDER, DISPERSION_VARS, DISPERSIONS,
                                               draw_sample)

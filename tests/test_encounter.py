@@ -12,13 +12,13 @@ import pytest
 from scipy.integrate import quad
 from scipy.spatial.transform import Rotation
 
-from ideas_hpc.config.campaign_tables import load
+from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.core.dynamics.encounter import dcm_NS, pointing_demand
 from ideas_hpc.flyby.encounter import phase_angle
 from ideas_hpc.errors import InputError
 from ideas_hpc.flyby.flight import fly, target
 from ideas_hpc.campaign.setup import setup_from_campaign
-from ideas_hpc.config.model_fields import flyby_errors
+from ideas_hpc.campaign.schema.model_fields import flyby_errors
 
 BASE = """
 kind = "flyby"

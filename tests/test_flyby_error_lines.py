@@ -2,7 +2,7 @@
 
 The flyby layer names its own parameters (``max_iter``, ``d_sep_m``,
 ``phase_angle_rad``, ``theta``); the campaign layer maps them
-(:data:`ideas_hpc.config.model_fields.FLYBY_FIELDS`). The ``--set`` cases of
+(:data:`ideas_hpc.campaign.schema.model_fields.FLYBY_FIELDS`). The ``--set`` cases of
 ``tests/bad_inputs/cases.toml`` check the key; these check the *line*: the
 oracle is the line of the TOML entry, found by searching the file's text, for
 errors raised while the setup is built and while a kind flies (flyby, Monte

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ideas_hpc.config.campaign_tables import load
+from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.design import min_swarm
 from ideas_hpc.design.bank import build_bank
 from ideas_hpc.campaign.setup import setup_from_campaign

@@ -13,8 +13,8 @@ import pytest
 
 from ideas_hpc.attitude.gains import CONTROLLER_SCHEMA, Gains
 from ideas_hpc.attitude.spacecraft import SPACECRAFT_SCHEMA, SpacecraftModel
-from ideas_hpc.config.campaign_tables import SCHEMA
-from ideas_hpc.config.model_fields import (COVERAGE_FIELDS, FLYBY_FIELDS, GAINS_FIELDS,
+from ideas_hpc.campaign.schema.campaign_tables import SCHEMA
+from ideas_hpc.campaign.schema.model_fields import (COVERAGE_FIELDS, FLYBY_FIELDS, GAINS_FIELDS,
                                            SPACECRAFT_FIELDS, flyby_errors)
 from ideas_hpc.errors import InputError
 from ideas_hpc.flyby.flight import FlybySetup

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from ideas_hpc.config.campaign_tables import load
+from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.cli import main
 from ideas_hpc.design import CandidateBank, build_bank, coverage_curve, worst_failure
 from ideas_hpc.design.pareto.nsga2 import (check_objectives, evaluate, members_of, minimised,

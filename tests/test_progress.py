@@ -18,3 +18,24 @@ def test_no_bar_when_disabled_or_without_desc(capsys):
         assert list(progress.steps(range(3), "coverage vs N")) == [0, 1, 2]
     progress.map_chunks(len, [[1], [2, 3]], desc=None)
     assert capsys.readouterr().err == ""
+
+
+def test_map_chunks_retries_and_returns_or_raises_failures():
+    """The one chunk executor: a chunk that raised runs again ``retries`` times; one that
+    still fails is returned as its exception (the engine records it) or raised."""
+    import pytest
+
+    calls = {}
+
+    def flaky(c):
+        calls[c] = calls.get(c, 0) + 1
+        if c == "bad" or (c == "once" and calls[c] == 1):
+            raise RuntimeError(f"chunk {c}")
+        return c.upper()
+
+    out = progress.map_chunks(flaky, ["a", "once", "bad"], desc=None, retries=1,
+                              errors="return")
+    assert out[:2] == ["A", "ONCE"] and isinstance(out[2], RuntimeError)
+    assert calls == {"a": 1, "once": 2, "bad": 2}
+    with pytest.raises(RuntimeError, match="chunk bad"):
+        progress.map_chunks(flaky, ["bad"], desc=None)

@@ -12,7 +12,7 @@ import pytest
 
 from ideas_hpc.body.analytic import sphere_mesh
 from ideas_hpc.core.mapping import quality as cq
-from ideas_hpc.config.model_fields import COVERAGE_FIELDS
+from ideas_hpc.campaign.schema.model_fields import COVERAGE_FIELDS
 from ideas_hpc.mapping.options import coverage_options_from_config
 from ideas_hpc.errors import InputError, config_fields
 from ideas_hpc.mapping.coverage import compute_coverage
@@ -259,7 +259,7 @@ ROOT_CAMPAIGNS = __import__("pathlib").Path(__file__).resolve().parent.parent / 
 
 
 def test_design_campaigns_take_a_requirement_and_refuse_stereo_they_cannot_score():
-    from ideas_hpc.config.campaign_tables import load
+    from ideas_hpc.campaign.schema.campaign_tables import load
 
     path = ROOT_CAMPAIGNS / "eros-nadir-ga.toml"
     load(path, ["body.name=\"ellipsoid\"", "coverage.require_lit=true"])   # unions: fine
@@ -284,7 +284,7 @@ def test_design_campaigns_take_a_requirement_and_refuse_stereo_they_cannot_score
 
 def test_arrival_scan_matches_flybys_at_each_epoch():
     from ideas_hpc.campaign.scan import arrival_scan
-    from ideas_hpc.config.campaign_tables import load
+    from ideas_hpc.campaign.schema.campaign_tables import load
     from ideas_hpc.flyby.flight import fly
     from ideas_hpc.campaign.setup import setup_from_campaign
 

@@ -8,6 +8,7 @@ give the same numbers, or a NumPy recomputation from the stored arrays.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 
@@ -16,14 +17,14 @@ import pytest
 import xarray as xr
 
 from ideas_hpc.attitude import maneuvers
-from ideas_hpc.campaign import kinds
+from ideas_hpc.campaign.schema import kinds
 from ideas_hpc.campaign.run import run_file
-from ideas_hpc.config.campaign_tables import load
+from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.core.attitude.maneuvers import FOV_MODE
 from ideas_hpc.design.pareto import objectives
 from ideas_hpc.errors import InputError
 from ideas_hpc.montecarlo import dispersions
-from ideas_hpc.config.fields import Field
+from ideas_hpc.fields import Field
 from ideas_hpc.engine.variables import StoreVar
 
 CAMPAIGNS = Path(__file__).resolve().parent.parent / "campaigns"
@@ -60,6 +61,26 @@ def test_recipe_maneuver(tmp_path, monkeypatch):
     assert not np.allclose(a["camera_dcm_BT"].values, nadir["camera_dcm_BT"].values)
 
 
+@pytest.mark.parametrize("kernel", ["reference_into", "camera_dcm_into"])
+def test_maneuver_dispatch_raises_on_a_code_it_has_no_branch_for(kernel):
+    """A mode code without its kernel branch (the recipe's next code, or the tabulated
+    TRACK_MODE) raises instead of flying nadir pointing."""
+    from ideas_hpc.core.attitude import maneuvers as core
+    from ideas_hpc.core.attitude.mrp import mrp_from_dcm
+
+    dcm = np.ascontiguousarray(np.eye(3))
+    fn = getattr(core, kernel)
+    args = {"reference_into": lambda m: (m, 1.0, 1e-4, mrp_from_dcm(dcm), dcm, 0.03, 60.0,
+                                         np.empty(9)),
+            "camera_dcm_into": lambda m: (m, 1.0, dcm, 0.03, 60.0, np.empty((3, 3)))}[kernel]
+    fn(*args(core.NP_MODE))
+    fn(*args(core.FOV_MODE))
+    codes = {m.code for m in maneuvers.MANEUVERS.values()}
+    for bad in (max(codes) + 1, core.TRACK_MODE):
+        with pytest.raises(ValueError, match="mode code"):
+            fn(*args(bad))
+
+
 # --- A new Monte Carlo dispersion: one Dispersion entry appended to DISPERSIONS
 
 def _toy_gm(rng, n, mc, setup, theta):
@@ -77,7 +98,7 @@ TOY_DISPERSION = dispersions.Dispersion(
     (StoreVar("toy_mu", (), np.float64, "m^3/s^2", "GM (toy dispersion)"),
      StoreVar("toy_u", (), np.float64, "1", "toy uniform draw")),
     keys=(("toy_gm_pct", Field("float", 0.0, lo=0, doc="toy GM error, %")),),
-    check=_toy_check)
+    check=_toy_check, level="body", active=lambda mc, setup: mc.toy_gm_pct != 0)
 MC = ['body.name="ellipsoid"', "flyby.tf_s=60", "flyby.z_start_km=-3", "flyby.z_stop_km=3",
       'attitude.mode="ideal"', "monte_carlo.samples=3", "run.chunk_size=3",
       "monte_carlo.attitude_dispersion=false", "monte_carlo.sigma_gm_pct=0.0"]
@@ -115,6 +136,97 @@ def test_recipe_dispersion(tmp_path, monkeypatch):
     assert np.allclose(toy["toy_mu"].values, mu0 * (1 + 0.2 * toy["toy_u"].values), rtol=1e-15)
     assert toy["toy_mu"].attrs["units"] == "m^3/s^2"
     assert not np.allclose(toy["arrival_error"].values, base["arrival_error"].values)
+
+
+def test_a_dispersion_must_declare_its_level_and_when_it_is_active():
+    for missing in ({"level": None}, {"active": None}, {"level": "swarm"}):
+        with pytest.raises(ValueError, match="level|active"):
+            dataclasses.replace(TOY_DISPERSION, **missing)
+
+
+RELIABILITY = ['body.name="ellipsoid"', "flyby.tf_s=60", "flyby.z_start_km=-3",
+               "flyby.z_stop_km=3", "dynamics.srp=false", "design.angle_step_deg=30",
+               'attitude.mode="ideal"', "run.workers=0", "design.time_limit_s=30",
+               "design.success_probability=0.1", "monte_carlo.failure_probability=0.05",
+               "design.scenarios=12", "design.verify_samples=12", "design.n_max=6"] + [
+    f"monte_carlo.{k}=0.0" for k in ("sigma_c20_pct", "sigma_c22_pct", "sigma_gm_pct",
+                                     "sigma_position_m", "sigma_velocity_mm_s",
+                                     "sigma_misalignment_deg")] + [
+    "monte_carlo.reflectivity_min=0.6", "monte_carlo.reflectivity_max=0.6"]
+
+
+def test_recipe_dispersion_reaches_the_success_probability_designer(tmp_path, monkeypatch):
+    """The toy entry alone makes the designer's campaign dispersed: it is drawn into
+    every scenario from the body-level generator of the seed scheme (its declared
+    level), and with its key at 0 (inactive) the design is the one exact scenario."""
+    from ideas_hpc.seeds import SCENARIO_STREAM, STREAM_BODY, stream_rng
+
+    drawn = []
+
+    def recorded(rng, n, mc, setup, theta):
+        v = _toy_gm(rng, n, mc, setup, theta)
+        drawn.append(v["toy_u"])
+        return v
+
+    monkeypatch.setattr(dispersions, "DISPERSIONS", dispersions.DISPERSIONS + (
+        dataclasses.replace(TOY_DISPERSION, draw=recorded),))
+    design = CAMPAIGNS / "eros-design.toml"
+    off = xr.open_zarr(run_file(design, out=tmp_path / "off.zarr", overrides=RELIABILITY,
+                                progress=False))
+    assert off["validation_probability"].shape == (1,)          # nominal: exact
+    drawn.clear()
+    on = xr.open_zarr(run_file(design, out=tmp_path / "on.zarr", progress=False,
+                               overrides=RELIABILITY + ["monte_carlo.toy_gm_pct=20.0"]))
+    assert on["validation_probability"].shape == (12,)           # dispersed: sampled
+    seed = load(design, RELIABILITY).config.seed
+    for k in range(12):
+        body = stream_rng(seed, SCENARIO_STREAM, k, STREAM_BODY)
+        body.standard_normal(3)          # gravity, then reflectivity: the entries before it
+        body.uniform(0.0, 1.0)
+        assert body.uniform(-1.0, 1.0) in drawn, k
+
+
+# --- A new disturbance torque: one settings class in TORQUE_TERMS
+
+@dataclasses.dataclass(frozen=True)
+class ToyJet:
+    """Toy outgassing jet: a torque about x_B of ``torque_N_m`` times (spacecraft index + 1)."""
+
+    torque_N_m: float = 0.0
+
+    def _pack(self, table, ctx):
+        table[:, :, 0] += self.torque_N_m * (1.0 + np.arange(ctx.theta_rad.size))[:, None]
+
+
+def test_recipe_torque(monkeypatch):
+    """The toy term, registered here alone, flies in a campaign's simulated flyby: once the
+    controller has settled, the wheels absorb it, so their momentum ``J_s Omega`` grows by
+    the torque's impulse (angular momentum balance of SPEC section 5's dynamics; the
+    undisturbed flight's drift, from the gyroscopic term, subtracted)."""
+    from ideas_hpc.attitude import torque_terms
+    from ideas_hpc.campaign.setup import setup_from_campaign
+    from ideas_hpc.flyby.flight import fly
+
+    monkeypatch.setitem(torque_terms.TORQUE_TERMS, "toy_jet", ToyJet)
+    jet = torque_terms.torques_from_config({"toy_jet": {"torque_N_m": 1e-4}})
+    with pytest.raises(InputError) as err:
+        torque_terms.torques_from_config({"toy_jet": {"torque_Nm": 1e-4}})
+    assert err.value.field == "torques.toy_jet.torque_Nm"
+    sets = [s for s in SHORT if not s.startswith("attitude.mode")] + [
+        'attitude.mode="simulated"', "attitude.decimate=1"]
+    setup = setup_from_campaign(load(FLYBY, sets))
+    theta = np.array([0.2, 2.4, 4.1])
+    quiet, loud = fly(setup, theta).attitude, fly(setup.with_(torques=jet), theta).attitude
+    t = quiet.times
+    late = t >= t[-1] - 20.0                 # settled (K_P = 0.4 1/s)
+    j_s = setup.spacecraft.J_s
+    for i in range(3):
+        h = [j_s * r.wheel_speed[0, i][late] for r in (quiet, loud)]
+        dh = (h[1][-1] - h[1][0]) - (h[0][-1] - h[0][0])
+        impulse = 1e-4 * (i + 1) * (t[late][-1] - t[late][0])
+        # about x_B, the jet's axis (the other axes see the gyroscopic coupling
+        # omega x h_s of the growing wheel momentum, ~5 % here)
+        assert dh[0] == pytest.approx(impulse, rel=0.03), i
 
 
 # --- A new design objective: one Objective entry in OBJECTIVES
@@ -170,7 +282,7 @@ def test_recipe_kind(tmp_path, monkeypatch):
 # --- One angle step for every designer (issue 21 item 2)
 
 def test_one_angle_step_key_keeps_each_default_and_the_alias_warns_once(monkeypatch):
-    from ideas_hpc.config import design_checks as design_table
+    from ideas_hpc.campaign.schema import design_checks as design_table
 
     monkeypatch.setattr(design_table, "_warned", [])
     exact = load(CAMPAIGNS / "eros-design.toml", ['body.name="ellipsoid"']).config.design

@@ -12,7 +12,7 @@ import pytest
 import xarray as xr
 
 from ideas_hpc.campaign.run import run_file
-from ideas_hpc.config.campaign_tables import load
+from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.cli import main
 from ideas_hpc.campaign.setup import setup_from_campaign
 

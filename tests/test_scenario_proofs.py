@@ -20,7 +20,7 @@ import pytest
 
 from numba import njit
 
-from ideas_hpc.config.campaign_tables import load
+from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.core.mapping.coverage import first_image_by_spacecraft
 from ideas_hpc.core.mapping.records import Camera, Nominal
 from ideas_hpc.core.mapping.scenario_proofs import BC_ANY, S_MAX

@@ -20,7 +20,7 @@ sp = pytest.importorskip("spiceypy")
 from ideas_hpc.body.dsk import write_dsk  # noqa: E402
 from ideas_hpc.body.shape import load_shape_file, read_plate_tab  # noqa: E402
 from ideas_hpc.campaign.setup import setup_from_campaign  # noqa: E402
-from ideas_hpc.config.campaign_tables import load, resolved_config  # noqa: E402
+from ideas_hpc.campaign.schema.campaign_tables import load, resolved_config  # noqa: E402
 from ideas_hpc.constants import AU, MU_SUN  # noqa: E402
 from ideas_hpc.dynamics.trajectory import sun_direction_T  # noqa: E402
 from ideas_hpc.errors import InputError  # noqa: E402
@@ -94,7 +94,7 @@ def test_dsk_flyby_coverage_is_bit_for_bit(eros_dsk):
 def test_kernel_values_repeat_without_the_kernels():
     """``SpiceValues.params_keys()`` written as [body.params] keys give the same parameters."""
     from ideas_hpc.body.params import get_params, params_from_mapping
-    from ideas_hpc.config.spice_table import SpiceValues, apply_spice
+    from ideas_hpc.campaign.schema.spice_table import SpiceValues, apply_spice
 
     v = SpiceValues("2029-04-13T21:46:00", 9.2e8, "EROS", "IAU_EROS", 1.9e11, 0.21, 0.19, 5.3,
                     3.1, 2.2, 0.198, 0.3, 1.26, 18972.9)

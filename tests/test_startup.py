@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ideas_hpc.config.campaign_tables import load
+from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.campaign.setup import setup_from_campaign
 from test_campaign_mc import MC, SHORT
 

@@ -11,7 +11,7 @@ from ideas_hpc.design import build_bank
 
 from ideas_hpc.campaign.montecarlo import run_sample
 from ideas_hpc.campaign.run import run_file
-from ideas_hpc.config.campaign_tables import load
+from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.montecarlo.verify import verify_swarm
 from test_campaign_mc import MC, ROOT, SHORT

@@ -6,11 +6,6 @@ from __future__ import annotations
 import numpy as np
 
 from ideas_hpc.errors import InputError
-from ideas_hpc.config.fields import number
-
-
-def pos_float(value, name, *, allow_zero=False):
-    return number(value, name, lo=0.0, lo_open=not allow_zero)
 
 
 def vec3(value, name):

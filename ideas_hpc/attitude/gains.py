@@ -12,7 +12,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ideas_hpc.errors import InputError
-from ideas_hpc.config.fields import Field, validate
+from ideas_hpc.fields import Field, validate
 from ideas_hpc.attitude.checks import vec3 as _vec3
 
 #: The ``[controller]`` table: a preset and overrides; ranges are checked by
@@ -34,7 +34,7 @@ class Gains:
     The physical gains carry their unit in the name; ``int_limit`` (an MRP
     norm) and ``phi_dt_max`` (the product ``eta phi dt``) are dimensionless
     and stay unitless. The ``[controller]`` keys are ``k_p``, ``k_i``, ``eta``,
-    ``phi``, ``int_limit``, ``phi_dt_max`` (:data:`ideas_hpc.config.model_fields.GAINS_FIELDS`).
+    ``phi``, ``int_limit``, ``phi_dt_max`` (:data:`ideas_hpc.campaign.schema.model_fields.GAINS_FIELDS`).
 
     Attributes
     ----------
@@ -106,7 +106,7 @@ def gains_from_config(table, prefix: str = "controller.") -> Gains:
     without a preset all of ``k_p`` and ``k_i`` must be given. Any other key
     is an error naming it (``prefix + key``); a value :func:`validate_gains`
     refuses names the :class:`Gains` field, which the campaign layer maps to the
-    file's key (:data:`ideas_hpc.config.model_fields.GAINS_FIELDS`).
+    file's key (:data:`ideas_hpc.campaign.schema.model_fields.GAINS_FIELDS`).
     """
     if table is None:
         return GAIN_PRESETS["np"]

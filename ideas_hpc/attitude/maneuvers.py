@@ -33,7 +33,7 @@ import numpy as np
 from ideas_hpc.core.attitude.maneuvers import FOV_MODE, NP_MODE, TRACK_MODE
 from ideas_hpc.errors import InputError
 from ideas_hpc.units import MINUTE
-from ideas_hpc.attitude.checks import pos_float as _pos_float
+from ideas_hpc.fields import number
 
 P_MIN_DEFAULT = 0.3 * MINUTE  #: paper: P_min = 0.3 min/sweep, s
 THETA_MAX_DEFAULT = math.radians(1.9138)  #: SPEC section 2 / Table 6, rad
@@ -54,12 +54,11 @@ def _sweep_params(n, periods, theta_max, p_min):
     if p.shape != (n,):
         raise InputError(f"must have one period per spacecraft ({n}), got shape {p.shape}",
                          field="periods")
-    pm = _pos_float(p_min, "p_min")
+    pm = number(p_min, "p_min", lo=0.0, lo_open=True)
     if not np.all(np.isfinite(p)) or np.any(p < pm * (1 - 1e-12)):
         raise InputError(f"sweep periods must be >= P_min = {pm} s, got min {np.min(p)!r} s",
                          field="periods")
-    tm = THETA_MAX_DEFAULT if theta_max is None else _pos_float(theta_max, "theta_max",
-                                                                allow_zero=True)
+    tm = THETA_MAX_DEFAULT if theta_max is None else number(theta_max, "theta_max", lo=0.0)
     return p, tm
 
 

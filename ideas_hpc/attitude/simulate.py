@@ -10,16 +10,18 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ideas_hpc.core.attitude.batch import simulate_batch
-from ideas_hpc.core.attitude.records import ControlGains, Initial, Wheels
+from ideas_hpc.core.attitude.records import ControlGains, Initial, StepTables, Wheels
 from ideas_hpc.core.dynamics.frames import dcm_RT as _dcm_RT
 from ideas_hpc.core.attitude.maneuvers import reference_dcm_BT
 from ideas_hpc.errors import InputError
 from ideas_hpc.seeds import sample_rng
 from ideas_hpc.units import RPM
-from ideas_hpc.attitude.checks import check_theta, init_array, pos_float, steps
+from ideas_hpc.attitude.checks import check_theta, init_array, steps
+from ideas_hpc.fields import number
 from ideas_hpc.attitude.gains import gains_from_config
 from ideas_hpc.attitude.maneuvers import P_MIN_DEFAULT, maneuver_args
 from ideas_hpc.attitude.spacecraft import default_spacecraft, validate_spacecraft
+from ideas_hpc.attitude.torque_terms import pack_torques
 
 
 def initial_conditions(seed: int, sample: int, n_spacecraft: int):
@@ -155,7 +157,8 @@ def ideal_dcm_BT(theta, spin_rate, image_times, *, mode="np", periods=None,
 def simulate_attitude(theta, spin_rate, t_f, *, mode="np", periods=None, theta_max=None,
                       gains=None, spacecraft=None, dt=0.1, image_dt=0.2, sigma0=None,
                       omega0=None, wheel0=None, decimate=1, dcm_TS=None,
-                      p_min=P_MIN_DEFAULT, seed=0, n_samples=1, ref_table=None) -> AttitudeResult:
+                      p_min=P_MIN_DEFAULT, seed=0, n_samples=1, ref_table=None,
+                      torques=()) -> AttitudeResult:
     """Closed-loop attitude of ``S`` samples of an ``N``-spacecraft swarm (SPEC section 5).
 
     Parameters
@@ -195,6 +198,9 @@ def simulate_attitude(theta, spin_rate, t_f, *, mode="np", periods=None, theta_m
         Body tracking ('track'): the reference at every step
         (:func:`ideas_hpc.core.attitude.maneuvers.track_reference_table`); its frame
         is inertial, so give ``spin_rate`` 0 and read ``dcm_BT`` as ``[B N]``.
+    torques : sequence of torque terms
+        Disturbance torques (:mod:`ideas_hpc.attitude.torque_terms`), summed
+        and held over each step; the controller is not told them.
 
     Returns
     -------
@@ -209,9 +215,9 @@ def simulate_attitude(theta, spin_rate, t_f, *, mode="np", periods=None, theta_m
     ws = float(spin_rate)
     if not math.isfinite(ws):
         raise InputError("must be finite (rad/s)", field="spin_rate")
-    dt = pos_float(dt, "dt")
-    image_dt = pos_float(image_dt, "image_dt")
-    t_f = pos_float(t_f, "t_f")
+    dt = number(dt, "dt", lo=0.0, lo_open=True)
+    image_dt = number(image_dt, "image_dt", lo=0.0, lo_open=True)
+    t_f = number(t_f, "t_f", lo=0.0, lo_open=True)
     n_steps = steps(t_f, dt, "t_f")
     img_every = steps(image_dt, dt, "image_dt")
     if isinstance(decimate, bool) or int(decimate) != decimate or decimate < 1:
@@ -231,11 +237,12 @@ def simulate_attitude(theta, spin_rate, t_f, *, mode="np", periods=None, theta_m
         if not (s0.shape == w0.shape == W0.shape):
             raise InputError("sigma0, omega0, wheel0 must have the same shape", field="omega0")
     k_p, k_i, eta, phi = g.arrays(dt)
-    table = _ref_table(ref_table, n, n_steps)
+    tables = StepTables(_ref_table(ref_table, n, n_steps),
+                        pack_torques(tuple(torques), th, n_steps, dt, ws))
     out = simulate_batch(man.code, _ring_dcms(th, dcm_TS), ws, p, tm,
                          ControlGains(k_p, k_i, eta, phi, float(g.int_limit)),
                          Wheels(sc.inertia_rw, sc.J_s, float(sc.u_max_N_m), float(sc.h_max_N_m_s)),
-                         dt, n_steps, (int(decimate), int(img_every)), Initial(s0, w0, W0), table)
+                         dt, n_steps, (int(decimate), int(img_every)), Initial(s0, w0, W0), tables)
     sig, om, wh, tq, dcm, mu, mh = out
     times = np.arange(0, n_steps + 1, decimate) * dt
     image_times = np.arange(0, n_steps + 1, img_every) * dt

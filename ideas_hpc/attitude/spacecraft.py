@@ -7,8 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ideas_hpc.errors import InputError
-from ideas_hpc.config.fields import Field, validate
-from ideas_hpc.attitude.checks import pos_float as _pos_float
+from ideas_hpc.fields import Field, number, validate
 
 def _opt(kind: str, doc: str, **kw) -> Field:
     # None: not given, the SpacecraftModel default applies (defaults live there only)
@@ -34,7 +33,7 @@ class SpacecraftModel:
     """Rigid spacecraft with three reaction wheels on its principal axes (SPEC section 5).
 
     Attributes (SI, the unit in the name; ``[spacecraft]`` keys drop it:
-    :data:`ideas_hpc.config.model_fields.SPACECRAFT_FIELDS`)
+    :data:`ideas_hpc.campaign.schema.model_fields.SPACECRAFT_FIELDS`)
     ---------------
     mass_kg : float
         Hub mass, kg (4).
@@ -98,14 +97,14 @@ class SpacecraftModel:
 def validate_spacecraft(sc: SpacecraftModel) -> SpacecraftModel:
     """Check a :class:`SpacecraftModel`; raise :class:`InputError` naming its field
     (``mass_kg``; the campaign layer maps it to the file's key)."""
-    _pos_float(sc.mass_kg, "mass_kg")
-    _pos_float(sc.wheel_mass_kg, "wheel_mass_kg", allow_zero=True)
-    _pos_float(sc.wheel_radius_m, "wheel_radius_m")
+    number(sc.mass_kg, "mass_kg", lo=0.0, lo_open=True)
+    number(sc.wheel_mass_kg, "wheel_mass_kg", lo=0.0)
+    number(sc.wheel_radius_m, "wheel_radius_m", lo=0.0, lo_open=True)
     if sc.wheel_mass_kg == 0.0:
         raise InputError("wheel mass must be positive (J_s = m r^2 / 2 > 0)",
                          field="wheel_mass_kg")
-    _pos_float(sc.u_max_N_m, "u_max_N_m", allow_zero=True)
-    _pos_float(sc.h_max_N_m_s, "h_max_N_m_s", allow_zero=True)
+    number(sc.u_max_N_m, "u_max_N_m", lo=0.0)
+    number(sc.h_max_N_m_s, "h_max_N_m_s", lo=0.0)
     if sc.inertia_kg_m2 is None:
         size = np.asarray(sc.size_m, dtype=float)
         if size.shape != (3,) or not np.all(np.isfinite(size)) or np.any(size <= 0):
@@ -140,7 +139,7 @@ def spacecraft_from_config(table, prefix: str = "spacecraft.") -> SpacecraftMode
     live in ``[dynamics]``), as is a bad inertia matrix (``prefix + "inertia"``); a
     value :func:`validate_spacecraft` refuses names the :class:`SpacecraftModel`
     field, which the campaign layer maps to the file's key
-    (:data:`ideas_hpc.config.model_fields.SPACECRAFT_FIELDS`).
+    (:data:`ideas_hpc.campaign.schema.model_fields.SPACECRAFT_FIELDS`).
     """
     table = dict(table or {})
     values = validate(table, SPACECRAFT_SCHEMA, prefix)  # the one field mechanism

@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ideas_hpc.errors import InputError, positive_number
+from ideas_hpc.errors import InputError
+from ideas_hpc.fields import number
 from ideas_hpc.body.shape import Shape, build_shape
 
 #: Eros-sized stand-in used when the real shape model is not on the data path:
@@ -33,9 +34,9 @@ def _check_resolution(resolution) -> int:
 def ellipsoid_mesh(a: float, b: float, c: float, resolution: int = 3, *,
                    name: str = "ellipsoid") -> Shape:
     """Triaxial ellipsoid with semi-axes ``a, b, c`` (m) along x, y, z of frame T."""
-    a = positive_number(a, "a")
-    b = positive_number(b, "b")
-    c = positive_number(c, "c")
+    a = number(a, "a", lo=0.0, lo_open=True)
+    b = number(b, "b", lo=0.0, lo_open=True)
+    c = number(c, "c", lo=0.0, lo_open=True)
     res = _check_resolution(resolution)
     import trimesh
 
@@ -47,7 +48,7 @@ def ellipsoid_mesh(a: float, b: float, c: float, resolution: int = 3, *,
 
 def sphere_mesh(radius: float, resolution: int = 3, *, name: str = "sphere") -> Shape:
     """Sphere of ``radius`` (m) as a geodesic icosphere with vertices on the sphere."""
-    r = positive_number(radius, "radius")
+    r = number(radius, "radius", lo=0.0, lo_open=True)
     shape = ellipsoid_mesh(r, r, r, resolution, name=name)
     object.__setattr__(shape, "source", f"built-in sphere R = {r / 1e3:g} km, "
                                         f"resolution {resolution}")

@@ -12,7 +12,7 @@ from dataclasses import asdict, dataclass
 
 from ideas_hpc.constants import AU, G
 from ideas_hpc.errors import InputError
-from ideas_hpc.config.fields import number
+from ideas_hpc.fields import number
 from ideas_hpc.units import DEG, HOUR, KM
 
 

@@ -26,7 +26,8 @@ import sys
 from ideas_hpc.body.bodies import BUILTIN
 from ideas_hpc.body.mass_properties import (com_problem, density_problem, implied_density,
                                             mass_properties, mean_radius)
-from ideas_hpc.config.design_checks import step_key
+from ideas_hpc.campaign.schema.design_checks import step_key
+from ideas_hpc.campaign.schema.kinds import KINDS
 from ideas_hpc.errors import InputError
 from ideas_hpc.flyby.swarm_geometry import min_separation_angle
 from ideas_hpc.units import DEG
@@ -60,10 +61,11 @@ def check_body(c, body) -> None:
 def check_grid_step(c, d_sep_m: float) -> None:
     """Refuse a design grid far finer than the minimum separation can use."""
     cfg = c.config
-    if not cfg.kind.startswith("design"):
+    kind = KINDS[cfg.kind]
+    if not kind.designs:
         return
     d = cfg.design
-    ga = cfg.kind == "design-nadir" and d.method == "ga"
+    ga = d.method in kind.continuous_methods
     step = d.angle_step_rad if ga else d.grid_step_rad
     if not step or step <= 0.0:
         return
@@ -82,7 +84,8 @@ def check_grid_step(c, d_sep_m: float) -> None:
 def check_pointing(c, eta_rad: float, altitude_m: float) -> None:
     """Warn when a 3-sigma pointing dispersion is larger than the camera's half angle."""
     cfg = c.config
-    if cfg.kind not in ("monte-carlo",) and not cfg.kind.startswith("design"):
+    kind = KINDS[cfg.kind]
+    if not (kind.samples or kind.designs):
         return
     mc = cfg.monte_carlo
     mis = getattr(mc, "sigma_misalignment_rad", 0.0) or 0.0

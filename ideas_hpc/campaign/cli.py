@@ -43,7 +43,7 @@ def add_commands(sub) -> None:
     import argparse
     import textwrap
 
-    from ideas_hpc.campaign.kinds import KINDS
+    from ideas_hpc.campaign.schema.kinds import KINDS
 
     kinds = "\n".join(textwrap.fill(f"{k.name:<14} {k.doc}", 78, initial_indent="  ",
                                      subsequent_indent=" " * 17) for k in KINDS.values())

@@ -92,7 +92,7 @@ def base_attrs(c, setup) -> dict:
     config and hash, code version, seed, creation time): kind, execution settings
     (not hashed), the campaign file and the setup's sizing."""
     from ideas_hpc.engine.store_meta import config_json
-    from ideas_hpc.config.campaign_tables import EXECUTION_KNOBS
+    from ideas_hpc.campaign.schema.campaign_tables import EXECUTION_KNOBS
 
     knobs = {k: getattr(getattr(c.config, k.split(".")[0]), k.split(".")[1])
              for k in EXECUTION_KNOBS}

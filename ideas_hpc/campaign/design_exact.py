@@ -33,10 +33,10 @@ from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.campaign import precompile
 from ideas_hpc.montecarlo.verify import verify_swarm
 from ideas_hpc.campaign import datasets
-from ideas_hpc.campaign.kinds import KINDS
+from ideas_hpc.campaign.schema.kinds import KINDS
 from ideas_hpc.campaign.vocabulary import requirement_line, verification_verdict
-from ideas_hpc.config.design_checks import designer_errors
-from ideas_hpc.config.design_table import verify_samples
+from ideas_hpc.campaign.schema.design_checks import designer_errors
+from ideas_hpc.campaign.schema.design_table import verify_samples
 
 
 def _log(msg: str) -> None:

@@ -30,9 +30,10 @@ from ideas_hpc.flyby.swarm_geometry import min_separation_angle
 from ideas_hpc.campaign import datasets
 from ideas_hpc.engine.variables import with_attrs
 from ideas_hpc.campaign.design_exact import checked_setup, ga_gap
-from ideas_hpc.config.campaign_tables import Campaign
-from ideas_hpc.config.design_checks import DESIGNER_FIELDS
-from ideas_hpc.config.model_fields import FLYBY_FIELDS
+from ideas_hpc.campaign.schema.campaign_tables import Campaign
+from ideas_hpc.campaign.schema.design_checks import DESIGNER_FIELDS
+from ideas_hpc.campaign.schema.kinds import KINDS
+from ideas_hpc.campaign.schema.model_fields import FLYBY_FIELDS
 from ideas_hpc.campaign.vocabulary import requirement_line
 
 
@@ -189,8 +190,9 @@ def _fov_swarm(c: Campaign) -> np.ndarray:
         except Exception as exc:
             raise c.error(f"cannot read the NP design store {src!r}: {exc}",
                           "design.nadir_store") from None
-        if ds.attrs.get("kind") != "design-nadir":
-            raise c.error(f"{src!r} is a {ds.attrs.get('kind')!r} store, not design-nadir",
+        if not getattr(KINDS.get(ds.attrs.get("kind")), "nadir_swarm_store", False):
+            able = " or ".join(k.name for k in KINDS.values() if k.nadir_swarm_store)
+            raise c.error(f"{src!r} is a {ds.attrs.get('kind')!r} store, not {able}",
                           "design.nadir_store")
         return theta
     return np.asarray(c.config.swarm.angles_rad, dtype=float)
@@ -224,15 +226,16 @@ def design_fov(c: Campaign, setup, client):
 def run_design(c: Campaign, out: Path, *, workers=None, scheduler=None, cluster="local",
                slurm_config=None, **_) -> xr.Dataset:
     """Kinds ``design-nadir`` and ``design-fov``: GA, then a full flyby of the best swarm."""
+    nadir = KINDS[c.kind].swarm == "designed"     # the GA designs angles, else periods
     setup = checked_setup(c, np.linspace(0.0, 2 * np.pi, 16, endpoint=False)
-                          if c.kind == "design-nadir" else _fov_swarm(c))
+                          if nadir else _fov_swarm(c))
     t = time.perf_counter()
-    design = design_nadir if c.kind == "design-nadir" else design_fov
+    design = design_nadir if nadir else design_fov
     d = c.config.design
     # distinct candidate flights the GA can ask for: at most every grid angle
     # (nadir on a grid), at most every spacecraft of every individual
     n_flights = d.population * d.generations * d.n_max
-    if c.kind == "design-nadir" and d.angle_step_rad > 0:
+    if nadir and d.angle_step_rad > 0:
         n_flights = min(n_flights, grid_size(d.angle_step_rad))
     work = visibility_tests(n_flights, 1, setup.image_times.size, setup.body.shape.n_vertices)
     with config_fields(GA_FIELDS), JobCluster(workers=workers, scheduler=scheduler,
@@ -240,7 +243,6 @@ def run_design(c: Campaign, out: Path, *, workers=None, scheduler=None, cluster=
                                               work=work) as job:
         res, theta, periods = design(c, setup, job.client())
     wall = time.perf_counter() - t
-    nadir = c.kind == "design-nadir"
     threshold = res.target_coverage - c.config.design.eps_tol_pct / 100.0
     _log(f"GA: {res.evaluations} designs evaluated in {wall:.1f} s; best: N = "
          f"{res.best_swarm_size}, " + (requirement_line(res.target_coverage, threshold,

@@ -44,7 +44,7 @@ from ideas_hpc.engine.job_cluster import JobCluster, visibility_tests
 from ideas_hpc.flyby.flight import target
 from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.campaign import datasets
-from ideas_hpc.config.design_checks import STEP_KEY, designer_errors
+from ideas_hpc.campaign.schema.design_checks import STEP_KEY, designer_errors
 
 #: A front point matches the exact curve when their coverages differ by at most this.
 MATCH_TOL = 1e-12

@@ -47,12 +47,13 @@ from ideas_hpc.design.reliability_stats import lower_confidence_bound
 from ideas_hpc.errors import InputError
 from ideas_hpc import progress
 from ideas_hpc.engine.job_cluster import phase_client
+from ideas_hpc.montecarlo.dispersions import scenario_dispersed
 from ideas_hpc.montecarlo.scenarios import build_scenario_bank, fly_members
 from ideas_hpc.seeds import VALIDATION_STREAM, stream_rng
 from ideas_hpc.campaign.design_exact import design_exact
-from ideas_hpc.config.design_checks import designer_errors
+from ideas_hpc.campaign.schema.design_checks import designer_errors
 from ideas_hpc.campaign.reliability_vars import reliability_dataset
-from ideas_hpc.config.design_table import verify_samples
+from ideas_hpc.campaign.schema.design_table import verify_samples
 
 #: Purpose word of the validation's sampled failures (the histogram only; the
 #: probabilities enumerate failures exactly): ``(VALIDATION_STREAM, m, 3)``.
@@ -68,12 +69,10 @@ def _log(msg: str) -> None:
 
 
 def continuous_off(mc, setup) -> bool:
-    """True when no continuous dispersion draws anything (a scenario is the nominal flight)."""
-    sig = (mc.sigma_c20_pct, mc.sigma_c22_pct, mc.sigma_gm_pct, mc.sigma_position_m,
-           mc.sigma_velocity_m_s, mc.sigma_misalignment_rad)
-    attitude = setup.attitude_mode == "simulated" and mc.attitude_dispersion
-    return all(s == 0 for s in sig) and mc.reflectivity_min == mc.reflectivity_max \
-        and not attitude
+    """True when no dispersion drawn into the scenarios is active (each declares when it
+    is: :func:`~ideas_hpc.montecarlo.dispersions.scenario_dispersed`), so a scenario
+    is the nominal flight."""
+    return not scenario_dispersed(mc, setup)
 
 
 class Validation:

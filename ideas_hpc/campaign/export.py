@@ -57,8 +57,8 @@ def add_export_command(sub) -> None:
 
 def _refly(store: Path, attrs: dict):
     from ideas_hpc.campaign.setup import setup_from_campaign
-    from ideas_hpc.config.campaign_tables import validate_campaign
-    from ideas_hpc.config.toml_file import CampaignSource
+    from ideas_hpc.campaign.schema.campaign_tables import validate_campaign
+    from ideas_hpc.campaign.schema.toml_file import CampaignSource
     from ideas_hpc.flyby.flight import fly
 
     cfg = dict(attrs["config"])

@@ -13,7 +13,7 @@ from ideas_hpc.flyby.flight import fly
 from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.campaign import datasets
 from ideas_hpc.engine.variables import with_attrs
-from ideas_hpc.config.campaign_tables import Campaign
+from ideas_hpc.campaign.schema.campaign_tables import Campaign
 
 
 def _log(msg: str) -> None:

@@ -32,7 +32,7 @@ from ideas_hpc.montecarlo.dispersions import dispersion_order, dispersion_vars, 
 from ideas_hpc.montecarlo.sample import Nominal, design_nominal, fly_sample
 from ideas_hpc.engine.variables import ATTITUDE_SERIES, PER_SAMPLE, QUALITY, VARS, with_attrs
 from ideas_hpc.campaign import datasets
-from ideas_hpc.config.campaign_tables import Campaign, resolved_config
+from ideas_hpc.campaign.schema.campaign_tables import Campaign, resolved_config
 
 
 def mc_chunk(chunk_id: int, start: int, stop: int, *, setup: FlybySetup, nominal: Nominal,

@@ -15,6 +15,7 @@ from ideas_hpc.plots import figures
 from ideas_hpc.units import DEG, KM
 from ideas_hpc.campaign.report_reliability import (reliability_figures, reliability_lines,
                                                    swarm_label)
+from ideas_hpc.campaign.schema.kinds import KINDS
 from ideas_hpc.campaign.vocabulary import requirement_line, verification_verdict
 
 
@@ -267,7 +268,7 @@ def write_report(store, out=None, *, html: bool = False) -> Path:
     figs: list[Path] = []
     kind = ds.attrs.get("kind", "")
     if "best_fitness" in ds:
-        design = "nadir" if kind == "design-nadir" else "fov"
+        design = "nadir" if getattr(KINDS.get(kind), "swarm", "") == "designed" else "fov"
         n = "19" if design == "nadir" else "30"
         figs.append(figures.ga_fitness(ds, out / f"fig{n}_ga_fitness.png",
                                        title=f"{kind}: best and mean fitness"))

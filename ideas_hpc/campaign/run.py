@@ -1,6 +1,6 @@
 """Run a campaign file of any kind and write its zarr store (SPEC sections 7-9).
 
-The kind comes from the registry (:mod:`ideas_hpc.campaign.kinds`). Every kind
+The kind comes from the registry (:mod:`ideas_hpc.campaign.schema.kinds`). Every kind
 writes through the engine: ``monte-carlo`` runs its chunks there; ``flyby`` and
 the designs compute their result in one piece, which the engine writes as a
 one-chunk store (:mod:`ideas_hpc.engine.single`): atomically, with the same
@@ -19,9 +19,9 @@ from ideas_hpc.engine.lock import StoreLock
 from ideas_hpc.engine.single import check_existing, write_complete
 from ideas_hpc.errors import InputError
 from ideas_hpc.progress import enabled as progress_enabled
-from ideas_hpc.campaign.kinds import KINDS
-from ideas_hpc.config.campaign_tables import SCHEMA, Campaign, load, resolved_config
-from ideas_hpc.config.model_fields import flyby_errors
+from ideas_hpc.campaign.schema.kinds import KINDS
+from ideas_hpc.campaign.schema.campaign_tables import SCHEMA, Campaign, load, resolved_config
+from ideas_hpc.campaign.schema.model_fields import flyby_errors
 
 
 def _log(msg: str) -> None:

@@ -20,7 +20,8 @@ import xarray as xr
 
 from ideas_hpc.flyby.flight import fly
 from ideas_hpc.campaign.setup import setup_from_campaign
-from ideas_hpc.config.model_fields import flyby_errors
+from ideas_hpc.campaign.schema.kinds import KINDS
+from ideas_hpc.campaign.schema.model_fields import flyby_errors
 from ideas_hpc.mapping.coverage import compute_coverage
 
 SCAN_ATTRS = {
@@ -90,11 +91,12 @@ def scan_file(path, overrides=None, *, n: int = 24, span_h: float | None = None,
     """Scan ``n`` arrival epochs over ``span_h`` hours (default: one rotation period)
     from the campaign's ``flyby.epoch_s``; print a table, optionally write ``out``."""
     from ideas_hpc.errors import InputError
-    from ideas_hpc.config.campaign_tables import load
+    from ideas_hpc.campaign.schema.campaign_tables import load
 
     c = load(path, overrides or [])
-    if c.kind not in ("flyby", "monte-carlo"):
-        raise InputError(f"needs a flyby or monte-carlo campaign, got {c.kind!r}", field="kind")
+    if KINDS[c.kind].swarm != "file":
+        able = " or ".join(k.name for k in KINDS.values() if k.swarm == "file")
+        raise InputError(f"needs a {able} campaign, got {c.kind!r}", field="kind")
     if n < 1:
         raise InputError(f"must be >= 1, got {n}", field="--n")
     setup = setup_from_campaign(c)

@@ -26,7 +26,7 @@ from ideas_hpc.flyby.encounter import Encounter, approach_angles
 from ideas_hpc.errors import InputError
 from ideas_hpc.flyby.flight import fly
 from ideas_hpc.campaign.setup import setup_from_campaign
-from ideas_hpc.config.model_fields import flyby_errors
+from ideas_hpc.campaign.schema.model_fields import flyby_errors
 from ideas_hpc.units import DEG
 
 SCAN_ATTRS = {
@@ -99,7 +99,7 @@ def encounter_scan(setup, fb, decs_rad, phases_rad, *, step_rad: float = 10 * DE
 def scan_encounter_file(path, overrides=None, *, decs_deg=None, phases_deg=None,
                         step_deg: float = 10.0, out=None, plot=None) -> xr.Dataset:
     """Scan a campaign's encounter over ``decs_deg`` x ``phases_deg``; print a table."""
-    from ideas_hpc.config.campaign_tables import load
+    from ideas_hpc.campaign.schema.campaign_tables import load
 
     c = load(path, overrides or [])
     setup = setup_from_campaign(c)

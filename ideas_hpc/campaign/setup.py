@@ -4,7 +4,7 @@ The campaign layer builds the setup: it loads the body, sizes the flyby, picks
 the maneuver, checks the ring spacing and, for ``flyby.geometry = "encounter"``,
 resolves the approach and the imaging window (SPEC sections 2-3, 7c). The flyby
 layer below names its own parameters in errors (``d_sep_m``, ``phase_angle_rad``);
-:func:`ideas_hpc.config.model_fields.flyby_errors` turns them into the file's keys
+:func:`ideas_hpc.campaign.schema.model_fields.flyby_errors` turns them into the file's keys
 with their file and line.
 """
 
@@ -16,8 +16,8 @@ from ideas_hpc.attitude import campaign_maneuver
 from ideas_hpc.campaign.body_checks import check_body, check_grid_step, check_pointing
 from ideas_hpc.body.bodies import load_body
 from ideas_hpc.body.shape import load_shape_file
-from ideas_hpc.config.spice_table import apply_spice
-from ideas_hpc.config.model_fields import flyby_errors
+from ideas_hpc.campaign.schema.spice_table import apply_spice
+from ideas_hpc.campaign.schema.model_fields import flyby_errors
 from ideas_hpc.dynamics.trajectory import sun_direction_T
 from ideas_hpc.errors import InputError
 from ideas_hpc.flyby.encounter import Encounter, approach_angles, approach_speed, window_s
@@ -27,7 +27,7 @@ from ideas_hpc.flyby.swarm_geometry import check_separation
 
 
 def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
-    """Resolve a validated :class:`~ideas_hpc.config.campaign_tables.Campaign` to a setup.
+    """Resolve a validated :class:`~ideas_hpc.campaign.schema.campaign_tables.Campaign` to a setup.
 
     ``maneuver`` (a campaign name of :data:`~ideas_hpc.attitude.MANEUVERS`) overrides
     ``attitude.maneuver`` (the FoV design kind sweeps whatever the file says).

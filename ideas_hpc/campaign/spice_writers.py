@@ -23,7 +23,7 @@ import math
 
 import numpy as np
 
-from ideas_hpc.config.spice_table import orientation_angles
+from ideas_hpc.campaign.schema.spice_table import orientation_angles
 
 TICK_S = 1e-5        #: SCLK tick, s of TDB
 FRAME_BASE = 1_490_000   #: frame IDs of the exported frames (NAIF leaves 1,400,000+ to users)

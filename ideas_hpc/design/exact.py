@@ -164,7 +164,7 @@ def min_swarm(bank: CandidateBank, *, target: float, eps_tol: float, n_max: int 
         (the message gives the highest reachable coverage), ``n_max`` when it
         needs more than ``n_max`` spacecraft and ``min_separation`` when only
         the separation stands in the way (the campaign maps these names to its
-        file keys, :data:`ideas_hpc.config.design_checks.DESIGNER_FIELDS`).
+        file keys, :data:`ideas_hpc.campaign.schema.design_checks.DESIGNER_FIELDS`).
     """
     time_limit = check_time_limit(time_limit)
     red, m = prepare(bank, min_separation)

@@ -29,9 +29,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ideas_hpc.dynamics.force_terms import (BOX_AREA, CannonballSRP, Degree2, PointMass, Polyhedron,
-                                            SphericalHarmonics, _number, _sh_field)
+                                            SphericalHarmonics, _sh_field)
 from ideas_hpc.dynamics.forces import PackedForceModel, pack_forces
 from ideas_hpc.errors import InputError, config_fields
+from ideas_hpc.fields import number
 from ideas_hpc.body.params import PhysicalParams
 
 
@@ -95,8 +96,8 @@ class ForceModel:
             if not isinstance(self.srp, (bool, np.bool_)):
                 raise InputError(f"must be true or false, got {self.srp!r}", field="srp")
             srp = CannonballSRP(self.reflectivity, self.sc_mass, self.sc_area)
-            _number(self.rtol, "rtol", 0.0, 1.0, lo_open=True)
-            _number(self.atol, "atol", 0.0, lo_open=True)
+            number(self.rtol, "rtol", lo=0.0, hi=1.0, lo_open=True)
+            number(self.atol, "atol", lo=0.0, lo_open=True)
             poly = Polyhedron(self.density)
         grav = {"point_mass": PointMass(), "degree2": Degree2(), "spherical_harmonics": sh,
                 "polyhedron": poly}[self.gravity]

@@ -14,7 +14,6 @@ spherical-harmonic table) is cached per shape / file here.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,15 +23,10 @@ from ideas_hpc.core.dynamics import forces as _cf
 from ideas_hpc.core.dynamics.gravity import polyhedron_precompute
 from ideas_hpc.core.dynamics.harmonics import sh_derivative_tables, sh_unnormalise
 from ideas_hpc.errors import InputError
-from ideas_hpc.config.fields import number
+from ideas_hpc.fields import number
 
 #: 30 x 10 x 10 cm box (SPEC section 4): total surface area / 4, m^2.
 BOX_AREA = (4 * 0.30 * 0.10 + 2 * 0.10 * 0.10) / 4.0
-
-
-def _number(v, field, lo=-math.inf, hi=math.inf, lo_open=False):
-    number(v, field, lo=None if lo == -math.inf else lo, hi=None if hi == math.inf else hi,
-           lo_open=lo_open)
 
 
 # -------------------------------------------------------------- settings
@@ -75,10 +69,10 @@ class SphericalHarmonics:
             raise InputError(f"must be an integer in [2, 60], got {d!r}", field="sh_degree")
         if not isinstance(self.sh_file, str) or not self.sh_file:
             raise InputError("must be a file name or path", field="sh_file")
-        _number(self.gm_scale, "gm_scale", 0.0, lo_open=True)
+        number(self.gm_scale, "gm_scale", lo=0.0, lo_open=True)
         for name in ("c20", "c22"):
             if getattr(self, name) is not None:
-                _number(getattr(self, name), name)
+                number(getattr(self, name), name)
 
     def _pack(self, rec, params, shape):
         fld = _sh_field(self.sh_file, self.sh_degree)
@@ -101,7 +95,7 @@ class Polyhedron:
 
     def __post_init__(self):
         if self.density is not None:
-            _number(self.density, "density", 0.0, lo_open=True)
+            number(self.density, "density", lo=0.0, lo_open=True)
 
     def _pack(self, rec, params, shape):
         if shape is None:
@@ -122,9 +116,9 @@ class CannonballSRP:
     sc_area: float = BOX_AREA
 
     def __post_init__(self):
-        _number(self.reflectivity, "reflectivity", 0.0, 1.0)
-        _number(self.sc_mass, "sc_mass", 0.0, lo_open=True)
-        _number(self.sc_area, "sc_area", 0.0, lo_open=True)
+        number(self.reflectivity, "reflectivity", lo=0.0, hi=1.0)
+        number(self.sc_mass, "sc_mass", lo=0.0, lo_open=True)
+        number(self.sc_area, "sc_area", lo=0.0, lo_open=True)
 
     def _pack(self, rec, params, shape):
         rec["srp_coef"] = P_SUN_1AU * AU * AU * (1.0 + self.reflectivity) * self.sc_area \

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import os
 import time
-import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping
@@ -30,6 +29,7 @@ from ideas_hpc.engine.lock import StoreLock
 from ideas_hpc.engine.chunk_write import done_mask, write_chunk_region
 from ideas_hpc.engine.store import create_store
 from ideas_hpc.engine.store_meta import ChunkPlan, store_plan
+from ideas_hpc.progress import map_chunks
 
 ChunkFn = Callable[[int, int, int], Mapping[str, np.ndarray]]
 
@@ -94,7 +94,7 @@ def limit_task_threads() -> int | None:
     return n
 
 
-def _run_chunk(store_path: str, chunk_fn: ChunkFn, chunk_id: int, start: int,
+def run_chunk(store_path: str, chunk_fn: ChunkFn, chunk_id: int, start: int,
                stop: int, gate: str | None = None) -> tuple[int, int, float, float]:
     """The task: compute one chunk, write its region, then its done flag.
 
@@ -172,7 +172,7 @@ def run_chunks(store_path: str | os.PathLike, chunk_fn: ChunkFn, plan: ChunkPlan
             if client is not None:
                 _submit_all(client, path, chunk_fn, todo, summary, progress, retries)
             elif in_process:
-                _run_all_here(path, chunk_fn, todo, summary, progress, retries)
+                _submit_all(None, path, chunk_fn, todo, summary, progress, retries)
             else:
                 logs = path.absolute().parent / f"{path.name}.slurm-logs"
                 with connect(cluster=cluster, workers=workers, scheduler=scheduler,
@@ -187,69 +187,43 @@ def run_chunks(store_path: str | os.PathLike, chunk_fn: ChunkFn, plan: ChunkPlan
     return summary
 
 
+class _ChunkTask:
+    """One store chunk ``(chunk_id, start, stop)`` -> :func:`run_chunk`'s tuple."""
+
+    def __init__(self, path: str, chunk_fn: ChunkFn, gate: str | None):
+        self.path, self.chunk_fn, self.gate = path, chunk_fn, gate
+
+    def __call__(self, chunk) -> tuple[int, int, float, float]:
+        cid, start, stop = chunk
+        return run_chunk(self.path, self.chunk_fn, cid, start, stop, self.gate)
+
+
 def _submit_all(client, path: Path, chunk_fn: ChunkFn, todo, summary: RunSummary,
                 progress: bool, retries: int) -> None:
-    from distributed import as_completed
-    from tqdm.auto import tqdm
-
-    summary.n_workers = len(client.scheduler_info(n_workers=-1).get("workers", {})) \
-        if _accepts_n_workers(client) else len(client.scheduler_info().get("workers", {}))
-    tag = uuid.uuid4().hex[:8]
+    """The not-done chunks ``todo`` through :func:`ideas_hpc.progress.map_chunks`, on
+    ``client``'s workers (``None``: in this process, in order), failures recorded."""
+    if client is None:
+        summary.n_workers = 0
+    else:
+        summary.n_workers = len(client.scheduler_info(n_workers=-1).get("workers", {})) \
+            if _accepts_n_workers(client) else len(client.scheduler_info().get("workers", {}))
     gate = gate_from_env()  # read here, in the client: workers may not share its environment
-    # the chunk function once per worker, not once per task: a scenario bank's
-    # carries its row engine (about 12 MB), which every task would otherwise ship
-    fn = client.scatter(chunk_fn, broadcast=True, hash=False) if todo else chunk_fn
-    futures = [client.submit(_run_chunk, str(path), fn, cid, start, stop, gate,
-                             key=f"chunk-{cid}-{tag}", pure=False, retries=retries)
-               for cid, start, stop in todo]
-    bar = tqdm(total=summary.n_chunks, initial=summary.chunks_skipped, unit="chunk",
-               desc=path.name, disable=not progress, dynamic_ncols=True)
-    try:
-        for fut in as_completed(futures):
-            if fut.status == "finished":
-                _cid, n, t_c, t_w = fut.result()
-                summary.chunks_run += 1
-                summary.samples_run += n
-                summary.compute_s += t_c
-                summary.write_s += t_w
-            else:
-                exc = fut.exception()
-                summary.failed.append(int(fut.key.split("-")[1]))
-                summary.errors.append(f"chunk {summary.failed[-1]}: {type(exc).__name__}: {exc}")
-            bar.update(1)
-    except BaseException:
-        client.cancel(futures)
-        raise
-    finally:
-        bar.close()
+    # the chunk function once per worker, not once per task (scatter): a scenario
+    # bank's carries its row engine (about 12 MB), which every task would otherwise ship
+    results = map_chunks(_ChunkTask(str(path), chunk_fn, gate), list(todo), client,
+                         desc=path.name if progress else None, retries=retries,
+                         scatter=True, errors="return", done=summary.chunks_skipped)
+    for (cid, _start, _stop), res in zip(todo, results):
+        if isinstance(res, BaseException):
+            summary.failed.append(cid)
+            summary.errors.append(f"chunk {cid}: {type(res).__name__}: {res}")
+        else:
+            _cid, n, t_c, t_w = res
+            summary.chunks_run += 1
+            summary.samples_run += n
+            summary.compute_s += t_c
+            summary.write_s += t_w
     summary.failed.sort()
-
-
-def _run_all_here(path: Path, chunk_fn: ChunkFn, todo, summary: RunSummary, progress: bool,
-                  retries: int) -> None:
-    """:func:`_submit_all` without dask: the same tasks in this process, in order."""
-    from tqdm.auto import tqdm
-
-    summary.n_workers = 0
-    gate = gate_from_env()
-    with tqdm(total=summary.n_chunks, initial=summary.chunks_skipped, unit="chunk",
-              desc=path.name, disable=not progress, dynamic_ncols=True) as bar:
-        for cid, start, stop in todo:
-            for attempt in range(retries + 1):
-                try:
-                    _cid, n, t_c, t_w = _run_chunk(str(path), chunk_fn, cid, start, stop, gate)
-                except Exception as exc:  # noqa: BLE001 - recorded like a failed dask task
-                    if attempt < retries:
-                        continue
-                    summary.failed.append(cid)
-                    summary.errors.append(f"chunk {cid}: {type(exc).__name__}: {exc}")
-                else:
-                    summary.chunks_run += 1
-                    summary.samples_run += n
-                    summary.compute_s += t_c
-                    summary.write_s += t_w
-                break
-            bar.update(1)
 
 
 def _accepts_n_workers(client) -> bool:

@@ -249,7 +249,7 @@ def config_problems(attrs: Mapping, config: Mapping, campaign_seed: int) -> list
 
     When ``config`` has ``defaults`` and ``effective`` attributes (dotted key ->
     default, and -> the value a null key resolves to, as
-    :func:`ideas_hpc.config.campaign_tables.resolved_config` gives), keys the
+    :func:`ideas_hpc.campaign.schema.campaign_tables.resolved_config` gives), keys the
     stored config lacks and whose value is their default, and null keys whose
     resolved value is the stored one, are not differences: the store was
     written by older code (:func:`without_later_defaults`).

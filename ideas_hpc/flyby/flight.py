@@ -82,6 +82,9 @@ class FlybySetup:
     p_min_s: float = 18.0
     epoch_s: float = 0.0
     encounter: Encounter | None = None   # None: the paper's geometry (ideas_hpc.flyby.encounter)
+    #: Disturbance torques on every spacecraft (ideas_hpc.attitude.torque_terms);
+    #: read by the simulated attitude only.
+    torques: tuple = ()
 
     @property
     def image_every(self) -> int:
@@ -122,7 +125,7 @@ def target(setup: FlybySetup, theta, *, raise_on_failure: bool = True) -> Target
 
     A failure the user can fix becomes an :class:`~ideas_hpc.errors.InputError`
     naming the setup parameter to change (:func:`targeting_input_error`; the
-    campaign layer maps it to the file's key, :data:`ideas_hpc.config.model_fields.FLYBY_FIELDS`).
+    campaign layer maps it to the file's key, :data:`ideas_hpc.campaign.schema.model_fields.FLYBY_FIELDS`).
     """
     th = np.asarray(theta, dtype=np.float64).ravel()
     try:

@@ -22,20 +22,11 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass
 
-from ideas_hpc.errors import InputError, positive_number
-from ideas_hpc.units import CM, DEG, KM, MM, UM
-
-
-#: Paper Table 3 camera, in the units campaign files and the CLI use: the one
-#: place these defaults are written (``[instrument]`` and ``ideas-hpc size`` read them).
-INSTRUMENT_DEFAULTS = {"ground_resolution_m": 1.0, "aperture_cm": 8.0, "wavelength_um": 0.55,
-                       "min_elevation_deg": 5.0, "near_field_mm": 0.1}
-#: The same, SI (converted as a campaign file's values are).
-GROUND_RESOLUTION = INSTRUMENT_DEFAULTS["ground_resolution_m"]
-APERTURE = INSTRUMENT_DEFAULTS["aperture_cm"] * CM
-WAVELENGTH = INSTRUMENT_DEFAULTS["wavelength_um"] * UM
-MIN_ELEVATION = INSTRUMENT_DEFAULTS["min_elevation_deg"] * DEG
-NEAR_FIELD = INSTRUMENT_DEFAULTS["near_field_mm"] * MM
+from ideas_hpc.errors import InputError
+from ideas_hpc.fields import number
+from ideas_hpc.instrument import (APERTURE, GROUND_RESOLUTION,  # noqa: F401 (public here too)
+                                  INSTRUMENT_DEFAULTS, MIN_ELEVATION, NEAR_FIELD, WAVELENGTH)
+from ideas_hpc.units import DEG, KM
 
 
 @dataclass(frozen=True)
@@ -92,16 +83,16 @@ def size_flyby(*, r_av: float | None = None, r_max: float | None = None,
     if r_av is None:
         if r_max is None or r_min is None:
             raise InputError("give r_av, or both r_max and r_min", field="r_av")
-        r_max = positive_number(r_max, "r_max")
-        r_min = positive_number(r_min, "r_min")
+        r_max = number(r_max, "r_max", lo=0.0, lo_open=True)
+        r_min = number(r_min, "r_min", lo=0.0, lo_open=True)
         if r_min > r_max:
             raise InputError(f"r_min ({r_min:g} m) exceeds r_max ({r_max:g} m)", field="r_min")
         r_av = 0.5 * (r_max + r_min)
-    r_av = positive_number(r_av, "r_av")
-    x = positive_number(ground_resolution, "ground_resolution")
-    d = positive_number(aperture, "aperture")
-    lam = positive_number(wavelength, "wavelength")
-    near = positive_number(near, "near")
+    r_av = number(r_av, "r_av", lo=0.0, lo_open=True)
+    x = number(ground_resolution, "ground_resolution", lo=0.0, lo_open=True)
+    d = number(aperture, "aperture", lo=0.0, lo_open=True)
+    lam = number(wavelength, "wavelength", lo=0.0, lo_open=True)
+    near = number(near, "near", lo=0.0, lo_open=True)
     eps = float(min_elevation)
     if not math.isfinite(eps) or eps < 0.0 or eps >= 0.5 * math.pi:
         raise InputError(f"must be in [0, 90) deg, got {eps / DEG:g} deg", field="min_elevation")

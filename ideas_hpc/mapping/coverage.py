@@ -216,6 +216,12 @@ def _strict_args(shape, options: CoverageOptions, sun_T, n_img) -> tuple[Strict,
                   bool(options.illumination), s), tree
 
 
+#: The boundary's checks and record builders, public for the layers above that
+#: build the same records for their own kernels (the scenario rows).
+check_geometry, mesh_record, camera_record, strict_records = (
+    _check_geometry, _mesh, _camera, _strict_args)
+
+
 def compute_coverage(shape, r_T, dcm_BT, image_times, eta, near, far, *,
                      options: CoverageOptions = CoverageOptions(), sun_T=None,
                      active=None, counts: bool = True) -> CoverageResult:

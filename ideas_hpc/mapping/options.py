@@ -35,8 +35,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ideas_hpc.errors import InputError
-from ideas_hpc.config.fields import Field, number, validate
-from ideas_hpc.flyby.sizing import APERTURE, WAVELENGTH
+from ideas_hpc.fields import Field, number, validate
+from ideas_hpc.instrument import APERTURE, WAVELENGTH
 from ideas_hpc.units import CM, DEG, MM, UM
 
 _MODES = ("paper", "exact")
@@ -219,7 +219,7 @@ def coverage_options_from_config(table: dict, prefix: str = "coverage.") -> Cove
     ``stereo_max_deg``. Unknown keys and wrong types raise :class:`InputError`
     naming ``prefix + key``; a value :class:`CoverageOptions` refuses names its
     field (``min_elevation_rad``), which the campaign layer maps to the file's key
-    (:data:`ideas_hpc.config.model_fields.COVERAGE_FIELDS`).
+    (:data:`ideas_hpc.campaign.schema.model_fields.COVERAGE_FIELDS`).
     """
     values = validate(table, COVERAGE_SCHEMA, prefix)   # one mechanism for every table
     given = table or {}

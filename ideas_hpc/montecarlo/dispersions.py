@@ -3,7 +3,7 @@
 Each entry of :data:`DISPERSIONS` says what one dispersion draws, how it turns
 into a :class:`~ideas_hpc.flyby.flight.Perturbation` of the flyby, and which store
 variables record it (name, dims, units), and which ``[monte_carlo]`` keys it
-reads (``keys``: :class:`~ideas_hpc.config.fields.Field` s, with its cross-check
+reads (``keys``: :class:`~ideas_hpc.fields.Field` s, with its cross-check
 ``check``). The campaign's ``[monte_carlo]`` table, the Monte Carlo kind's store
 layout, its per-sample draws and its perturbations are built from this list and
 nothing else, so a new dispersion is one entry here (plus, if it perturbs
@@ -29,11 +29,11 @@ from typing import Callable
 
 import numpy as np
 
-from ideas_hpc.attitude import initial_conditions
+from ideas_hpc.attitude import draw_initial_conditions
 from ideas_hpc.core.dynamics.frames import dcm_RT
 from ideas_hpc.core.attitude.mrp import mrp_from_dcm
 from ideas_hpc.errors import InputError
-from ideas_hpc.config.fields import Field
+from ideas_hpc.fields import Field
 from ideas_hpc.seeds import sample_rng
 from ideas_hpc.engine.variables import StoreVar
 from ideas_hpc.units import DEG, MM
@@ -52,6 +52,29 @@ class Dispersion:
     ``[monte_carlo]`` keys, ``((key, Field), ...)`` (the draw reads them by SI name
     from ``mc``); ``check(mc)`` cross-checks them, raising ``InputError`` naming
     its own key (the campaign prefixes ``monte_carlo.``).
+
+    Every entry also says, for the success-probability designer's scenario bank
+    (:mod:`ideas_hpc.montecarlo.scenarios`), how it is drawn there:
+
+    ``level``
+        ``"body"``: one draw per scenario shared by every candidate (the body's
+        gravity, its SRP reflectivity); ``"spacecraft"``: drawn with one row
+        per candidate (``n = theta.size``), independently for each.
+    ``active(mc, setup) -> bool``
+        Whether, under this table and setup, it draws anything but the nominal
+        value. When no ``designer="scenario"`` entry is active a scenario is the
+        nominal flight and the designer is exact (one scenario).
+    ``designer``
+        ``"scenario"``: drawn into every scenario; ``"exact"``: not drawn, the
+        designer handles it exactly (failures are enumerated).
+    ``applies(setup) -> bool``
+        Whether a flight of this setup reads its values at all (``None``:
+        always); the initial attitude only matters to a simulated attitude. A
+        scenario leaves out the perturbation of an entry that does not apply
+        (and, on a stream of its own, its draws).
+
+    ``level`` and ``active`` have no default: an entry that does not say is
+    refused when it is declared, not flown as something it is not.
     """
 
     name: str
@@ -61,11 +84,33 @@ class Dispersion:
     stream: str = "child"
     keys: tuple = ()
     check: Callable | None = None
+    level: str | None = None
+    active: Callable | None = None
+    designer: str = "scenario"
+    applies: Callable | None = None
+
+    def __post_init__(self):
+        if self.level not in LEVELS:
+            raise ValueError(f"dispersion {self.name!r}: level must be one of {LEVELS}, "
+                             f"got {self.level!r}")
+        if not callable(self.active):
+            raise ValueError(f"dispersion {self.name!r}: declare active(mc, setup) -> bool")
+        if self.designer not in ("scenario", "exact"):
+            raise ValueError(f"dispersion {self.name!r}: designer must be 'scenario' or "
+                             f"'exact', got {self.designer!r}")
+        if self.stream not in ("child", "sample"):
+            raise ValueError(f"dispersion {self.name!r}: stream must be 'child' or 'sample'")
 
 
-def _attitude(rng, n, mc, setup, theta, *, seed, k):
+#: Where a dispersion acts: the whole body, or each spacecraft.
+LEVELS = ("body", "spacecraft")
+
+
+def _attitude(rng, n, mc, setup, theta):
+    # rng: the sample's own generator, so that sample k's draws equal
+    # initial_conditions(seed, k, n)
     if mc.attitude_dispersion:
-        s0, w0, W0 = initial_conditions(seed, k, n)
+        s0, w0, W0 = draw_initial_conditions(rng, n)
     else:
         s0, w0, W0 = reference_start(setup.body.params.spin_rate, theta)
     return {"sigma0": s0, "omega0": w0, "wheel0": W0}
@@ -138,7 +183,11 @@ DISPERSIONS: tuple[Dispersion, ...] = (
                          "initial wheel speeds")),
                stream="sample",
                keys=(("attitude_dispersion",
-                      Field("bool", True, doc="random initial attitude, rates, wheels")),)),
+                      Field("bool", True, doc="random initial attitude, rates, wheels")),),
+               level="spacecraft",
+               active=lambda mc, setup: setup.attitude_mode == "simulated"
+               and mc.attitude_dispersion,
+               applies=lambda setup: setup.attitude_mode == "simulated"),
     Dispersion("gravity", _gravity,
                lambda v: {"params_override": {"mu": v["mu"], "c20": v["c20"], "c22": v["c22"]}},
                (StoreVar("c20", (), np.float64, "m^2", "C20 (dispersed)"),
@@ -147,13 +196,17 @@ DISPERSIONS: tuple[Dispersion, ...] = (
                keys=(("sigma_c20_pct", Field("float", 0.0, lo=0, doc="1-sigma relative C20 "
                                                                    "error, %")),
                      ("sigma_c22_pct", Field("float", 0.0, lo=0)),
-                     ("sigma_gm_pct", Field("float", 0.0, lo=0)))),
+                     ("sigma_gm_pct", Field("float", 0.0, lo=0))),
+               level="body",
+               active=lambda mc, setup: (mc.sigma_c20_pct, mc.sigma_c22_pct,
+                                         mc.sigma_gm_pct) != (0, 0, 0)),
     Dispersion("reflectivity", _reflectivity,
                lambda v: {"params_override": {"reflectivity": v["reflectivity"]}},
                (StoreVar("reflectivity", (), np.float64, "1", "SRP reflectivity (dispersed)"),),
                keys=(("reflectivity_min", Field("float", 0.6, lo=0, hi=1)),
                      ("reflectivity_max", Field("float", 0.6, lo=0, hi=1))),
-               check=_check_reflectivity),
+               check=_check_reflectivity, level="body",
+               active=lambda mc, setup: mc.reflectivity_min != mc.reflectivity_max),
     Dispersion("initial_state", _state,
                lambda v: {"position_error_T": v["position_error"],
                           "velocity_error_T": v["velocity_error"]},
@@ -164,20 +217,25 @@ DISPERSIONS: tuple[Dispersion, ...] = (
                keys=(("sigma_position_m", Field("float", 0.0, lo=0, doc="1-sigma initial "
                                                                         "position error per axis")),
                      ("sigma_velocity_mm_s", Field("float", 0.0, si="sigma_velocity_m_s",
-                                                   to_si=MM, lo=0)))),
+                                                   to_si=MM, lo=0))),
+               level="spacecraft",
+               active=lambda mc, setup: (mc.sigma_position_m, mc.sigma_velocity_m_s) != (0, 0)),
     Dispersion("failures", _failures, lambda v: {"active": v["active"]},
                (StoreVar("active", ("spacecraft",), bool, "1",
                          "spacecraft working (False: failed)"),
                 StoreVar("n_failed", (), np.int32, "1", "failed spacecraft")),
                keys=(("failures_k", Field("int", 0, lo=0, doc="exactly k of N spacecraft lost")),
                      ("failure_probability", Field("float", 0.0, lo=0, hi=1,
-                                                   doc="per-spacecraft loss probability")))),
+                                                   doc="per-spacecraft loss probability"))),
+               level="spacecraft", designer="exact",
+               active=lambda mc, setup: mc.failures_k > 0 or mc.failure_probability > 0),
     Dispersion("misalignment", _misalignment,
                lambda v: {"misalignment_prv": v["misalignment_prv"]},
                (StoreVar("misalignment_prv", SC3, np.float64, "rad",
                          "camera misalignment (PRV)"),),
                keys=(("sigma_misalignment_deg", Field("float", 0.0, si="sigma_misalignment_rad",
-                                                      to_si=DEG, lo=0, hi=90)),)),
+                                                      to_si=DEG, lo=0, hi=90)),),
+               level="spacecraft", active=lambda mc, setup: mc.sigma_misalignment_rad != 0),
 )
 DISPERSION_ORDER = tuple(d.name for d in DISPERSIONS)
 DISPERSION_VARS: tuple[StoreVar, ...] = tuple(v for d in DISPERSIONS for v in d.variables)
@@ -198,6 +256,12 @@ def dispersion_keys() -> dict:
     return {k: f for d in DISPERSIONS for k, f in d.keys}
 
 
+def scenario_dispersed(mc, setup) -> bool:
+    """True when some dispersion drawn into the designer's scenarios is active (read live):
+    False means every scenario is the nominal flight."""
+    return any(d.active(mc, setup) for d in DISPERSIONS if d.designer == "scenario")
+
+
 def check_dispersions(mc) -> None:
     """Every dispersion's cross-check of the typed ``[monte_carlo]`` table."""
     for d in DISPERSIONS:
@@ -209,7 +273,7 @@ def draw_sample(mc, seed: int, k: int, theta: np.ndarray, setup) -> tuple[dict, 
     """Every dispersion of sample ``k``, in declared order.
 
     ``mc`` is the validated ``[monte_carlo]`` table
-    (:class:`~ideas_hpc.config.campaign_tables.MonteCarlo`: SI values under SI names).
+    (:class:`~ideas_hpc.campaign.schema.campaign_tables.MonteCarlo`: SI values under SI names).
 
     Returns
     -------
@@ -223,10 +287,8 @@ def draw_sample(mc, seed: int, k: int, theta: np.ndarray, setup) -> tuple[dict, 
     values: dict = {}
     pert: dict = {}
     for d in DISPERSIONS:
-        if d.stream == "sample":
-            v = d.draw(None, n, mc, setup, theta, seed=seed, k=k)
-        else:
-            v = d.draw(child, n, mc, setup, theta)
+        rng = sample_rng(seed, k) if d.stream == "sample" else child
+        v = d.draw(rng, n, mc, setup, theta)
         values.update(v)
         for key, val in d.perturb(v).items():
             if isinstance(val, dict):

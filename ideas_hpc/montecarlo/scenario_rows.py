@@ -24,7 +24,7 @@ from ideas_hpc.core.mapping.coverage import first_image_by_spacecraft
 from ideas_hpc.core.mapping.scenario_proofs import BC_ANY, windows, witness_proofs
 from ideas_hpc.flyby.flight import FlybySetup, Perturbation, open_loop_views
 from ideas_hpc.core.mapping.records import Nominal
-from ideas_hpc.mapping.coverage import _camera, _check_geometry, _mesh, _strict_args
+from ideas_hpc.mapping.coverage import camera_record, check_geometry, mesh_record, strict_records
 
 #: Head room on the pilot's deviations (speed only).
 HEADROOM = 1.5
@@ -82,13 +82,13 @@ class RowEngine:
         if "records" not in got:
             setup = self.setup
             shape = setup.body.shape
-            r, c, tan_eta, near, far, _ = _check_geometry(shape, *got["flight"], setup.eta_rad,
-                                                          setup.near_m, setup.far_m)
+            r, c, tan_eta, near, far, _ = check_geometry(shape, *got["flight"], setup.eta_rad,
+                                                         setup.near_m, setup.far_m)
             sun = setup.sun_T() if setup.coverage.needs_sun else None
-            opts, bvh = _strict_args(shape, setup.coverage, sun, r.shape[1])
-            cam = _camera(r, c, np.zeros(r.shape[1]), tan_eta, near, far,
-                          setup.coverage.mode == "exact")
-            got["records"] = (_mesh(shape), cam, opts, bvh)
+            opts, bvh = strict_records(shape, setup.coverage, sun, r.shape[1])
+            cam = camera_record(r, c, np.zeros(r.shape[1]), tan_eta, near, far,
+                                setup.coverage.mode == "exact")
+            got["records"] = (mesh_record(shape), cam, opts, bvh)
         return got["records"]
 
     def prepare(self, pilot: Perturbation | None) -> "RowEngine":

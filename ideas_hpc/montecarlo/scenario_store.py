@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from ideas_hpc.engine.lock import StoreLock
-from ideas_hpc.engine.runner import _run_chunk, run_campaign
+from ideas_hpc.engine.runner import run_chunk, run_campaign
 from ideas_hpc.engine.chunk_write import done_mask
 from ideas_hpc.engine.store import create_store
 from ideas_hpc.engine.store_meta import config_hash, is_store, store_attrs, store_plan
@@ -118,7 +118,7 @@ def _run_serial(path: Path, template, chunk_fn, config, seed, chunk_size, attrs,
         with tqdm(total=done.size, initial=done.size - len(todo), unit="chunk",
                   desc=path.name, disable=not progress, file=sys.stderr) as bar:
             for cid, start, stop in todo:
-                _run_chunk(str(path), chunk_fn, cid, start, stop, gate)
+                run_chunk(str(path), chunk_fn, cid, start, stop, gate)
                 bar.update(1)
     return len(todo)
 

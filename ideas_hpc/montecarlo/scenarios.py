@@ -1,15 +1,17 @@
 """The scenario bank of the reliability designer, and the validation flights (issue 20).
 
 A *scenario* is one draw of the continuous ``[monte_carlo]`` dispersions for
-the whole candidate grid:
+the whole candidate grid; each entry of
+:data:`~ideas_hpc.montecarlo.dispersions.DISPERSIONS` says how (read live):
 
-* the body-level ones (gravity ``mu``, ``C20``, ``C22``; SRP reflectivity) are
-  drawn once and shared by every candidate;
-* the per-spacecraft ones (initial position and velocity errors, camera
-  misalignment and, with ``attitude.mode = "simulated"``, the initial attitude,
-  rates and wheel speeds) are drawn independently for every candidate.
+* ``level="body"`` (gravity ``mu``, ``C20``, ``C22``; SRP reflectivity): drawn
+  once and shared by every candidate;
+* ``level="spacecraft"`` (initial position and velocity errors, camera
+  misalignment, the initial attitude, rates and wheel speeds, which only a
+  simulated attitude reads): drawn independently for every candidate.
 
-Failures are not drawn: the designer handles them exactly. Every candidate is
+Entries with ``designer="exact"`` (failures) are not drawn: the designer
+handles them exactly. Every candidate is
 targeted once on the nominal model and flown open loop through each scenario
 (:func:`ideas_hpc.flyby.flight.open_loop_views`); its row is what it sees, or with a
 ``[coverage]`` requirement what it maps (:func:`ideas_hpc.design.candidates.rows_from_views`).
@@ -31,24 +33,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ideas_hpc.attitude import draw_initial_conditions
 from ideas_hpc.engine.store_meta import config_hash
+from ideas_hpc.progress import map_chunks
 from ideas_hpc.flyby.flight import FlybySetup, Perturbation, endpoints, target
 from ideas_hpc.seeds import (SCENARIO_STREAM, STREAM_ATTITUDE, STREAM_BODY, STREAM_SPACECRAFT,
                      VALIDATION_STREAM, stream_rng)
-from ideas_hpc.montecarlo.dispersions import DISPERSIONS, reference_start
+from ideas_hpc.montecarlo import dispersions as _dispersions
 from ideas_hpc.montecarlo.scenario_rows import RowEngine
 from ideas_hpc.montecarlo.scenario_store import build_into_store, chunk_task
 
 TWO_PI = 2.0 * math.pi
-#: Dispersions drawn once per scenario and shared by all spacecraft.
-BODY_LEVEL = ("gravity", "reflectivity")
-#: Dispersions drawn independently for every spacecraft (attitude has its own stream).
-PER_SPACECRAFT = ("initial_state", "misalignment")
-#: Not drawn: failures are exact in the designer; the attitude is drawn below.
-NOT_DRAWN = ("failures", "attitude")
-_unclassified = {d.name for d in DISPERSIONS} - set(BODY_LEVEL + PER_SPACECRAFT + NOT_DRAWN)
-assert not _unclassified, f"classify dispersions {_unclassified} in scenarios.py"
+#: The purpose word of each dispersion level's generator in a design stream.
+LEVEL_STREAMS = {"body": STREAM_BODY, "spacecraft": STREAM_SPACECRAFT}
 
 
 @dataclass(frozen=True)
@@ -81,32 +77,33 @@ def draw_world(mc, setup: FlybySetup, theta: np.ndarray, seed: int, stream: int,
                k: int) -> dict:
     """Perturbation keywords of draw ``k`` of a design stream for spacecraft ``theta`` (rad).
 
-    Body-level dispersions from purpose ``STREAM_BODY``, per-spacecraft ones
-    from ``STREAM_SPACECRAFT`` (each in :data:`~ideas_hpc.montecarlo.dispersions.DISPERSIONS`
-    order, ``n = theta.size`` rows), the initial attitude (simulated attitude
-    only) from ``STREAM_ATTITUDE`` with the laws of
-    :func:`ideas_hpc.attitude.initial_conditions`, or the undispersed start
-    when ``monte_carlo.attitude_dispersion`` is off. No failures.
+    Each ``designer="scenario"`` entry of
+    :data:`~ideas_hpc.montecarlo.dispersions.DISPERSIONS` draws, in its order,
+    from its level's generator (purpose ``STREAM_BODY`` or
+    ``STREAM_SPACECRAFT``; ``n = theta.size`` rows), or, with a stream of its own
+    in the Monte Carlo kind (``stream="sample"``: the initial attitude, rates
+    and wheel speeds, or the undispersed start when
+    ``monte_carlo.attitude_dispersion`` is off), from purpose
+    ``STREAM_ATTITUDE``. No failures (``designer="exact"``), and nothing of an
+    entry that does not apply to ``setup`` (the attitude of an ideal-attitude flight).
     """
     n = theta.size
-    body = stream_rng(seed, stream, k, STREAM_BODY)
-    per_sc = stream_rng(seed, stream, k, STREAM_SPACECRAFT)
+    rngs = {level: stream_rng(seed, stream, k, word) for level, word in LEVEL_STREAMS.items()}
     pert: dict = {}
-    for d in DISPERSIONS:
-        if d.name in NOT_DRAWN:
+    for d in _dispersions.DISPERSIONS:
+        flown = d.applies is None or d.applies(setup)
+        if d.designer != "scenario" or (not flown and d.stream != "child"):
             continue
-        v = d.draw(body if d.name in BODY_LEVEL else per_sc, n, mc, setup, theta)
+        rng = rngs[d.level] if d.stream == "child" else stream_rng(seed, stream, k,
+                                                                     STREAM_ATTITUDE)
+        v = d.draw(rng, n, mc, setup, theta)   # a shared stream draws all the same
+        if not flown:
+            continue
         for key, val in d.perturb(v).items():
             if isinstance(val, dict):
                 pert.setdefault(key, {}).update(val)
             else:
                 pert[key] = val
-    if setup.attitude_mode == "simulated":
-        if mc.attitude_dispersion:
-            pert["ics"] = draw_initial_conditions(
-                stream_rng(seed, stream, k, STREAM_ATTITUDE), n)
-        else:
-            pert["ics"] = reference_start(setup.body.params.spin_rate, theta)
     return pert
 
 
@@ -126,38 +123,11 @@ def row_engine(setup: FlybySetup, theta, mc, seed: int, stream: int) -> RowEngin
     return RowEngine(setup, theta, r0, v0).prepare(pilot)
 
 
-def _apply(part, fn):
-    return fn(part)
-
-
 def _run_chunks(ks, fn, client, chunk_size, progress, label):
     parts = [ks[i:i + chunk_size] for i in range(0, len(ks), chunk_size)]
-    bar = None
-    if progress:
-        import sys
-
-        from tqdm.auto import tqdm
-        bar = tqdm(total=len(ks), desc=label, unit="scenario", file=sys.stderr, leave=False)
-    out = []
-    if client is None:
-        for p in parts:
-            out.append(fn(p))
-            if bar is not None:
-                bar.update(len(p))
-    else:
-        from distributed import as_completed
-        # the row engine once per worker (see engine.runner._submit_all)
-        fn_f = client.scatter(fn, broadcast=True, hash=False)
-        futures = client.map(_apply, parts, fn=fn_f, pure=False)
-        index = {f.key: i for i, f in enumerate(futures)}
-        res = [None] * len(parts)
-        for f in as_completed(futures):
-            res[index[f.key]] = f.result()
-            if bar is not None:
-                bar.update(len(parts[index[f.key]]))
-        out = res
-    if bar is not None:
-        bar.close()
+    # the row engine once per worker (see engine.runner._submit_all)
+    out = map_chunks(fn, parts, client, desc=label if progress else None, unit="scenario",
+                     sizes=[len(p) for p in parts], scatter=True)
     return np.concatenate(out) if out else None
 
 
@@ -181,7 +151,8 @@ def shaping_config(setup: FlybySetup, mc, step_rad: float, seed: int, n: int) ->
     mc_d = {f.name: getattr(mc, f.name) for f in dataclasses.fields(mc) if f.name not in skip}
     sh = setup.body.shape
     fs = {f.name: repr(getattr(setup, f.name)) for f in dataclasses.fields(setup)
-          if f.name not in ("body", "seed", "decimate")}
+          if f.name not in ("body", "seed", "decimate")
+          and not (f.name == "torques" and not setup.torques)}   # older banks' hashes hold
     import hashlib
     mesh = hashlib.sha256(np.ascontiguousarray(sh.vertices_T).tobytes()
                           + np.ascontiguousarray(sh.faces).tobytes()).hexdigest()

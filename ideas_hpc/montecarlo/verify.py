@@ -68,7 +68,7 @@ def verify_swarm(setup: FlybySetup, theta, periods, *, mc, seed: int, n_samples:
     periods : (N,) s or None
         Sweep periods (FoV sweeping).
     mc : MonteCarlo
-        The validated ``[monte_carlo]`` table (:class:`~ideas_hpc.config.campaign_tables.MonteCarlo`, SI).
+        The validated ``[monte_carlo]`` table (:class:`~ideas_hpc.campaign.schema.campaign_tables.MonteCarlo`, SI).
     seed : int
         Campaign seed; sample ``k`` draws from ``SeedSequence(seed, spawn_key=(k,))``.
     n_samples : int

@@ -85,7 +85,7 @@ def closed_loop_step(t, x, z, ring, gains, wheels, L_ext, dt, ref, u, err, work)
 
 @njit(cache=True, parallel=True, error_model="numpy")
 def simulate_batch(mode, dcm_RT_all, spin_rate, periods, theta_max, gains, wheels,
-                   dt, n_steps, every, initial, ref_table):
+                   dt, n_steps, every, initial, tables):
     """Closed-loop attitude of ``S x N`` spacecraft over ``n_steps`` steps of ``dt``.
 
     Parameters
@@ -117,10 +117,12 @@ def simulate_batch(mode, dcm_RT_all, spin_rate, periods, theta_max, gains, wheel
         img_every, ...``).
     initial : :class:`~ideas_hpc.core.attitude.records.Initial`
         (S, N, 3) initial ``sigma_BN``, ``omega_BN_B`` (rad/s), wheel speeds (rad/s).
-    ref_table : (N, n_steps + 1, 9) float64
-        ``mode`` 2 (body tracking): the reference at every step
-        (``core.maneuvers.track_reference_table``); other modes ignore it
-        (pass an empty ``(N, 0, 9)`` array).
+    tables : :class:`~ideas_hpc.core.attitude.records.StepTables`
+        Per step: ``reference`` (N, n_steps + 1, 9), read by ``mode`` 2 (body
+        tracking, ``core.maneuvers.track_reference_table``; other modes ignore
+        it: pass ``(N, 0, 9)``), and ``torque_B_N_m`` (N, n_steps + 1, 3), the
+        external torque ``L_ext`` in B (N m) held over each step (``(N, 0, 3)``:
+        none). The controller does not know it (its feed-forward torque is zero).
 
     Returns
     -------
@@ -154,7 +156,11 @@ def simulate_batch(mode, dcm_RT_all, spin_rate, periods, theta_max, gains, wheel
     sigma_RT_all = np.empty((n_sc, 3))
     for i in range(n_sc):
         sigma_RT_all[i] = mrp_from_dcm(np.ascontiguousarray(dcm_RT_all[i]))
-    L_ext = np.zeros(3)
+    ref_table = tables.reference
+    torque_table = tables.torque_B_N_m
+    disturbed = torque_table.shape[1] > 0
+    # the controller is not told the disturbance: the sliding surface rejects it
+    L_known = np.zeros(3)
     for job in prange(n_s * n_sc):
         smp = job // n_sc
         i = job % n_sc
@@ -164,6 +170,7 @@ def simulate_batch(mode, dcm_RT_all, spin_rate, periods, theta_max, gains, wheel
         u = np.empty(3)
         err = np.empty(6)
         work = np.empty((5, 9))
+        L_ext = np.zeros(3)
         sigma_RT = sigma_RT_all[i]
         dcm_RT = dcm_RT_all[i]
         period = periods[i]
@@ -205,7 +212,10 @@ def simulate_batch(mode, dcm_RT_all, spin_rate, periods, theta_max, gains, wheel
                     ref[j] = ref_table[i, k, j]
             else:
                 reference_into(mode, t, spin_rate, sigma_RT, dcm_RT, theta_max, period, ref)
-            sliding_mode_into(x, z, ref, gains, wheels, L_ext, u, err)
+            if disturbed:
+                for j in range(3):
+                    L_ext[j] = torque_table[i, k, j]
+            sliding_mode_into(x, z, ref, gains, wheels, L_known, u, err)
             if k < n_steps:
                 rk4_step_into(x, u, L_ext, I_rw, J_s, dt, work, x)
                 if err[0] * err[0] + err[1] * err[1] + err[2] * err[2] < int_limit * int_limit:

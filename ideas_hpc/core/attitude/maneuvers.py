@@ -139,11 +139,18 @@ def fov_reference_into(t, spin_rate, sigma_RT, dcm_RT, theta_max, period, ref):
 
 @njit(cache=True, error_model="numpy")
 def reference_into(mode, t, spin_rate, sigma_RT, dcm_RT, theta_max, period, ref):
-    """Dispatch: ``mode`` 0 = Nadir Pointing, 1 = FoV Sweeping."""
-    if mode == FOV_MODE:
+    """Dispatch: ``mode`` 0 = Nadir Pointing, 1 = FoV Sweeping.
+
+    Any other code raises ``ValueError``: a maneuver without its branch here
+    (or a tabulated one, ``TRACK_MODE``, whose reference is not a function of
+    ``t``) must never fly another maneuver's reference.
+    """
+    if mode == NP_MODE:
+        nadir_reference_into(t, spin_rate, sigma_RT, dcm_RT, ref)
+    elif mode == FOV_MODE:
         fov_reference_into(t, spin_rate, sigma_RT, dcm_RT, theta_max, period, ref)
     else:
-        nadir_reference_into(t, spin_rate, sigma_RT, dcm_RT, ref)
+        raise ValueError("reference_into: no reference kernel for this maneuver mode code")
 
 
 @njit(cache=True, error_model="numpy")
@@ -178,11 +185,16 @@ def fov_camera_dcm_into(t, dcm_RT, theta_max, period, out):
 
 @njit(cache=True, error_model="numpy")
 def camera_dcm_into(mode, t, dcm_RT, theta_max, period, out):
-    """Dispatch: camera DCM ``[B T]`` (3, 3) of maneuver ``mode`` at ``t`` (s) into ``out``."""
-    if mode == FOV_MODE:
+    """Dispatch: camera DCM ``[B T]`` (3, 3) of maneuver ``mode`` at ``t`` (s) into ``out``.
+
+    An unknown code raises ``ValueError`` (as :func:`reference_into`).
+    """
+    if mode == NP_MODE:
+        nadir_camera_dcm_into(t, dcm_RT, theta_max, period, out)
+    elif mode == FOV_MODE:
         fov_camera_dcm_into(t, dcm_RT, theta_max, period, out)
     else:
-        nadir_camera_dcm_into(t, dcm_RT, theta_max, period, out)
+        raise ValueError("camera_dcm_into: no camera kernel for this maneuver mode code")
 
 
 @njit(cache=True, error_model="numpy")

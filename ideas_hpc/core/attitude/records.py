@@ -66,3 +66,16 @@ class Initial(NamedTuple):
     omega_BN_B: np.ndarray
     #: (S, N, 3) float64, wheel speeds, rad/s.
     wheel_rad_s: np.ndarray
+
+
+class StepTables(NamedTuple):
+    """What :func:`~ideas_hpc.core.attitude.batch.simulate_batch` reads at every step
+    ``k`` (``t = k dt``) of spacecraft ``i``; a table with no steps (``(N, 0, .)``)
+    is not read."""
+
+    #: (N, n_steps + 1, 9) float64, body tracking's reference ``[sigma_RN,
+    #: omega_RN_R, omegadot_RN_R]`` (``core.maneuvers.track_reference_table``).
+    reference: np.ndarray
+    #: (N, n_steps + 1, 3) float64, the external (disturbance) torque in B, N m,
+    #: held over the step (the sum of :mod:`ideas_hpc.attitude.torque_terms`).
+    torque_B_N_m: np.ndarray

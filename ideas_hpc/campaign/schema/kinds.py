@@ -7,7 +7,7 @@ one-chunk store (:mod:`ideas_hpc.engine.single`); a chunked kind plans its
 chunks and runs them on the engine itself (:func:`ideas_hpc.engine.run_campaign`).
 Functions are imported when the kind runs, so the registry costs nothing and
 has no import cycle. A new kind is a module with its run function and one
-entry here (plus its keys in :mod:`ideas_hpc.config.campaign_tables` if it has any).
+entry here (plus its keys in :mod:`ideas_hpc.campaign.schema.campaign_tables` if it has any).
 A kind whose ``design.method`` picks a different entry lists it in ``methods``
 (method -> module and function), so this table alone says which function runs.
 """
@@ -17,6 +17,10 @@ from __future__ import annotations
 import importlib
 from dataclasses import dataclass
 from typing import Callable
+
+
+#: Where a kind's flown swarm comes from (:attr:`Kind.swarm`).
+SWARM_SOURCES = ("file", "file-angles", "designed")
 
 
 @dataclass(frozen=True)
@@ -39,6 +43,33 @@ class Kind:
     #: The maneuver (``attitude.maneuver`` name) the kind always flies, whatever
     #: the file says; ``None``: the file's.
     maneuver: str | None = None
+    # --- capabilities: what the schema, the scans and the report read, so that
+    # no kind name is compared outside this module
+    #: Where the flown swarm comes from: ``"file"`` (``swarm.angles_rad`` and,
+    #: for a sweeping maneuver, ``swarm.sweep_periods_min``), ``"file-angles"``
+    #: (the angles from the file or a nadir design store, the periods designed)
+    #: or ``"designed"`` (the kind designs the angles).
+    swarm: str = "file"
+    #: Scores stereo pairs (``coverage.require_stereo``).
+    stereo: bool = False
+    #: Designs for ``design.success_probability`` (the scenario bank).
+    success_probability: bool = False
+    #: ``design.method`` values that take continuous angles (``angle_step_deg = 0``).
+    continuous_methods: tuple = ()
+    #: Its store's ``swarm_angle`` is one nadir-pointing design, readable as
+    #: ``design.nadir_store``.
+    nadir_swarm_store: bool = False
+    #: Its store holds dispersed samples (dimension ``sample``).
+    samples: bool = False
+
+    def __post_init__(self):
+        if self.swarm not in SWARM_SOURCES:
+            raise ValueError(f"kind {self.name!r}: swarm must be one of {SWARM_SOURCES}")
+
+    @property
+    def designs(self) -> bool:
+        """The kind designs something (angles or periods) rather than flying a given swarm."""
+        return self.swarm != "file"
 
     def runner(self, method: str | None = None) -> Callable:
         """The run function, of ``design.method = method`` when the kind lists one."""
@@ -54,12 +85,24 @@ KINDS: dict[str, Kind] = {k.name: k for k in (
          "one flyby of swarm.angles_rad"),
     Kind("design-nadir", "ideas_hpc.campaign.design_ga", "run_design", False,
          "fewest spacecraft for the coverage target (exact integer programme or GA)",
-         methods=(("exact", "ideas_hpc.campaign.design_nadir", "run_design_exact"),)),
+         methods=(("exact", "ideas_hpc.campaign.design_nadir", "run_design_exact"),),
+         swarm="designed", stereo=True, success_probability=True,
+         continuous_methods=("ga",), nadir_swarm_store=True),
     Kind("design-fov", "ideas_hpc.campaign.design_ga", "run_design", False,
-         "sweep periods of a swarm with half the field of view (GA)", maneuver="fov"),
+         "sweep periods of a swarm with half the field of view (GA)", maneuver="fov",
+         swarm="file-angles"),
     Kind("design-pareto", "ideas_hpc.campaign.design_pareto", "run_design_pareto", False,
          "non-dominated swarms for two or more objectives (NSGA-II), with the exact "
-         "coverage-vs-N curve for (n, coverage)"),
+         "coverage-vs-N curve for (n, coverage)", swarm="designed"),
     Kind("monte-carlo", "ideas_hpc.campaign.montecarlo", "run_monte_carlo", True,
-         "dispersed flights of a designed swarm, chunked and resumable"),
+         "dispersed flights of a designed swarm, chunked and resumable", samples=True),
 )}
+
+
+def kind_of(name: str) -> Kind:
+    """The registered kind ``name`` (a store's ``kind`` attr, a campaign's ``kind``)."""
+    try:
+        return KINDS[name]
+    except KeyError:
+        raise ValueError(f"unknown campaign kind {name!r}; one of "
+                         f"{', '.join(KINDS)}") from None

@@ -2,7 +2,7 @@
 
 A schema is a dict of :class:`Field` (or nested dicts for sub-tables). Values
 are checked once, converted to SI with ``Field.to_si``, and defaults filled
-in. Every error names the dotted field; :class:`~ideas_hpc.config.toml_file.CampaignSource`
+in. Every error names the dotted field; :class:`~ideas_hpc.campaign.schema.toml_file.CampaignSource`
 adds the file and line.
 """
 
@@ -73,8 +73,12 @@ def number(value: Any, field: str, *, lo: float | None = None, hi: float | None 
            lo_open: bool = False, hi_open: bool = False) -> float:
     """The one numeric check of every configuration value: a real, finite number in range.
 
+    Every numeric check in the package goes through here (models, designers
+    and the campaign tables alike), so a value is judged and worded one way.
     Raises :class:`InputError` naming ``field``; returns ``float(value)``.
     """
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value[()]
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise InputError(f"must be a number, got {value!r}", field=field)
     x = float(value)

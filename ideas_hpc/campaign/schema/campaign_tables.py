@@ -1,6 +1,6 @@
 """The campaign file schema (SPEC sections 7-9), validated once at load.
 
-One mechanism (:class:`ideas_hpc.config.fields.Field`) validates every table once
+One mechanism (:class:`ideas_hpc.fields.Field`) validates every table once
 into a frozen dataclass with SI values under SI names (:class:`CampaignConfig`:
 ``c.config.instrument.aperture_m``, ``c.config.design.p_min_s``); the file
 keys keep their user units (``aperture_cm``) and errors name them with the
@@ -12,7 +12,7 @@ file and line. Tables and their keys, in the file's units (converted to SI here)
 ``[body]`` ``name`` (name or path), ``params`` (preset name or a table of
 :func:`ideas_hpc.body.params.params_from_mapping` keys), ``resolution`` (analytic
 bodies), ``data_path``, ``length_unit`` (:mod:`ideas_hpc.campaign.body_checks`); ``shape``,
-``kernels``, ``spice_body``, ``spice_frame``, ``[flyby] epoch_utc``: :mod:`~ideas_hpc.config.spice_table`.
+``kernels``, ``spice_body``, ``spice_frame``, ``[flyby] epoch_utc``: :mod:`~ideas_hpc.campaign.schema.spice_table`.
 
 ``[instrument]`` ``ground_resolution_m``, ``aperture_cm``, ``wavelength_um``,
 ``min_elevation_deg``, ``near_field_mm``, ``image_rate_hz``, ``half_angle_deg``
@@ -26,7 +26,7 @@ turn of swarm angle), ``d_sep_km`` (default from the sizing), ``tolerance_m``,
 ``max_iterations``, ``dt_s`` (attitude step and trajectory sampling),
 ``epoch_s`` (arrival epoch after the body's element epoch: the Sun direction at
 flyby time ``t`` is the ephemeris at ``epoch_s + t``); ``geometry = "encounter"`` and its
-keys: :mod:`ideas_hpc.config.encounter_table`.
+keys: :mod:`ideas_hpc.campaign.schema.encounter_table`.
 
 ``[swarm]`` ``angles_rad`` and ``sweep_periods_min`` (flyby and Monte Carlo),
 ``min_separation_km`` (closest allowed distance between two spacecraft on the
@@ -45,7 +45,7 @@ the owning modules' ``*_from_config`` (see their docstrings).
 (Monte Carlo verification of the design with the ``[monte_carlo]`` dispersions)
 (exact designer); ``success_probability``, ``confidence``, ``scenarios``,
 ``demonstrate`` (the success-probability designer, issue 20; tables and checks
-in :mod:`ideas_hpc.config.design_table`);
+in :mod:`ideas_hpc.campaign.schema.design_table`);
 (GA) ``population``, ``generations``, ``n_max``, ``eps_tol_pct``,
 ``angle_step_rad``, ``p_min_min``, ``p_max_min``, ``period_step_min``,
 ``parents``, ``elitism``, ``mutation_probability``, ``stall_generations``;
@@ -66,22 +66,22 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ideas_hpc.attitude.maneuvers import CAMPAIGN_NAMES, campaign_maneuver
-from ideas_hpc.config.toml_file import CampaignSource, load_campaign
+from ideas_hpc.campaign.schema.toml_file import CampaignSource, load_campaign
 from ideas_hpc.design.pareto.objectives import check_objectives
 from ideas_hpc.errors import InputError, config_fields
 from ideas_hpc.montecarlo.dispersions import check_dispersions
-from ideas_hpc.config.fields import (Field, live_typed_table, schema_defaults, to_typed,
+from ideas_hpc.fields import (Field, live_typed_table, schema_defaults, to_typed,
                                      typed_table, validate, with_defaults)
 from ideas_hpc.units import CM, DEG, KM, MINUTE, MM, UM
-from ideas_hpc.flyby.sizing import INSTRUMENT_DEFAULTS as _CAM
-from ideas_hpc.config.design_checks import (DESIGNER_FIELDS, check_stereo_design,
+from ideas_hpc.instrument import INSTRUMENT_DEFAULTS as _CAM
+from ideas_hpc.campaign.schema.design_checks import (DESIGNER_FIELDS, check_stereo_design,
                                            resolve_angle_step)
-from ideas_hpc.config.encounter_table import ENCOUNTER, check_encounter
-from ideas_hpc.config.spice_table import SPICE_BODY, SPICE_FLYBY, resolve_spice
-from ideas_hpc.config.model_fields import (COVERAGE_FIELDS, GAINS_FIELDS, SPACECRAFT_FIELDS,
+from ideas_hpc.campaign.schema.encounter_table import ENCOUNTER, check_encounter
+from ideas_hpc.campaign.schema.spice_table import SPICE_BODY, SPICE_FLYBY, resolve_spice
+from ideas_hpc.campaign.schema.model_fields import (COVERAGE_FIELDS, GAINS_FIELDS, SPACECRAFT_FIELDS,
                                            STORED_NAMES, flyby_errors, stored_fields)
-from ideas_hpc.campaign.kinds import KINDS as REGISTRY
-from ideas_hpc.config.design_table import DESIGN, MC_SCHEMA, reliability_checks, verify_samples
+from ideas_hpc.campaign.schema.kinds import KINDS as REGISTRY
+from ideas_hpc.campaign.schema.design_table import DESIGN, MC_SCHEMA, reliability_checks, verify_samples
 
 KINDS = REGISTRY.keys()   # live: a kind registered later is a valid choice
 
@@ -207,7 +207,7 @@ class CampaignConfig:
 
 
 def typed_config(values: dict) -> CampaignConfig:
-    """:class:`CampaignConfig` from :func:`~ideas_hpc.config.fields.validate`'s output."""
+    """:class:`CampaignConfig` from :func:`~ideas_hpc.fields.validate`'s output."""
     tables = {k: to_typed(live_typed_table(cls, SCHEMA[k], __name__), values[k], SCHEMA[k])
               for k, cls in TABLES.items()}
     return CampaignConfig(kind=values["kind"], seed=values["seed"],
@@ -255,14 +255,15 @@ def _cross_checks(c: CampaignConfig) -> None:
     if d.failures_tolerated >= d.n_max:
         raise InputError(f"must be < design.n_max ({d.n_max}): {d.failures_tolerated} "
                          "failures would leave no spacecraft", field="design.failures_tolerated")
-    if c.kind in ("flyby", "monte-carlo", "design-fov"):
-        if not sw.angles_rad and not (c.kind == "design-fov" and d.nadir_store):
+    kind = REGISTRY[c.kind]
+    if kind.swarm != "designed":
+        if not sw.angles_rad and not (kind.swarm == "file-angles" and d.nadir_store):
             raise InputError(f"is required for kind {c.kind!r}", field="swarm.angles_rad")
         if (sw.sweep_periods_s is not None and sw.angles_rad is not None
                 and len(sw.sweep_periods_s) != len(sw.angles_rad)):
             raise InputError(f"has {len(sw.sweep_periods_s)} periods for "
                              f"{len(sw.angles_rad)} spacecraft", field="swarm.sweep_periods_min")
-    if campaign_maneuver(c.attitude.maneuver).sweeps and c.kind in ("flyby", "monte-carlo"):
+    if campaign_maneuver(c.attitude.maneuver).sweeps and kind.swarm == "file":
         if sw.sweep_periods_s is None:
             raise InputError(f"is required for attitude.maneuver = {c.attitude.maneuver!r}",
                              field="swarm.sweep_periods_min")
@@ -320,7 +321,7 @@ def build_models(raw: dict, config: CampaignConfig) -> dict:
         ctrl = {"preset": campaign_maneuver(config.attitude.maneuver).gains}
     with config_fields(COVERAGE_FIELDS):   # the models' field names -> the file's keys
         coverage = coverage_options_from_config(cov, prefix="coverage.")
-    if coverage.require_stereo and config.kind.startswith("design"):
+    if coverage.require_stereo and REGISTRY[config.kind].designs:
         check_stereo_design(config, raw.get("design"))
     with config_fields(SPACECRAFT_FIELDS):
         sc = spacecraft_from_config(_sub_table(raw, "spacecraft"), prefix="spacecraft.")
@@ -372,10 +373,10 @@ def resolved_config(c: Campaign) -> dict[str, Any]:
     """The campaign as run, with nothing implicit: what a store records and hashes.
 
     Every schema key with its value or default in the file's units
-    (:func:`ideas_hpc.config.fields.with_defaults`), and under ``models`` the
+    (:func:`ideas_hpc.fields.with_defaults`), and under ``models`` the
     resolved sub-models of ``[dynamics]``, ``[spacecraft]``, ``[controller]``
     and ``[coverage]`` (SI, every default of their modules written out, under the
-    names of :data:`~ideas_hpc.config.model_fields.STORED_NAMES`). So a
+    names of :data:`~ideas_hpc.campaign.schema.model_fields.STORED_NAMES`). So a
     changed default changes the hash, and ``--resume`` names the field. The
     :data:`EXECUTION_KNOBS` are left out: they do not change the numbers.
     Every store writer (flyby, designs, Monte Carlo) uses this one function.

@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ideas_hpc.config.fields import Field
+from ideas_hpc.fields import Field
 from ideas_hpc.errors import InputError
 
 SPICE_BODY = {

@@ -22,7 +22,8 @@ import warnings
 
 from ideas_hpc.design.bank import grid_size
 from ideas_hpc.design.stereo import check_grid
-from ideas_hpc.config.model_fields import FLYBY_FIELDS
+from ideas_hpc.campaign.schema.kinds import KINDS
+from ideas_hpc.campaign.schema.model_fields import FLYBY_FIELDS
 from ideas_hpc.errors import InputError, config_fields
 from ideas_hpc.units import DEG
 
@@ -50,7 +51,7 @@ def _warn_alias() -> None:
 @contextlib.contextmanager
 def designer_errors(c=None):
     """Re-raise a designer's (or the flyby layer's) :class:`InputError` under the file's key
-    (:data:`DESIGNER_FIELDS`, :data:`~ideas_hpc.config.model_fields.FLYBY_FIELDS`), with
+    (:data:`DESIGNER_FIELDS`, :data:`~ideas_hpc.campaign.schema.model_fields.FLYBY_FIELDS`), with
     its file and line when the campaign ``c`` is given."""
     try:
         with config_fields({**FLYBY_FIELDS, **DESIGNER_FIELDS}):   # designs fly setups too
@@ -78,7 +79,7 @@ def resolve_angle_step(config):
             raise InputError(f"is a deprecated alias of {STEP_KEY}, which gives another step; "
                              f"keep {STEP_KEY} only", field=ALIAS_KEY)
     step = deg if deg is not None else alias
-    ga = config.kind == "design-nadir" and d.method == "ga"
+    ga = d.method in KINDS[config.kind].continuous_methods
     if step is not None and step <= 0 and not ga:
         raise InputError("must be > 0 (0, continuous angles, is for the GA only)",
                          field=ALIAS_KEY if deg is None else STEP_KEY)
@@ -92,9 +93,10 @@ def check_stereo_design(config, raw_design) -> None:
     """A design campaign with ``coverage.require_stereo``: the NP designers score pairs
     (``raw_design``: the file's ``[design]`` table, to name the key it used)."""
     d = config.design
-    if config.kind != "design-nadir":
+    if not KINDS[config.kind].stereo:
+        able = " or ".join(k.name for k in KINDS.values() if k.stereo)
         raise InputError(f"stereo from two spacecraft is a condition on pairs, which kind "
-                         f"{config.kind!r} cannot score; use kind design-nadir",
+                         f"{config.kind!r} cannot score; use kind {able}",
                          field="coverage.require_stereo")
     key = step_key(raw_design)
     if d.method == "ga":

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from ideas_hpc.attitude.maneuvers import campaign_maneuver
 from ideas_hpc.errors import InputError
-from ideas_hpc.config.fields import Field
+from ideas_hpc.fields import Field
 from ideas_hpc.units import DEG, KM
 
 ENCOUNTER = {

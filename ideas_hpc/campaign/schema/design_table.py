@@ -1,5 +1,5 @@
 """The ``[design]`` and ``[monte_carlo]`` tables and their cross-checks (split from
-:mod:`ideas_hpc.config.campaign_tables`).
+:mod:`ideas_hpc.campaign.schema.campaign_tables`).
 
 The success-probability designer (issue 20) reads ``design.success_probability``
 (p, 0 < p < 1), ``design.confidence`` (of the validation's lower bound, in
@@ -15,7 +15,8 @@ import math
 
 from ideas_hpc.errors import InputError
 from ideas_hpc.montecarlo.dispersions import dispersion_keys
-from ideas_hpc.config.fields import Field, LiveTable
+from ideas_hpc.campaign.schema.kinds import KINDS
+from ideas_hpc.fields import Field, LiveTable
 from ideas_hpc.units import DEG, MINUTE
 
 #: Validation samples when ``design.verify_samples`` is not given.
@@ -91,8 +92,9 @@ def reliability_checks(c) -> None:
         if d.bank_level is not None:
             raise InputError("needs design.success_probability", field="design.bank_level")
         return
-    if c.kind != "design-nadir":
-        raise InputError(f"is for kind 'design-nadir', not {c.kind!r}",
+    if not KINDS[c.kind].success_probability:
+        able = ", ".join(repr(k.name) for k in KINDS.values() if k.success_probability)
+        raise InputError(f"is for kind {able}, not {c.kind!r}",
                          field="design.success_probability")
     if d.method != "exact":
         raise InputError("is supported by the exact designer only (design.method = 'exact'), "

@@ -1,0 +1,224 @@
+"""The layer order of CONTRIBUTING.md, enforced with plain ``ast`` over ``ideas_hpc``.
+
+Data flows one way: cli -> campaign (kinds and schema) -> flyby / design /
+montecarlo -> models (body, dynamics, attitude, mapping, plots) -> the
+execution engine and the ``core/`` kernels -> the ground floor (errors, units,
+constants, seeds, progress, fields, instrument). A module may import its own
+layer or any layer below it; folders of one layer may import each other, but
+never in a cycle. Every import counts, also those inside functions: a lazy
+import still ties the folders together.
+"""
+
+from __future__ import annotations
+
+import ast
+from collections import defaultdict
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parents[1] / "ideas_hpc"
+
+#: Bottom to top. A folder is named by its path under ``ideas_hpc`` ("" for
+#: the package's own modules); a module listed by file overrides its folder.
+LAYERS = (
+    ("ground", ("",)),
+    ("kernels and engine", ("core", "core/attitude", "core/design", "core/dynamics",
+                            "core/mapping", "engine")),
+    ("models", ("body", "dynamics", "attitude", "mapping", "plots")),
+    ("flyby, design, montecarlo", ("flyby", "design", "design/ga", "design/pareto",
+                                   "montecarlo")),
+    ("campaign", ("campaign", "campaign/schema")),
+    ("cli", ("cli.py", "__init__.py")),
+)
+
+
+def _rank_table():
+    return {unit: rank for rank, (_, units) in enumerate(LAYERS) for unit in units}
+
+
+def _modules():
+    """Dotted module name -> file, for every module of the package."""
+    out = {}
+    for f in PACKAGE.rglob("*.py"):
+        parts = f.relative_to(PACKAGE.parent).with_suffix("").parts
+        out[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = f
+    return out
+
+
+def _unit(f: Path) -> str:
+    """The layer unit of a file: its own name if the table lists it, else its folder."""
+    rel = f.relative_to(PACKAGE)
+    if rel.as_posix() in _rank_table():
+        return rel.as_posix()
+    return rel.parent.as_posix() if rel.parent.as_posix() != "." else ""
+
+
+def _imported(f: Path, node, modules) -> list[str]:
+    """The dotted names an import statement loads: ``from p import m`` loads the
+    module ``p.m`` when there is one, else ``p`` (``m`` is an attribute)."""
+    if isinstance(node, ast.Import):
+        return [a.name for a in node.names]
+    pkg = list(f.relative_to(PACKAGE.parent).with_suffix("").parts[:-1])
+    if node.level:
+        base = pkg[:len(pkg) - (node.level - 1)]
+        mod = ".".join(base + ([node.module] if node.module else []))
+    else:
+        mod = node.module or ""
+    return [f"{mod}.{a.name}" if f"{mod}.{a.name}" in modules else mod for a in node.names]
+
+
+def _edges():
+    """``(importer unit, imported unit) -> [files]`` over all ideas_hpc imports."""
+    modules = _modules()
+    edges = defaultdict(set)
+    for f in modules.values():
+        src = _unit(f)
+        for node in ast.walk(ast.parse(f.read_text(), str(f))):
+            if not isinstance(node, (ast.Import, ast.ImportFrom)):
+                continue
+            for name in _imported(f, node, modules):
+                if not name.startswith("ideas_hpc"):
+                    continue
+                # the longest module prefix is what gets loaded (a name imported
+                # from a package may be a submodule or an attribute)
+                parts = name.split(".")
+                while parts and ".".join(parts) not in modules:
+                    parts.pop()
+                if not parts:
+                    continue
+                dst = _unit(modules[".".join(parts)])
+                if dst != src:
+                    edges[(src, dst)].add(f.relative_to(PACKAGE).as_posix())
+    return edges
+
+
+def test_every_folder_has_a_layer():
+    ranks = _rank_table()
+    units = {_unit(f) for f in _modules().values()}
+    missing = sorted(u for u in units if u not in ranks)
+    assert not missing, f"folders with no layer in LAYERS: {missing}"
+
+
+def test_no_import_runs_up():
+    ranks = _rank_table()
+    up = [f"{a or 'ideas_hpc'} ({LAYERS[ranks[a]][0]}) imports {b or 'ideas_hpc'} "
+          f"({LAYERS[ranks[b]][0]}) in {sorted(fs)}"
+          for (a, b), fs in sorted(_edges().items()) if ranks[a] < ranks[b]]
+    assert not up, "imports that run up a layer:\n" + "\n".join(up)
+
+
+def _cycles(graph):
+    """Strongly connected components with more than one node (Tarjan)."""
+    index, low, stack, on, out = {}, {}, [], set(), []
+
+    def visit(v):
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on.add(v)
+        for w in graph.get(v, ()):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(sorted(comp))
+
+    for v in list(graph):
+        if v not in index:
+            visit(v)
+    return out
+
+
+def test_no_cycle_between_folders():
+    graph = defaultdict(set)
+    for a, b in _edges():
+        graph[a].add(b)
+    cycles = _cycles(graph)
+    assert not cycles, f"folders that import each other: {cycles}"
+
+
+@pytest.mark.parametrize("graph, expect", [
+    ({"a": {"b"}, "b": {"c"}}, []),
+    ({"a": {"b"}, "b": {"c"}, "c": {"a"}}, [["a", "b", "c"]]),
+    ({"a": {"b"}, "b": {"a"}, "c": {"d"}}, [["a", "b"]]),
+])
+def test_cycle_finder_sees_cycles(graph, expect):
+    assert sorted(_cycles(graph)) == expect
+
+
+def test_edge_reader_sees_relative_and_lazy_imports(tmp_path, monkeypatch):
+    """A lazy, relative import from a low folder to a high one is an arrow up."""
+    pkg = tmp_path / "ideas_hpc"
+    for d in ("", "core", "campaign"):
+        (pkg / d).mkdir(parents=True, exist_ok=True)
+        (pkg / d / "__init__.py").write_text("")
+    (pkg / "campaign" / "run.py").write_text("X = 1\n")
+    (pkg / "core" / "k.py").write_text("def f():\n    from ..campaign import run\n")
+    monkeypatch.setitem(globals(), "PACKAGE", pkg)
+    assert _edges() == {("core", "campaign"): {"core/k.py"}}
+    with pytest.raises(AssertionError, match="core .* imports campaign"):
+        test_no_import_runs_up()
+
+
+def test_no_kind_name_is_compared_outside_the_kinds_registry():
+    """Kinds declare capabilities (``campaign/schema/kinds.py``); code reads those, so a
+    new kind needs no edit elsewhere. A comparison with a registered kind's name is refused."""
+    from ideas_hpc.campaign.schema.kinds import KINDS
+
+    names = set(KINDS)
+    hits = []
+    roots = (PACKAGE, PACKAGE.parent / "analysis")
+    for f in (p for r in roots for p in r.rglob("*.py")):
+        if f.name == "kinds.py":
+            continue
+        for node in ast.walk(ast.parse(f.read_text(), str(f))):
+            if isinstance(node, ast.Compare):
+                consts = [c for c in ast.walk(node) if isinstance(c, ast.Constant)]
+            elif isinstance(node, ast.Call) and getattr(node.func, "attr", "") == "startswith":
+                consts = [c for c in node.args if isinstance(c, ast.Constant)]
+                consts = [c for c in consts if any(n.startswith(str(c.value)) for n in names)
+                          and str(c.value) not in ("",)]
+                hits += [f"{f.name}:{node.lineno}" for c in consts
+                         if isinstance(node.func.value, ast.Attribute)
+                         and node.func.value.attr == "kind"]
+                continue
+            else:
+                continue
+            hits += [f"{f.name}:{node.lineno}" for c in consts if c.value in names
+                     and c.value != "flyby" or (c.value == "flyby" and _is_kind(node))]
+    assert not hits, f"kind names compared outside the registry: {hits}"
+
+
+def _is_kind(node) -> bool:
+    """A comparison that reads a ``kind`` (``flyby`` is also a table's name)."""
+    return any(isinstance(n, ast.Attribute) and n.attr == "kind"
+               or isinstance(n, ast.Name) and n.id == "kind" for n in ast.walk(node))
+
+
+def test_no_module_imports_another_folders_private_names():
+    """A name with a leading underscore stays in its folder: the layers above get a
+    public name for what they share (``engine.runner.run_chunk``,
+    ``mapping.coverage.mesh_record``)."""
+    modules = _modules()
+    hits = []
+    for f in modules.values():
+        for node in ast.walk(ast.parse(f.read_text(), str(f))):
+            if not isinstance(node, ast.ImportFrom):
+                continue
+            for name, alias in zip(_imported(f, node, modules), node.names):
+                if not alias.name.startswith("_") or alias.name.endswith("__") \
+                        or name.endswith("." + alias.name):
+                    continue         # a public name, or a module (``import x as _x``)
+                if name in modules and _unit(modules[name]) != _unit(f):
+                    hits.append(f"{f.relative_to(PACKAGE)}:{node.lineno} {alias.name}")
+    assert not hits, f"private names imported from another folder: {hits}"
