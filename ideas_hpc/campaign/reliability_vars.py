@@ -15,21 +15,21 @@ The chosen design replaces the nominal one in ``best_swarm_size`` and
 
 The rest is new:
 
-=============================  ====================  =========================================
-variable                        dims                  meaning
-=============================  ====================  =========================================
-success_probability_required    ()                    p
-reliability_probability         ()                    P on the scenario bank (failures exact)
-scenario_probability            (scenario,)           exact failure-weighted P per scenario
-validation_probability          (validation_sample,)  the same for each fresh sample
-validation_p_hat, _lower_bound  ()                    their mean and lower confidence bound
-bank_swarm_size, _probability   ()                    fewest N meeting p on the bank, its P
-validation_outcome, demonstrated ()                   lower bound >= p (str, bool)
-validation_coverage, _n_failed  (validation_sample,)  coverage with failures sampled (figure)
-reliability_vs_n (_upper,       (reliability_n,)      best P on the scenarios (proven upper
-_validated, _lower, _swarm)                           bound), validated P-hat and its bound
-tolerant_swarm_size, _prob.     (tolerated,)          k-failure-tolerant designs on the curve
-=============================  ====================  =========================================
+==================================  ======================  =========================================
+variable                            dims                    meaning
+==================================  ======================  =========================================
+success_probability_required        ()                      p
+reliability_probability             ()                      P on the scenario bank (failures exact)
+scenario_probability                (scenario,)             exact failure-weighted P per scenario
+validation_probability              (validation_sample,)    the same for each fresh sample
+validation_p_hat, _lower_bound      ()                      their mean and lower confidence bound
+bank_swarm_size, _probability       ()                      fewest N meeting p on the bank, its P
+validation_outcome, demonstrated    ()                      lower bound >= p (str, bool)
+validation_coverage, _n_failed      (validation_sample,)    coverage with failures sampled (figure)
+reliability_vs_n (_upper,           (reliability_n,)        best P on the scenarios (proven upper
+_validated, _lower, _swarm)                                 bound), validated P-hat and its bound
+tolerant_swarm_size, _prob.         (tolerated,)            k-failure-tolerant designs on the curve
+==================================  ======================  =========================================
 """
 
 from __future__ import annotations

@@ -145,7 +145,7 @@ def trajectories(ds, path, *, vertices=None, faces=None) -> Path:
 
 
 def targeting_error(ds, path) -> Path:
-    """|dr_k| per Newton iteration and spacecraft (paper Fig. 23)."""
+    """``|dr_k|`` per Newton iteration and spacecraft (paper Fig. 23)."""
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
     miss = ds["targeting_miss"].values
     if miss.ndim == 3:
