@@ -78,6 +78,10 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
     ds = nominal.data.copy()
     ds = ds.rename({"best_swarm_size": "nominal_swarm_size",
                     "solver_status": "nominal_solver_status"})
+    _with(ds, "nominal_swarm_size", "1", "fewest spacecraft of the nominal design (nothing "
+          "goes wrong)")
+    _with(ds, "nominal_solver_status", "1", "solver status of the nominal design (optimal, "
+          "time_limit, feasible)")
     new = xr.Dataset({
         "best_swarm_size": ((), np.int64(chosen.n)),
         "solver_status": ((), res.status),
@@ -124,14 +128,14 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
     _with(new, "demonstrated", "1", "validation lower bound >= required probability")
     _with(new, "validation_coverage", "1", "coverage of each validation flight with failures "
           "sampled")
-    _with(new, "validation_n_failed", None, "failed spacecraft in each validation flight")
+    _with(new, "validation_n_failed", "1", "failed spacecraft in each validation flight")
     _with(new, "reliability_vs_n", "1", f"best P({thr}) of N spacecraft on the scenarios")
     _with(new, "reliability_vs_n_upper", "1", "proven upper bound on P of any N spacecraft "
           "(scenario programme)")
     _with(new, "reliability_vs_n_validated", "1", "validated P-hat of that swarm")
     _with(new, "reliability_vs_n_lower", "1", f"{100 * conf:g} % lower confidence bound")
     _with(new, "reliability_vs_n_swarm", "rad", "swarm angles of the curve's swarms (NaN: unused)")
-    _with(new, "tolerant_swarm_size", None, "spacecraft of the k-failure-tolerant design")
+    _with(new, "tolerant_swarm_size", "1", "spacecraft of the k-failure-tolerant design")
     _with(new, "tolerant_probability", "1", "its P on the scenario bank")
     ds = xr.merge([ds.drop_vars([k for k in new.data_vars if k in ds]), new],
                   combine_attrs="override")
