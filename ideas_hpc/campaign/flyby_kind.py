@@ -30,12 +30,13 @@ def run_flyby(c: Campaign, out: Path, **_) -> xr.Dataset:
     t = time.perf_counter()
     res = fly(setup, sw.angles_rad, periods)
     result(f"flyby: {len(sw.angles_rad)} spacecraft, coverage {100 * res.coverage.coverage:.3f} % "
-         f"(area), {100 * res.coverage.coverage_count:.3f} % (vertices) in "
-         f"{time.perf_counter() - t:.1f} s")
+           f"(area), {100 * res.coverage.coverage_count:.3f} % (vertices) in "
+           f"{time.perf_counter() - t:.1f} s")
     ds = datasets.flyby_dataset(setup, res)
     ds.attrs.update(datasets.base_attrs(c, setup))
     point = pointing_profile(setup, sw.angles_rad, periods, res.r_img_T)
-    result(point.pop("summary"))
+    line = point.pop("summary")   # a wheel-limit WARNING is a warning: stderr, like the logs
+    (_log if line.startswith("WARNING") else result)(line)
     for name, v in point.items():
         ds[name] = (("spacecraft",), v)
     return with_attrs(ds)
