@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from ideas_hpc.config.campaign_tables import load, resolved_config
@@ -52,3 +53,17 @@ def test_resume_onto_the_same_kind_lists_only_the_differences():
     problems = config_problems(attrs, now, 2026)
     assert problems and not any("kind" in p for p in problems)
     assert any(p.startswith("flyby.tf_s") for p in problems)
+
+
+def test_scan_arrival_says_when_lighting_is_off(tmp_path, capsys):
+    """Without a lighting requirement every epoch maps the same: the scan says so and
+    names the key to set, instead of crowning the first of equals."""
+    from ideas_hpc.campaign.scan import scan_file
+
+    sets = ['body.name="ellipsoid"', "flyby.tf_s=60", "flyby.z_start_km=-3",
+            "flyby.z_stop_km=3"]
+    ds = scan_file(CAMPAIGNS / "eros-flyby.toml", sets, n=2, span_h=1.0)
+    printed = capsys.readouterr().out
+    assert float(np.ptp(ds["coverage"].values)) == 0.0
+    assert "coverage.require_lit" in printed and "lighting is off" in printed
+    assert "best arrival epoch: none, every epoch maps the same coverage" in printed
