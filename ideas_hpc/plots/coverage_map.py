@@ -27,7 +27,8 @@ def _never_note(never_v) -> str:
     k = int(np.count_nonzero(never_v))
     if not k:
         return "every vertex seen"
-    return f"red: never seen ({k} vert{'ex' if k == 1 else 'ices'}, each marked by a dot)"
+    return ("red: never seen (1 vertex, marked by a dot)" if k == 1 else
+            f"red: never seen ({k} vertices, each marked by a dot)")
 
 def render_coverage_map(shape, values, path, *, kind: str = "observed", title=None,
                         view=(20.0, -60.0), dpi: int = 120, label: str | None = None) -> Path:
@@ -170,7 +171,9 @@ def render_coverage_map(shape, values, path, *, kind: str = "observed", title=No
             ax.scatter(pts[:, 0], pts[:, 1], pts[:, 2], color=unseen[:3], s=22,
                        depthshade=False, edgecolors="k", linewidths=0.4, zorder=10)
     sm = cm.ScalarMappable(norm=norm, cmap=cmap)
-    fig.subplots_adjust(left=0.0, right=0.9, bottom=0.02, top=0.9, wspace=0.08)
+    two_lines = bool(title)   # the title, then the statistic: room for both lines
+    fig.subplots_adjust(left=0.0, right=0.9, bottom=0.02, top=0.84 if two_lines else 0.9,
+                        wspace=0.08)
     cax = fig.add_axes((0.93, 0.2, 0.012, 0.6))
     fig.colorbar(sm, cax=cax, label=label)
     fig.suptitle((title + f" ({shape.name})\n" if title else f"{shape.name}: ") + stat)

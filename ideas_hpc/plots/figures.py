@@ -231,7 +231,7 @@ def attitude_series(ds, var, path, *, ylabel, scale=1.0, title=None, log=False) 
         ax.grid(alpha=0.3, which="both" if log else "major")
     axes[-1].set_xlabel("time since the start of the pass, s (log scale: the acquisition, "
                         "then the steady state)", fontsize=9)
-    _legend_spacecraft(axes[0], n_sc, loc="best")
+    _legend_spacecraft(axes[0], n_sc, loc="upper left", bbox_to_anchor=(1.01, 1.0))  # off the data
     kind = "Monte Carlo min-max envelope per spacecraft, " if vals.ndim == 4 else ""
     axes[0].set_title(title or f"{kind}{da.attrs.get('long_name', var)}")
     return save_png(fig, path, body=body_name(ds))
