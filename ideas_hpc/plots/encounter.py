@@ -37,8 +37,8 @@ def scan_map(ds, path) -> "Path":  # noqa: F821
     ax.set_yticks(range(dec.size), [f"{d:g}" for d in dec])
     ax.set_xlabel("phase angle, deg")
     ax.set_ylabel("approach declination, deg")
-    ax.set_title(f"ring coverage at {ds.attrs['speed_m_s'] / 1e3:g} km/s,\n"
-                 f"d_sep {ds.attrs['d_sep_m'] / 1e3:.4g} km (blank: unreachable); colour "
-                 f"scale {lo:.2f}-{hi:.2f} %", fontsize=9)
+    ax.set_title(f"ring coverage at {ds.attrs['speed_m_s'] / 1e3:g} km/s, "
+                 f"d_sep {ds.attrs['d_sep_m'] / 1e3:.4g} km\nblank: unreachable\n"
+                 f"colour scale {lo:.2f}-{hi:.2f} %", fontsize=9)
     fig.colorbar(im, ax=ax, label="ring coverage, %")
     return save_png(fig, path, body=body_name(ds))
