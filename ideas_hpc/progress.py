@@ -32,7 +32,7 @@ def on() -> bool:
 
 
 def result(msg: str) -> None:
-    """A result line (a summary a user keeps): on stdout, so ``run ... > result.txt`` has it."""
+    """A result line (a summary a user keeps): on stdout, so ``run > result.txt`` keeps it."""
     print(msg, flush=True)
 
 
