@@ -67,3 +67,9 @@ def test_scan_arrival_says_when_lighting_is_off(tmp_path, capsys):
     assert float(np.ptp(ds["coverage"].values)) == 0.0
     assert "coverage.require_lit" in printed and "lighting is off" in printed
     assert "best arrival epoch: none, every epoch maps the same coverage" in printed
+
+
+def test_a_percentage_for_a_confidence_says_it_is_a_fraction():
+    with pytest.raises(InputError) as exc:
+        load(CAMPAIGNS / "eros-design.toml", ["design.confidence=95"])
+    assert "design.confidence" in str(exc.value) and "a fraction, e.g. 0.9" in str(exc.value)
