@@ -41,8 +41,8 @@ ROOT = Path(__file__).resolve().parent.parent
 _KEEP = ("exact design:", "Monte Carlo verification:", "Pareto front:", "GA:")
 
 
-def _summary(stderr: str) -> list[str]:
-    lines = [ln for ln in stderr.splitlines() if ln.startswith(_KEEP)]
+def _summary(printed: str) -> list[str]:
+    lines = [ln for ln in printed.splitlines() if ln.startswith(_KEEP)]
     return [re.sub(r"(in|masks|solve|curve in) [0-9.]+ s", r"\1 _ s", ln) for ln in lines]
 
 
@@ -63,7 +63,7 @@ def run_job(campaign: Path, out: Path, cache: Path, sets, workers,
     wall = time.perf_counter() - t0
     if p.returncode:
         sys.exit(f"{' '.join(cmd)} failed ({p.returncode}):\n{p.stderr[-3000:]}")
-    return wall, p.stderr
+    return wall, p.stdout + "\n" + p.stderr   # results on stdout, logs on stderr
 
 
 def main(argv=None) -> None:

@@ -88,7 +88,10 @@ def number(value: Any, field: str, *, lo: float | None = None, hi: float | None 
            or (hi is not None and (x >= hi if hi_open else x > hi)))
     if bad:
         f = Field("float", lo=lo, hi=hi, lo_open=lo_open, hi_open=hi_open)
-        raise InputError(f"must be {_range_msg(f)}, got {x:g}", field=field)
+        fraction = hi == 1 and lo is not None and 0 <= lo < 1 and x > 1   # 90 for 0.9
+        raise InputError(f"must be {_range_msg(f)}, got {x:g}"
+                         + (" (a fraction, e.g. 0.9, not a percentage)" if fraction else ""),
+                         field=field)
     return x
 
 

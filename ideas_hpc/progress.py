@@ -1,5 +1,6 @@
 """Progress bars of the long one-piece phases (issue 22): candidate masks, the
-coverage-versus-N curve, the Monte Carlo verification.
+coverage-versus-N curve, the Monte Carlo verification; and where lines go: results
+on stdout (:func:`result`), progress and logs on stderr (:func:`log`).
 
 The bars are tqdm's, on stderr, like the GA's and the engine's; ``ideas-hpc
 run --no-progress`` turns them off for the whole run (:func:`enabled`).
@@ -28,6 +29,21 @@ def enabled(on: bool):
 def on() -> bool:
     """Whether bars are shown (``run --no-progress`` turns them off)."""
     return _STATE["on"]
+
+
+def result(msg: str) -> None:
+    """A result line (a summary a user keeps): on stdout, so ``run > result.txt`` keeps it."""
+    print(msg, flush=True)
+
+
+def log(msg: str) -> None:
+    """A progress or log line (body loaded, phase timings): on stderr, beside the bars."""
+    print(msg, file=sys.stderr, flush=True)
+
+
+def plural(n: int, word: str, many: str | None = None) -> str:
+    """``1 sample``, ``2 samples``: the count and the word in the right number."""
+    return f"{n} {word if n == 1 else (many or word + 's')}"
 
 
 def bar(total: int, desc: str | None, unit: str = "chunk"):

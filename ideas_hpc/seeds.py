@@ -10,7 +10,7 @@ dispersions use ``c = 1`` while the attitude initial conditions use the
 sample's own stream).
 
 Design streams (issue 20)
-------------------------
+-------------------------
 The reliability designer draws from two more families, keyed by three words
 so that they can never be a Monte Carlo sample's key (one word, ``(k,)``) or
 a sample child's (two words, ``(k, c)``)::

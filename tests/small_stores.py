@@ -29,6 +29,11 @@ KINDS = {
         "design.p_max_min=2.0"], 0),
     "design-pareto": ("eros-pareto.toml", SHORT_FLIGHT + [
         "design.angle_step_deg=10", "design.population=8", "design.generations=3"], 0),
+    # the success-probability designer (the main job's kind), on the smoke campaign made
+    # smaller still: p = 0.5 needs only 20 scenarios and 20 validation samples
+    "design-reliability": ("eros-design-quick.toml", SHORT_FLIGHT + [
+        "design.angle_step_deg=10", "design.n_max=6", "design.success_probability=0.5",
+        "design.scenarios=20", "design.verify_samples=20", 'attitude.mode="ideal"'], 0),
     "monte-carlo": ("eros-monte-carlo.toml", SHORT_FLIGHT + [
         "attitude.decimate=10", "monte_carlo.samples=4", "run.chunk_size=2"], 1),
 }

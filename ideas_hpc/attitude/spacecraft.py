@@ -32,9 +32,11 @@ SPACECRAFT_SCHEMA = {
 class SpacecraftModel:
     """Rigid spacecraft with three reaction wheels on its principal axes (SPEC section 5).
 
-    Attributes (SI, the unit in the name; ``[spacecraft]`` keys drop it:
-    :data:`ideas_hpc.campaign.schema.model_fields.SPACECRAFT_FIELDS`)
-    ---------------
+    SI units, the unit in the name; the ``[spacecraft]`` keys drop it
+    (:data:`ideas_hpc.campaign.schema.model_fields.SPACECRAFT_FIELDS`).
+
+    Attributes
+    ----------
     mass_kg : float
         Hub mass, kg (4).
     size_m : tuple of 3 floats

@@ -27,6 +27,7 @@ from ideas_hpc.design.stereo import min_swarm_stereo, stereo_curve
 from ideas_hpc.design.stereo import scorer as stereo_scorer
 from ideas_hpc.engine.job_cluster import JobCluster, phase_client, visibility_tests
 from ideas_hpc.errors import InputError
+from ideas_hpc.progress import result
 from ideas_hpc.design.candidates import candidate_masks
 from ideas_hpc.flyby.flight import fly, target
 from ideas_hpc.campaign.setup import setup_from_campaign
@@ -245,16 +246,16 @@ def _run_exact(c, setup, workers, scheduler, cluster, slurm_config, designer) ->
     with JobCluster(workers=workers, scheduler=scheduler, cluster=cluster,
                     slurm_config=slurm_config, work=work) as client:
         res = (designer or design_exact)(c, setup, client)
-        _log(res.summary)
+        result(res.summary)
         for note in res.notes:
-            _log(f"note: {note}")
+            result(f"note: {note}")
         threshold = res.attrs["threshold_coverage"]
         vdata, vattrs, vline = ({}, {}, None) if designer else \
             verification_vars(c, setup, res.theta, threshold, client)
     if vline:
-        _log(vline)
+        result(vline)
     if vattrs:
-        _log(vattrs["verify_verdict"])
+        result(vattrs["verify_verdict"])
     flight = fly(setup, res.theta)
     ds = datasets.flyby_dataset(setup, flight)
     ds = xr.merge([ds, res.data, xr.Dataset(vdata)], combine_attrs="override")

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from ideas_hpc.progress import result
 from ideas_hpc.design.candidates import candidate_masks
 from ideas_hpc.design.bank import grid_size
 from ideas_hpc.engine.job_cluster import JobCluster, visibility_tests
@@ -244,12 +245,14 @@ def run_design(c: Campaign, out: Path, *, workers=None, scheduler=None, cluster=
         res, theta, periods = design(c, setup, job.client())
     wall = time.perf_counter() - t
     threshold = res.target_coverage - c.config.design.eps_tol_pct / 100.0
-    _log(f"GA: {res.evaluations} designs evaluated in {wall:.1f} s; best: N = "
+    result(f"GA: {res.evaluations} designs evaluated in {wall:.1f} s; best: N = "
          f"{res.best_swarm_size}, " + (requirement_line(res.target_coverage, threshold,
                                                        res.best_coverage) if nadir else
                                        f"reached {100 * res.best_coverage:.3f} %"))
     for note in res.notes:
-        _log(f"note: {note}")
+        result(f"note: {note}")
+    if periods is not None and not nadir:
+        result("sweep periods found (min): " + " ".join(f"{p / 60:.1f}" for p in periods))
     flight = fly(setup, theta, periods)
     ds = datasets.flyby_dataset(setup, flight)
     g = xr.Dataset({

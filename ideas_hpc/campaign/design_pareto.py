@@ -35,6 +35,7 @@ import time
 import numpy as np
 import xarray as xr
 
+from ideas_hpc.progress import result
 from ideas_hpc.design.stereo import check_grid
 from ideas_hpc.design import build_bank, coverage_curve
 from ideas_hpc.design.bank import grid_size, separation_steps
@@ -167,10 +168,10 @@ def run_design_pareto(c, out, *, workers=None, scheduler=None, cluster="local",
         ds = xr.merge([ds, ref], combine_attrs="override")
         attrs.update(ref_attrs)
         notes.append(note)
-    _log(f"Pareto front: {ds.sizes['pareto']} non-dominated swarms of "
+    result(f"Pareto front: {ds.sizes['pareto']} non-dominated swarms of "
          f"{', '.join(names)} in {res.wall_s:.1f} s ({res.evaluations} swarms scored)")
     for note in notes:
-        _log(f"note: {note}")
+        result(f"note: {note}")
     ds.attrs.update(datasets.base_attrs(c, setup))
     ds.attrs.update(attrs)
     ds.attrs["notes"] = json.dumps(notes)

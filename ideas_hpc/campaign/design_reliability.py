@@ -37,6 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ideas_hpc.progress import result
 from ideas_hpc.core.design.reliability import swarm_probabilities
 from ideas_hpc.design import failure_tolerant
 from ideas_hpc.design.bank import grid_size, separation_steps
@@ -156,7 +157,7 @@ def design_reliable(c, setup, client, *, bank_store: str | None = None):
                       f"always maps the target succeeds with at most 1 - p_f^N = "
                       f"{1.0 - p_f ** d.n_max:.6g}", "design.success_probability")
     nominal = design_exact(c, setup, client)
-    _log(nominal.summary.replace("exact design:", "nominal exact design (nothing goes wrong):"))
+    result(nominal.summary.replace("exact design:", "nominal exact design (nothing goes wrong):"))
     client = phase_client(client)   # the job's one cluster (None: in this process)
     exact = continuous_off(mc, setup)
     s_n = 1 if exact else d.scenarios

@@ -26,6 +26,7 @@ import xarray as xr
 
 from ideas_hpc.engine.job_cluster import JobCluster, visibility_tests
 from ideas_hpc.engine.runner import run_campaign
+from ideas_hpc.progress import plural, result
 from ideas_hpc.flyby.flight import FlybySetup, Perturbation
 from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.montecarlo.dispersions import dispersion_order, dispersion_vars, draw_sample
@@ -130,4 +131,30 @@ def run_monte_carlo(c: Campaign, out, *, workers=None, scheduler=None, resume=Fa
                                chunk_size=c.config.run.chunk_size, attrs=attrs, resume=resume,
                                client=client, in_process=job.in_process, progress=progress)
     print(str(summary), file=sys.stderr, flush=True)
+    with xr.open_zarr(out) as ds:
+        coverage = np.asarray(ds["coverage"].values, dtype=float)
+        n_failed = np.asarray(ds["n_failed"].values) if "n_failed" in ds else None
+    result(coverage_result(coverage, n_failed, 1.0 - c.config.design.eps_tol_pct / 100.0))
     return summary
+
+
+def coverage_result(coverage, n_failed, threshold: float) -> str:
+    """The result line of a Monte Carlo campaign: how often the swarm reaches the threshold
+    (the paper's requirement, 100 % - ``design.eps_tol_pct``), the coverage percentiles and
+    how many samples lost a spacecraft. Unfinished samples (NaN) are counted apart."""
+    cov = np.asarray(coverage, dtype=float)
+    ok = np.isfinite(cov)
+    c = 100 * cov[ok]
+    if not c.size:
+        return "Monte Carlo result: no finished sample"
+    line = (f"Monte Carlo result: P(coverage >= {100 * threshold:.2f} %) = "
+            f"{100 * np.mean(cov[ok] >= threshold):.1f} % over {plural(int(c.size), 'sample')} "
+            f"(threshold: 100 % - design.eps_tol_pct); coverage min {c.min():.2f} %, "
+            f"5th percentile {np.percentile(c, 5):.2f} %, median {np.median(c):.2f} %, "
+            f"max {c.max():.2f} %")
+    if n_failed is not None:
+        nf = np.asarray(n_failed)[ok]
+        line += f"; {plural(int((nf > 0).sum()), 'sample')} with a failed spacecraft"
+    if (~ok).any():
+        line += f"; {plural(int((~ok).sum()), 'sample')} not finished"
+    return line

@@ -15,28 +15,28 @@ The chosen design replaces the nominal one in ``best_swarm_size`` and
 
 The rest is new:
 
-=============================  ====================  =========================================
-variable                        dims                  meaning
-=============================  ====================  =========================================
-success_probability_required    ()                    p
-reliability_probability         ()                    P on the scenario bank (failures exact)
-scenario_probability            (scenario,)           exact failure-weighted P per scenario
-validation_probability          (validation_sample,)  the same for each fresh sample
-validation_p_hat, _lower_bound  ()                    their mean and lower confidence bound
-bank_swarm_size, _probability   ()                    fewest N meeting p on the bank, its P
-validation_outcome, demonstrated ()                   lower bound >= p (str, bool)
-validation_coverage, _n_failed  (validation_sample,)  coverage with failures sampled (figure)
-reliability_vs_n (_upper,       (reliability_n,)      best P on the scenarios (proven upper
-_validated, _lower, _swarm)                           bound), validated P-hat and its bound
-tolerant_swarm_size, _prob.     (tolerated,)          k-failure-tolerant designs on the curve
-bank_level                      ()                    p' the bank was solved at (p by default)
-validation_looks (_planned)     ()                    looks made (planned, K) by the design
-validation_first_sample         ()                    first validation sample of the final look
-validation_look_confidence      ()                    confidence of each look, 1 - alpha / K
-validation_look_n (_p_hat,      (validation_look,)    each look's swarm size, P-hat, bound and
-_lower_bound, _first_sample)                          first validation sample, in order
-statistical_lower_bound         ()                    lower bound on the true fewest N (docs)
-=============================  ====================  =========================================
+==================================  ======================  =========================================
+variable                            dims                    meaning
+==================================  ======================  =========================================
+success_probability_required        ()                      p
+reliability_probability             ()                      P on the scenario bank (failures exact)
+scenario_probability                (scenario,)             exact failure-weighted P per scenario
+validation_probability              (validation_sample,)    the same for each fresh sample
+validation_p_hat, _lower_bound      ()                      their mean and lower confidence bound
+bank_swarm_size, _probability       ()                      fewest N meeting p on the bank, its P
+validation_outcome, demonstrated    ()                      lower bound >= p (str, bool)
+validation_coverage, _n_failed      (validation_sample,)    coverage with failures sampled (figure)
+reliability_vs_n (_upper,           (reliability_n,)        best P on the scenarios (proven upper
+_validated, _lower, _swarm)                                 bound), validated P-hat and its bound
+tolerant_swarm_size, _prob.         (tolerated,)            k-failure-tolerant designs on the curve
+bank_level                          ()                      p' the bank was solved at (p by default)
+validation_looks (_planned)         ()                      looks made (planned, K) by the design
+validation_first_sample             ()                      first validation sample of the final look
+validation_look_confidence          ()                      confidence of each look, 1 - alpha / K
+validation_look_n (_p_hat,          (validation_look,)      each look's swarm size, P-hat, bound and
+_lower_bound, _first_sample)                                first validation sample, in order
+statistical_lower_bound             ()                      lower bound on the true fewest N (docs)
+==================================  ======================  =========================================
 
 The certificate (:mod:`ideas_hpc.design.certificate`, docs/certificate.md) is
 ``validation_lower_bound``: the final look's bound, on its own fresh samples,
@@ -106,6 +106,10 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
     ds = nominal.data.copy()
     ds = ds.rename({"best_swarm_size": "nominal_swarm_size",
                     "solver_status": "nominal_solver_status"})
+    _with(ds, "nominal_swarm_size", "1", "fewest spacecraft of the nominal design (nothing "
+          "goes wrong)")
+    _with(ds, "nominal_solver_status", "1", "solver status of the nominal design (optimal, "
+          "time_limit, feasible)")
     new = xr.Dataset({
         "best_swarm_size": ((), np.int64(chosen.n)),
         "solver_status": ((), res.status),
@@ -177,7 +181,7 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
     _with(new, "demonstrated", "1", "validation lower bound >= required probability")
     _with(new, "validation_coverage", "1", "coverage of each validation flight with failures "
           "sampled")
-    _with(new, "validation_n_failed", None, "failed spacecraft in each validation flight")
+    _with(new, "validation_n_failed", "1", "failed spacecraft in each validation flight")
     _with(new, "reliability_vs_n", "1", f"best P({thr}) of N spacecraft on the scenarios")
     _with(new, "reliability_vs_n_upper", "1", "proven upper bound on P of any N spacecraft "
           "(scenario programme)")
@@ -185,7 +189,7 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
     _with(new, "reliability_vs_n_lower", "1", f"{100 * conf:g} % lower confidence bound of each "
           "N alone (samples from 0, not a certificate)")
     _with(new, "reliability_vs_n_swarm", "rad", "swarm angles of the curve's swarms (NaN: unused)")
-    _with(new, "tolerant_swarm_size", None, "spacecraft of the k-failure-tolerant design")
+    _with(new, "tolerant_swarm_size", "1", "spacecraft of the k-failure-tolerant design")
     _with(new, "tolerant_probability", "1", "its P on the scenario bank")
     ds = xr.merge([ds.drop_vars([k for k in new.data_vars if k in ds]), new],
                   combine_attrs="override")

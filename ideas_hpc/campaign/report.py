@@ -76,7 +76,7 @@ def _summary(ds, figs) -> str:
                          "vertices")
         else:
             ok = np.isfinite(cov)
-            lines.append(f"coverage over {ok.sum()} samples: mean {cov[ok].mean():.3f} %, min "
+            lines.append(f"coverage over {ok.sum()} sample{'' if ok.sum() == 1 else 's'}: mean {cov[ok].mean():.3f} %, min "
                          f"{cov[ok].min():.3f} %, 5th percentile {np.percentile(cov[ok], 5):.3f} %,"
                          f" max {cov[ok].max():.3f} %")
         if "mapped" in ds and "coverage_seen" in ds:

@@ -18,6 +18,7 @@ from pathlib import Path
 from ideas_hpc.engine.lock import StoreLock
 from ideas_hpc.engine.single import check_existing, write_complete
 from ideas_hpc.errors import InputError
+from ideas_hpc.progress import result
 from ideas_hpc.progress import enabled as progress_enabled
 from ideas_hpc.campaign.schema.kinds import KINDS
 from ideas_hpc.campaign.schema.campaign_tables import SCHEMA, Campaign, load, resolved_config
@@ -70,6 +71,8 @@ def _run(c: Campaign, *, out, workers, scheduler, resume, cluster, slurm_config,
     workers = workers if workers is not None else c.config.run.workers
     kind = KINDS[c.kind]
     _check_execution(out, workers, w_field, kind, scheduler)
+    if c.config.description:   # e.g. the smoke run says it is not a design, first
+        result(f"campaign: {c.config.description}")
     run = kind.runner(c.config.design.method)
     exec_kw = dict(workers=workers, scheduler=scheduler, cluster=cluster,
                    slurm_config=slurm_config)

@@ -115,8 +115,20 @@ def scan_file(path, overrides=None, *, n: int = 24, span_h: float | None = None,
               f" {100 * float(ds['coverage'][m]):10.3f} {100 * float(ds['coverage_seen'][m]):7.2f}"
               f" {100 * float(ds['lit_fraction'][m]):6.2f} {100 * float(ds['stereo_fraction'][m]):8.2f}")
     best = int(np.argmax(ds["coverage"].values))
-    print(f"best arrival epoch: {ds['epoch'].values[best]:.1f} s "
-          f"(coverage {100 * float(ds['coverage'][best]):.3f} %)")
+    cov = ds["coverage"].values
+    if not (setup.coverage.require_lit or setup.coverage.illumination):
+        # without a lighting requirement coverage ignores the Sun: every epoch maps the
+        # same, and "the best epoch" would be the first of equals
+        print("note: lighting is off (coverage counts what is seen, lit or not): set "
+              "coverage.require_lit = true (--set coverage.require_lit=true) to rank "
+              "arrival epochs by the sunlit area mapped; the lit % column is the Sun's "
+              "share regardless")
+    if np.ptp(cov) <= 1e-12:
+        print(f"best arrival epoch: none, every epoch maps the same coverage "
+              f"({100 * float(cov[best]):.3f} %)")
+    else:
+        print(f"best arrival epoch: {ds['epoch'].values[best]:.1f} s "
+              f"(coverage {100 * float(ds['coverage'][best]):.3f} %)")
     if out is not None:
         ds.to_netcdf(out)
     return ds

@@ -164,7 +164,7 @@ def separation_steps(step: float, d_sep: float, min_separation: float, n: int) -
 
 
 def conflict_windows(n: int, m: int) -> np.ndarray:
-    """Clique rows of the separation constraint: candidates ``i .. i+m`` (mod n), one row each.
+    """Clique rows of the separation constraint: candidates ``i`` to ``i+m`` (mod n), one row each.
 
     Every conflicting pair ``(i, i+d)``, ``1 <= d <= m``, lies in the window
     starting at ``i``, and all pairs inside a window conflict, so ``sum x <= 1``

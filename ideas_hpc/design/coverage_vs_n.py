@@ -75,7 +75,7 @@ class CoverageCurve:
 
 def coverage_curve(bank: CandidateBank, n_max: int, *, min_separation: float = 0.0,
                    time_limit: float | None = None) -> CoverageCurve:
-    """Proven best coverage for every swarm size ``1 .. n_max`` (module docstring)."""
+    """Proven best coverage for every swarm size from 1 to ``n_max`` (module docstring)."""
     t0 = time.perf_counter()
     prepared = prepare(bank, min_separation)
     reach = bank.reach

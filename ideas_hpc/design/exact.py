@@ -47,6 +47,7 @@ from scipy import sparse
 from scipy.optimize import Bounds, LinearConstraint, milp
 
 from ideas_hpc.errors import InputError
+from ideas_hpc.progress import plural
 from ideas_hpc.design.bank import CandidateBank, Reduced, conflict_windows, reduce_problem, separation_steps
 from ideas_hpc.design.ring_bound import redundancy_polish, ring_bound, swap_search
 
@@ -244,7 +245,7 @@ def _ring_result(bank, idx, target, dt) -> ExactResult:
     return ExactResult(indices=idx, theta=bank.theta[idx], n=idx.size,
                        coverage=float(bank.coverage([idx])[0]), target=target, status="optimal",
                        bound=float(idx.size), gap=0.0, solve_time=dt,
-                       notes=[f"proven by the ring-gap bound (no {idx.size - 1} grid candidates "
+                       notes=[f"proven by the ring-gap bound (no {plural(idx.size - 1, 'grid candidate')} "
                               f"can reach the threshold) and a swap search that found "
                               f"{idx.size} that do; no integer programme needed"])
 

@@ -59,9 +59,12 @@ class RunSummary:
         return self.samples_run / self.wall_s if self.wall_s > 0 else float("nan")
 
     def __str__(self) -> str:
-        return (f"{self.store}: {self.chunks_run} chunks run, {self.chunks_skipped} skipped "
-                f"(of {self.n_chunks}), {self.samples_run} samples in {self.wall_s:.2f} s "
-                f"({self.samples_per_s:.1f} samples/s on {self.n_workers} workers; tasks spent "
+        return (f"{self.store}: {self.chunks_run} chunk{'' if self.chunks_run == 1 else 's'} "
+                f"run, {self.chunks_skipped} skipped "
+                f"(of {self.n_chunks}), {self.samples_run} sample{'' if self.samples_run == 1 else 's'} "
+                f"in {self.wall_s:.2f} s ({self.samples_per_s:.1f} samples/s "
+                + (f"on {self.n_workers} dask workers" if self.n_workers else "in this process")
+                + f"; tasks spent "
                 f"{self.compute_s:.2f} s computing, {self.write_s:.2f} s writing)")
 
 

@@ -261,7 +261,12 @@ def config_problems(attrs: Mapping, config: Mapping, campaign_seed: int) -> list
         new = without_later_defaults(old, config, getattr(config, "defaults", None) or {},
                                      getattr(config, "effective", None))
         if config_json(new) != config_json(old):
-            problems += config_diff(old, new) or ["config hash differs"]
+            kinds = (old.get("kind"), config.get("kind")) if isinstance(old, Mapping) else ()
+            if kinds and kinds[0] != kinds[1]:   # the one difference that explains the rest
+                problems.append(f"a store of kind {kinds[0]!r}, this campaign is kind "
+                                f"{kinds[1]!r}")
+            problems += [p for p in config_diff(old, new) if not p.startswith("kind =")] \
+                or ["config hash differs"]
     if int(attrs.get("campaign_seed", -1)) != int(campaign_seed):
         problems.append(f"campaign seed {attrs.get('campaign_seed')} in the store, "
                         f"{campaign_seed} now")

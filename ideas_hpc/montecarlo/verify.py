@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ideas_hpc.flyby.flight import FlybySetup, Perturbation
-from ideas_hpc.progress import map_chunks
+from ideas_hpc.progress import map_chunks, plural
 from ideas_hpc.montecarlo.dispersions import draw_sample
 from ideas_hpc.montecarlo.sample import Nominal, design_nominal, fly_sample
 
@@ -41,10 +41,10 @@ class Verification:
     def summary(self) -> str:
         c = 100 * self.coverage
         return (f"Monte Carlo verification: P(coverage >= {100 * self.threshold:.2f} %) = "
-                f"{100 * self.probability:.1f} % over {c.size} samples (coverage min "
+                f"{100 * self.probability:.1f} % over {plural(c.size, 'sample')} (coverage min "
                 f"{c.min():.2f} %, 5th percentile {np.percentile(c, 5):.2f} %, median "
-                f"{np.median(c):.2f} %; {int((self.n_failed > 0).sum())} samples with a "
-                f"failure) in {self.wall_s:.1f} s")
+                f"{np.median(c):.2f} %; {plural(int((self.n_failed > 0).sum()), 'sample')} "
+                f"with a failure) in {self.wall_s:.1f} s")
 
 
 def _samples(ks, *, setup: FlybySetup, nominal: Nominal, mc, seed: int):

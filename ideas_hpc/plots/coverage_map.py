@@ -21,6 +21,15 @@ from ideas_hpc.errors import InputError
 _KINDS = ("observed", "first_seen", "fraction", "value")
 
 
+
+def _never_note(never_v) -> str:
+    """What the title says about the red: the never-seen vertices (dots) and faces."""
+    k = int(np.count_nonzero(never_v))
+    if not k:
+        return "every vertex seen"
+    return ("red: never seen (1 vertex, marked by a dot)" if k == 1 else
+            f"red: never seen ({k} vertices, each marked by a dot)")
+
 def render_coverage_map(shape, values, path, *, kind: str = "observed", title=None,
                         view=(20.0, -60.0), dpi: int = 120, label: str | None = None) -> Path:
     """Write a PNG of ``shape`` coloured by per-vertex ``values``.
@@ -74,6 +83,7 @@ def render_coverage_map(shape, values, path, *, kind: str = "observed", title=No
     grey = np.array([0.78, 0.78, 0.78, 1.0])
     unseen = np.array([0.86, 0.15, 0.1, 1.0])   # never-seen faces stand out (issue 22)
     area = np.asarray(shape.vertex_areas, dtype=np.float64)
+    never_v = None   # vertices never seen, marked as red dots (kinds with a "seen")
     if kind == "fraction":
         v01 = np.clip(np.nan_to_num(vals.astype(np.float64), nan=0.0), 0.0, 1.0)
         frac = v01[shape.faces].mean(axis=1)
@@ -82,8 +92,9 @@ def render_coverage_map(shape, values, path, *, kind: str = "observed", title=No
         fc = cmap(norm(frac))
         fc[frac == 0.0] = unseen
         label = label or "fraction"
+        never_v = v01 == 0.0
         stat = (f"area-weighted mean {100 * float(area @ v01 / area.sum()):.3f} %; "
-                f"red: never seen")
+                + _never_note(never_v))
     elif kind == "observed":
         frac = vals.astype(bool)[shape.faces].mean(axis=1)
         cmap = colors.LinearSegmentedColormap.from_list("obs", [grey[:3], (0.12, 0.35, 0.85)])
@@ -92,8 +103,9 @@ def render_coverage_map(shape, values, path, *, kind: str = "observed", title=No
         fc[frac == 0.0] = unseen
         label = "observed fraction of face vertices"
         obs = vals.astype(bool)
+        never_v = ~obs
         stat = (f"seen: {100 * float(area[obs].sum() / area.sum()):.3f} % of the area "
-                f"({int(obs.sum())}/{nv} vertices); red: never seen")
+                f"({int(obs.sum())}/{nv} vertices); " + _never_note(never_v))
     elif kind == "value":
         x = vals.astype(np.float64)
         fin = np.isfinite(x)
@@ -125,8 +137,9 @@ def render_coverage_map(shape, values, path, *, kind: str = "observed", title=No
         fc[never] = unseen
         label = "first seen, s"
         seen = np.isfinite(vals)
+        never_v = ~seen
         stat = (f"seen: {100 * float(area[seen].sum() / area.sum()):.3f} % of the area; "
-                "red: never seen")
+                + _never_note(never_v))
     # Simple Lambert shading so the shape reads in 3-D.
     light = np.array([0.4, -0.5, 0.77])
     light /= np.linalg.norm(light)
@@ -150,11 +163,20 @@ def render_coverage_map(shape, values, path, *, kind: str = "observed", title=No
         ax.set_ylabel("y, km")
         ax.set_zlabel("z, km")
         ax.set_title(f"view azimuth {az % 360:.0f} deg", fontsize=9)
+        if never_v is not None and never_v.any():
+            # A few unseen vertices colour no whole face: mark each one, so the red the
+            # title names is always on the figure.
+            pts = v_km[never_v]
+            ax.computed_zorder = False   # the dots over the surface, not sorted under it
+            ax.scatter(pts[:, 0], pts[:, 1], pts[:, 2], color=unseen[:3], s=22,
+                       depthshade=False, edgecolors="k", linewidths=0.4, zorder=10)
     sm = cm.ScalarMappable(norm=norm, cmap=cmap)
-    fig.subplots_adjust(left=0.0, right=0.9, bottom=0.02, top=0.9, wspace=0.08)
+    two_lines = bool(title)   # the title, then the statistic: room for both lines
+    fig.subplots_adjust(left=0.0, right=0.9, bottom=0.02, top=0.84 if two_lines else 0.9,
+                        wspace=0.08)
     cax = fig.add_axes((0.93, 0.2, 0.012, 0.6))
     fig.colorbar(sm, cax=cax, label=label)
-    fig.suptitle((title + "  -  " if title else "") + stat + f" ({shape.name})")
+    fig.suptitle((title + f" ({shape.name})\n" if title else f"{shape.name}: ") + stat)
     fig.savefig(path, dpi=dpi)
     close(fig, path)
     return path

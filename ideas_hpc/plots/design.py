@@ -72,12 +72,19 @@ def ring_view(ds, path) -> "Path":  # noqa: F821
         title += f"\nrequirement {word} by validation"
     elif status is not None:
         title += f"\n{status}" + ("" if gap is None else f", gap {100 * float(gap):.1f} %")
-    ax.set_title(title)
+    ax.set_title(title, fontsize=10)
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
+    # room around the ring for the angle labels (they sat on the axis labels), and
+    # the legend below the axes, where it hides no spacecraft
+    lim = 1.32 * d
+    ax.set_xlim(-lim, lim)
+    ax.set_ylim(-lim, lim)
     ax.set_aspect("equal")
     ax.grid(alpha=0.3)
-    ax.legend(loc="lower right", fontsize=7)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=3, fontsize=7,
+              frameon=False)
+    fig.subplots_adjust(bottom=0.2)
     return save_png(fig, path, body=body_name(ds))
 
 
@@ -124,7 +131,9 @@ def coverage_vs_n(ds, path) -> "Path":  # noqa: F821
     axes[1].set_ylim(lo, hi)
     near = np.flatnonzero(c >= lo)
     k0 = int(n[near[0]]) if near.size else int(n[0])
-    axes[1].set_xlim(max(int(n[0]), k0 - 1) - 0.5, min(int(n[-1]), k0 + 6) + 0.5)
+    design_n = ds.sizes.get("spacecraft", int(n[0]))   # the zoom always shows the design
+    axes[1].set_xlim(max(int(n[0]), min(k0 - 1, design_n - 1)) - 0.5,
+                     max(min(int(n[-1]), k0 + 6), design_n + 1) + 0.5)
     axes[1].ticklabel_format(axis="y", useOffset=False, style="plain")
     axes[1].set_title("zoom on the decision region")
     axes[1].legend(fontsize=7, loc="lower right")

@@ -121,6 +121,30 @@ def _body_wire(ax, vertices_km, faces, every=1):
                     color="0.7", alpha=0.5, linewidth=0)
 
 
+def _equal_axes(ax, zoom: float = 0.85) -> None:
+    """One scale on the three axes of a 3-D plot: a cube around what is drawn."""
+    lims = np.array([ax.get_xlim3d(), ax.get_ylim3d(), ax.get_zlim3d()])
+    mid, half = lims.mean(axis=1), 0.5 * float(np.ptp(lims, axis=1).max())
+    ax.set_xlim3d(mid[0] - half, mid[0] + half)
+    ax.set_ylim3d(mid[1] - half, mid[1] + half)
+    ax.set_zlim3d(mid[2] - half, mid[2] + half)
+    ax.set_box_aspect((1.0, 1.0, 1.0), zoom=zoom)
+
+
+def spacecraft_colors(n: int) -> list:
+    """One distinct colour per spacecraft: tab10 up to 10, tab20 up to 20, then viridis."""
+    if n <= 10:
+        return [plt.get_cmap("tab10")(i) for i in range(n)]
+    if n <= 20:
+        return [plt.get_cmap("tab20")(i) for i in range(n)]
+    return [plt.get_cmap("viridis")(x) for x in np.linspace(0.0, 1.0, n)]
+
+
+def _legend_spacecraft(ax, n: int, **kw) -> None:
+    """A legend naming every spacecraft, in columns of at most 10."""
+    ax.legend(fontsize=7, ncol=max(1, -(-n // 10)), **kw)
+
+
 def trajectories(ds, path, *, vertices=None, faces=None) -> Path:
     """Targeted trajectories in frame T (paper Fig. 22)."""
     fig = plt.figure(figsize=(6.4, 5.6))
@@ -128,9 +152,10 @@ def trajectories(ds, path, *, vertices=None, faces=None) -> Path:
     pos = ds["position"].values / 1e3
     if pos.ndim == 4:
         pos = pos[0]
+    cols = spacecraft_colors(pos.shape[0])
     for i in range(pos.shape[0]):
-        ax.plot(pos[i, :, 0], pos[i, :, 1], pos[i, :, 2], lw=1.5,
-                label=f"sc {i + 1}" if pos.shape[0] <= 10 else None)
+        ax.plot(pos[i, :, 0], pos[i, :, 1], pos[i, :, 2], lw=1.5, color=cols[i],
+                label=f"sc {i + 1}")
         ax.scatter(*pos[i, 0], marker="o", s=10, color="k")
     if vertices is not None:
         _body_wire(ax, vertices / 1e3, faces)
@@ -138,14 +163,13 @@ def trajectories(ds, path, *, vertices=None, faces=None) -> Path:
     ax.set_ylabel("y_T, km")
     ax.set_zlabel("z_T, km")
     ax.set_title("Targeted trajectories (frame T)")
-    if pos.shape[0] <= 10:
-        ax.legend(fontsize=7, loc="upper left")
+    _legend_spacecraft(ax, pos.shape[0], loc="upper left")
     ax.set_box_aspect(None, zoom=0.85)   # room for the z label
     return save_png(fig, path, body=body_name(ds))
 
 
 def targeting_error(ds, path) -> Path:
-    """|dr_k| per Newton iteration and spacecraft (paper Fig. 23)."""
+    """``|dr_k|`` per Newton iteration and spacecraft (paper Fig. 23)."""
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
     miss = ds["targeting_miss"].values
     if miss.ndim == 3:
@@ -178,27 +202,36 @@ def attitude_series(ds, var, path, *, ylabel, scale=1.0, title=None, log=False) 
     A sample dimension, if present, is drawn as a min-max envelope per spacecraft.
     """
     da = ds[var]
-    t = ds["time"].values / 60.0
-    vals = da.values * scale
+    # Time on a log axis: the acquisition takes the first tens of seconds of a
+    # 10-minute pass and the steady state the rest; a linear axis squeezed the whole
+    # transient into its first tick. t = 0 has no place on it and is left out.
+    t_s = ds["time"].values
+    keep = t_s > 0
+    t = t_s[keep]
+    vals = (da.values * scale)[..., keep, :]
     fig, axes = plt.subplots(3, 1, figsize=(6.8, 6.4), sharex=True)
     labels = da.attrs.get("components", ["1", "2", "3"])
+    n_sc = vals.shape[-3]
+    cols = spacecraft_colors(n_sc)
     for c in range(3):
         ax = axes[c]
         if vals.ndim == 4:  # sample, spacecraft, time, comp
             for i in range(vals.shape[1]):
                 y = np.abs(vals[:, i, :, c]) if log else vals[:, i, :, c]
-                ax.fill_between(t, y.min(axis=0), y.max(axis=0), alpha=0.3)
+                ax.fill_between(t, y.min(axis=0), y.max(axis=0), alpha=0.3, color=cols[i],
+                                label=f"sc {i + 1}" if c == 0 else None)
         else:
             for i in range(vals.shape[0]):
                 y = np.abs(vals[i, :, c]) if log else vals[i, :, c]
-                ax.plot(t, y, lw=1, label=f"sc {i + 1}" if c == 0 else None)
+                ax.plot(t, y, lw=1, color=cols[i], label=f"sc {i + 1}" if c == 0 else None)
         if log:
             ax.set_yscale("log")
+        ax.set_xscale("log")
         ax.set_ylabel(f"{ylabel} [{labels[c]}]")
-        ax.grid(alpha=0.3)
-    axes[-1].set_xlabel("time, min")
-    if vals.ndim == 3 and vals.shape[0] <= 10:
-        axes[0].legend(fontsize=7, ncol=4)
+        ax.grid(alpha=0.3, which="both" if log else "major")
+    axes[-1].set_xlabel("time since the start of the pass, s (log scale: the acquisition, "
+                        "then the steady state)", fontsize=9)
+    _legend_spacecraft(axes[0], n_sc, loc="upper left", bbox_to_anchor=(1.01, 1.0))  # off the data
     kind = "Monte Carlo min-max envelope per spacecraft, " if vals.ndim == 4 else ""
     axes[0].set_title(title or f"{kind}{da.attrs.get('long_name', var)}")
     return save_png(fig, path, body=body_name(ds))
@@ -222,12 +255,11 @@ def fov_pyramids(path, r_T, dcm_BT, eta, time_s, *, vertices, faces, body=None) 
         loop = np.vstack([corners, corners[:1]]) / 1e3
         ax.plot(loop[:, 0], loop[:, 1], loop[:, 2], color="tab:orange", lw=0.8)
         ax.scatter(*(r / 1e3), color="tab:blue", s=12)
-    ax.set_aspect("equal")
-    ax.set_title(f"FoV pyramids at t = {time_s / 60.0:.2f} min")
+    ax.set_title(f"FoV pyramids at t = {time_s / 60.0:.2f} min (equal axes)")
     ax.set_xlabel("x_T, km")
     ax.set_ylabel("y_T, km")
     ax.set_zlabel("z_T, km", labelpad=8)
-    ax.set_box_aspect(None, zoom=0.8)   # the z label inside the figure
+    _equal_axes(ax, zoom=0.8)   # a km is a km on every axis: the body keeps its shape
     return save_png(fig, path, body=body)
 
 

@@ -109,8 +109,13 @@ def reliability_checks(c) -> None:
     least = math.ceil(10.0 / (1.0 - p) - 1e-9)
     if d.scenarios < least:
         raise InputError(f"{d.scenarios} scenarios cannot resolve p = {p:g}: at least "
-                         f"10 / (1 - p) = {least} are needed", field="design.scenarios")
+                         f"10 / (1 - p) = {least} are needed (a bank with fewer than 10 "
+                         "expected misses cannot tell P from p); for a quick check run "
+                         "campaigns/eros-design-quick.toml, or lower "
+                         "design.success_probability", field="design.scenarios")
     m = verify_samples(d)
     if m < least:
         raise InputError(f"{m} validation samples cannot resolve p = {p:g}: at least "
-                         f"10 / (1 - p) = {least} are needed", field="design.verify_samples")
+                         f"10 / (1 - p) = {least} are needed (fewer than 10 expected misses "
+                         "cannot tell P from p); lower design.success_probability for a "
+                         "smaller check", field="design.verify_samples")

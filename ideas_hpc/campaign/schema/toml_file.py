@@ -158,6 +158,8 @@ def load_campaign(path, overrides: list[str] | None = None) -> CampaignSource:
                          "text", file=p, line=line) from None
     except OSError as exc:
         raise InputError(f"cannot read the campaign file: {exc.strerror}", file=p) from None
+    if text.startswith("\ufeff"):   # a UTF-8 byte-order mark (some Windows editors): not TOML
+        text = text[1:]
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

@@ -36,7 +36,7 @@ def fma(typingctx, a, b, c):
 
 @njit(cache=True)
 def dot3_fma(a0, a1, a2, b0, b1, b2):
-    """``a . b`` as ``fma(a2, b2, fma(a1, b1, a0 b0))`` (dimensionless)."""
+    """``dot(a, b)`` as ``fma(a2, b2, fma(a1, b1, a0 b0))`` (dimensionless)."""
     return fma(a2, b2, fma(a1, b1, a0 * b0))
 
 

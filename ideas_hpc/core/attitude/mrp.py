@@ -227,7 +227,9 @@ def mrp_sub_s(a1, a2, a3, r1, r2, r3):
 
 @njit(cache=True, error_model="numpy")
 def mrp_rotate_s(s1, s2, s3, v1, v2, v3):
-    """``dcm_from_mrp(sigma) @ v`` without forming the matrix (S&J 3.153)::
+    """``dcm_from_mrp(sigma) @ v`` without forming the matrix (S&J 3.153).
+
+    ::
 
         C v = v + (8 s x (s x v) - 4 (1 - s^2) s x v) / (1 + s^2)^2
     """

@@ -2,7 +2,7 @@
 
 Spacecraft fail independently with probability ``p_f``. In one scenario (one
 draw of the continuous dispersions) the swarm of ``N`` members reaches the
-threshold with probability
+threshold with probability::
 
     P_s = sum_{T subset of swarm} (1 - p_f)^|T| p_f^(N - |T|) 1[cov_s(T) >= need]
 

@@ -3,14 +3,14 @@
 A scenario moves every candidate's camera by a small deviation from its
 nominal flight: positions ``r'_i = r_i + dr_i`` and camera DCMs
 ``C'_i = C_i + dC_i`` at the images. For a vertex ``p`` the camera
-coordinates move by (same derivation as :mod:`ideas_hpc.core.mapping.time_tree`)
+coordinates move by (same derivation as :mod:`ideas_hpc.core.mapping.time_tree`)::
 
     q'_i - q_i = (C'_i - C_i)(p - r_i) + C'_i (r_i - r'_i),
     |q'_i - q_i| <= B_C |p - r_i| + s' d,
 
 with ``B_C >= ||C'_i - C_i||_F``, ``d = |r'_i - r_i|`` and ``s' >= ||C'_i||_2``
 (:data:`S_MAX` for the rotation matrices flown here, checked by the caller).
-Culling, clipping and the field of view are linear or |linear| in ``q``
+Culling, clipping and the field of view are linear or ``|linear|`` in ``q``
 (gradient norms 1 and ``sec eta``); the exact culling ``(r - p) . n``, the
 elevation ``(r - p) . n >= |r - p| sin e_min`` and the range
 ``|r - p| <= max_range`` move by at most ``|n| d``, ``(|n| + |sin e_min|) d``

@@ -128,7 +128,7 @@ class MaskBank:
 
 
 def nadir_keys(genome: np.ndarray, angle_step: float, ic_offset: int = 0) -> list[Key]:
-    """Keys of an NP genome ``[N, theta_1 .. theta_Nmax]`` (first N angles used)."""
+    """Keys of an NP genome ``[N, theta_1, ..., theta_Nmax]`` (first N angles used)."""
     n = int(round(genome[0]))
     keys = []
     for th in genome[1:1 + n]:
@@ -139,6 +139,6 @@ def nadir_keys(genome: np.ndarray, angle_step: float, ic_offset: int = 0) -> lis
 
 def fov_keys(genome: np.ndarray, thetas: Sequence[float], p_min: float, step: float,
              ic_offset: int = 0) -> list[Key]:
-    """Keys of an FoV genome ``[P_1 .. P_N]`` for a fixed swarm (spacecraft i keeps its IC)."""
+    """Keys of an FoV genome ``[P_1, ..., P_N]`` for a fixed swarm (spacecraft i keeps its IC)."""
     return [(float(th) % TWO_PI, snap_period(p, p_min, step), ic_offset + i)
             for i, (th, p) in enumerate(zip(thetas, genome))]
