@@ -70,7 +70,7 @@ def look_confidence(confidence: float, looks: int) -> float:
 
 @dataclass
 class Look:
-    """One validation look: swarm of ``n``, samples ``first .. first + size - 1``."""
+    """One validation look: swarm of ``n``, samples ``first`` to ``first + size - 1``."""
 
     n: int
     swarm: np.ndarray

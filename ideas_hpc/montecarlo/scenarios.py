@@ -222,7 +222,7 @@ def fly_members(setup: FlybySetup, theta, periods, mc, *, seed: int, n_samples: 
                 first: int = 0) -> np.ndarray:
     """(M, N, V) bool: per-member rows of swarm ``theta`` (rad) in ``n_samples`` fresh draws
     of the continuous dispersions (no failures), stream ``VALIDATION_STREAM``, samples
-    ``first .. first + n_samples - 1`` (a validation look's own draws, issue 29)."""
+    ``first`` to ``first + n_samples - 1`` (a validation look's own draws, issue 29)."""
     th = np.asarray(theta, dtype=np.float64).ravel()
     if periods is not None:
         raise NotImplementedError("fly_members: FoV sweeping periods are not supported yet")
