@@ -28,6 +28,7 @@ from ideas_hpc.design.stereo import scorer as stereo_scorer
 from ideas_hpc.engine.job_cluster import JobCluster, phase_client, visibility_tests
 from ideas_hpc.errors import InputError
 from ideas_hpc.design.candidates import candidate_masks
+from ideas_hpc.design.resolution import eps_tol_warning
 from ideas_hpc.flyby.flight import fly, target
 from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.campaign import precompile
@@ -109,6 +110,10 @@ def design_exact(c, setup, client) -> ExactDesign:
          f"grid angles ({math.degrees(bank.step_rad):g} deg)"
          f"{' and their stereo pairs' if stereo else ''} in {t_masks:.1f} s")
     notes: list = []
+    coarse = eps_tol_warning(bank.areas, eps)
+    if coarse is not None:          # it still runs: a strict requirement may be meant
+        _log(coarse)
+        notes.append(coarse.removeprefix("warning: "))
     target = _target(scorer, eps, setup.coverage, notes)
     with designer_errors(c):
         if stereo:
