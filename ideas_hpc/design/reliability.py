@@ -189,6 +189,7 @@ class ReliabilityDesigner:
         self.exhausted: set = set()
         self._lows = None
         self._tol = None
+        self.tol_proved: set = set()
         self._tol_solver = tolerance_solver
 
     def ring_lows(self, n_max: int) -> np.ndarray:
@@ -249,8 +250,12 @@ class ReliabilityDesigner:
         ``m = n`` down only while ``UB(n) >= p``."""
         u = [0.0] + [min(self.cheap_ubar(k), self.u_bar.get(k, 1.0)) for k in range(1, n + 1)]
         ub = failure_upper_bound(n, u, self.p_f)
-        if p is not None and ub >= p - 1e-12 and self.tolerance().enabled:
-            ub = min(ub, self.tolerance().upper(n, self.p_f, self.deadline))
+        if ub >= (p if p is not None else 0.0) - 1e-12:
+            # with p: solve what could prove n short of p; without: what is known
+            tol = self.tolerance().upper(n, self.p_f, self.deadline, p, solve=p is not None)
+            if p is not None and tol < p - 1e-12 <= ub - 1e-12:
+                self.tol_proved.add(n)
+            ub = min(ub, tol)
         for k in range(n, 0, -1):
             if (p is not None and ub < p - 1e-12) or u[k] == 0.0 or self.out_of_time():
                 break
@@ -365,6 +370,10 @@ def min_swarm_reliable(rows, areas, *, p: float, p_f: float, need: float, n_max:
                 notes.append(f"the bank ({d.s_n} scenarios x {d.c_n} candidates) is above "
                              "the scenario programme's size: U_m bounded by the per-scenario "
                              "ring-gap bounds only")
+            if d.tol_proved:
+                notes.append(f"sizes {sorted(d.tol_proved)} proven short of p by the "
+                             "per-scenario failure-tolerance bound (fewest spacecraft "
+                             "surviving any k failures, ideas_hpc.design.tolerance_bound)")
             if unresolved:
                 notes.append(f"sizes {unresolved} are neither proven short of p nor met by a "
                              "swarm found")

@@ -42,8 +42,6 @@ import numpy as np
 
 from ideas_hpc.errors import InputError
 
-#: Most scenarios whose k-tolerant minima are solved (each is an integer programme).
-TOL_MAX_SCENARIOS = 16
 #: Largest k whose tolerant minimum is solved.
 K_MAX = 3
 
@@ -104,7 +102,8 @@ class ToleranceBound:
         self.lows = [{0: int(v)} for v in np.asarray(lows0)]
         self.step = float(step_rad)
         self.solver = solver or tolerant_lower
-        self.enabled = self.s_n <= TOL_MAX_SCENARIOS
+        self.enabled = True
+        self.pace: list = []          # seconds of each solve so far
 
     def _need_k(self, s: int, n: int) -> int | None:
         """The next k worth solving in scenario s for size n (None: nothing to gain)."""
@@ -117,19 +116,40 @@ class ToleranceBound:
                 return k
         return None
 
-    def upper(self, n: int, p_f: float, deadline: float | None) -> float:
-        """``mean_s UB_s(n)``, solving the missing ``N_{k,s}`` while time is left."""
-        if self.enabled:
+    def _optimistic(self, s: int, n: int, p_f: float) -> float:
+        """The lowest ``UB_s(n)`` any solve could still give (unknown ``N_k`` taken > n)."""
+        low = self.lows[s]
+        ks = [k for k in range(1, min(K_MAX, n) + 1) if k not in low or low[k] > n]
+        return downset_upper(n, p_f, low[0], min(ks) if ks else None)
+
+    def upper(self, n: int, p_f: float, deadline: float | None, p: float | None = None,
+              solve: bool = True) -> float:
+        """``mean_s UB_s(n)``, solving missing ``N_{k,s}`` while time is left (``solve``).
+
+        With ``p``, nothing is solved when even the best outcome of every solve leaves
+        the bound >= p; solving stops when the scenarios left would not fit before
+        ``deadline`` at the pace of those done.
+        """
+        if solve and self.enabled and (p is None or np.mean(
+                [self._optimistic(s, n, p_f) for s in range(self.s_n)]) < p - 1e-12):
             for s in range(self.s_n):
                 while True:
                     k = self._need_k(s, n)
-                    if k is None:
-                        break
                     left = None if deadline is None else deadline - time.perf_counter()
-                    if left is not None and left <= 0.0:
+                    if k is None or (left is not None and left <= 0.0):
                         break
-                    got = self.solver(self.rows[s], self.w, self.need, k, left, self.step)
+                    todo = sum(self._need_k(r, n) is not None for r in range(s, self.s_n))
+                    if left is not None and self.pace and np.mean(self.pace) * todo > left:
+                        return self._mean(n, p_f)   # would not finish: keep the time
+                    t = time.perf_counter()
+                    # the first of several solves may not take all the time left
+                    budget = left if left is None or todo == 1 or self.pace else left / 2
+                    got = self.solver(self.rows[s], self.w, self.need, k, budget, self.step)
+                    self.pace.append(time.perf_counter() - t)
                     self.lows[s][k] = max(int(got), self.lows[s][0] + k)
+        return self._mean(n, p_f)
+
+    def _mean(self, n: int, p_f: float) -> float:
         ub = [downset_upper(n, p_f, low[0], k_star(n, low)) for low in self.lows]
         return float(np.mean(ub))
 
