@@ -39,12 +39,26 @@ def _cmd_scan_encounter(args) -> int:
     return 0
 
 
+def _percent_list(text) -> list:
+    from ideas_hpc.errors import InputError
+
+    try:
+        out = [float(e) for e in (text or "").split(",") if e.strip()]
+    except ValueError:
+        raise InputError(f"expected percentages separated by commas, got {text!r}",
+                         field="--eps-tol") from None
+    if any(not 0 <= e < 100 for e in out):
+        raise InputError(f"each must be in [0, 100) %, got {text!r}", field="--eps-tol")
+    return out
+
+
 def _cmd_resolution(args) -> int:
     from ideas_hpc.campaign.resolution_study import format_table, resolution_study
 
     rows, path = resolution_study(args.campaign, args.shapes.split(","), overrides=args.set,
                                   out=args.out, workers=args.workers,
-                                  progress=not args.no_progress)
+                                  progress=not args.no_progress,
+                                  eps_list=_percent_list(args.eps_tol))
     print(format_table(rows))
     print(f"table: {path}")
     return 0
@@ -142,5 +156,8 @@ def add_commands(sub) -> None:
     v.add_argument("--out", default=None,
                    help="folder of the stores and resolution.csv (default: STEM-resolution)")
     v.add_argument("--workers", type=int, default=None, help="as for 'run'")
+    v.add_argument("--eps-tol", default=None, metavar="PCT,PCT,...",
+                   help="also the N of these tolerances (percent), read from each store's "
+                        "coverage-versus-N curve")
     v.add_argument("--no-progress", action="store_true", help="no progress bar")
     v.set_defaults(handler=_cmd_resolution)

@@ -22,12 +22,9 @@ from ideas_hpc.errors import InputError
 
 #: The four NASA PDS models of Eros, coarse to fine (plates).
 EROS_MODELS = ("eros001708", "eros007790", "eros010152", "eros022540")
-COLUMNS = ("shape", "vertices", "median_vertex_pct", "smallest_vertex_pct", "n",
-           "nominal_n", "coverage_pct", "threshold_pct", "probability", "status", "gap_pct",
-           "seconds", "store")
 
 
-def _row(shape: str, store: Path, seconds: float) -> dict:
+def _row(shape: str, store: Path, seconds: float, eps_list=()) -> dict:
     import xarray as xr
 
     from ideas_hpc.body.bodies import load_body
@@ -49,7 +46,26 @@ def _row(shape: str, store: Path, seconds: float) -> dict:
             "probability": scalar("reliability_probability"),
             "status": str(a.get("solver_status", "")),
             "gap_pct": 100 * float(a.get("optimality_gap", np.nan)),
-            "seconds": seconds, "store": str(store)}
+            "seconds": seconds, "store": str(store),
+            **{f"n_at_{e:g}pct": n_from_curve(ds, float(a.get("target_coverage", np.nan)),
+                                              e / 100.0) for e in eps_list}}
+
+
+def n_from_curve(ds, target: float, eps: float) -> str:
+    """Fewest N whose best coverage (the stored coverage-versus-N curve, proven per
+    point when its status is ``optimal``) reaches ``target - eps``; ``"N*"`` when a
+    smaller N is not proven short, ``"-"`` when no N of the curve reaches it."""
+    if "coverage_vs_n" not in ds:
+        return "-"
+    n = np.asarray(ds["n_spacecraft"].values)
+    cov = np.asarray(ds["coverage_vs_n"].values, dtype=float)
+    status = np.asarray(ds["coverage_vs_n_status"].values).astype(str)
+    ok = np.flatnonzero(cov >= target - eps - 1e-12)
+    if ok.size == 0:
+        return "-"
+    i = int(ok[0])
+    proven = bool(np.all(status[:i] == "optimal"))
+    return f"{int(n[i])}" + ("" if proven else "*")
 
 
 def format_table(rows: list[dict]) -> str:
@@ -57,22 +73,32 @@ def format_table(rows: list[dict]) -> str:
     head = (f"{'shape':<12} {'vertices':>8} {'median w':>9} {'min w':>7} {'N':>3} "
             f"{'N nom':>5} {'coverage':>9} {'threshold':>9} {'P':>7} {'status':>10} "
             f"{'gap':>6} {'time':>7}")
+    extra = [k for k in (rows[0] if rows else {}) if k.startswith("n_at_")]
+    head += "".join(f" {'N@' + k[5:-3] + '%':>8}" for k in extra)
     out = [head, "-" * len(head)]
     for r in rows:
         p = "-" if not np.isfinite(r["probability"]) else f"{r['probability']:.4f}"
         out.append(f"{r['shape']:<12} {r['vertices']:>8d} {r['median_vertex_pct']:>8.3f}% "
                    f"{r['smallest_vertex_pct']:>6.3f}% {r['n']:>3d} {r['nominal_n']:>5d} "
                    f"{r['coverage_pct']:>8.3f}% {r['threshold_pct']:>8.3f}% {p:>7} "
-                   f"{r['status']:>10} {r['gap_pct']:>5.1f}% {r['seconds']:>6.0f}s")
+                   f"{r['status']:>10} {r['gap_pct']:>5.1f}% {r['seconds']:>6.0f}s"
+                   + "".join(f" {r[k]:>8}" for k in extra))
     ns = {r["n"] for r in rows}
     out.append("N is the same on every model: the requirement is resolved" if len(ns) == 1
                else f"N differs between models ({sorted(ns)}): the requirement follows the mesh")
+    if extra:
+        out.append("N@e%: fewest N whose proven best coverage (coverage-versus-N curve) "
+                   "reaches target - e % (* : a smaller N is not proven short)")
     return "\n".join(out)
 
 
 def resolution_study(campaign, shapes, *, overrides=None, out=None, workers=None,
-                     progress=True) -> tuple[list[dict], Path]:
-    """Run ``campaign`` once per shape model; returns (rows, CSV path)."""
+                     progress=True, eps_list=()) -> tuple[list[dict], Path]:
+    """Run ``campaign`` once per shape model; returns (rows, CSV path).
+
+    ``eps_list`` (percent): also the N that other tolerances would give, read from each
+    store's coverage-versus-N curve (no further run).
+    """
     from ideas_hpc.campaign.run import run_file
 
     shapes = [s.strip() for s in shapes if s.strip()]
@@ -91,10 +117,10 @@ def resolution_study(campaign, shapes, *, overrides=None, out=None, workers=None
         t0 = time.perf_counter()
         run_file(campaign, out=store, overrides=list(overrides or []) + [f'body.name="{shape}"'],
                  workers=workers, resume=True, progress=progress)
-        rows.append(_row(shape, store, time.perf_counter() - t0))
+        rows.append(_row(shape, store, time.perf_counter() - t0, eps_list))
     path = out / "resolution.csv"
     with open(path, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=COLUMNS)
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
         w.writeheader()
         w.writerows(rows)
     return rows, path

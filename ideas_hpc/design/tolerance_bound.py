@@ -40,6 +40,7 @@ import time
 
 import numpy as np
 
+from ideas_hpc import progress
 from ideas_hpc.errors import InputError
 
 #: Largest k whose tolerant minimum is solved.
@@ -144,6 +145,11 @@ class ToleranceBound:
                     t = time.perf_counter()
                     # the first of several solves may not take all the time left
                     budget = left if left is None or todo == 1 or self.pace else left / 2
+                    progress.note(f"failure-tolerance bound, N = {n}: fewest spacecraft "
+                                  f"surviving any {k} failure(s) in scenario {s + 1} of "
+                                  f"{self.s_n} (integer programme"
+                                  + ("" if budget is None else f", at most {budget:.0f} s")
+                                  + ")")
                     got = self.solver(self.rows[s], self.w, self.need, k, budget, self.step)
                     self.pace.append(time.perf_counter() - t)
                     self.lows[s][k] = max(int(got), self.lows[s][0] + k)
