@@ -113,7 +113,6 @@ def design_exact(c, setup, client) -> ExactDesign:
     coarse = eps_tol_warning(bank.areas, eps)
     if coarse is not None:          # it still runs: a strict requirement may be meant
         _log(coarse)
-        notes.append(coarse.removeprefix("warning: "))
     target = _target(scorer, eps, setup.coverage, notes)
     with designer_errors(c):
         if stereo:
@@ -155,7 +154,8 @@ def design_exact(c, setup, client) -> ExactDesign:
              "threshold_coverage": float(target - eps),
              "design_masks_s": float(t_masks), "design_solve_s": float(t_design - t_masks),
              "coverage_curve_s": float(curve.solve_time), "failures_tolerated": int(k),
-             "failures_evaluated": int(k_eval), "angle_step_rad": float(bank.step_rad)}
+             "failures_evaluated": int(k_eval), "angle_step_rad": float(bank.step_rad),
+             **({"eps_tol_warning": coarse} if coarse is not None else {})}
     summary = (f"exact design: N = {res.n} ({res.status}, gap {100 * res.gap:.1f} %, bound "
                f"{res.bound:g}), {requirement_line(target, target - eps, res.coverage)}, "
                f"{'k = %d tolerant, ' % k if k else ''}masks {t_masks:.1f} s + solve "

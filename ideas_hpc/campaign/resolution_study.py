@@ -59,7 +59,7 @@ def n_from_curve(ds, target: float, eps: float) -> str:
         return "-"
     n = np.asarray(ds["n_spacecraft"].values)
     cov = np.asarray(ds["coverage_vs_n"].values, dtype=float)
-    status = np.asarray(ds["coverage_vs_n_status"].values).astype(str)
+    status = np.array([str(x) for x in np.asarray(ds["coverage_vs_n_status"].values)])
     ok = np.flatnonzero(cov >= target - eps - 1e-12)
     if ok.size == 0:
         return "-"
