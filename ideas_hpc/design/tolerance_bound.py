@@ -169,14 +169,17 @@ def tolerant_lower(masks, w, need: float, k: int, seconds: float | None,
     """Proven lower bound on the fewest grid candidates surviving any k failures in one
     scenario (separation dropped: a relaxation). ``k + 1`` when nothing is proven."""
     from ideas_hpc.design.bank import CandidateBank
+    from ideas_hpc.design.exact import FEAS_TOL
     from ideas_hpc.design.failures import failure_tolerant
 
     k_n = masks.shape[0]
     bank = CandidateBank(theta=step_rad * np.arange(k_n), masks=np.asarray(masks, bool),
                          areas=np.asarray(w, dtype=np.float64), step_rad=step_rad, d_sep_m=1.0)
     try:
-        r = failure_tolerant(bank, k, target=need, eps_tol=0.0, n_max=min(k_n, 40),
-                             time_limit=seconds)
+        # the programme asks coverage >= need + FEAS_TOL, the evaluator >= need - 1e-12: a
+        # threshold lowered by twice FEAS_TOL keeps every swarm the evaluator counts
+        r = failure_tolerant(bank, k, target=need - 2 * FEAS_TOL, eps_tol=0.0,
+                             n_max=min(k_n, 40), time_limit=seconds)
     except InputError as exc:
         # out of time before a bound: only the trivial one; otherwise no k-tolerant swarm
         # of at most n_max candidates exists at all
