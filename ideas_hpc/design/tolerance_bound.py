@@ -43,6 +43,10 @@ import numpy as np
 from ideas_hpc import progress
 from ideas_hpc.errors import InputError
 
+#: Most scenarios to solve before any solve has shown its pace (each is an integer
+#: programme of 5-60 s on eros001708's 720 candidates: a 256-scenario bank is out of
+#: reach, and its first solve would only spend the time limit).
+FIRST_MAX_SCENARIOS = 8
 #: Largest k whose tolerant minimum is solved.
 K_MAX = 3
 
@@ -140,7 +144,8 @@ class ToleranceBound:
                     if k is None or (left is not None and left <= 0.0):
                         break
                     todo = sum(self._need_k(r, n) is not None for r in range(s, self.s_n))
-                    if left is not None and self.pace and np.mean(self.pace) * todo > left:
+                    if (left is not None and self.pace and np.mean(self.pace) * todo > left) \
+                            or (not self.pace and todo > FIRST_MAX_SCENARIOS):
                         return self._mean(n, p_f)   # would not finish: keep the time
                     t = time.perf_counter()
                     # the first of several solves may not take all the time left
