@@ -18,7 +18,9 @@ Bernoulli(p_f) failures are enumerated, not sampled)::
   survivors of any N-swarm after j failures are an (N-j)-swarm, so every
   N-swarm has ``P <= UB(N) = sum_j C(N,j) p_f^j (1-p_f)^(N-j) Ubar_{N-j}``
   (:func:`~ideas_hpc.design.reliability_stats.failure_upper_bound`); N is
-  infeasible when ``UB(N) < p``.
+  infeasible when ``UB(N) < p``. The per-scenario failure-tolerance bound
+  (:mod:`ideas_hpc.design.tolerance_bound`: no N-swarm survives every k-failure when
+  the k-tolerant minimum exceeds N) tightens ``UB(N)`` on banks of few scenarios.
 * **Feasibility.** A swarm of N whose exact ``P_bank >= p``: the programme's
   swarm and the previous size's best swarm plus its best new member, each
   improved by a swap search on the exact ``P_bank`` (:func:`improve`). When
