@@ -1,7 +1,8 @@
-"""``ideas-hpc`` command line: ``size``, ``run``, ``report``, ``scan-arrival``.
+"""``ideas-hpc`` command line: ``size``, ``run``, ``report``, ``scan-arrival``, ``resolution``...
 
 Bad input (an :class:`~ideas_hpc.errors.InputError`) prints one line naming
-the problem and exits with status 2; no traceback.
+the problem and exits with status 2; no traceback. SIGINT and SIGTERM print one
+line and exit with 128 + the signal number (130, 143); stores stay resumable.
 """
 
 from __future__ import annotations
