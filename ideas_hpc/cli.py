@@ -1,13 +1,16 @@
-"""``ideas-hpc`` command line: ``size``, ``run``, ``report``, ``scan-arrival``.
+"""``ideas-hpc`` command line: ``size``, ``run``, ``report``, ``scan-arrival``, ``resolution``...
 
 Bad input (an :class:`~ideas_hpc.errors.InputError`) prints one line naming
-the problem and exits with status 2; no traceback.
+the problem and exits with status 2; no traceback. SIGINT and SIGTERM print one
+line and exit with 128 + the signal number (130, 143); stores stay resumable.
 """
 
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
+from contextlib import contextmanager
 
 from ideas_hpc import __version__
 from ideas_hpc.errors import InputError
@@ -64,6 +67,30 @@ def _cmd_size(args) -> int:
     return 0
 
 
+class Stopped(KeyboardInterrupt):
+    """SIGTERM, raised where Python code runs so ``with`` blocks clean up as for Ctrl-C."""
+
+    signal_name = "SIGTERM"
+    signal_number = int(signal.SIGTERM)
+
+
+@contextmanager
+def stop_signals():
+    """SIGTERM raises :class:`Stopped` in the main thread while the block runs."""
+    def _raise(signum, frame):
+        raise Stopped()
+
+    try:
+        old = signal.signal(signal.SIGTERM, _raise)
+    except ValueError:                 # not the main thread (e.g. called from a test)
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="ideas-hpc",
@@ -90,13 +117,18 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     handler = {"size": _cmd_size}.get(args.command) or getattr(args, "handler", None)
     try:
-        return int(handler(args) or 0)
+        with stop_signals():
+            return int(handler(args) or 0)
     except InputError as exc:
         print(f"ideas-hpc: error: {exc}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("ideas-hpc: interrupted", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:
+        # one line, whatever was running: stores are written atomically or per
+        # finished chunk and their locks released on the way out, so --resume goes on
+        name = getattr(exc, "signal_name", "SIGINT")
+        again = " (rerun with --resume to continue)" if args.command == "run" else ""
+        print(f"ideas-hpc: stopped by {name}{again}", file=sys.stderr)
+        return 128 + getattr(exc, "signal_number", signal.SIGINT)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -127,3 +127,9 @@ def steps(items, desc: str, unit: str = "step"):
         for x in items:
             yield x
             b.update(1)
+
+
+def note(msg: str) -> None:
+    """One line on stderr before a long step that has no bar (none under ``enabled(False)``)."""
+    if _STATE["on"]:
+        print(msg, file=sys.stderr, flush=True)

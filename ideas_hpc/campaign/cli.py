@@ -1,5 +1,5 @@
 """``ideas-hpc run``, ``ideas-hpc report`` (SPEC section 9) and ``ideas-hpc scan-arrival``,
-``ideas-hpc scan-encounter``."""
+``ideas-hpc scan-encounter``, ``ideas-hpc resolution``."""
 
 from __future__ import annotations
 
@@ -36,6 +36,31 @@ def _cmd_scan_encounter(args) -> int:
     scan_encounter_file(args.campaign, args.set, decs_deg=args.dec_deg,
                         phases_deg=args.phase_deg, step_deg=args.step_deg, out=args.out,
                         plot=args.plot)
+    return 0
+
+
+def _percent_list(text) -> list:
+    from ideas_hpc.errors import InputError
+
+    try:
+        out = [float(e) for e in (text or "").split(",") if e.strip()]
+    except ValueError:
+        raise InputError(f"expected percentages separated by commas, got {text!r}",
+                         field="--eps-tol") from None
+    if any(not 0 <= e < 100 for e in out):
+        raise InputError(f"each must be in [0, 100) %, got {text!r}", field="--eps-tol")
+    return out
+
+
+def _cmd_resolution(args) -> int:
+    from ideas_hpc.campaign.resolution_study import format_table, resolution_study
+
+    rows, path = resolution_study(args.campaign, args.shapes.split(","), overrides=args.set,
+                                  out=args.out, workers=args.workers,
+                                  progress=not args.no_progress,
+                                  eps_list=_percent_list(args.eps_tol))
+    print(format_table(rows))
+    print(f"table: {path}")
     return 0
 
 
@@ -118,3 +143,25 @@ def add_commands(sub) -> None:
     from ideas_hpc.campaign.export import add_export_command
     add_body_command(sub)
     add_export_command(sub)
+    from ideas_hpc.campaign.resolution_study import EROS_MODELS
+
+    v = sub.add_parser("resolution", help="one design campaign on several shape models",
+                       description="Run a design campaign once per shape model (body.name "
+                                   "set to each) and print N, coverage and P side by side "
+                                   "with the meshes' vertex areas; a requirement is resolved "
+                                   "when N is the same on every model (docs/requirement.md). "
+                                   "Each model's store is resumable.")
+    v.add_argument("campaign", help="design campaign TOML file")
+    v.add_argument("--shapes", default=",".join(EROS_MODELS),
+                   help="comma-separated shape models (default: the four Eros models, "
+                        "coarse to fine)")
+    v.add_argument("--set", action="append", default=[], metavar="dotted.key=value",
+                   help="override a campaign field (TOML value), repeatable")
+    v.add_argument("--out", default=None,
+                   help="folder of the stores and resolution.csv (default: STEM-resolution)")
+    v.add_argument("--workers", type=int, default=None, help="as for 'run'")
+    v.add_argument("--eps-tol", default=None, metavar="PCT,PCT,...",
+                   help="also the N of these tolerances (percent), read from each store's "
+                        "coverage-versus-N curve")
+    v.add_argument("--no-progress", action="store_true", help="no progress bar")
+    v.set_defaults(handler=_cmd_resolution)

@@ -29,6 +29,7 @@ from ideas_hpc.engine.job_cluster import JobCluster, phase_client, visibility_te
 from ideas_hpc.errors import InputError
 from ideas_hpc.progress import result
 from ideas_hpc.design.candidates import candidate_masks
+from ideas_hpc.design.resolution import eps_tol_warning
 from ideas_hpc.flyby.flight import fly, target
 from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.campaign import precompile
@@ -110,6 +111,9 @@ def design_exact(c, setup, client) -> ExactDesign:
          f"grid angles ({math.degrees(bank.step_rad):g} deg)"
          f"{' and their stereo pairs' if stereo else ''} in {t_masks:.1f} s")
     notes: list = []
+    coarse = eps_tol_warning(bank.areas, eps)
+    if coarse is not None:          # it still runs: a strict requirement may be meant
+        _log(coarse)
     target = _target(scorer, eps, setup.coverage, notes)
     with designer_errors(c):
         if stereo:
@@ -151,7 +155,8 @@ def design_exact(c, setup, client) -> ExactDesign:
              "threshold_coverage": float(target - eps),
              "design_masks_s": float(t_masks), "design_solve_s": float(t_design - t_masks),
              "coverage_curve_s": float(curve.solve_time), "failures_tolerated": int(k),
-             "failures_evaluated": int(k_eval), "angle_step_rad": float(bank.step_rad)}
+             "failures_evaluated": int(k_eval), "angle_step_rad": float(bank.step_rad),
+             **({"eps_tol_warning": coarse} if coarse is not None else {})}
     summary = (f"exact design: N = {res.n} ({res.status}, gap {100 * res.gap:.1f} %, bound "
                f"{res.bound:g}), {requirement_line(target, target - eps, res.coverage)}, "
                f"{'k = %d tolerant, ' % k if k else ''}masks {t_masks:.1f} s + solve "

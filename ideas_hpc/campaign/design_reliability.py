@@ -156,7 +156,12 @@ def design_reliable(c, setup, client, *, bank_store: str | None = None):
         raise c.error(f"{p:g} is not reached: even a swarm of design.n_max = {d.n_max} that "
                       f"always maps the target succeeds with at most 1 - p_f^N = "
                       f"{1.0 - p_f ** d.n_max:.6g}", "design.success_probability")
+    # design.time_limit_s bounds the searches of the phase together (issue 29): the
+    # nominal design, then the bank's search gets what is left. Sampling (the bank's
+    # flights, the validation) is not search: it has its own progress bars.
+    t_nominal = time.perf_counter()
     nominal = design_exact(c, setup, client)
+    spent = time.perf_counter() - t_nominal - float(nominal.attrs.get("design_masks_s", 0.0))
     result(nominal.summary.replace("exact design:", "nominal exact design (nothing goes wrong):"))
     client = phase_client(client)   # the job's one cluster (None: in this process)
     exact = continuous_off(mc, setup)
@@ -173,15 +178,18 @@ def design_reliable(c, setup, client, *, bank_store: str | None = None):
                                client=client, store=bank_store, progress=progress.on())
     t_bank = time.perf_counter() - t0
     try:
-        return _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant)
+        return _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant,
+                               spent_s=spent)
     except InputError:
         if fresh:    # bad input leaves no store: the bank this run made goes too
             shutil.rmtree(bank_store, ignore_errors=True)
         raise
 
 
-def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=None):
+def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=None, *,
+                    spent_s=0.0):
     d, mc = c.config.design, c.config.monte_carlo
+    left = max(1e-3, float(d.time_limit_s) - max(0.0, spent_s))
     p, p_f = float(d.success_probability), float(mc.failure_probability)
     eps = d.eps_tol_pct / 100.0
     target = float(nominal.attrs["target_coverage"])
@@ -196,7 +204,7 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=Non
     try:
         with designer_errors(c):
             res = min_swarm_reliable(bank.rows, bank.areas, p=level, p_f=p_f, need=need,
-                                     n_max=d.n_max, sep_steps=m_sep, time_limit=d.time_limit_s)
+                                     n_max=d.n_max, sep_steps=m_sep, time_limit=left)
     except InputError as exc:
         if level == p or exc.field != "design.success_probability":
             raise

@@ -44,7 +44,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import sparse
-from scipy.optimize import Bounds, LinearConstraint, milp
+from scipy.optimize import Bounds, LinearConstraint
+
+from ideas_hpc.design.highs import run_milp
 
 from ideas_hpc.errors import InputError
 from ideas_hpc.progress import plural
@@ -129,12 +131,9 @@ def heavy_groups(red: Reduced, need: float) -> np.ndarray:
 
 def solve(c, constraints, integrality, time_limit, lower=None):
     """HiGHS through scipy, variables in [lower, 1] (default [0, 1]); returns (result, seconds)."""
-    opts = {"mip_rel_gap": 0.0}
-    if time_limit is not None:
-        opts["time_limit"] = float(time_limit)
     t = time.perf_counter()
-    res = milp(c, constraints=constraints, integrality=integrality,
-               bounds=Bounds(0.0 if lower is None else lower, 1.0), options=opts)
+    res = run_milp(c, constraints=constraints, integrality=integrality,
+                   bounds=Bounds(0.0 if lower is None else lower, 1.0), time_limit=time_limit)
     return res, time.perf_counter() - t
 
 

@@ -18,7 +18,9 @@ Bernoulli(p_f) failures are enumerated, not sampled)::
   survivors of any N-swarm after j failures are an (N-j)-swarm, so every
   N-swarm has ``P <= UB(N) = sum_j C(N,j) p_f^j (1-p_f)^(N-j) Ubar_{N-j}``
   (:func:`~ideas_hpc.design.reliability_stats.failure_upper_bound`); N is
-  infeasible when ``UB(N) < p``.
+  infeasible when ``UB(N) < p``. The per-scenario failure-tolerance bound
+  (:mod:`ideas_hpc.design.tolerance_bound`: no N-swarm survives every k-failure when
+  the k-tolerant minimum exceeds N) tightens ``UB(N)`` on banks of few scenarios.
 * **Feasibility.** A swarm of N whose exact ``P_bank >= p``: the programme's
   swarm and the previous size's best swarm plus its best new member, each
   improved by a swap search on the exact ``P_bank`` (:func:`improve`). When
@@ -41,12 +43,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ideas_hpc import progress
 from ideas_hpc.core.design.reliability import swarm_coverages, swarm_probabilities
 from ideas_hpc.errors import InputError
 from ideas_hpc.design.bank import CandidateBank, reduce_problem
 from ideas_hpc.design.reliability_stats import failure_upper_bound
 from ideas_hpc.design.ring_bound import ring_bound
 from ideas_hpc.design.scenario_mip import ScenarioMIP
+from ideas_hpc.design.tolerance_bound import ToleranceBound
 
 #: Largest swarm whose 2^N failure subsets are enumerated.
 N_ENUM_MAX = 24
@@ -112,14 +116,18 @@ class Evaluator:
         return np.round(p, 12) + 1e-6 * cov
 
 
-def improve(ev: Evaluator, start, m: int, *, radius: int = 6, rounds: int = 30):
+def improve(ev: Evaluator, start, m: int, *, radius: int = 6, rounds: int = 30,
+            deadline: float | None = None):
     """Best-improvement single moves of each member within ``radius`` grid steps
-    (keeping distances > ``m``), maximising the exact ``P_bank``. Returns (swarm, P)."""
+    (keeping distances > ``m``), maximising the exact ``P_bank``; stops at ``deadline``
+    (``time.perf_counter()``). Returns (swarm, P)."""
     c_n = ev.rows.shape[1]
     radius = c_n // 2 if c_n <= 96 else radius
     sw = np.sort(np.asarray(start, dtype=np.int64))
     cur = float(ev.scored([sw])[0])
     for _ in range(rounds):
+        if deadline is not None and time.perf_counter() >= deadline:
+            break
         trials = []
         for p in range(sw.size):
             rest = np.delete(sw, p)
@@ -164,7 +172,7 @@ class ReliabilityDesigner:
 
     def __init__(self, rows, areas, *, need: float, p_f: float, sep_steps: int = 0,
                  time_limit: float | None = None, enumerate_budget: int = 20000,
-                 bound_solver=None):
+                 bound_solver=None, tolerance_solver=None):
         rows = np.asarray(rows, dtype=bool)
         w = np.asarray(areas, dtype=np.float64)
         w = w / w.sum()
@@ -182,6 +190,9 @@ class ReliabilityDesigner:
         self.best: dict = {}
         self.exhausted: set = set()
         self._lows = None
+        self._tol = None
+        self.tol_proved: set = set()
+        self._tol_solver = tolerance_solver
 
     def ring_lows(self, n_max: int) -> np.ndarray:
         """(S,) proven lower bound on each scenario's fewest covering spacecraft (ring-gap
@@ -190,7 +201,9 @@ class ReliabilityDesigner:
             lows = np.ones(self.s_n, dtype=np.int64)
             step = 2 * math.pi / self.c_n
             areas = self.ev.w
-            for s in range(self.s_n):
+            for s in progress.steps(range(self.s_n), "ring-gap bounds", unit="scenario"):
+                if self.out_of_time():   # the rest keep the trivial bound 1 (still proven)
+                    break
                 bank = CandidateBank(theta=step * np.arange(self.c_n), masks=self.ev.rows[s],
                                      areas=areas, step_rad=step, d_sep_m=1.0)
                 red = reduce_problem(bank.masks, areas, merge_candidates=False)
@@ -225,24 +238,43 @@ class ReliabilityDesigner:
                 self.mip_swarm[m] = b.swarm
         return self.u_bar[m]
 
+    def tolerance(self) -> ToleranceBound:
+        """The per-scenario failure-tolerance bound (:mod:`ideas_hpc.design.tolerance_bound`)."""
+        if self._tol is None:
+            lows = self._lows if self._lows is not None else np.ones(self.s_n, np.int64)
+            self._tol = ToleranceBound(self.ev.rows, self.ev.w, self.ev.need, lows,
+                                       2 * math.pi / self.c_n, solver=self._tol_solver)
+        return self._tol
+
     def upper(self, n: int, p: float | None = None) -> float:
-        """Proven ``UB(n)`` (module docstring). The ring-gap fractions first; the
-        programme refines ``Ubar_m`` from ``m = n`` down only while ``UB(n) >= p``."""
+        """Proven ``UB(n)`` (module docstring). The ring-gap fractions first, then the
+        per-scenario failure-tolerance bound; the programme refines ``Ubar_m`` from
+        ``m = n`` down only while ``UB(n) >= p``."""
         u = [0.0] + [min(self.cheap_ubar(k), self.u_bar.get(k, 1.0)) for k in range(1, n + 1)]
         ub = failure_upper_bound(n, u, self.p_f)
+        if ub >= (p if p is not None else 0.0) - 1e-12:
+            # with p: solve what could prove n short of p; without: what is known
+            tol = self.tolerance().upper(n, self.p_f, self.deadline, p, solve=p is not None)
+            if p is not None and tol < p - 1e-12 <= ub - 1e-12:
+                self.tol_proved.add(n)
+            ub = min(ub, tol)
         for k in range(n, 0, -1):
-            if (p is not None and ub < p - 1e-12) or u[k] == 0.0:
+            if (p is not None and ub < p - 1e-12) or u[k] == 0.0 or self.out_of_time():
                 break
             u[k] = min(u[k], self.ubar(k))
-            ub = failure_upper_bound(n, u, self.p_f)
+            ub = min(ub, failure_upper_bound(n, u, self.p_f))
         return ub
+
+    def out_of_time(self) -> bool:
+        """The design's ``time_limit`` has passed."""
+        return self.deadline is not None and time.perf_counter() >= self.deadline
 
     def best_of(self, n: int, target: float = math.inf):
         """Best swarm of n found (exhaustive when the count is within the budget)."""
         if n in self.best:
             return self.best[n]
         n_swarms = math.comb(self.c_n, n)
-        if n_swarms <= self.budget:
+        if n_swarms <= self.budget and not self.out_of_time():
             sw = all_swarms(self.c_n, n, self.m)
             if sw.shape[0] == 0:
                 self.best[n] = (np.zeros(0, np.int64), 0.0)
@@ -253,7 +285,7 @@ class ReliabilityDesigner:
             self.exhausted.add(n)
             return self.best[n]
         starts = []
-        if n in self.mip_swarm:
+        if n in self.mip_swarm and not self.out_of_time():
             s = self.mip_swarm[n]
             while s is not None and s.size < n:
                 s = extend(self.ev, s, self.m)
@@ -270,7 +302,7 @@ class ReliabilityDesigner:
             starts.append(s)
         top = (np.zeros(0, np.int64), -1.0)
         for s in starts:
-            sw, val = improve(self.ev, s, self.m)
+            sw, val = improve(self.ev, s, self.m, deadline=self.deadline)
             if val > top[1]:
                 top = (sw, val)
         top = (top[0], max(top[1], 0.0))
@@ -281,7 +313,7 @@ class ReliabilityDesigner:
 def min_swarm_reliable(rows, areas, *, p: float, p_f: float, need: float, n_max: int,
                        sep_steps: int = 0, time_limit: float | None = None,
                        enumerate_budget: int = 20000, bound_solver=None,
-                       ring_prebound: bool = True) -> ReliableResult:
+                       ring_prebound: bool = True, tolerance_solver=None) -> ReliableResult:
     """The fewest grid candidates with ``P_bank >= p`` (module docstring).
 
     Parameters
@@ -304,6 +336,9 @@ def min_swarm_reliable(rows, areas, *, p: float, p_f: float, need: float, n_max:
         Score every swarm of a size when there are at most this many.
     bound_solver : callable, optional
         ``(m, seconds) -> BoundResult`` in place of the programme (tests).
+    tolerance_solver : callable, optional
+        In place of the per-scenario k-tolerant designs
+        (:class:`~ideas_hpc.design.tolerance_bound.ToleranceBound`, tests).
     ring_prebound : bool
         Bound ``U_m`` first by the per-scenario ring-gap bounds (cheap, no programme).
 
@@ -315,12 +350,13 @@ def min_swarm_reliable(rows, areas, *, p: float, p_f: float, need: float, n_max:
     """
     d = ReliabilityDesigner(rows, areas, need=need, p_f=p_f, sep_steps=sep_steps,
                             time_limit=time_limit, enumerate_budget=enumerate_budget,
-                            bound_solver=bound_solver)
+                            bound_solver=bound_solver, tolerance_solver=tolerance_solver)
     upper: dict = {}
     unresolved: list = []
     if ring_prebound:
         d.ring_lows(n_max)
-    for n in range(1, int(n_max) + 1):
+    for n in progress.steps(range(1, int(n_max) + 1), "success-probability design",
+                            unit="size"):
         upper[n] = d.upper(n, p)
         if upper[n] < p - 1e-12:
             continue
@@ -328,13 +364,18 @@ def min_swarm_reliable(rows, areas, *, p: float, p_f: float, need: float, n_max:
         if val >= p - 1e-12:
             bound = unresolved[0] if unresolved else n
             gap = (n - bound) / n
-            timed = any(s == "time_limit" for s in d.bound_status.values())
+            timed = any(s == "time_limit" for s in d.bound_status.values()) or \
+                d.out_of_time()
             status = "optimal" if gap == 0 else ("time_limit" if timed else "feasible")
             notes = []
             if "ring_bound" in d.bound_status.values():
                 notes.append(f"the bank ({d.s_n} scenarios x {d.c_n} candidates) is above "
                              "the scenario programme's size: U_m bounded by the per-scenario "
                              "ring-gap bounds only")
+            if d.tol_proved:
+                notes.append(f"sizes {sorted(d.tol_proved)} proven short of p by the "
+                             "per-scenario failure-tolerance bound (fewest spacecraft "
+                             "surviving any k failures, ideas_hpc.design.tolerance_bound)")
             if unresolved:
                 notes.append(f"sizes {unresolved} are neither proven short of p nor met by a "
                              "swarm found")

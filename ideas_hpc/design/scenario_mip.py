@@ -34,10 +34,11 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy import sparse
-from scipy.optimize import Bounds, LinearConstraint, milp
+from scipy.optimize import Bounds, LinearConstraint
 
 from ideas_hpc.core.design.reliability import minimal_sets
 from ideas_hpc.design.bank import conflict_windows
+from ideas_hpc.design.highs import run_milp
 
 
 @dataclass
@@ -150,12 +151,9 @@ class ScenarioMIP:
         card = LinearConstraint(np.r_[np.ones(self.c_n), np.zeros(self.n_var - self.c_n)][None, :],
                                 0, m)
         cons = [c for c in (self.cover_rows, self.sep_rows) if c is not None] + [card]
-        opts = {"mip_rel_gap": 0.0}
-        if time_limit is not None:
-            opts["time_limit"] = max(1e-3, float(time_limit))
         cost = np.r_[np.zeros(self.c_n), -np.ones(self.s_n), np.zeros(self.n_var - self.c_n - self.s_n)]
-        res = milp(cost, constraints=cons, integrality=self.integrality,
-                   bounds=Bounds(0.0, self.upper), options=opts)
+        res = run_milp(cost, constraints=cons, integrality=self.integrality,
+                       bounds=Bounds(0.0, self.upper), time_limit=time_limit)
         dt = time.perf_counter() - t
         dual = getattr(res, "mip_dual_bound", None)
         upper = self.reachable
