@@ -65,7 +65,8 @@ def continuous_off(mc, setup) -> bool:
     """True when no continuous dispersion draws anything (a scenario is the nominal flight)."""
     sig = (mc.sigma_c20_pct, mc.sigma_c22_pct, mc.sigma_gm_pct, mc.sigma_position_m,
            mc.sigma_velocity_m_s, mc.sigma_misalignment_rad)
-    attitude = setup.attitude_mode == "simulated" and mc.attitude_dispersion
+    attitude = setup.attitude_mode == "simulated" and mc.attitude_dispersion and not (
+        mc.attitude_start == "reference" and mc.sigma_attitude_rad == mc.sigma_rate_rad_s == 0)
     return all(s == 0 for s in sig) and mc.reflectivity_min == mc.reflectivity_max \
         and not attitude
 

@@ -34,6 +34,7 @@ from ideas_hpc.flyby.camera import camera_at_images, misaligned, misalignment_dc
 from ideas_hpc.mapping.coverage import CoverageResult, compute_coverage
 from ideas_hpc.mapping.options import CoverageOptions
 from ideas_hpc.flyby.sizing import Sizing
+from ideas_hpc.flyby.usable import ImageUse
 from ideas_hpc.dynamics.force_model import ForceModel
 from ideas_hpc.dynamics.trajectory import (TargetingError, TargetingResult, propagate_swarm,
                                            ring_states, sun_direction_T, target_swarm)
@@ -82,6 +83,7 @@ class FlybySetup:
     p_min_s: float = 18.0
     epoch_s: float = 0.0
     encounter: Encounter | None = None   # None: the paper's geometry (ideas_hpc.flyby.encounter)
+    imaging: ImageUse | None = None      # None: every image counts (ideas_hpc.flyby.usable)
 
     @property
     def image_every(self) -> int:
@@ -191,6 +193,10 @@ class Perturbation:
     """
 
     ics: tuple | None = None                  # (sigma0, omega0, wheel0), each (N, 3)
+    # (sigma_BR0, omega_BR0_B, wheel0): a start relative to the reference flown (SPEC 7d);
+    # replaces ``ics``
+    ics_reference: tuple | None = None
+    acquisition_s: float = 0.0                # closed loop from ``ics`` before the window, s
     params_override: dict | None = None       # mu, c20, c22, reflectivity
     position_error_T: np.ndarray | None = None  # (N, 3) m
     velocity_error_T: np.ndarray | None = None  # (N, 3) m/s
@@ -287,8 +293,12 @@ def open_loop_views(setup: FlybySetup, theta, periods, r0_T, v0_T,
     # body tracking points at the flown positions, so its DCMs move with the perturbation
     if ideal_dcm_BT is not None and setup.attitude_mode == "ideal" and not setup.maneuver.tracks_body:
         dcm, att = misaligned(ideal_dcm_BT, mis), None
+    elif p.ics_reference is not None:
+        dcm, att = camera_at_images(setup, th, periods, p.ics_reference, mis, r_img, (pos, vel),
+                                    start="reference")
     else:
-        dcm, att = camera_at_images(setup, th, periods, p.ics, mis, r_img, (pos, vel))
+        dcm, att = camera_at_images(setup, th, periods, p.ics, mis, r_img, (pos, vel),
+                                    acquisition_s=p.acquisition_s)
     return r_img, dcm, att, pos
 
 

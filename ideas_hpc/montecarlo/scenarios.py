@@ -31,12 +31,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ideas_hpc.attitude import draw_initial_conditions
 from ideas_hpc.engine.store_meta import config_hash
 from ideas_hpc.flyby.flight import FlybySetup, Perturbation, endpoints, target
 from ideas_hpc.seeds import (SCENARIO_STREAM, STREAM_ATTITUDE, STREAM_BODY, STREAM_SPACECRAFT,
                      VALIDATION_STREAM, stream_rng)
-from ideas_hpc.montecarlo.dispersions import DISPERSIONS, reference_start
+from ideas_hpc.montecarlo.dispersions import DISPERSIONS, attitude_draw, attitude_perturbation
 from ideas_hpc.montecarlo.scenario_rows import RowEngine
 from ideas_hpc.montecarlo.scenario_store import build_into_store, chunk_task
 
@@ -84,9 +83,9 @@ def draw_world(mc, setup: FlybySetup, theta: np.ndarray, seed: int, stream: int,
     Body-level dispersions from purpose ``STREAM_BODY``, per-spacecraft ones
     from ``STREAM_SPACECRAFT`` (each in :data:`~ideas_hpc.montecarlo.dispersions.DISPERSIONS`
     order, ``n = theta.size`` rows), the initial attitude (simulated attitude
-    only) from ``STREAM_ATTITUDE`` with the laws of
-    :func:`ideas_hpc.attitude.initial_conditions`, or the undispersed start
-    when ``monte_carlo.attitude_dispersion`` is off. No failures.
+    only) from ``STREAM_ATTITUDE`` with the laws of ``monte_carlo.attitude_start``
+    (:func:`~ideas_hpc.montecarlo.dispersions.attitude_draw`; on the reference
+    flown when ``monte_carlo.attitude_dispersion`` is off). No failures.
     """
     n = theta.size
     body = stream_rng(seed, stream, k, STREAM_BODY)
@@ -102,11 +101,8 @@ def draw_world(mc, setup: FlybySetup, theta: np.ndarray, seed: int, stream: int,
             else:
                 pert[key] = val
     if setup.attitude_mode == "simulated":
-        if mc.attitude_dispersion:
-            pert["ics"] = draw_initial_conditions(
-                stream_rng(seed, stream, k, STREAM_ATTITUDE), n)
-        else:
-            pert["ics"] = reference_start(setup.body.params.spin_rate, theta)
+        v = attitude_draw(stream_rng(seed, stream, k, STREAM_ATTITUDE), n, mc)
+        pert.update(attitude_perturbation(mc, v))
     return pert
 
 
