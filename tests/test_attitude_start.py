@@ -62,10 +62,8 @@ def _on_reference(n):
 ], ids=["encounter", "encounter-track", "paper", "paper-fov"])
 def test_reference_start_is_the_ideal_camera(path, sets):
     # No attitude error: the closed loop's first image is the ideal camera's first
-    # image (computed by the ideal-tracking path), and stays on it (every image
-    # kept: sweeping and body tracking smear at the default exposure)
+    # image (computed by the ideal-tracking path), and stays on it
     c, setup = _setup(path, sets)
-    setup = setup.with_(imaging=None)
     periods = None if setup.maneuver.name != "fov" else np.full(THETA.size, 120.0)
     nom = design_nominal(setup, THETA, periods)
     sim = fly_open_loop(setup, THETA, periods, nom.r0_T, nom.v0_T, _on_reference(THETA.size))

@@ -74,18 +74,22 @@ def _simulate(setup, th, ws, duration, sigma0, omega0, wheel0, dcm_TS, kw):
 
 def camera_at_images(setup, th, periods, ics, misalignment, r_img, track_T=None, *,
                      start="absolute", acquisition_s=0.0):
-    """Camera DCMs at the images (attitude, then the camera misalignment, then the
-    unusable images blinded when ``setup.imaging`` is set and the attitude is simulated:
-    :mod:`ideas_hpc.flyby.usable`). ``start``, ``acquisition_s``: see :func:`camera_dcms`."""
+    """Camera DCMs at the images (attitude, then the camera misalignment).
+    ``start``, ``acquisition_s``: see :func:`camera_dcms`."""
     s0, w0, W0 = ics if ics is not None else (None, None, None)
     dcm, att = camera_dcms(setup, th, periods, sigma0=s0, omega0=w0, wheel0=W0, r_img_T=r_img,
                            track_T=track_T, start=start, acquisition_s=acquisition_s)
-    dcm = misaligned(dcm, misalignment)
+    return misaligned(dcm, misalignment), att
+
+
+def imaging_dcms(setup, dcm, att, r_img):
+    """The cameras the coverage sees: ``dcm`` with the unusable images blinded when
+    ``setup.imaging`` is set and the attitude is simulated (:mod:`ideas_hpc.flyby.usable`)."""
     use = getattr(setup, "imaging", None)
-    if use is not None and att is not None and att.image_rate is not None:
-        ok, _, _ = usable_images(use, att.image_rate[0], att.image_error[0])
-        dcm = blind(dcm, r_img, ok, setup.body.shape.r_max)
-    return dcm, att
+    if use is None or att is None or att.image_rate is None:
+        return dcm
+    ok, _, _ = usable_images(use, att.image_rate[0], att.image_error[0])
+    return blind(dcm, r_img, ok, setup.body.shape.r_max)
 
 
 def discarded_images(setup, att) -> tuple[np.ndarray, np.ndarray] | None:

@@ -30,7 +30,8 @@ from ideas_hpc.attitude import Gains, Maneuver, SpacecraftModel, campaign_maneuv
 from ideas_hpc.body.bodies import Body
 from ideas_hpc.flyby.encounter import Encounter, endpoints_encounter, target_encounter
 from ideas_hpc.errors import InputError
-from ideas_hpc.flyby.camera import camera_at_images, misaligned, misalignment_dcms
+from ideas_hpc.flyby.camera import (camera_at_images, imaging_dcms, misaligned,
+                                    misalignment_dcms)
 from ideas_hpc.mapping.coverage import CoverageResult, compute_coverage
 from ideas_hpc.mapping.options import CoverageOptions
 from ideas_hpc.flyby.sizing import Sizing
@@ -266,8 +267,9 @@ def fly_open_loop(setup: FlybySetup, theta, periods, r0_T, v0_T,
     (``times_seen`` is then 0/1; the coverage and first-seen times are the same).
     """
     th = np.asarray(theta, dtype=np.float64).ravel()
-    r_img, dcm, att, pos = open_loop_views(setup, th, periods, r0_T, v0_T, perturbation)
-    cov = _coverage(setup, r_img, dcm, perturbation.active, counts)
+    r_img, dcm, att, pos = _views(setup, th, periods, r0_T, v0_T, perturbation)
+    cov = _coverage(setup, r_img, imaging_dcms(setup, dcm, att, r_img), perturbation.active,
+                    counts)
     return FlybyOutcome(theta=th, periods=None if periods is None else np.asarray(periods),
                         targeting=None, image_times=setup.image_times, r_img_T=r_img,
                         dcm_BT=dcm, coverage=cov, attitude=att, position_T=pos)
@@ -277,10 +279,18 @@ def open_loop_views(setup: FlybySetup, theta, periods, r0_T, v0_T,
                     perturbation: Perturbation = Perturbation(), *, ideal_dcm_BT=None):
     """What :func:`fly_open_loop` images from: positions ``r_img_T`` (N, n_img, 3) m and
     camera DCMs (N, n_img, 3, 3) at the image times (misalignment applied), the
-    attitude result (simulated) and the trajectory (N, T, 3) m. Failures are not applied.
+    attitude result (simulated) and the trajectory (N, T, 3) m. Failures are not applied;
+    unusable images are blinded (:func:`ideas_hpc.flyby.camera.imaging_dcms`).
     ``ideal_dcm_BT``: the ideal camera DCMs of these spacecraft when already computed
     (``attitude_mode = "ideal"`` and not body tracking: they do not depend on the
     perturbation then)."""
+    r_img, dcm, att, pos = _views(setup, theta, periods, r0_T, v0_T, perturbation,
+                                  ideal_dcm_BT=ideal_dcm_BT)
+    return r_img, imaging_dcms(setup, dcm, att, r_img), att, pos
+
+
+def _views(setup, theta, periods, r0_T, v0_T, perturbation, *, ideal_dcm_BT=None):
+    """:func:`open_loop_views` with the camera DCMs as flown (nothing blinded)."""
     th = np.asarray(theta, dtype=np.float64).ravel()
     p = perturbation
     r0 = r0_T if p.position_error_T is None else r0_T + p.position_error_T
@@ -307,7 +317,8 @@ def _image(setup: FlybySetup, th, periods, r_img, ics, misalignment, active, cou
     """Attitude at the images, camera misalignment, Sun, coverage: the common tail of a flyby.
     ``track_T``: positions and velocities at every step (body tracking, simulated)."""
     dcm, att = camera_at_images(setup, th, periods, ics, misalignment, r_img, track_T)
-    return dcm, att, _coverage(setup, r_img, dcm, active, counts)
+    return dcm, att, _coverage(setup, r_img, imaging_dcms(setup, dcm, att, r_img), active,
+                               counts)
 
 
 def _coverage(setup: FlybySetup, r_img, dcm, active, counts):
