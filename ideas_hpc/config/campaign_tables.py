@@ -369,6 +369,9 @@ def resolved_config(c: Campaign) -> dict[str, Any]:
         out.get(table, {}).pop(key, None)
     out = ResolvedConfig(out)
     out.defaults = {**schema_defaults(SCHEMA), **_model_defaults(c.extras)}
+    # its default is not the old behaviour (the paper's start): a store written before
+    # the key existed must not resume under it
+    out.defaults.pop("monte_carlo.attitude_start", None)
     d = c.config.design
     out.effective = {"design.angle_step_deg": d.grid_step_rad / DEG,
                      "design.angle_step_rad": d.angle_step_rad,
