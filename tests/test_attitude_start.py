@@ -248,3 +248,18 @@ def test_acquisition_needs_a_duration():
     with pytest.raises(InputError) as e:
         load(DESIGN, ['monte_carlo.attitude_start="acquisition"', "monte_carlo.acquisition_s=0"])
     assert e.value.field == "monte_carlo.acquisition_s"
+
+
+def test_nominal_candidate_masks_start_on_the_reference():
+    # The designers' simulated candidate masks fly the closed loop from the
+    # reference (no draw): they are the ideal-tracking masks; the paper's start
+    # (random, seeded) differs from them
+    from ideas_hpc.design.candidates import candidate_masks
+
+    keys = [(t, 0.0, i) for i, t in enumerate(np.deg2rad([0.0, 50.0, 130.0, 250.0]))]
+    c, setup = _setup(DESIGN, PAPER_SHORT)
+    assert setup.attitude_start == "reference"
+    ideal = candidate_masks(setup.with_(attitude_mode="ideal"), keys)
+    np.testing.assert_array_equal(candidate_masks(setup, keys), ideal)
+    paper = candidate_masks(setup.with_(attitude_start="paper", imaging=None), keys)
+    assert (paper != ideal).any()

@@ -80,7 +80,8 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
         tol_m=fb.tolerance_m, max_iter=fb.max_iterations, seed=cfg.seed,
         force_model=ex["force_model"], spacecraft=ex["spacecraft"],
         gains=ex["gains"], coverage=ex["coverage"], p_min_s=cfg.design.p_min_s,
-        epoch_s=fb.epoch_s, encounter=enc, imaging=_imaging(cfg, eta))
+        epoch_s=fb.epoch_s, encounter=enc, imaging=_imaging(cfg, eta),
+        attitude_start=cfg.monte_carlo.attitude_start)
 
 
 def _imaging(cfg, eta_rad: float) -> ImageUse | None:

@@ -85,6 +85,9 @@ class FlybySetup:
     epoch_s: float = 0.0
     encounter: Encounter | None = None   # None: the paper's geometry (ideas_hpc.flyby.encounter)
     imaging: ImageUse | None = None      # None: every image counts (ideas_hpc.flyby.usable)
+    # where a flight without explicit initial conditions starts its closed loop:
+    # "paper" (random, seeded by ``seed`` and the sample), else on the reference (SPEC 7d)
+    attitude_start: str = "paper"
 
     @property
     def image_every(self) -> int:
@@ -234,7 +237,8 @@ def fly(setup: FlybySetup, theta, periods=None, *, sample: int = 0, ics=None,
     periods : (N,) s, optional
         Sweep periods (FoV sweeping).
     sample : int
-        Sample index whose seeded initial attitude is used (``simulated``).
+        Sample index whose seeded initial attitude is used (``simulated`` with
+        ``setup.attitude_start = "paper"``; otherwise the loop starts on the reference).
     ics : tuple of (N, 3) arrays, optional
         Explicit ``(sigma0, omega0, wheel0)``.
     counts : bool
@@ -245,10 +249,14 @@ def fly(setup: FlybySetup, theta, periods=None, *, sample: int = 0, ics=None,
         raise InputError("needs at least one spacecraft", field="theta")
     tgt = target(setup, th, raise_on_failure=raise_on_failure)
     r_img = np.ascontiguousarray(tgt.position_T[:, ::setup.image_every])
+    start = "absolute"
     if ics is None and setup.attitude_mode == "simulated":
-        ics = initial_conditions(setup.seed, sample, th.size)
+        if setup.attitude_start == "paper":
+            ics = initial_conditions(setup.seed, sample, th.size)
+        else:
+            ics, start = tuple(np.zeros((th.size, 3)) for _ in range(3)), "reference"
     dcm, att, cov = _image(setup, th, periods, r_img, ics, None, None, counts,
-                           (tgt.position_T, tgt.velocity_T))
+                           (tgt.position_T, tgt.velocity_T), start)
     return FlybyOutcome(theta=th, periods=None if periods is None else np.asarray(periods),
                         targeting=tgt, image_times=setup.image_times, r_img_T=r_img, dcm_BT=dcm,
                         coverage=cov, attitude=att)
@@ -313,10 +321,11 @@ def _views(setup, theta, periods, r0_T, v0_T, perturbation, *, ideal_dcm_BT=None
 
 
 def _image(setup: FlybySetup, th, periods, r_img, ics, misalignment, active, counts,
-           track_T=None):
+           track_T=None, start="absolute"):
     """Attitude at the images, camera misalignment, Sun, coverage: the common tail of a flyby.
     ``track_T``: positions and velocities at every step (body tracking, simulated)."""
-    dcm, att = camera_at_images(setup, th, periods, ics, misalignment, r_img, track_T)
+    dcm, att = camera_at_images(setup, th, periods, ics, misalignment, r_img, track_T,
+                                start=start)
     return dcm, att, _coverage(setup, r_img, imaging_dcms(setup, dcm, att, r_img), active,
                                counts)
 
