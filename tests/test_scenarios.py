@@ -9,6 +9,7 @@ import pytest
 
 from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.design.bank import build_bank
+from ideas_hpc.flyby.camera import discarded_images
 from ideas_hpc.flyby.flight import Perturbation, fly_open_loop
 from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.montecarlo.scenarios import (build_scenario_bank, draw_world, fly_members,
@@ -34,9 +35,9 @@ def _slice(pert: dict, c: int) -> Perturbation:
     """Candidate ``c``'s share of a whole-grid perturbation."""
     out = {}
     for k, v in pert.items():
-        if k == "ics":
+        if k in ("ics", "ics_reference"):
             out[k] = tuple(np.ascontiguousarray(a[c:c + 1]) for a in v)
-        elif k == "params_override":
+        elif k in ("params_override", "acquisition_s"):
             out[k] = v
         else:
             out[k] = np.ascontiguousarray(v[c:c + 1])
@@ -45,8 +46,14 @@ def _slice(pert: dict, c: int) -> Perturbation:
 
 @pytest.mark.parametrize("sets", [[], ['coverage.mode="exact"', "coverage.occlusion=true",
                                        "coverage.min_elevation_deg=5.0"],
-                                  ['attitude.mode="simulated"']],
-                         ids=["paper", "strict", "closed-loop"])
+                                  ['attitude.mode="simulated"'],
+                                  ['attitude.mode="simulated"',
+                                   'monte_carlo.attitude_start="paper"'],
+                                  ['attitude.mode="simulated"',
+                                   'monte_carlo.attitude_start="acquisition"',
+                                   "monte_carlo.acquisition_s=60.0"]],
+                         ids=["paper", "strict", "closed-loop", "closed-loop-paper",
+                              "closed-loop-acquisition"])
 def test_rows_are_single_candidate_flights(sets):
     # Each row is the flyby pipeline flying that one candidate alone through the
     # scenario's draws (body-level shared, its own state error and misalignment).
@@ -56,17 +63,25 @@ def test_rows_are_single_candidate_flights(sets):
     n_c = bank.theta.size
     assert bank.rows.shape == (3, n_c, setup.body.shape.n_vertices)
     r0, v0 = nominal_start(setup, bank.theta)
-    changed = 0
+    changed = discarded = kept = 0
     for s in range(3):
         pert = draw_world(mc, setup, bank.theta, 7, SCENARIO_STREAM, s)
         assert set(pert["params_override"]) == {"mu", "c20", "c22", "reflectivity"}
-        assert ("ics" in pert) == (setup.attitude_mode == "simulated")
+        start = "ics_reference" if mc.attitude_start == "reference" else "ics"
+        assert (start in pert) == (setup.attitude_mode == "simulated")
         for k in range(0, n_c, 3):
             f = fly_open_loop(setup, bank.theta[k:k + 1], None, r0[k:k + 1], v0[k:k + 1],
                               _slice(pert, k))
             np.testing.assert_array_equal(bank.rows[s, k], f.coverage.observed)
+            found = discarded_images(setup, f.attitude)
+            if found is not None:
+                discarded += int(found[0].sum() + found[1].sum())
+                kept += setup.image_times.size - int(found[1].sum())
         changed += int((bank.rows[s] != bank.rows[0]).sum())
     assert changed > 0          # the scenarios differ
+    if mc.attitude_start == "acquisition":
+        # the rows' identity covers blinded (unsettled) and usable images alike
+        assert discarded > 0 and kept > 0
 
 
 def test_quiet_scenarios_are_the_nominal_bank():
@@ -165,14 +180,18 @@ def test_fast_rows_equal_full_recomputation_on_eros(eros1708, sets):
         assert (full != (eng.witness >= 0)).any()     # the scenario moved footprints
 
 
-def test_closed_loop_rows_include_the_convergence(eros1708):
+@pytest.mark.parametrize("start", ["paper", "acquisition"])
+def test_closed_loop_rows_include_the_convergence(eros1708, start):
     # Closed-loop attitude from dispersed initial attitudes: the fast rows (full
     # scans while the attitude converges, budget windows after) equal the full
     # recomputation, and they differ from the ideal-attitude rows of the same world.
+    # With a short acquisition the first images are unsettled and blinded: the
+    # fast rows still equal the full recomputation.
     from ideas_hpc.montecarlo.scenario_rows import full_rows
     from ideas_hpc.montecarlo.scenarios import grid_theta, row_engine
 
-    c = load(DESIGN, ['attitude.mode="simulated"'])
+    c = load(DESIGN, ['attitude.mode="simulated"', f'monte_carlo.attitude_start="{start}"',
+                      "monte_carlo.acquisition_s=60.0"])
     setup = setup_from_campaign(c)
     mc = c.config.monte_carlo
     theta = grid_theta(np.deg2rad(6.0))
@@ -182,8 +201,12 @@ def test_closed_loop_rows_include_the_convergence(eros1708):
     from ideas_hpc.core.mapping.scenario_rows import deviation_start
     r_nom, dcm_nom = eng.nominal()
     i_ok, _, _ = deviation_start(r_nom, dcm_nom, r_img, dcm, *eng.budget)
-    assert np.all(i_ok > 0)                     # converging: outside the budget at first
+    if start == "paper":
+        assert np.all(i_ok > 0)                 # converging: outside the budget at first
+    else:
+        assert np.any(i_ok > 0)                 # blinded images: outside the budget
     fast = eng.rows(r_img, dcm)
     np.testing.assert_array_equal(fast, full_rows(setup, theta, None, eng.r0_T, eng.v0_T, pert))
     ideal = full_rows(setup.with_(attitude_mode="ideal"), theta, None, eng.r0_T, eng.v0_T, pert)
-    assert (fast != ideal).any()
+    if start == "paper":
+        assert (fast != ideal).any()

@@ -12,7 +12,7 @@ import numpy as np
 from ideas_hpc.core.attitude.batch import simulate_batch
 from ideas_hpc.core.attitude.records import ControlGains, Initial, StepTables, Wheels
 from ideas_hpc.core.dynamics.frames import dcm_RT as _dcm_RT
-from ideas_hpc.core.attitude.maneuvers import reference_dcm_BT
+from ideas_hpc.core.attitude.maneuvers import TRACK_MODE, reference_dcm_BT
 from ideas_hpc.errors import InputError
 from ideas_hpc.seeds import sample_rng
 from ideas_hpc.units import RPM
@@ -22,6 +22,7 @@ from ideas_hpc.attitude.gains import gains_from_config
 from ideas_hpc.attitude.maneuvers import P_MIN_DEFAULT, maneuver_args
 from ideas_hpc.attitude.spacecraft import default_spacecraft, validate_spacecraft
 from ideas_hpc.attitude.torque_terms import pack_torques
+from ideas_hpc.attitude.start import absolute_start, reference_state0
 
 
 def initial_conditions(seed: int, sample: int, n_spacecraft: int):
@@ -68,6 +69,8 @@ class AttitudeResult:
     dcm_BT : (S, N, n_img, 3, 3) camera DCM, body <- target frame
     max_torque : (S, N) max ``|u_s|`` over the run, N m
     max_momentum : (S, N) max ``|J_s Omega|`` over the run, N m s
+    image_rate : (S, N, n_img) ``|omega_BN|`` at the images, rad/s
+    image_error : (S, N, n_img) principal angle of ``sigma_B/R`` at the images, rad
     """
 
     times: np.ndarray
@@ -80,6 +83,8 @@ class AttitudeResult:
     max_torque: np.ndarray
     max_momentum: np.ndarray
     attrs: dict = field(default_factory=dict)
+    image_rate: np.ndarray | None = None
+    image_error: np.ndarray | None = None
 
     def to_dataset(self):
         """``xarray.Dataset`` with the SPEC section 9 names and dims."""
@@ -158,7 +163,7 @@ def simulate_attitude(theta, spin_rate, t_f, *, mode="np", periods=None, theta_m
                       gains=None, spacecraft=None, dt=0.1, image_dt=0.2, sigma0=None,
                       omega0=None, wheel0=None, decimate=1, dcm_TS=None,
                       p_min=P_MIN_DEFAULT, seed=0, n_samples=1, ref_table=None,
-                      torques=()) -> AttitudeResult:
+                      torques=(), start="absolute", acquisition_s=0.0) -> AttitudeResult:
     """Closed-loop attitude of ``S`` samples of an ``N``-spacecraft swarm (SPEC section 5).
 
     Parameters
@@ -201,6 +206,16 @@ def simulate_attitude(theta, spin_rate, t_f, *, mode="np", periods=None, theta_m
     torques : sequence of torque terms
         Disturbance torques (:mod:`ideas_hpc.attitude.torque_terms`), summed
         and held over each step; the controller is not told them.
+    start : {'absolute', 'reference'}
+        'reference': ``sigma0``, ``omega0`` are the errors ``sigma_B/R`` and
+        ``omega_B/R`` (B components) about the reference at t = 0 of the geometry
+        flown (:mod:`ideas_hpc.attitude.start`); zeros start exactly on it.
+    acquisition_s : float
+        With ``start = 'absolute'`` and > 0: first fly the loop from the given
+        state for this long (s, a multiple of ``dt``) on the reference's first
+        frame and rate (Nadir Pointing for body tracking), then start the window
+        from the attitude, rate and wheel errors reached (the controller's
+        integral restarts at zero).
 
     Returns
     -------
@@ -237,16 +252,39 @@ def simulate_attitude(theta, spin_rate, t_f, *, mode="np", periods=None, theta_m
         if not (s0.shape == w0.shape == W0.shape):
             raise InputError("sigma0, omega0, wheel0 must have the same shape", field="omega0")
     k_p, k_i, eta, phi = g.arrays(dt)
-    tables = StepTables(_ref_table(ref_table, n, n_steps),
-                        pack_torques(tuple(torques), th, n_steps, dt, ws))
-    out = simulate_batch(man.code, _ring_dcms(th, dcm_TS), ws, p, tm,
-                         ControlGains(k_p, k_i, eta, phi, float(g.int_limit)),
-                         Wheels(sc.inertia_rw, sc.J_s, float(sc.u_max_N_m), float(sc.h_max_N_m_s)),
+    table = _ref_table(ref_table, n, n_steps)
+    tables = StepTables(table, pack_torques(tuple(torques), th, n_steps, dt, ws))
+    rings = _ring_dcms(th, dcm_TS)
+    gains_rec = ControlGains(k_p, k_i, eta, phi, float(g.int_limit))
+    wheels = Wheels(sc.inertia_rw, sc.J_s, float(sc.u_max_N_m), float(sc.h_max_N_m_s))
+    if start not in ("absolute", "reference"):
+        raise InputError(f"must be 'absolute' or 'reference', got {start!r}", field="start")
+    acq = float(acquisition_s)
+    if not (math.isfinite(acq) and acq >= 0.0):
+        raise InputError(f"must be finite and >= 0 s, got {acquisition_s!r}",
+                         field="acquisition_s")
+    if acq > 0.0:
+        if start != "absolute":
+            raise InputError("an acquisition starts from an absolute state",
+                             field="acquisition_s")
+        n_acq = steps(acq, dt, "acquisition_s")
+        code = 0 if man.code == TRACK_MODE else man.code
+        a = simulate_batch(code, rings, ws, p, tm, gains_rec, wheels, dt, n_acq, (n_acq, n_acq),
+                           Initial(s0, w0, W0),
+                           StepTables(np.empty((n, 0, 9)),
+                                      pack_torques(tuple(torques), th, n_acq, dt, ws)))
+        s0, w0, W0 = (np.ascontiguousarray(a[j][:, :, -1]) for j in range(3))
+        start = "reference"
+    if start == "reference":
+        s_r, w_r = reference_state0(man.code, rings, ws, p, tm, table)
+        s0, w0 = absolute_start(s_r, w_r, s0, w0)
+    out = simulate_batch(man.code, rings, ws, p, tm, gains_rec, wheels,
                          dt, n_steps, (int(decimate), int(img_every)), Initial(s0, w0, W0), tables)
-    sig, om, wh, tq, dcm, mu, mh = out
+    sig, om, wh, tq, dcm, mu, mh, i_rate, i_err = out
     times = np.arange(0, n_steps + 1, decimate) * dt
     image_times = np.arange(0, n_steps + 1, img_every) * dt
     attrs = {"mode": mode, "dt": dt, "image_dt": image_dt, "spin_rate": ws,
              "theta_max": tm, "k_p": list(k_p), "k_i": list(k_i), "eta": list(eta),
              "phi_effective": list(phi), "int_limit": float(g.int_limit)}
-    return AttitudeResult(times, sig, om, wh, tq, image_times, dcm, mu, mh, attrs)
+    return AttitudeResult(times, sig, om, wh, tq, image_times, dcm, mu, mh, attrs,
+                          image_rate=i_rate, image_error=i_err)

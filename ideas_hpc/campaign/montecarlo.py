@@ -31,7 +31,7 @@ from ideas_hpc.flyby.flight import FlybySetup, Perturbation
 from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.montecarlo.dispersions import dispersion_order, dispersion_vars, draw_sample
 from ideas_hpc.montecarlo.sample import Nominal, design_nominal, fly_sample
-from ideas_hpc.engine.variables import ATTITUDE_SERIES, PER_SAMPLE, QUALITY, VARS, with_attrs
+from ideas_hpc.engine.variables import ATTITUDE_SERIES, DISCARDS, PER_SAMPLE, QUALITY, VARS, with_attrs
 from ideas_hpc.campaign import datasets
 from ideas_hpc.campaign.schema.campaign_tables import Campaign, resolved_config
 
@@ -84,6 +84,8 @@ def mc_template(setup: FlybySetup, nom: Nominal, n_samples: int) -> xr.Dataset:
         v["sweep_period"] = (("spacecraft",), nom.periods)
     if simulated:
         v.update({name: per_sample(VARS[name]) for name in ATTITUDE_SERIES})
+        if setup.imaging is not None:
+            v.update({name: per_sample(VARS[name]) for name in DISCARDS})
     ds = xr.Dataset(v, coords={"sample": np.arange(ns), "spacecraft": np.arange(n),
                                "time": ("time", times, {"units": "s"}),
                                "iteration": np.arange(nom.miss.shape[1]),

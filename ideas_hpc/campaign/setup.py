@@ -24,6 +24,7 @@ from ideas_hpc.flyby.encounter import Encounter, approach_angles, approach_speed
 from ideas_hpc.flyby.flight import FlybySetup
 from ideas_hpc.flyby.sizing import size_flyby
 from ideas_hpc.flyby.swarm_geometry import check_separation
+from ideas_hpc.flyby.usable import ImageUse, ifov_rad
 
 
 def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
@@ -97,7 +98,21 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
         tol_m=fb.tolerance_m, max_iter=fb.max_iterations, seed=cfg.seed,
         force_model=ex["force_model"], spacecraft=ex["spacecraft"],
         gains=ex["gains"], coverage=ex["coverage"], p_min_s=cfg.design.p_min_s,
-        epoch_s=epoch_s, encounter=enc)
+        epoch_s=epoch_s, encounter=enc, imaging=_imaging(cfg, eta),
+        attitude_start=cfg.monte_carlo.attitude_start)
+
+
+def _imaging(cfg, eta_rad: float) -> ImageUse | None:
+    """The usable-image test (SPEC 7d), or None (every image counts) for the paper's
+    start, ``monte_carlo.attitude_start = "paper"``."""
+    if cfg.monte_carlo.attitude_start == "paper":
+        return None
+    inst = cfg.instrument
+    return ImageUse(ifov_rad(eta_rad, pixels_across=inst.pixels_across,
+                             pixel_pitch_m=inst.pixel_pitch_m, focal_length_m=inst.focal_length_m,
+                             wavelength_m=inst.wavelength_m, aperture_m=inst.aperture_m),
+                    exposure_s=inst.exposure_s, smear_pixels=inst.smear_pixels,
+                    settle_rad=inst.settle_rad)
 
 
 def _encounter_window(fb, body, image_dt_s: float):

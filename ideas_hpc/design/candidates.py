@@ -1,8 +1,9 @@
 """Per-candidate rows for the designers: what one spacecraft at one swarm angle sees or maps.
 
 A design key is ``(theta rad, period s (0 = nadir), ic key)``. All candidates
-of a call are targeted in one compiled call, flown (ideal, or simulated from
-``initial_conditions(seed, ic_key, 1)``) and imaged; the designers then score
+of a call are targeted in one compiled call, flown (ideal, or simulated: on the
+reference of the geometry flown, or with ``attitude_start = "paper"`` from
+``initial_conditions(seed, ic_key, 1)``) and imaged (usable images only); the designers then score
 any swarm as a union of rows (paper eq. 26), the GA through
 :class:`~ideas_hpc.design.ga.swarm_eval.MaskBank` and the exact designer through
 :class:`~ideas_hpc.design.bank.CandidateBank`.
@@ -20,7 +21,7 @@ import numpy as np
 
 from ideas_hpc.attitude import initial_conditions
 from ideas_hpc.flyby.flight import FlybySetup, target
-from ideas_hpc.flyby.camera import camera_dcms
+from ideas_hpc.flyby.camera import camera_dcms, imaging_dcms
 from ideas_hpc.mapping.coverage import observed_per_spacecraft, quality_per_spacecraft, stereo_pair_table
 
 
@@ -31,12 +32,19 @@ def _views(setup: FlybySetup, keys):
     r_img = np.ascontiguousarray(tgt.position_T[:, ::setup.image_every])
     periods = per if setup.maneuver.sweeps else None
     if setup.attitude_mode == "simulated":
-        draws = [initial_conditions(setup.seed, int(k[2]), 1) for k in keys]
-        s0, w0, W0 = (np.ascontiguousarray(np.concatenate([d[j] for d in draws])) for j in range(3))
-        dcm, _ = camera_dcms(setup.with_(decimate=max(1, int(round((setup.tf_s - setup.t0_s)
-                                                                    / setup.dt_s)))),
-                             th, periods, sigma0=s0, omega0=w0, wheel0=W0,
-                             track_T=(tgt.position_T, tgt.velocity_T))
+        if setup.attitude_start == "paper":
+            draws = [initial_conditions(setup.seed, int(k[2]), 1) for k in keys]
+            s0, w0, W0 = (np.ascontiguousarray(np.concatenate([d[j] for d in draws]))
+                          for j in range(3))
+        else:       # the nominal flight: exactly on the reference (SPEC 7d)
+            s0, w0, W0 = (np.zeros((th.size, 3)) for _ in range(3))
+        dcm, att = camera_dcms(setup.with_(decimate=max(1, int(round((setup.tf_s - setup.t0_s)
+                                                                      / setup.dt_s)))),
+                               th, periods, sigma0=s0, omega0=w0, wheel0=W0,
+                               track_T=(tgt.position_T, tgt.velocity_T),
+                               start="absolute" if setup.attitude_start == "paper"
+                               else "reference")
+        dcm = imaging_dcms(setup, dcm, att, r_img)
     else:
         dcm, _ = camera_dcms(setup, th, periods, r_img_T=r_img)
     sun = setup.sun_T() if setup.coverage.needs_sun else None

@@ -50,6 +50,11 @@ _VARS = (
              long_name="rate error omega_B/R, frame B"),
     StoreVar("wheel_speed", T + ("wheel",), units="rad/s", long_name="reaction wheel speed Omega"),
     StoreVar("wheel_torque", T + ("wheel",), units="N m", long_name="reaction wheel torque u_s"),
+    StoreVar("images_discarded_smear", SC, np.int32, units="1",
+             long_name="images not used: camera rate smears them over more than "
+             "smear_pixels during the exposure"),
+    StoreVar("images_discarded_settle", SC, np.int32, units="1",
+             long_name="images not used: attitude error above settle_deg"),
     StoreVar("camera_dcm_BT", SC + ("snapshot", "row", "col"),
              long_name="camera DCM [BT] (B <- T) at snapshots"),
     StoreVar("observed", V, bool, long_name="vertex observed (paper eq. 26)"),
@@ -140,6 +145,8 @@ PER_SAMPLE = ("coverage", "coverage_count", "coverage_seen", "observed", "first_
               "times_seen", "arrival_error")
 #: Closed-loop attitude series (simulated attitude only).
 ATTITUDE_SERIES = ("sigma_error", "omega_error", "wheel_speed", "wheel_torque")
+#: Images discarded per spacecraft (simulated attitude with the usable-image test on).
+DISCARDS = ("images_discarded_smear", "images_discarded_settle")
 
 
 #: Index coordinates: dim -> (units, long_name). Every dim of a store gets one

@@ -15,6 +15,7 @@ from ideas_hpc.core.attitude.compose import compose_each
 from ideas_hpc.core.attitude.mrp import dcm_from_mrp, mrp_from_prv
 from ideas_hpc.errors import InputError
 from ideas_hpc.flyby.encounter import camera_dcms_encounter, track_dcms, track_reference
+from ideas_hpc.flyby.usable import blind, usable_images
 
 
 def misalignment_dcms(prv) -> np.ndarray:
@@ -24,9 +25,14 @@ def misalignment_dcms(prv) -> np.ndarray:
 
 
 def camera_dcms(setup, theta, periods=None, *, sigma0=None, omega0=None,
-                wheel0=None, spin_rate=None, r_img_T=None, track_T=None):
+                wheel0=None, spin_rate=None, r_img_T=None, track_T=None, start="absolute",
+                acquisition_s=0.0):
     """Camera DCMs at the image times, and the attitude result when simulated.
 
+    ``start = "reference"``: ``sigma0``, ``omega0`` are errors about the reference
+    of the geometry flown (encounter swarm frame, body tracking included);
+    ``acquisition_s``: fly the loop that long before the window
+    (:func:`ideas_hpc.attitude.simulate_attitude`).
     ``r_img_T`` (N, n_img, 3): the flown positions, for body tracking;
     ``track_T``: ``(position_T, velocity_T)`` (N, T, 3) at every attitude step,
     for body tracking with simulated attitude.
@@ -39,12 +45,12 @@ def camera_dcms(setup, theta, periods=None, *, sigma0=None, omega0=None,
     duration = setup.tf_s - setup.t0_s
     img_t = setup.image_times - setup.t0_s
     kw = dict(mode=setup.maneuver.name, periods=periods, theta_max=setup.theta_max_rad, p_min=setup.p_min_s)
-    sim_kw = kw
+    sim_kw = dict(kw, start=start, acquisition_s=acquisition_s)
     if setup.maneuver.tracks_body:
         if track_T is None:
             raise InputError("body tracking with simulated attitude needs the flown positions "
                              "and velocities at every step", field="track_T")
-        sim_kw = dict(kw, ref_table=track_reference(setup, *track_T))
+        sim_kw = dict(sim_kw, ref_table=track_reference(setup, *track_T))
     if setup.encounter is not None:
         if sigma0 is None and setup.attitude_mode == "simulated":
             sigma0, omega0, wheel0 = initial_conditions(setup.seed, 0, th.size)
@@ -56,7 +62,7 @@ def camera_dcms(setup, theta, periods=None, *, sigma0=None, omega0=None,
         return ideal_dcm_BT(th, ws, img_t, **kw), None
     if sigma0 is None:
         sigma0, omega0, wheel0 = initial_conditions(setup.seed, 0, th.size)
-    return _simulate(setup, th, ws, duration, sigma0, omega0, wheel0, None, kw)
+    return _simulate(setup, th, ws, duration, sigma0, omega0, wheel0, None, sim_kw)
 
 
 def _simulate(setup, th, ws, duration, sigma0, omega0, wheel0, dcm_TS, kw):
@@ -67,12 +73,34 @@ def _simulate(setup, th, ws, duration, sigma0, omega0, wheel0, dcm_TS, kw):
     return np.ascontiguousarray(res.dcm_BT[0]), res
 
 
-def camera_at_images(setup, th, periods, ics, misalignment, r_img, track_T=None):
-    """Camera DCMs at the images (attitude, then the camera misalignment)."""
+def camera_at_images(setup, th, periods, ics, misalignment, r_img, track_T=None, *,
+                     start="absolute", acquisition_s=0.0):
+    """Camera DCMs at the images (attitude, then the camera misalignment).
+    ``start``, ``acquisition_s``: see :func:`camera_dcms`."""
     s0, w0, W0 = ics if ics is not None else (None, None, None)
     dcm, att = camera_dcms(setup, th, periods, sigma0=s0, omega0=w0, wheel0=W0, r_img_T=r_img,
-                           track_T=track_T)
+                           track_T=track_T, start=start, acquisition_s=acquisition_s)
     return misaligned(dcm, misalignment), att
+
+
+def imaging_dcms(setup, dcm, att, r_img):
+    """The cameras the coverage sees: ``dcm`` with the unusable images blinded when
+    ``setup.imaging`` is set and the attitude is simulated (:mod:`ideas_hpc.flyby.usable`)."""
+    use = getattr(setup, "imaging", None)
+    if use is None or att is None or att.image_rate is None:
+        return dcm
+    ok, _, _ = usable_images(use, att.image_rate[0], att.image_error[0])
+    return blind(dcm, r_img, ok, setup.body.shape.r_max)
+
+
+def discarded_images(setup, att) -> tuple[np.ndarray, np.ndarray] | None:
+    """``(smeared (N,), unsettled (N,))`` image counts of a simulated flight, or None when
+    every image counts (ideal attitude or no ``setup.imaging``)."""
+    use = getattr(setup, "imaging", None)
+    if use is None or att is None or att.image_rate is None:
+        return None
+    _, smear, settle = usable_images(use, att.image_rate[0], att.image_error[0])
+    return smear, settle
 
 
 def misaligned(dcm, misalignment):

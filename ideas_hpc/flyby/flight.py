@@ -30,10 +30,12 @@ from ideas_hpc.attitude import Gains, Maneuver, SpacecraftModel, campaign_maneuv
 from ideas_hpc.body.bodies import Body
 from ideas_hpc.flyby.encounter import Encounter, endpoints_encounter, target_encounter
 from ideas_hpc.errors import InputError
-from ideas_hpc.flyby.camera import camera_at_images, misaligned, misalignment_dcms
+from ideas_hpc.flyby.camera import (camera_at_images, imaging_dcms, misaligned,
+                                    misalignment_dcms)
 from ideas_hpc.mapping.coverage import CoverageResult, compute_coverage
 from ideas_hpc.mapping.options import CoverageOptions
 from ideas_hpc.flyby.sizing import Sizing
+from ideas_hpc.flyby.usable import ImageUse
 from ideas_hpc.dynamics.force_model import ForceModel
 from ideas_hpc.dynamics.trajectory import (TargetingError, TargetingResult, propagate_swarm,
                                            ring_states, sun_direction_T, target_swarm)
@@ -85,6 +87,10 @@ class FlybySetup:
     #: Disturbance torques on every spacecraft (ideas_hpc.attitude.torque_terms);
     #: read by the simulated attitude only.
     torques: tuple = ()
+    imaging: ImageUse | None = None      # None: every image counts (ideas_hpc.flyby.usable)
+    # where a flight without explicit initial conditions starts its closed loop:
+    # "paper" (random, seeded by ``seed`` and the sample), else on the reference (SPEC 7d)
+    attitude_start: str = "paper"
 
     @property
     def image_every(self) -> int:
@@ -194,6 +200,10 @@ class Perturbation:
     """
 
     ics: tuple | None = None                  # (sigma0, omega0, wheel0), each (N, 3)
+    # (sigma_BR0, omega_BR0_B, wheel0): a start relative to the reference flown (SPEC 7d);
+    # replaces ``ics``
+    ics_reference: tuple | None = None
+    acquisition_s: float = 0.0                # closed loop from ``ics`` before the window, s
     params_override: dict | None = None       # mu, c20, c22, reflectivity
     position_error_T: np.ndarray | None = None  # (N, 3) m
     velocity_error_T: np.ndarray | None = None  # (N, 3) m/s
@@ -230,7 +240,8 @@ def fly(setup: FlybySetup, theta, periods=None, *, sample: int = 0, ics=None,
     periods : (N,) s, optional
         Sweep periods (FoV sweeping).
     sample : int
-        Sample index whose seeded initial attitude is used (``simulated``).
+        Sample index whose seeded initial attitude is used (``simulated`` with
+        ``setup.attitude_start = "paper"``; otherwise the loop starts on the reference).
     ics : tuple of (N, 3) arrays, optional
         Explicit ``(sigma0, omega0, wheel0)``.
     counts : bool
@@ -241,10 +252,14 @@ def fly(setup: FlybySetup, theta, periods=None, *, sample: int = 0, ics=None,
         raise InputError("needs at least one spacecraft", field="theta")
     tgt = target(setup, th, raise_on_failure=raise_on_failure)
     r_img = np.ascontiguousarray(tgt.position_T[:, ::setup.image_every])
+    start = "absolute"
     if ics is None and setup.attitude_mode == "simulated":
-        ics = initial_conditions(setup.seed, sample, th.size)
+        if setup.attitude_start == "paper":
+            ics = initial_conditions(setup.seed, sample, th.size)
+        else:
+            ics, start = tuple(np.zeros((th.size, 3)) for _ in range(3)), "reference"
     dcm, att, cov = _image(setup, th, periods, r_img, ics, None, None, counts,
-                           (tgt.position_T, tgt.velocity_T))
+                           (tgt.position_T, tgt.velocity_T), start)
     return FlybyOutcome(theta=th, periods=None if periods is None else np.asarray(periods),
                         targeting=tgt, image_times=setup.image_times, r_img_T=r_img, dcm_BT=dcm,
                         coverage=cov, attitude=att)
@@ -263,8 +278,9 @@ def fly_open_loop(setup: FlybySetup, theta, periods, r0_T, v0_T,
     (``times_seen`` is then 0/1; the coverage and first-seen times are the same).
     """
     th = np.asarray(theta, dtype=np.float64).ravel()
-    r_img, dcm, att, pos = open_loop_views(setup, th, periods, r0_T, v0_T, perturbation)
-    cov = _coverage(setup, r_img, dcm, perturbation.active, counts)
+    r_img, dcm, att, pos = _views(setup, th, periods, r0_T, v0_T, perturbation)
+    cov = _coverage(setup, r_img, imaging_dcms(setup, dcm, att, r_img), perturbation.active,
+                    counts)
     return FlybyOutcome(theta=th, periods=None if periods is None else np.asarray(periods),
                         targeting=None, image_times=setup.image_times, r_img_T=r_img,
                         dcm_BT=dcm, coverage=cov, attitude=att, position_T=pos)
@@ -274,10 +290,18 @@ def open_loop_views(setup: FlybySetup, theta, periods, r0_T, v0_T,
                     perturbation: Perturbation = Perturbation(), *, ideal_dcm_BT=None):
     """What :func:`fly_open_loop` images from: positions ``r_img_T`` (N, n_img, 3) m and
     camera DCMs (N, n_img, 3, 3) at the image times (misalignment applied), the
-    attitude result (simulated) and the trajectory (N, T, 3) m. Failures are not applied.
+    attitude result (simulated) and the trajectory (N, T, 3) m. Failures are not applied;
+    unusable images are blinded (:func:`ideas_hpc.flyby.camera.imaging_dcms`).
     ``ideal_dcm_BT``: the ideal camera DCMs of these spacecraft when already computed
     (``attitude_mode = "ideal"`` and not body tracking: they do not depend on the
     perturbation then)."""
+    r_img, dcm, att, pos = _views(setup, theta, periods, r0_T, v0_T, perturbation,
+                                  ideal_dcm_BT=ideal_dcm_BT)
+    return r_img, imaging_dcms(setup, dcm, att, r_img), att, pos
+
+
+def _views(setup, theta, periods, r0_T, v0_T, perturbation, *, ideal_dcm_BT=None):
+    """:func:`open_loop_views` with the camera DCMs as flown (nothing blinded)."""
     th = np.asarray(theta, dtype=np.float64).ravel()
     p = perturbation
     r0 = r0_T if p.position_error_T is None else r0_T + p.position_error_T
@@ -290,17 +314,23 @@ def open_loop_views(setup: FlybySetup, theta, periods, r0_T, v0_T,
     # body tracking points at the flown positions, so its DCMs move with the perturbation
     if ideal_dcm_BT is not None and setup.attitude_mode == "ideal" and not setup.maneuver.tracks_body:
         dcm, att = misaligned(ideal_dcm_BT, mis), None
+    elif p.ics_reference is not None:
+        dcm, att = camera_at_images(setup, th, periods, p.ics_reference, mis, r_img, (pos, vel),
+                                    start="reference")
     else:
-        dcm, att = camera_at_images(setup, th, periods, p.ics, mis, r_img, (pos, vel))
+        dcm, att = camera_at_images(setup, th, periods, p.ics, mis, r_img, (pos, vel),
+                                    acquisition_s=p.acquisition_s)
     return r_img, dcm, att, pos
 
 
 def _image(setup: FlybySetup, th, periods, r_img, ics, misalignment, active, counts,
-           track_T=None):
+           track_T=None, start="absolute"):
     """Attitude at the images, camera misalignment, Sun, coverage: the common tail of a flyby.
     ``track_T``: positions and velocities at every step (body tracking, simulated)."""
-    dcm, att = camera_at_images(setup, th, periods, ics, misalignment, r_img, track_T)
-    return dcm, att, _coverage(setup, r_img, dcm, active, counts)
+    dcm, att = camera_at_images(setup, th, periods, ics, misalignment, r_img, track_T,
+                                start=start)
+    return dcm, att, _coverage(setup, r_img, imaging_dcms(setup, dcm, att, r_img), active,
+                               counts)
 
 
 def _coverage(setup: FlybySetup, r_img, dcm, active, counts):

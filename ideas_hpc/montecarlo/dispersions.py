@@ -13,8 +13,8 @@ Streams and order
 -----------------
 The seed scheme is :mod:`ideas_hpc.seeds`. Sample ``k`` of campaign seed ``s`` owns ``SeedSequence(s, spawn_key=(k,))``.
 Entries with ``stream="sample"`` draw from that sequence itself (the attitude
-initial conditions, equal to :func:`ideas_hpc.attitude.initial_conditions`
-``(s, k, N)``); every other entry draws from the child
+start, :func:`attitude_draw`: with ``attitude_start = "paper"`` equal to
+:func:`ideas_hpc.attitude.initial_conditions` ``(s, k, N)``); every other entry draws from the child
 ``SeedSequence(s, spawn_key=(k, 1))``, in the order of :data:`DISPERSIONS`,
 and always draws, switched on or not, so switching one on does not shift the
 others. Append new entries at the end: an entry inserted earlier changes the
@@ -30,8 +30,7 @@ from typing import Callable
 import numpy as np
 
 from ideas_hpc.attitude import draw_initial_conditions
-from ideas_hpc.core.dynamics.frames import dcm_RT
-from ideas_hpc.core.attitude.mrp import mrp_from_dcm
+from ideas_hpc.core.attitude.mrp import mrp_from_prv
 from ideas_hpc.errors import InputError
 from ideas_hpc.fields import Field
 from ideas_hpc.seeds import sample_rng
@@ -88,6 +87,13 @@ class Dispersion:
     active: Callable | None = None
     designer: str = "scenario"
     applies: Callable | None = None
+    reads_mc: bool = False
+
+    def perturbation(self, values: dict, mc) -> dict:
+        """The :class:`~ideas_hpc.flyby.flight.Perturbation` fields of ``values``:
+        ``perturb(values)``, or ``perturb(values, mc)`` for an entry with ``reads_mc``
+        (the attitude start, whose meaning depends on ``monte_carlo.attitude_start``)."""
+        return self.perturb(values, mc) if self.reads_mc else self.perturb(values)
 
     def __post_init__(self):
         if self.level not in LEVELS:
@@ -105,29 +111,57 @@ class Dispersion:
 #: Where a dispersion acts: the whole body, or each spacecraft.
 LEVELS = ("body", "spacecraft")
 
+#: ``[monte_carlo] attitude_start`` choices (docs/attitude-start.md).
+ATTITUDE_STARTS = ("reference", "acquisition", "paper")
+
 
 def _attitude(rng, n, mc, setup, theta):
-    # rng: the sample's own generator, so that sample k's draws equal
-    # initial_conditions(seed, k, n)
-    if mc.attitude_dispersion:
-        s0, w0, W0 = draw_initial_conditions(rng, n)
-    else:
-        s0, w0, W0 = reference_start(setup.body.params.spin_rate, theta)
+    # rng: the sample's own generator (stream="sample"), so that with the paper's
+    # start sample k's draws equal initial_conditions(seed, k, n)
+    return attitude_draw(rng, n, mc)
+
+
+def attitude_draw(rng, n: int, mc) -> dict:
+    """The initial attitude of ``n`` spacecraft from ``rng`` (SPEC section 7d).
+
+    ``attitude_start = "paper"`` and ``"acquisition"``: the paper's random state
+    (:func:`ideas_hpc.attitude.draw_initial_conditions`: ``sigma_BN``, ``omega_BN_B``,
+    wheels), flown from t0 ("paper") or for ``acquisition_s`` before the window.
+    ``"reference"``: the errors about the reference of the geometry flown, a
+    rotation of normal angle ``sigma_attitude_rad`` per axis (as an MRP
+    ``sigma_B/R``) and a rate error of ``sigma_rate_rad_s`` per axis
+    (``omega_B/R``, B), wheels at rest. ``attitude_dispersion = false``: no draw,
+    every start exactly on the reference (zeros).
+    """
+    if not mc.attitude_dispersion:
+        z = np.zeros((n, 3))
+        return {"sigma0": z, "omega0": z.copy(), "wheel0": z.copy()}
+    if mc.attitude_start == "reference":
+        prv = mc.sigma_attitude_rad * rng.standard_normal((n, 3))
+        w = mc.sigma_rate_rad_s * rng.standard_normal((n, 3))
+        return {"sigma0": np.stack([mrp_from_prv(np.ascontiguousarray(v)) for v in prv])
+                .reshape(n, 3), "omega0": w, "wheel0": np.zeros((n, 3))}
+    s0, w0, W0 = draw_initial_conditions(rng, n)
     return {"sigma0": s0, "omega0": w0, "wheel0": W0}
 
 
-def reference_start(spin_rate: float, theta: np.ndarray):
-    """Initial state without attitude dispersion: ``B = R_i`` at t0 (``[TN](t0) = I``),
-    turning with the body at ``spin_rate`` (rad/s); wheels at rest."""
-    n = theta.size
-    s0 = np.empty((n, 3))
-    w0 = np.empty((n, 3))
-    eye = np.eye(3)
-    for i in range(n):
-        c = dcm_RT(float(theta[i]), eye)
-        s0[i] = mrp_from_dcm(c)
-        w0[i] = c @ np.array([0.0, 0.0, spin_rate])
-    return s0, w0, np.zeros((n, 3))
+def attitude_perturbation(mc, v: dict) -> dict:
+    """:class:`~ideas_hpc.flyby.flight.Perturbation` keywords of an attitude draw ``v``:
+    absolute (``ics``, with ``acquisition_s``) for the random starts, relative to the
+    reference flown (``ics_reference``) otherwise."""
+    ics = (v["sigma0"], v["omega0"], v["wheel0"])
+    if not mc.attitude_dispersion or mc.attitude_start == "reference":
+        return {"ics_reference": ics}
+    if mc.attitude_start == "acquisition":
+        return {"ics": ics, "acquisition_s": float(mc.acquisition_s)}
+    return {"ics": ics}
+
+
+def _check_attitude(mc):
+    if mc.attitude_start == "acquisition" and mc.attitude_dispersion and \
+            not mc.acquisition_s > 0.0:
+        raise InputError("must be > 0 s with `attitude_start = \"acquisition\"`",
+                         field="acquisition_s")
 
 
 def _gravity(rng, n, mc, setup, theta):
@@ -175,18 +209,36 @@ def _misalignment(rng, n, mc, setup, theta):
 
 SC3 = ("spacecraft", "axis")
 DISPERSIONS: tuple[Dispersion, ...] = (
-    Dispersion("attitude", _attitude,
-               lambda v: {"ics": (v["sigma0"], v["omega0"], v["wheel0"])},
-               (StoreVar("sigma0", SC3, np.float64, "1", "initial sigma_BN"),
-                StoreVar("omega0", SC3, np.float64, "rad/s", "initial omega_BN_B"),
+    Dispersion("attitude", _attitude, lambda v, mc: attitude_perturbation(mc, v),
+               (StoreVar("sigma0", SC3, np.float64, "1", "initial sigma_BN (attitude_start "
+                         "paper, acquisition) or sigma_B/R about the reference (reference)"),
+                StoreVar("omega0", SC3, np.float64, "rad/s", "initial omega_BN_B (paper, "
+                         "acquisition) or omega_B/R in B about the reference (reference)"),
                 StoreVar("wheel0", ("spacecraft", "wheel"), np.float64, "rad/s",
                          "initial wheel speeds")),
                stream="sample",
                keys=(("attitude_dispersion",
-                      Field("bool", True, doc="random initial attitude, rates, wheels")),),
-               level="spacecraft",
+                      Field("bool", True, doc="draw the initial attitude (false: start "
+                                              "exactly on the reference)")),
+                     ("attitude_start",
+                      Field("str", "reference", choices=ATTITUDE_STARTS,
+                            doc="reference: on the reference with knowledge and control "
+                                "errors; acquisition: closed loop from a random attitude "
+                                "for acquisition_s before the window; paper: random "
+                                "attitude at the window's start (paper Figs. 26-29)")),
+                     ("acquisition_s", Field("float", 300.0, lo=0,
+                                             doc="acquisition phase before the window, s")),
+                     ("sigma_attitude_deg", Field("float", 0.03, si="sigma_attitude_rad",
+                                                  to_si=DEG, lo=0, hi=10,
+                                                  doc="1-sigma attitude error per axis at "
+                                                      "the window's start")),
+                     ("sigma_rate_rad_s", Field("float", 5e-5, lo=0, hi=0.1,
+                                                doc="1-sigma rate error per axis, rad/s"))),
+               check=_check_attitude, level="spacecraft", reads_mc=True,
                active=lambda mc, setup: setup.attitude_mode == "simulated"
-               and mc.attitude_dispersion,
+               and mc.attitude_dispersion and not (mc.attitude_start == "reference" and
+                                                   mc.sigma_attitude_rad == 0 and
+                                                   mc.sigma_rate_rad_s == 0),
                applies=lambda setup: setup.attitude_mode == "simulated"),
     Dispersion("gravity", _gravity,
                lambda v: {"params_override": {"mu": v["mu"], "c20": v["c20"], "c22": v["c22"]}},
@@ -290,7 +342,7 @@ def draw_sample(mc, seed: int, k: int, theta: np.ndarray, setup) -> tuple[dict, 
         rng = sample_rng(seed, k) if d.stream == "sample" else child
         v = d.draw(rng, n, mc, setup, theta)
         values.update(v)
-        for key, val in d.perturb(v).items():
+        for key, val in d.perturbation(v, mc).items():
             if isinstance(val, dict):
                 pert.setdefault(key, {}).update(val)
             else:

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ideas_hpc.flyby.camera import discarded_images
 from ideas_hpc.flyby.flight import FlybySetup, Perturbation, endpoints, fly_open_loop, target
 from ideas_hpc.mapping.coverage import quality_arrays
 
@@ -57,4 +58,7 @@ def fly_sample(setup: FlybySetup, nom: Nominal, pert: Perturbation, *,
     if f.attitude is not None:
         for name in ("sigma_error", "omega_error", "wheel_speed", "wheel_torque"):
             out[name] = getattr(f.attitude, name)[0]
+        found = discarded_images(setup, f.attitude)
+        if found is not None:
+            out["images_discarded_smear"], out["images_discarded_settle"] = found
     return out

@@ -82,8 +82,9 @@ def draw_world(mc, setup: FlybySetup, theta: np.ndarray, seed: int, stream: int,
     from its level's generator (purpose ``STREAM_BODY`` or
     ``STREAM_SPACECRAFT``; ``n = theta.size`` rows), or, with a stream of its own
     in the Monte Carlo kind (``stream="sample"``: the initial attitude, rates
-    and wheel speeds, or the undispersed start when
-    ``monte_carlo.attitude_dispersion`` is off), from purpose
+    and wheel speeds with the laws of ``monte_carlo.attitude_start``, or the
+    start exactly on the reference when ``monte_carlo.attitude_dispersion`` is
+    off: :func:`~ideas_hpc.montecarlo.dispersions.attitude_draw`), from purpose
     ``STREAM_ATTITUDE``. No failures (``designer="exact"``), and nothing of an
     entry that does not apply to ``setup`` (the attitude of an ideal-attitude flight).
     """
@@ -99,7 +100,7 @@ def draw_world(mc, setup: FlybySetup, theta: np.ndarray, seed: int, stream: int,
         v = d.draw(rng, n, mc, setup, theta)   # a shared stream draws all the same
         if not flown:
             continue
-        for key, val in d.perturb(v).items():
+        for key, val in d.perturbation(v, mc).items():
             if isinstance(val, dict):
                 pert.setdefault(key, {}).update(val)
             else:

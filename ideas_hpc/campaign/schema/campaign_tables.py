@@ -18,7 +18,8 @@ bodies), ``data_path``, ``length_unit`` (:mod:`ideas_hpc.campaign.body_checks`);
 ``min_elevation_deg``, ``near_field_mm``, ``image_rate_hz``, ``half_angle_deg``
 (default: the sizing's eta_N for nadir pointing, eta_N/2 for FoV sweeping),
 ``pixel_pitch_um`` and ``focal_length_mm`` (optional detector, for the quality
-pass's ground sample).
+pass's ground sample), the usable-image test ``pixels_across``, ``exposure_ms``,
+``smear_pixels``, ``settle_deg`` (:mod:`ideas_hpc.campaign.schema.instrument_table`).
 
 ``[flyby]`` ``configuration`` (``ring`` or ``helix``), ``t0_s``, ``tf_s``,
 ``z_start_km``, ``z_stop_km``, ``helix_rise_km`` (helix: extra z_start per full
@@ -72,12 +73,12 @@ from ideas_hpc.errors import InputError, config_fields
 from ideas_hpc.montecarlo.dispersions import check_dispersions
 from ideas_hpc.fields import (Field, live_typed_table, schema_defaults, to_typed,
                                      typed_table, validate, with_defaults)
-from ideas_hpc.units import CM, DEG, KM, MINUTE, MM, UM
-from ideas_hpc.instrument import INSTRUMENT_DEFAULTS as _CAM
+from ideas_hpc.units import DEG, KM, MINUTE
 from ideas_hpc.campaign.schema.design_checks import (DESIGNER_FIELDS, check_stereo_design,
                                            resolve_angle_step)
 from ideas_hpc.campaign.schema.encounter_table import ENCOUNTER, check_encounter
 from ideas_hpc.campaign.schema.spice_table import SPICE_BODY, SPICE_FLYBY, resolve_spice
+from ideas_hpc.campaign.schema.instrument_table import INSTRUMENT
 from ideas_hpc.campaign.schema.model_fields import (COVERAGE_FIELDS, GAINS_FIELDS, SPACECRAFT_FIELDS,
                                            STORED_NAMES, flyby_errors, stored_fields)
 from ideas_hpc.campaign.schema.kinds import KINDS as REGISTRY
@@ -92,28 +93,6 @@ BODY = {
     "data_path": Field("str", None, nullable=True),
     "length_unit": Field("str", "km", choices=("km", "m"), doc="unit of an OBJ/PLY/STL/OFF mesh"),
     **SPICE_BODY,
-}
-
-INSTRUMENT = {
-    "ground_resolution_m": Field("float", _CAM["ground_resolution_m"], lo=0, lo_open=True),
-    "aperture_cm": Field("float", _CAM["aperture_cm"], si="aperture_m",
-                         to_si=CM, lo=0, lo_open=True),
-    "wavelength_um": Field("float", _CAM["wavelength_um"], si="wavelength_m",
-                           to_si=UM, lo=0, lo_open=True),
-    "min_elevation_deg": Field("float", _CAM["min_elevation_deg"], si="min_elevation_rad",
-                               to_si=DEG, lo=0, hi=90, hi_open=True),
-    "near_field_mm": Field("float", _CAM["near_field_mm"], si="near_field_m",
-                           to_si=MM, lo=0, lo_open=True),
-    "image_rate_hz": Field("float", 5.0, lo=0, lo_open=True),
-    "half_angle_deg": Field("float", None, nullable=True, si="half_angle_rad",
-                            to_si=DEG, lo=0, hi=90,
-                            lo_open=True, hi_open=True),
-    "pixel_pitch_um": Field("float", None, nullable=True, si="pixel_pitch_m",
-                            to_si=UM, lo=0, lo_open=True,
-                            doc="detector pixel pitch (with focal_length_mm: the quality "
-                                "pass uses pitch/focal length instead of lambda/D)"),
-    "focal_length_mm": Field("float", None, nullable=True, si="focal_length_m",
-                             to_si=MM, lo=0, lo_open=True),
 }
 
 FLYBY = {
@@ -394,6 +373,9 @@ def resolved_config(c: Campaign) -> dict[str, Any]:
         out.get(table, {}).pop(key, None)
     out = ResolvedConfig(out)
     out.defaults = {**schema_defaults(SCHEMA), **_model_defaults(c.extras)}
+    # its default is not the old behaviour (the paper's start): a store written before
+    # the key existed must not resume under it
+    out.defaults.pop("monte_carlo.attitude_start", None)
     d = c.config.design
     out.effective = {"design.angle_step_deg": d.grid_step_rad / DEG,
                      "design.angle_step_rad": d.angle_step_rad,

@@ -136,6 +136,12 @@ def simulate_batch(mode, dcm_RT_all, spin_rate, periods, theta_max, gains, wheel
         Camera DCM (body <- target frame) at image times.
     max_torque, max_momentum : (S, N) float64
         ``max |u_s|`` (N m) and ``max |J_s Omega|`` (N m s) over all steps.
+    image_rate : (S, N, n_img) float64
+        ``|omega_BN|`` at the image times, rad/s (the camera's inertial rate: the
+        camera is fixed in B), for the smear test of a usable image (SPEC 7d).
+    image_error : (S, N, n_img) float64
+        Principal angle of ``sigma_B/R`` at the image times, rad
+        (``4 atan |sigma_B/R|``), for the settle test.
     """
     sigma0, omega0, wheel0 = initial
     int_limit = gains.int_limit
@@ -151,6 +157,8 @@ def simulate_batch(mode, dcm_RT_all, spin_rate, periods, theta_max, gains, wheel
     wheel = np.empty((n_s, n_sc, n_rec, 3))
     torque = np.empty((n_s, n_sc, n_rec, 3))
     dcm_BT = np.empty((n_s, n_sc, n_img, 3, 3))
+    img_rate = np.empty((n_s, n_sc, n_img))
+    img_err = np.empty((n_s, n_sc, n_img))
     max_u = np.zeros((n_s, n_sc))
     max_h = np.zeros((n_s, n_sc))
     sigma_RT_all = np.empty((n_sc, 3))
@@ -191,9 +199,10 @@ def simulate_batch(mode, dcm_RT_all, spin_rate, periods, theta_max, gains, wheel
         r = 0
         for k in range(n_steps + 1):
             t = k * dt
-            if c_img == 0:
+            img = c_img == 0
+            if img:
                 _dcm_BT(x, spin_rate, t, dcm_BT, smp, i, n_img_done)
-                n_img_done += 1
+                img_rate[smp, i, n_img_done] = np.sqrt(x[3] * x[3] + x[4] * x[4] + x[5] * x[5])
             c_img += 1
             if c_img == img_every:
                 c_img = 0
@@ -216,6 +225,10 @@ def simulate_batch(mode, dcm_RT_all, spin_rate, periods, theta_max, gains, wheel
                 for j in range(3):
                     L_ext[j] = torque_table[i, k, j]
             sliding_mode_into(x, z, ref, gains, wheels, L_known, u, err)
+            if img:
+                img_err[smp, i, n_img_done] = 4.0 * np.arctan(
+                    np.sqrt(err[0] * err[0] + err[1] * err[1] + err[2] * err[2]))
+                n_img_done += 1
             if k < n_steps:
                 rk4_step_into(x, u, L_ext, I_rw, J_s, dt, work, x)
                 if err[0] * err[0] + err[1] * err[1] + err[2] * err[2] < int_limit * int_limit:
@@ -237,4 +250,4 @@ def simulate_batch(mode, dcm_RT_all, spin_rate, periods, theta_max, gains, wheel
                 c_rec = 0
         max_u[smp, i] = mu
         max_h[smp, i] = mh
-    return sig_err, om_err, wheel, torque, dcm_BT, max_u, max_h
+    return sig_err, om_err, wheel, torque, dcm_BT, max_u, max_h, img_rate, img_err
