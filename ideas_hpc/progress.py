@@ -76,7 +76,9 @@ def map_chunks(fn, chunks: list, client=None, *, desc: str | None, unit: str = "
     with bar(done + sum(sizes), desc, unit) as b:
         b.update(done)
         if client is None:
-            return [_here(fn, c, retries, errors, b, n) for c, n in zip(chunks, sizes)]
+            out = [_here(fn, c, retries, errors, b, n) for c, n in zip(chunks, sizes)]
+            b.refresh()     # the final count is drawn whatever tqdm's refresh interval
+            return out
         from distributed import as_completed
 
         if scatter:
@@ -99,6 +101,7 @@ def map_chunks(fn, chunks: list, client=None, *, desc: str | None, unit: str = "
         except BaseException:
             client.cancel(futures)
             raise
+        b.refresh()         # the final count is drawn whatever tqdm's refresh interval
         return out
 
 

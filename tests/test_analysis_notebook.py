@@ -24,6 +24,14 @@ PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 sys.path.insert(0, str(ANALYSIS))
 import plotting  # noqa: E402  (analysis/plotting.py)
 
+# A 60 s, +-3 km flight keeps the campaign to seconds on a warm numba cache;
+# every override is a schema field (ideas_hpc/campaign/schema/campaign_tables.py).
+# (test_quality_probabilities runs its own campaign with these.)
+SMALL = ["--set", "monte_carlo.samples=4", "--set", "run.chunk_size=2",
+         "--set", "flyby.tf_s=60", "--set", "flyby.z_start_km=-3",
+         "--set", "flyby.z_stop_km=3", "--set", "attitude.decimate=10"]
+
+
 @pytest.fixture(scope="module")
 def mc_store(tmp_path_factory):
     """A finished 4-sample Monte Carlo store: the session's shared one (tests/small_stores.py,

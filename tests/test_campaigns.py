@@ -21,6 +21,7 @@ SMALL = {
     "eros-design.toml": ["design.scenarios=100", "design.verify_samples=100",
                          "design.angle_step_deg=6.0"],
     "eros-design-nominal.toml": ["design.verify_samples=2", "design.angle_step_deg=3.0"],
+    "eros-design-quick.toml": ["design.angle_step_deg=6.0"],
     "eros-fast-encounter.toml": ["design.verify_samples=2", "design.angle_step_deg=6.0"],
     "eros-fast-encounter-flyby.toml": [],
     "eros-flyby.toml": [],

@@ -163,18 +163,18 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
           f"P of the reported swarm over its own fresh samples ({BOUND_METHOD}; the look's share "
           f"of 1 - {conf:g}: the certificate)")
     _with(new, "bank_level", "1", "level p' >= p the scenario bank was solved at")
-    _with(new, "statistical_lower_bound", None, f"{100 * conf:g} % statistical lower bound on "
+    _with(new, "statistical_lower_bound", "1", f"{100 * conf:g} % statistical lower bound on "
           "the true fewest N (replicated sample problems cut from the bank, ring-gap bounds; "
           "NaN: none)")
-    _with(new, "validation_look_n", None, "swarm size of each validation look, in order")
+    _with(new, "validation_look_n", "1", "swarm size of each validation look, in order")
     _with(new, "validation_look_p_hat", "1", "P-hat of each look")
     _with(new, "validation_look_lower_bound", "1", "lower bound of each look at "
           "validation_look_confidence (the last is the certificate)")
-    _with(new, "validation_look_first_sample", None, "first validation sample of each look")
-    _with(new, "validation_looks", None, "validation looks made (one swarm size each)")
-    _with(new, "validation_looks_planned", None, "looks planned from the bank, K; each at "
+    _with(new, "validation_look_first_sample", "1", "first validation sample of each look")
+    _with(new, "validation_looks", "1", "validation looks made (one swarm size each)")
+    _with(new, "validation_looks_planned", "1", "looks planned from the bank, K; each at "
           "(1 - confidence) / K")
-    _with(new, "validation_first_sample", None, "index of the final look's first validation "
+    _with(new, "validation_first_sample", "1", "index of the final look's first validation "
           "sample (its samples follow, disjoint from every other look's)")
     _with(new, "validation_look_confidence", "1", "confidence of each look's bound, "
           "1 - (1 - confidence) / K")
