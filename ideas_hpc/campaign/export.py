@@ -14,8 +14,9 @@ one by more than 1 mm, and writes at full resolution (SPEC section 7e,
 * ``images.csv``: one row per spacecraft and image: times (flyby s, TDB s past J2000,
   UTC when a leap-second kernel is known), position (m, J2000, body-centred), the
   quaternion J2000 -> camera (SPICE's ``m2q`` convention, scalar first), the unit Sun
-  direction (J2000) and whether the image was usable (:func:`body_in_view`: this code has
-  no smear or settle test per image yet);
+  direction (J2000) and whether the image was usable: the body in the field of view
+  (:func:`body_in_view`) and, for simulated attitude, the smear and settle test the
+  coverage applied (:func:`ideas_hpc.flyby.camera.usable_mask`);
 * ``export.tm``: a meta-kernel loading them (and the LSK when known).
 
 Epoch: the store's ``models.spice.epoch_et_s`` (a run from kernels) or ``--epoch-et``
@@ -158,6 +159,11 @@ def export_store(store, out=None, *, naif_base: int = -1000, body_id: int | None
     sun_J = np.einsum("tji,tj->ti", tj_img, sun_direction_T(params, setup.epoch_s + t_img))
     r_img_J = np.einsum("tji,ktj->kti", tj_img, res.r_img_T)
     usable = body_in_view(res.r_img_T, res.dcm_BT, setup.eta_rad, setup.body.shape.r_max)
+    from ideas_hpc.flyby.camera import usable_mask
+
+    sharp = usable_mask(setup, res.attitude)    # None: every image counts (ideal attitude)
+    if sharp is not None:
+        usable &= sharp
     _write_csv(out / "images.csv", sp, sc_ids, t_img, et_img, utc, r_img_J, dcm_CJ, sun_J, usable)
     mk = [str(lsk)] if lsk else []
     mk += [str(out / n) for n in ("swarm.tsc", "swarm.tf", "body.tpc", "swarm.bsp", "swarm.bc")]

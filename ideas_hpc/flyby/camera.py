@@ -51,17 +51,20 @@ def camera_dcms(setup, theta, periods=None, *, sigma0=None, omega0=None,
             raise InputError("body tracking with simulated attitude needs the flown positions "
                              "and velocities at every step", field="track_T")
         sim_kw = dict(sim_kw, ref_table=track_reference(setup, *track_T))
-    if setup.encounter is not None:
-        if sigma0 is None and setup.attitude_mode == "simulated":
+    if sigma0 is None and setup.attitude_mode == "simulated":
+        # no initial state given: the setup's own start (SPEC 7d), as flight.fly() does
+        if setup.attitude_start == "paper":
             sigma0, omega0, wheel0 = initial_conditions(setup.seed, 0, th.size)
+        else:
+            sigma0, omega0, wheel0 = (np.zeros((th.size, 3)) for _ in range(3))
+            sim_kw = dict(sim_kw, start="reference")
+    if setup.encounter is not None:
         bt, att, _ = camera_dcms_encounter(
             setup, th, periods, lambda w, ns: ideal_dcm_BT(th, w, img_t, dcm_TS=ns, **kw),
             lambda w, ns: _simulate(setup, th, w, duration, sigma0, omega0, wheel0, ns, sim_kw))
         return bt, att
     if setup.attitude_mode == "ideal":
         return ideal_dcm_BT(th, ws, img_t, **kw), None
-    if sigma0 is None:
-        sigma0, omega0, wheel0 = initial_conditions(setup.seed, 0, th.size)
     return _simulate(setup, th, ws, duration, sigma0, omega0, wheel0, None, sim_kw)
 
 
@@ -83,14 +86,21 @@ def camera_at_images(setup, th, periods, ics, misalignment, r_img, track_T=None,
     return misaligned(dcm, misalignment), att
 
 
-def imaging_dcms(setup, dcm, att, r_img):
-    """The cameras the coverage sees: ``dcm`` with the unusable images blinded when
-    ``setup.imaging`` is set and the attitude is simulated (:mod:`ideas_hpc.flyby.usable`)."""
+def usable_mask(setup, att) -> np.ndarray | None:
+    """(N, n_img) bool: the images that pass the usable-image test (smear and settle,
+    :mod:`ideas_hpc.flyby.usable`), or None when every image counts (ideal attitude or
+    no ``setup.imaging``)."""
     use = getattr(setup, "imaging", None)
     if use is None or att is None or att.image_rate is None:
-        return dcm
-    ok, _, _ = usable_images(use, att.image_rate[0], att.image_error[0])
-    return blind(dcm, r_img, ok, setup.body.shape.r_max)
+        return None
+    return usable_images(use, att.image_rate[0], att.image_error[0])[0]
+
+
+def imaging_dcms(setup, dcm, att, r_img):
+    """The cameras the coverage sees: ``dcm`` with the unusable images blinded when
+    ``setup.imaging`` is set and the attitude is simulated (:func:`usable_mask`)."""
+    ok = usable_mask(setup, att)
+    return dcm if ok is None else blind(dcm, r_img, ok, setup.body.shape.r_max)
 
 
 def discarded_images(setup, att) -> tuple[np.ndarray, np.ndarray] | None:
