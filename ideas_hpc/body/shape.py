@@ -235,8 +235,9 @@ def load_shape_file(path, *, length_unit: str = "km") -> Shape:
         raise InputError("no such shape file", file=path)
     if path.suffix.lower() == ".tab":
         return read_plate_tab(path)
-    if path.suffix.lower() in (".bds", ".dsk"):
-        from ideas_hpc.body.dsk import read_dsk
+    from ideas_hpc.body.dsk import DSK_SUFFIXES, read_dsk   # spiceypy itself only on use
+
+    if path.suffix.lower() in DSK_SUFFIXES:
         v, f = read_dsk(path)
         try:
             return build_shape(v, f, name=path.stem, source=str(path))

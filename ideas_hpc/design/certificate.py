@@ -5,7 +5,7 @@ fixed before its sample was drawn (SPEC section 7d, issue 29). The design
 procedure is
 
 1. *selection* on the scenario bank: the fewest N whose bank probability
-   reaches the solve level ``p'`` (:func:`solve_level`; ``p' = p`` unless a
+   reaches the solve level ``p'`` (:func:`stricter_level`; ``p' = p`` unless a
    stricter level is asked for), its swarm ``X_N``;
 2. *looks*: swarm ``X_N`` is flown through fresh validation samples and the
    bound computed; with ``design.demonstrate`` a look whose bound misses ``p``
@@ -160,9 +160,11 @@ def certify(n_bank: int, best_of: Callable, validate: Callable, *, p: float,
     k = planned_looks(demonstrate, n_bank, n_max, max_looks, exact)
     conf_look = 1.0 if exact else look_confidence(confidence, k)
     cert = Certificate(p=float(p), confidence=float(confidence), planned=k, exact=exact)
-    for j in range(k):
+    # every swarm a look may fly is fixed before the first look: no choice waits on
+    # (or times itself against) a validation flight
+    picks = [best_of(int(n_bank) + j) for j in range(k)]
+    for j, (swarm, pb) in enumerate(picks):
         n = int(n_bank) + j
-        swarm, pb = best_of(n)
         swarm = np.asarray(swarm, dtype=np.int64)
         if swarm.size != n:
             break

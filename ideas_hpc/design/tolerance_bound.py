@@ -164,9 +164,6 @@ class ToleranceBound:
         ub = [downset_upper(n, p_f, low[0], k_star(n, low)) for low in self.lows]
         return float(np.mean(ub))
 
-    def plain_low(self, s: int, value: int) -> None:
-        """Raise scenario s's known plain minimum to ``value``."""
-        self.lows[s][0] = max(self.lows[s][0], int(value))
 
 
 def tolerant_lower(masks, w, need: float, k: int, seconds: float | None,
