@@ -70,6 +70,7 @@ class AttitudeResult:
     max_torque : (S, N) max ``|u_s|`` over the run, N m
     max_momentum : (S, N) max ``|J_s Omega|`` over the run, N m s
     image_rate : (S, N, n_img) ``|omega_BN|`` at the images, rad/s
+    image_omega : (S, N, n_img, 3) ``omega_BN`` in B at the images, rad/s
     image_error : (S, N, n_img) principal angle of ``sigma_B/R`` at the images, rad
     """
 
@@ -85,6 +86,7 @@ class AttitudeResult:
     attrs: dict = field(default_factory=dict)
     image_rate: np.ndarray | None = None
     image_error: np.ndarray | None = None
+    image_omega: np.ndarray | None = None
 
     def to_dataset(self):
         """``xarray.Dataset`` with the SPEC section 9 names and dims."""
@@ -280,11 +282,14 @@ def simulate_attitude(theta, spin_rate, t_f, *, mode="np", periods=None, theta_m
         s0, w0 = absolute_start(s_r, w_r, s0, w0)
     out = simulate_batch(man.code, rings, ws, p, tm, gains_rec, wheels,
                          dt, n_steps, (int(decimate), int(img_every)), Initial(s0, w0, W0), tables)
-    sig, om, wh, tq, dcm, mu, mh, i_rate, i_err = out
+    sig, om, wh, tq, dcm, mu, mh, i_omega, i_err = out
+    # the norm in the kernel's old order of operations: the smear test reads the same bits
+    i_rate = np.sqrt(i_omega[..., 0] * i_omega[..., 0] + i_omega[..., 1] * i_omega[..., 1]
+                     + i_omega[..., 2] * i_omega[..., 2])
     times = np.arange(0, n_steps + 1, decimate) * dt
     image_times = np.arange(0, n_steps + 1, img_every) * dt
     attrs = {"mode": mode, "dt": dt, "image_dt": image_dt, "spin_rate": ws,
              "theta_max": tm, "k_p": list(k_p), "k_i": list(k_i), "eta": list(eta),
              "phi_effective": list(phi), "int_limit": float(g.int_limit)}
     return AttitudeResult(times, sig, om, wh, tq, image_times, dcm, mu, mh, attrs,
-                          image_rate=i_rate, image_error=i_err)
+                          image_rate=i_rate, image_error=i_err, image_omega=i_omega)

@@ -9,6 +9,7 @@ Everything downstream takes the contiguous float64/int64 arrays of
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -58,6 +59,15 @@ class Shape:
     r_av: float = 0.0
     area: float = 0.0
     volume: float = 0.0
+
+    @functools.cached_property
+    def mass_properties(self):
+        """Constant-density :class:`~ideas_hpc.body.mass_properties.MassProperties` of the
+        mesh, computed on first use and kept: the body checks, the default C20/C22 and
+        ``ideas-hpc body`` all read this one."""
+        from ideas_hpc.body.mass_properties import mass_properties
+
+        return mass_properties(self.vertices_T, self.faces)
 
     @property
     def n_vertices(self) -> int:

@@ -25,7 +25,7 @@ import sys
 
 from ideas_hpc.body.bodies import BUILTIN
 from ideas_hpc.body.mass_properties import (com_problem, density_problem, implied_density,
-                                            mass_properties, mean_radius)
+                                            mean_radius)
 from ideas_hpc.campaign.schema.design_checks import step_key
 from ideas_hpc.campaign.schema.kinds import KINDS
 from ideas_hpc.errors import InputError
@@ -46,7 +46,7 @@ def warn_field(field: str, message: str) -> None:
 def check_body(c, body) -> None:
     """Refuse an implausible density or a mesh origin away from the centre of mass."""
     shape = body.shape
-    props = mass_properties(shape.vertices_T, shape.faces)
+    props = shape.mass_properties
     problem = density_problem(implied_density(body.params.mu, props.volume_m3))
     if problem:
         b = c.config.body

@@ -59,11 +59,11 @@ def _mu(args, body):
 
 def body_lines(body, mu) -> list[str]:
     """The report of :func:`_cmd_body` for a loaded body and ``mu`` (m^3/s^2 or None)."""
-    from ideas_hpc.body.mass_properties import implied_density, mass_properties, mean_radius
+    from ideas_hpc.body.mass_properties import implied_density, mean_radius
     from ideas_hpc.constants import G
 
     s = body.shape
-    p = mass_properties(s.vertices_T, s.faces)
+    p = s.mass_properties
     ex = p.extent_T_m / KM
     com = p.com_T_m / KM
     out = [f"shape: {s.summary()}",
@@ -103,7 +103,7 @@ def body_lines(body, mu) -> list[str]:
 def _cmd_body(args) -> int:
     from ideas_hpc.body.bodies import load_body
     from ideas_hpc.body.mass_properties import (com_problem, density_problem, implied_density,
-                                                mass_properties, mean_radius)
+                                                mean_radius)
 
     try:
         body = load_body(args.file, data_path=args.data_path, length_unit=args.length_unit)
@@ -113,7 +113,7 @@ def _cmd_body(args) -> int:
         raise
     mu, source = _mu(args, body)
     print("\n".join(body_lines(body, mu)))
-    p = mass_properties(body.shape.vertices_T, body.shape.faces)
+    p = body.shape.mass_properties
     if mu is not None:
         problem = density_problem(implied_density(mu, p.volume_m3))
         if problem:

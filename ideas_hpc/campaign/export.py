@@ -1,9 +1,12 @@
-"""``ideas-hpc export STORE``: a flyby store as SPICE kernels and a CSV of images (issue 32).
+"""``ideas-hpc export STORE``: a store's swarm as SPICE kernels and a CSV of images (issue 32).
 
-The store holds the trajectory at the stored steps and the camera attitude at a few
-snapshots; the export re-flies the campaign from the store's resolved config (the
-reproducibility promise), refuses when the re-flown trajectory differs from the stored
-one by more than 1 mm, and writes at full resolution (SPEC section 7e,
+A store holds the trajectory at the stored steps and the camera attitude at a few
+snapshots; the export flies the store's swarm again from its resolved config (the
+reproducibility promise) and writes at full resolution. Which flight, by store kind: a
+flyby's, a design's chosen swarm, a Monte Carlo store's nominal flight or, with
+``--sample K``, its sample K; a store of many swarms (a Pareto front) is refused
+(:mod:`ideas_hpc.campaign.export_flight`, which also refuses a re-flown trajectory more
+than 1 mm from the stored one). Files (SPEC section 7e,
 :mod:`ideas_hpc.campaign.spice_writers`):
 
 * ``swarm.bsp``: SPK type 13, each spacecraft relative to the body centre in J2000;
@@ -15,8 +18,9 @@ one by more than 1 mm, and writes at full resolution (SPEC section 7e,
   UTC when a leap-second kernel is known), position (m, J2000, body-centred), the
   quaternion J2000 -> camera (SPICE's ``m2q`` convention, scalar first), the unit Sun
   direction (J2000) and whether the image was usable: the body in the field of view
-  (:func:`body_in_view`) and, for simulated attitude, the smear and settle test the
-  coverage applied (:func:`ideas_hpc.flyby.camera.usable_mask`);
+  (:func:`body_in_view`), for simulated attitude the smear and settle test the
+  coverage applied (:func:`ideas_hpc.flyby.camera.usable_mask`) and, in a dispersed
+  sample, the spacecraft not failed;
 * ``export.tm``: a meta-kernel loading them (and the LSK when known).
 
 Epoch: the store's ``models.spice.epoch_et_s`` (a run from kernels) or ``--epoch-et``
@@ -35,14 +39,13 @@ import numpy as np
 from ideas_hpc.errors import InputError
 
 EROS_ID = 2000433
-REPRODUCE_TOL_M = 1e-3
 
 
 def add_export_command(sub) -> None:
-    p = sub.add_parser("export", help="write a flyby store as SPICE kernels (SPK, CK, FK, PCK) "
-                                      "and a CSV of every image",
+    p = sub.add_parser("export", help="write a store's swarm as SPICE kernels (SPK, CK, FK, "
+                                      "PCK) and a CSV of every image",
                        description=__doc__.split("\n\n")[1])
-    p.add_argument("store", help="zarr store of a flyby campaign")
+    p.add_argument("store", help="zarr store of a flyby, design or Monte Carlo campaign")
     p.add_argument("--out", default=None, help="output folder (default: STORE-spice)")
     p.add_argument("--naif-base", type=int, default=-1000,
                    help="NAIF ID of spacecraft 0; spacecraft k gets base - k (default -1000)")
@@ -51,25 +54,17 @@ def add_export_command(sub) -> None:
                    help="TDB s past J2000 of the body's element epoch (default 0, or the "
                         "store's kernel epoch)")
     p.add_argument("--lsk", default=None, help="leap-second kernel, for the UTC column")
-    p.set_defaults(handler=lambda a: print(export_store(
-        a.store, a.out, naif_base=a.naif_base, body_id=a.body_id, epoch_et=a.epoch_et,
-        lsk=a.lsk)) or 0)
+    p.add_argument("--sample", type=int, default=None, metavar="K",
+                   help="Monte Carlo store: export sample K (default: the nominal flight)")
+    p.set_defaults(handler=_cmd_export)
 
 
-def _refly(store: Path, attrs: dict):
-    from ideas_hpc.campaign.setup import setup_from_campaign
-    from ideas_hpc.campaign.schema.campaign_tables import validate_campaign
-    from ideas_hpc.campaign.schema.toml_file import CampaignSource
-    from ideas_hpc.flyby.flight import fly
-
-    cfg = dict(attrs["config"])
-    cfg.pop("models", None)
-    src = Path(attrs["campaign_file"]) if attrs.get("campaign_file") else None
-    c = validate_campaign(CampaignSource(data=cfg, path=src))
-    setup = setup_from_campaign(c)
-    sw = c.config.swarm
-    res = fly(setup, sw.angles_rad, setup.maneuver.swarm_periods(sw.sweep_periods_s))
-    return c, setup, res
+def _cmd_export(a) -> int:
+    notes: list = []
+    out = export_store(a.store, a.out, naif_base=a.naif_base, body_id=a.body_id,
+                       epoch_et=a.epoch_et, lsk=a.lsk, sample=a.sample, notes=notes)
+    print("\n".join(notes + [f"wrote {out}"]))
+    return 0
 
 
 def _body_id(sp, c, spice, body_id):
@@ -84,11 +79,13 @@ def _body_id(sp, c, spice, body_id):
 
 
 def export_store(store, out=None, *, naif_base: int = -1000, body_id: int | None = None,
-                 epoch_et: float | None = None, lsk=None) -> Path:
-    """Write the kernels and the CSV of a flyby store (module docstring); returns the folder."""
-    import xarray as xr
-
+                 epoch_et: float | None = None, lsk=None, sample: int | None = None,
+                 notes: list | None = None) -> Path:
+    """Write the kernels and the CSV of a store's flight (module docstring); returns the
+    folder. ``sample``: a Monte Carlo store's sample (default its nominal flight);
+    ``notes``: a list that gets the lines saying which flight was written."""
     from ideas_hpc.campaign import spice_writers as w
+    from ideas_hpc.campaign.export_flight import camera_rates_J, flight_of
     from ideas_hpc.dynamics.trajectory import sun_direction_T
     from ideas_hpc.engine.store_meta import store_attrs
     from ideas_hpc.spice import spiceypy
@@ -96,26 +93,18 @@ def export_store(store, out=None, *, naif_base: int = -1000, body_id: int | None
     sp = spiceypy("export")
     store = Path(store)
     attrs = store_attrs(store)
-    if attrs.get("kind") != "flyby":
-        raise InputError(f"export reads flyby stores; this one is kind {attrs.get('kind')!r}",
-                         field="store")
     if naif_base >= 0:
         raise InputError(f"must be negative (NAIF spacecraft IDs), got {naif_base}",
                          field="--naif-base")
-    c, setup, res = _refly(store, attrs)
-    tg = res.targeting
-    stored = xr.open_zarr(store)["position"].values
-    flown = tg.position_T[:, ::setup.decimate]
-    gap = float(np.max(np.abs(stored - flown))) if stored.shape == flown.shape else np.inf
-    if not gap <= REPRODUCE_TOL_M:
-        raise InputError(f"re-flying the store's config gives a trajectory {gap:.3g} m away from "
-                         "the stored one (another code version?); re-run the campaign first",
-                         field="store")
+    fl = flight_of(store, attrs, sample)
+    if notes is not None:
+        notes += [f"flight: {fl.what}", *(f"note: {n}" for n in fl.notes)]
+    c, setup = fl.c, fl.setup
     spice = attrs["config"].get("models", {}).get("spice")
     et_el = spice["epoch_et_s"] if spice else (epoch_et if epoch_et is not None else 0.0)
     bid = _body_id(sp, c, spice, body_id)
     params = setup.body.params
-    n_sc = tg.position_T.shape[0]
+    n_sc = fl.position_T.shape[0]
     sc_ids = [naif_base - k for k in range(n_sc)]
     cams = [f"IDEAS_SC{k}_CAMERA" for k in range(n_sc)]
     body_frame = f"IDEAS_{bid}_FIXED"
@@ -124,21 +113,21 @@ def export_store(store, out=None, *, naif_base: int = -1000, body_id: int | None
     dcm_NJ = np.asarray(sp.pxform("J2000", "ECLIPJ2000", 0.0))
     omega = np.array([0.0, 0.0, params.spin_rate])
 
-    tau = setup.epoch_s + tg.times
+    tau = setup.epoch_s + fl.times_s
     tj = w.dcm_TN(params, tau) @ dcm_NJ                       # [T J2000] per step
-    r_J = np.einsum("tji,ktj->kti", tj, tg.position_T)
-    v_T = tg.velocity_T + np.cross(omega, tg.position_T)
+    r_J = np.einsum("tji,ktj->kti", tj, fl.position_T)
+    v_T = fl.velocity_T + np.cross(omega, fl.position_T)     # inertial velocity, in T
     v_J = np.einsum("tji,ktj->kti", tj, v_T)
     (out / "body.tpc").write_text(w.pck_text(bid, params, et_el, dcm_NJ))
     (out / "swarm.tf").write_text(w.fk_text(bid, body_frame, sc_ids, cams))
-    t_img = res.image_times
+    t_img = fl.image_times_s
     et_img = et_el + setup.epoch_s + t_img
     (out / "swarm.tsc").write_text(w.sclk_text(sc_ids, float(et_img[0])))
     for name in ("swarm.bsp", "swarm.bc"):
         (out / name).unlink(missing_ok=True)
     w.write_spk(sp, out / "swarm.bsp", bid, sc_ids, et_el + tau, r_J, v_J)
     tj_img = w.dcm_TN(params, setup.epoch_s + t_img) @ dcm_NJ
-    dcm_CJ = np.einsum("kiab,ibc->kiac", res.dcm_BT, tj_img)
+    dcm_CJ = np.einsum("kiab,ibc->kiac", fl.dcm_BT, tj_img)
     kernels = [out / "swarm.tsc", out / "swarm.tf", out / "body.tpc"]
     lsk = lsk or _lsk_of(attrs)
     for k in kernels:
@@ -146,7 +135,7 @@ def export_store(store, out=None, *, naif_base: int = -1000, body_id: int | None
     if lsk:
         sp.furnsh(str(lsk))
     try:
-        w.write_ck(sp, out / "swarm.bc", sc_ids, et_img, dcm_CJ)
+        w.write_ck(sp, out / "swarm.bc", sc_ids, et_img, dcm_CJ, camera_rates_J(fl, dcm_CJ))
         utc = [sp.et2utc(float(t), "ISOC", 6) for t in et_img] if lsk else [""] * len(et_img)
     finally:
         for k in kernels:
@@ -157,19 +146,30 @@ def export_store(store, out=None, *, naif_base: int = -1000, body_id: int | None
         print("ideas-hpc: warning: --lsk: no leap-second kernel, the CSV's utc column is empty",
               flush=True)
     sun_J = np.einsum("tji,tj->ti", tj_img, sun_direction_T(params, setup.epoch_s + t_img))
-    r_img_J = np.einsum("tji,ktj->kti", tj_img, res.r_img_T)
-    usable = body_in_view(res.r_img_T, res.dcm_BT, setup.eta_rad, setup.body.shape.r_max)
-    from ideas_hpc.flyby.camera import usable_mask
-
-    sharp = usable_mask(setup, res.attitude)    # None: every image counts (ideal attitude)
-    if sharp is not None:
-        usable &= sharp
-    _write_csv(out / "images.csv", sp, sc_ids, t_img, et_img, utc, r_img_J, dcm_CJ, sun_J, usable)
+    r_img_J = np.einsum("tji,ktj->kti", tj_img, fl.r_img_T)
+    _write_csv(out / "images.csv", sp, sc_ids, t_img, et_img, utc, r_img_J, dcm_CJ, sun_J,
+               usable_images(fl))
     mk = [str(lsk)] if lsk else []
     mk += [str(out / n) for n in ("swarm.tsc", "swarm.tf", "body.tpc", "swarm.bsp", "swarm.bc")]
     (out / "export.tm").write_text("\\begindata\nKERNELS_TO_LOAD = (\n"
                                    + "\n".join(f"  '{k}'" for k in mk) + " )\n\\begintext\n")
     return out
+
+
+def usable_images(fl) -> np.ndarray:
+    """(N, n_img) bool: the CSV's ``usable``: the body in view (:func:`body_in_view`), the
+    smear and settle test the coverage applied (simulated attitude), the spacecraft not
+    failed (a dispersed sample)."""
+    from ideas_hpc.flyby.camera import usable_mask
+
+    setup = fl.setup
+    ok = body_in_view(fl.r_img_T, fl.dcm_BT, setup.eta_rad, setup.body.shape.r_max)
+    sharp = usable_mask(setup, fl.attitude)    # None: every image counts (ideal attitude)
+    if sharp is not None:
+        ok &= sharp
+    if fl.active is not None:
+        ok &= fl.active[:, None]
+    return ok
 
 
 def body_in_view(r_T, dcm_BT, eta_rad: float, r_max_m: float) -> np.ndarray:

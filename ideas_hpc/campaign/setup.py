@@ -131,11 +131,9 @@ def _default_degree2(body, table: dict):
     """A ``[body.params]`` table that gives neither ``c20_km2`` nor ``c22_km2`` gets the
     constant-density values of its mesh (:mod:`ideas_hpc.body.mass_properties`, the
     values ``ideas-hpc body FILE`` prints) instead of a point mass's zeros."""
-    from ideas_hpc.body.mass_properties import mass_properties
-
     if "c20_km2" in table or "c22_km2" in table:
         return body
-    props = mass_properties(body.shape.vertices_T, body.shape.faces)
+    props = body.shape.mass_properties
     params = dataclasses.replace(body.params, c20=props.c20_m2, c22=props.c22_m2)
     return dataclasses.replace(body, params=params)
 

@@ -10,8 +10,8 @@ Frames: ``N`` is ``ECLIPJ2000`` (the frame of the body's orbit elements and pole
 * per spacecraft an SPK type 13 segment (Hermite, positions and velocities relative to
   the body centre in J2000, km and km/s);
 * per spacecraft a camera frame ``IDEAS_SC<k>_CAMERA`` (CK class) and a CK type 3
-  segment (quaternions J2000 -> camera at every image, angular velocities from central
-  differences of the image attitudes), with a type 1 SCLK kernel whose ticks are
+  segment (quaternions J2000 -> camera at every image; angular velocities: the flown
+  ones of a simulated attitude, else central differences of the image attitudes), with a type 1 SCLK kernel whose ticks are
   1e-5 s of TDB from the first image.
 
 All writers need spiceypy (imported on use by the caller).
@@ -119,14 +119,19 @@ def rates_J(dcm_CJ, et) -> np.ndarray:
     return out
 
 
-def write_ck(sp, path, sc_ids, et, dcm_CJ) -> None:
-    """One CK type 3 segment per spacecraft (``dcm_CJ``: (N, n_img, 3, 3), J2000 -> camera)."""
+def write_ck(sp, path, sc_ids, et, dcm_CJ, omega_J=None) -> None:
+    """One CK type 3 segment per spacecraft (``dcm_CJ``: (N, n_img, 3, 3), J2000 -> camera).
+
+    ``omega_J`` (N, n_img, 3): the camera's angular velocity relative to J2000 in J2000
+    components, rad/s (what CK type 3 stores: rates in the segment's reference frame);
+    None: :func:`rates_J` of the attitudes."""
     h = sp.ckopn(str(path), "ideas_hpc export", 0)
     try:
         for k, sc in enumerate(sc_ids):
             ticks = np.array([sp.sce2c(sc, float(t)) for t in et])
             quats = np.array([sp.m2q(np.ascontiguousarray(m)) for m in dcm_CJ[k]])
-            av = rates_J(dcm_CJ[k], et)
+            av = (rates_J(dcm_CJ[k], et) if omega_J is None
+                  else np.ascontiguousarray(omega_J[k], dtype=np.float64))
             sp.ckw03(h, float(ticks[0]), float(ticks[-1]), sc * 1000, "J2000", True,
                      f"IDEAS_SC{k}_CAMERA", len(et), ticks, quats, av, 1, ticks[:1])
     finally:

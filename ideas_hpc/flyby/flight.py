@@ -225,6 +225,7 @@ class FlybyOutcome:
     attitude: object | None = None      # AttitudeResult for 'simulated'
     extras: dict = field(default_factory=dict)
     position_T: np.ndarray | None = None  # (N, T, 3) m, the flown trajectory (open loop)
+    velocity_T: np.ndarray | None = None  # (N, T, 3) m/s, its velocities (open loop)
 
 
 def fly(setup: FlybySetup, theta, periods=None, *, sample: int = 0, ics=None,
@@ -278,12 +279,12 @@ def fly_open_loop(setup: FlybySetup, theta, periods, r0_T, v0_T,
     (``times_seen`` is then 0/1; the coverage and first-seen times are the same).
     """
     th = np.asarray(theta, dtype=np.float64).ravel()
-    r_img, dcm, att, pos = _views(setup, th, periods, r0_T, v0_T, perturbation)
+    r_img, dcm, att, pos, vel = _views(setup, th, periods, r0_T, v0_T, perturbation)
     cov = _coverage(setup, r_img, imaging_dcms(setup, dcm, att, r_img), perturbation.active,
                     counts)
     return FlybyOutcome(theta=th, periods=None if periods is None else np.asarray(periods),
                         targeting=None, image_times=setup.image_times, r_img_T=r_img,
-                        dcm_BT=dcm, coverage=cov, attitude=att, position_T=pos)
+                        dcm_BT=dcm, coverage=cov, attitude=att, position_T=pos, velocity_T=vel)
 
 
 def open_loop_views(setup: FlybySetup, theta, periods, r0_T, v0_T,
@@ -295,13 +296,14 @@ def open_loop_views(setup: FlybySetup, theta, periods, r0_T, v0_T,
     ``ideal_dcm_BT``: the ideal camera DCMs of these spacecraft when already computed
     (``attitude_mode = "ideal"`` and not body tracking: they do not depend on the
     perturbation then)."""
-    r_img, dcm, att, pos = _views(setup, theta, periods, r0_T, v0_T, perturbation,
-                                  ideal_dcm_BT=ideal_dcm_BT)
+    r_img, dcm, att, pos, _ = _views(setup, theta, periods, r0_T, v0_T, perturbation,
+                                     ideal_dcm_BT=ideal_dcm_BT)
     return r_img, imaging_dcms(setup, dcm, att, r_img), att, pos
 
 
 def _views(setup, theta, periods, r0_T, v0_T, perturbation, *, ideal_dcm_BT=None):
-    """:func:`open_loop_views` with the camera DCMs as flown (nothing blinded)."""
+    """:func:`open_loop_views` with the camera DCMs as flown (nothing blinded), and the
+    velocities (N, T, 3) m/s after the trajectory."""
     th = np.asarray(theta, dtype=np.float64).ravel()
     p = perturbation
     r0 = r0_T if p.position_error_T is None else r0_T + p.position_error_T
@@ -320,7 +322,7 @@ def _views(setup, theta, periods, r0_T, v0_T, perturbation, *, ideal_dcm_BT=None
     else:
         dcm, att = camera_at_images(setup, th, periods, p.ics, mis, r_img, (pos, vel),
                                     acquisition_s=p.acquisition_s)
-    return r_img, dcm, att, pos
+    return r_img, dcm, att, pos, vel
 
 
 def _image(setup: FlybySetup, th, periods, r_img, ics, misalignment, active, counts,

@@ -61,6 +61,10 @@ class Kind:
     nadir_swarm_store: bool = False
     #: Its store holds dispersed samples (dimension ``sample``).
     samples: bool = False
+    #: Its store holds one flown swarm (``swarm_angle``, with ``sweep_period`` when it
+    #: sweeps; the chosen swarm of a design, the nominal design of dispersed samples),
+    #: which ``ideas-hpc export`` writes as SPICE kernels.
+    one_swarm: bool = True
 
     def __post_init__(self):
         if self.swarm not in SWARM_SOURCES:
@@ -93,7 +97,7 @@ KINDS: dict[str, Kind] = {k.name: k for k in (
          swarm="file-angles"),
     Kind("design-pareto", "ideas_hpc.campaign.design_pareto", "run_design_pareto", False,
          "non-dominated swarms for two or more objectives (NSGA-II), with the exact "
-         "coverage-vs-N curve for (n, coverage)", swarm="designed"),
+         "coverage-vs-N curve for (n, coverage)", swarm="designed", one_swarm=False),
     Kind("monte-carlo", "ideas_hpc.campaign.montecarlo", "run_monte_carlo", True,
          "dispersed flights of a designed swarm, chunked and resumable", samples=True),
 )}

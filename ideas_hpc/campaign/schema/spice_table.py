@@ -101,13 +101,12 @@ def _kernel_list(value, base: Path | None) -> list[str]:
 
 
 def true_anomaly(mean_anomaly: float, e: float) -> float:
-    """True anomaly (rad) of an ellipse from its mean anomaly (Newton on Kepler's equation)."""
-    E = mean_anomaly if e < 0.8 else math.pi
-    for _ in range(60):
-        dE = (E - e * math.sin(E) - mean_anomaly) / (1.0 - e * math.cos(E))
-        E -= dE
-        if abs(dE) < 1e-15:
-            break
+    """True anomaly (rad) of an ellipse from its mean anomaly: the eccentric anomaly from the
+    project's one Kepler solver (:func:`ideas_hpc.core.dynamics.ephemeris.kepler_E`, the
+    one the ephemeris propagates with), then the half-angle form."""
+    from ideas_hpc.core.dynamics.ephemeris import kepler_E
+
+    E = float(kepler_E(float(mean_anomaly), float(e)))
     return 2.0 * math.atan2(math.sqrt(1 + e) * math.sin(E / 2), math.sqrt(1 - e) * math.cos(E / 2))
 
 

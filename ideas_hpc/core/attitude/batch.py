@@ -136,9 +136,10 @@ def simulate_batch(mode, dcm_RT_all, spin_rate, periods, theta_max, gains, wheel
         Camera DCM (body <- target frame) at image times.
     max_torque, max_momentum : (S, N) float64
         ``max |u_s|`` (N m) and ``max |J_s Omega|`` (N m s) over all steps.
-    image_rate : (S, N, n_img) float64
-        ``|omega_BN|`` at the image times, rad/s (the camera's inertial rate: the
-        camera is fixed in B), for the smear test of a usable image (SPEC 7d).
+    image_omega : (S, N, n_img, 3) float64
+        ``omega_BN`` (B components, rad/s) at the image times: the camera's inertial
+        rate (the camera is fixed in B); its norm is the smear test's rate (SPEC 7d)
+        and it is the angular velocity ``ideas-hpc export`` writes into the CK.
     image_error : (S, N, n_img) float64
         Principal angle of ``sigma_B/R`` at the image times, rad
         (``4 atan |sigma_B/R|``), for the settle test.
@@ -157,7 +158,7 @@ def simulate_batch(mode, dcm_RT_all, spin_rate, periods, theta_max, gains, wheel
     wheel = np.empty((n_s, n_sc, n_rec, 3))
     torque = np.empty((n_s, n_sc, n_rec, 3))
     dcm_BT = np.empty((n_s, n_sc, n_img, 3, 3))
-    img_rate = np.empty((n_s, n_sc, n_img))
+    img_omega = np.empty((n_s, n_sc, n_img, 3))
     img_err = np.empty((n_s, n_sc, n_img))
     max_u = np.zeros((n_s, n_sc))
     max_h = np.zeros((n_s, n_sc))
@@ -202,7 +203,8 @@ def simulate_batch(mode, dcm_RT_all, spin_rate, periods, theta_max, gains, wheel
             img = c_img == 0
             if img:
                 _dcm_BT(x, spin_rate, t, dcm_BT, smp, i, n_img_done)
-                img_rate[smp, i, n_img_done] = np.sqrt(x[3] * x[3] + x[4] * x[4] + x[5] * x[5])
+                for j in range(3):
+                    img_omega[smp, i, n_img_done, j] = x[3 + j]
             c_img += 1
             if c_img == img_every:
                 c_img = 0
@@ -250,4 +252,4 @@ def simulate_batch(mode, dcm_RT_all, spin_rate, periods, theta_max, gains, wheel
                 c_rec = 0
         max_u[smp, i] = mu
         max_h[smp, i] = mh
-    return sig_err, om_err, wheel, torque, dcm_BT, max_u, max_h, img_rate, img_err
+    return sig_err, om_err, wheel, torque, dcm_BT, max_u, max_h, img_omega, img_err
