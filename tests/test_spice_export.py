@@ -71,6 +71,23 @@ def test_ck_reads_back_the_camera_attitudes_within_1_microradian(exported):
     assert worst < 1e-6, worst
 
 
+def test_ck_rates_of_an_ideal_nadir_camera_are_the_body_spin(exported):
+    """Ideal nadir pointing keeps each camera fixed in the ring frame, which is fixed in
+    the body frame: its angular velocity is the body's spin, which SPICE gives from the
+    exported PCK (``xf2rav`` of J2000 -> body frame: the body frame's rate in J2000)."""
+    store, out = exported
+    n_sc = xr.open_zarr(store).sizes["spacecraft"]
+    worst = 0.0
+    for k in range(n_sc):
+        for t in np.linspace(0.0, 60.0, 13):
+            et = 8.0e8 + 5000.0 + float(t)
+            _, av, _ = sp.ckgpav((-1000 - k) * 1000, sp.sce2c(-1000 - k, et), 0.0, "J2000")
+            spin = sp.xf2rav(sp.sxform("J2000", f"IDEAS_{BID}_FIXED", et))[1]
+            worst = max(worst, float(np.linalg.norm(np.asarray(av) - np.asarray(spin))))
+    print(f"CK rates: worst {worst:.3g} rad/s against the spin")
+    assert worst < 1e-12, worst
+
+
 def test_csv_has_every_image_and_matches_the_spk(exported):
     store, out = exported
     rows = list(csv.DictReader(open(out / "images.csv")))
