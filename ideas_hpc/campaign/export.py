@@ -128,6 +128,9 @@ def export_store(store, out=None, *, naif_base: int = -1000, body_id: int | None
     w.write_spk(sp, out / "swarm.bsp", bid, sc_ids, et_el + tau, r_J, v_J)
     tj_img = w.dcm_TN(params, setup.epoch_s + t_img) @ dcm_NJ
     dcm_CJ = np.einsum("kiab,ibc->kiac", fl.dcm_BT, tj_img)
+    omega_J = camera_rates_J(fl, dcm_CJ)     # the flown rates (simulated attitude)
+    if omega_J is None:                       # else central differences, in flyby time
+        omega_J = np.stack([w.rates_J(dcm_CJ[k], t_img) for k in range(n_sc)])
     kernels = [out / "swarm.tsc", out / "swarm.tf", out / "body.tpc"]
     lsk = lsk or _lsk_of(attrs)
     for k in kernels:
@@ -135,7 +138,7 @@ def export_store(store, out=None, *, naif_base: int = -1000, body_id: int | None
     if lsk:
         sp.furnsh(str(lsk))
     try:
-        w.write_ck(sp, out / "swarm.bc", sc_ids, et_img, dcm_CJ, camera_rates_J(fl, dcm_CJ))
+        w.write_ck(sp, out / "swarm.bc", sc_ids, et_img, dcm_CJ, omega_J)
         utc = [sp.et2utc(float(t), "ISOC", 6) for t in et_img] if lsk else [""] * len(et_img)
     finally:
         for k in kernels:

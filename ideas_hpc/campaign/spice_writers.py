@@ -100,38 +100,43 @@ def write_spk(sp, path, body_id: int, sc_ids, et, r_J_m, v_J_m_s, degree: int = 
         sp.spkcls(h)
 
 
-def rates_J(dcm_CJ, et) -> np.ndarray:
+def rates_J(dcm_CJ, t_s) -> np.ndarray:
     """Angular velocity of C relative to J2000 in J2000 components (rad/s), central differences
-    of the attitudes (one-sided at the ends); zeros for a single image."""
-    n = len(et)
+    of the attitudes at times ``t_s`` (one-sided at the ends); zeros for a single image.
+    ``t_s`` should be short times (flyby seconds), not TDB past J2000: at 8e8 s a TDB
+    carries 1.2e-7 s of rounding, 3e-7 of a 0.4 s difference.
+
+    The rotation between neighbours, ``[C(b) C(a)] = [C J](b) [C J](a)^T``, gives its angle
+    as ``atan2(sin, cos)`` of its antisymmetric part and trace: exact for a rotation about a
+    fixed axis at a constant rate (an ideal nadir camera), where an ``acos`` of the trace
+    would lose half the digits of the small angle between images."""
+    n = len(t_s)
     out = np.zeros((n, 3))
     if n < 2:
         return out
     for i in range(n):
         a, b = max(i - 1, 0), min(i + 1, n - 1)
-        rel = dcm_CJ[b] @ dcm_CJ[a].T          # C(a) -> C(b), in C(a)... as a rotation
-        ang = math.acos(max(-1.0, min(1.0, 0.5 * (np.trace(rel) - 1.0))))
-        if ang < 1e-15:
+        rel = dcm_CJ[b] @ dcm_CJ[a].T
+        v = np.array([rel[1, 2] - rel[2, 1], rel[2, 0] - rel[0, 2], rel[0, 1] - rel[1, 0]])
+        s2 = float(np.linalg.norm(v))                  # 2 sin(angle)
+        if s2 == 0.0:
             continue
-        axis_c = np.array([rel[1, 2] - rel[2, 1], rel[2, 0] - rel[0, 2], rel[0, 1] - rel[1, 0]])
-        axis_c /= 2.0 * math.sin(ang)
-        out[i] = dcm_CJ[a].T @ axis_c * ang / (et[b] - et[a])
+        ang = math.atan2(0.5 * s2, 0.5 * (np.trace(rel) - 1.0))
+        # the axis in C(a) components, then in J2000
+        out[i] = dcm_CJ[a].T @ (v / s2) * ang / (t_s[b] - t_s[a])
     return out
 
 
-def write_ck(sp, path, sc_ids, et, dcm_CJ, omega_J=None) -> None:
-    """One CK type 3 segment per spacecraft (``dcm_CJ``: (N, n_img, 3, 3), J2000 -> camera).
-
+def write_ck(sp, path, sc_ids, et, dcm_CJ, omega_J) -> None:
+    """One CK type 3 segment per spacecraft (``dcm_CJ``: (N, n_img, 3, 3), J2000 -> camera;
     ``omega_J`` (N, n_img, 3): the camera's angular velocity relative to J2000 in J2000
-    components, rad/s (what CK type 3 stores: rates in the segment's reference frame);
-    None: :func:`rates_J` of the attitudes."""
+    components, rad/s, what CK type 3 stores: rates in the segment's reference frame)."""
     h = sp.ckopn(str(path), "ideas_hpc export", 0)
     try:
         for k, sc in enumerate(sc_ids):
             ticks = np.array([sp.sce2c(sc, float(t)) for t in et])
             quats = np.array([sp.m2q(np.ascontiguousarray(m)) for m in dcm_CJ[k]])
-            av = (rates_J(dcm_CJ[k], et) if omega_J is None
-                  else np.ascontiguousarray(omega_J[k], dtype=np.float64))
+            av = np.ascontiguousarray(omega_J[k], dtype=np.float64)
             sp.ckw03(h, float(ticks[0]), float(ticks[-1]), sc * 1000, "J2000", True,
                      f"IDEAS_SC{k}_CAMERA", len(et), ticks, quats, av, 1, ticks[:1])
     finally:
