@@ -32,6 +32,7 @@ name, ``--body-id``, or 2000433 for Eros.
 from __future__ import annotations
 
 import csv
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -147,7 +148,7 @@ def export_store(store, out=None, *, naif_base: int = -1000, body_id: int | None
             sp.unload(str(lsk))
     if not lsk:
         print("ideas-hpc: warning: --lsk: no leap-second kernel, the CSV's utc column is empty",
-              flush=True)
+              file=sys.stderr, flush=True)
     sun_J = np.einsum("tji,tj->ti", tj_img, sun_direction_T(params, setup.epoch_s + t_img))
     r_img_J = np.einsum("tji,ktj->kti", tj_img, fl.r_img_T)
     _write_csv(out / "images.csv", sp, sc_ids, t_img, et_img, utc, r_img_J, dcm_CJ, sun_J,
