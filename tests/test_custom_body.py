@@ -120,6 +120,19 @@ def test_example_campaign_uses_the_constant_density_degree2(tmp_path, binary_km)
     assert 1000 < density < 3000
 
 
+def test_mass_properties_are_computed_once_per_custom_body(tmp_path, binary_km, monkeypatch):
+    """The default C20/C22 and the body checks read one computation of the mesh's mass
+    properties (a 0.5 M-plate mesh pays its volume integrals once)."""
+    import ideas_hpc.body.mass_properties as mp
+
+    calls = []
+    real = mp.mass_properties
+    monkeypatch.setattr(mp, "mass_properties", lambda v, f: calls.append(1) or real(v, f))
+    s = setup_from_campaign(_campaign(tmp_path, _write_obj(tmp_path / "cb.obj", *binary_km)))
+    assert len(calls) == 1
+    assert s.body.params.c20 == s.body.shape.mass_properties.c20_m2
+
+
 def test_case1_mesh_in_metres_is_refused(tmp_path, binary_km, capsys):
     v, f = binary_km
     obj = _write_obj(tmp_path / "cb_m.obj", v * 1e3, f)    # metres, read as km

@@ -91,6 +91,21 @@ def test_dsk_flyby_coverage_is_bit_for_bit(eros_dsk):
     assert a.coverage.coverage == b.coverage.coverage and 0.2 < a.coverage.coverage < 1.0
 
 
+def test_true_anomaly_inverts_keplers_equation():
+    """The kernel values' true anomaly (one Kepler solver, the ephemeris's): from a true
+    anomaly nu, E = 2 atan(sqrt((1-e)/(1+e)) tan(nu/2)) and M = E - e sin E (the forward
+    direction needs no solver); back from M it must give nu."""
+    from ideas_hpc.campaign.schema.spice_table import true_anomaly
+
+    worst = 0.0
+    for e in (0.0, 0.2229, 0.7, 0.95):
+        for nu in np.linspace(-3.1, 3.1, 25):
+            E = 2.0 * math.atan(math.sqrt((1 - e) / (1 + e)) * math.tan(nu / 2))
+            back = true_anomaly(E - e * math.sin(E), e)
+            worst = max(worst, abs(math.remainder(back - nu, 2 * math.pi)))
+    assert worst < 1e-12, worst
+
+
 def test_kernel_values_repeat_without_the_kernels():
     """``SpiceValues.params_keys()`` written as [body.params] keys give the same parameters."""
     from ideas_hpc.body.params import get_params, params_from_mapping
