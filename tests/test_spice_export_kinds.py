@@ -2,8 +2,9 @@
 
 Each oracle is what the store holds, never the export's own arrays:
 
-* a design store (exact, success probability): its ``position`` of the chosen swarm
-  (frame T) within 1 mm, its ``camera_dcm_BT`` snapshots within 1 microradian;
+* a design store (exact, success probability, FoV sweep periods): its ``position`` of
+  the chosen swarm (frame T) within 1 mm, its ``camera_dcm_BT`` snapshots within 1
+  microradian;
 * a Monte Carlo store's nominal flight: its ``position``;
 * a Monte Carlo sample K: it starts at the nominal start plus the stored
   ``position_error[K]`` and ends ``arrival_error[K]`` from the nominal arrival (1 mm);
@@ -50,6 +51,7 @@ def stores(tmp_path_factory):
     return {"root": root,
             "design-exact": _store(root, "design-exact"),
             "design-reliability": _store(root, "design-reliability"),
+            "design-fov": _store(root, "design-fov"),    # designed sweep periods
             "monte-carlo": _store(root, "monte-carlo", MC_SETS)}
 
 
@@ -102,7 +104,7 @@ def _attitude_gap(store, folder) -> float:
     return worst
 
 
-@pytest.mark.parametrize("kind", ["design-exact", "design-reliability"])
+@pytest.mark.parametrize("kind", ["design-exact", "design-reliability", "design-fov"])
 def test_design_store_reads_back_its_chosen_swarm(stores, kind, tmp_path):
     store = stores[kind]
     folder, notes = _export(store, tmp_path / "k")
@@ -111,7 +113,7 @@ def test_design_store_reads_back_its_chosen_swarm(stores, kind, tmp_path):
     assert ds.sizes["spacecraft"] == n
     rows = list(csv.DictReader(open(folder / "images.csv")))
     assert sorted({int(r["spacecraft"]) for r in rows}) == list(range(n))
-    assert "design-nadir" in notes[0]
+    assert f"the nominal flight of the {ds.attrs['kind']} store" in notes[0]
     gap_r, gap_a = _position_gap(store, folder), _attitude_gap(store, folder)
     print(f"{kind}: SPK {gap_r:.3g} m, CK {gap_a:.3g} rad")
     assert gap_r < 1e-3 and gap_a < 1e-6, (gap_r, gap_a)
