@@ -119,6 +119,33 @@ def test_design_store_reads_back_its_chosen_swarm(stores, kind, tmp_path):
     assert gap_r < 1e-3 and gap_a < 1e-6, (gap_r, gap_a)
 
 
+def test_ck_rates_of_an_ideal_fov_sweep_are_the_sweep_plus_the_spin(stores, tmp_path):
+    """FoV sweeping under perfect tracking turns the camera about its x axis by
+    ``theta_max sin(2 pi t / P)`` on the ring frame, which turns with the body (SPEC
+    section 5): ``omega = theta_max (2 pi / P) cos(2 pi t / P) x_C + spin``, from the
+    store's ``theta_max_rad`` and ``sweep_period`` (central differences of the images miss
+    this by ``(2 pi h / P)^2 / 6`` of the rate, 3e-4 at P = 30 s and 0.2 s images)."""
+    store = stores["design-fov"]
+    folder, _ = _export(store, tmp_path / "k")
+    ds = xr.open_zarr(store)
+    tm, periods = float(ds.attrs["theta_max_rad"]), ds["sweep_period"].values
+    times = ds["time"].values
+    worst = w_max = 0.0
+    with _Loaded(folder):
+        for i, p in enumerate(periods):
+            sc = -1000 - i
+            for t in times[::4]:
+                et = ET0 + EPOCH_S + float(t)
+                cmat, av, _ = sp.ckgpav(sc * 1000, sp.sce2c(sc, et), 0.0, "J2000")
+                spin = np.asarray(sp.xf2rav(sp.sxform("J2000", FIXED, et))[1])
+                rate = tm * 2 * math.pi / p * math.cos(2 * math.pi * (t - times[0]) / p)
+                want = rate * np.asarray(cmat)[0] + spin
+                worst = max(worst, float(np.linalg.norm(np.asarray(av) - want)))
+                w_max = max(w_max, float(np.linalg.norm(want)))
+    print(f"design-fov: CK rates {worst:.3g} rad/s (max rate {w_max:.3g})")
+    assert worst < 1e-12, worst
+
+
 def test_a_store_without_trajectories_is_flown_from_its_config(stores, tmp_path):
     import zarr
 

@@ -45,14 +45,14 @@ from ideas_hpc.units import RPM
 from ideas_hpc.attitude.gains import GAIN_PRESETS, Gains, gains_from_config, validate_gains
 from ideas_hpc.attitude.maneuvers import (MANEUVERS, P_MIN_DEFAULT, THETA_MAX_DEFAULT, Maneuver,
                         campaign_maneuver, get_maneuver)
-from ideas_hpc.attitude.simulate import (AttitudeResult, draw_initial_conditions, ideal_dcm_BT, initial_conditions,
-                       simulate_attitude)
+from ideas_hpc.attitude.simulate import (AttitudeResult, draw_initial_conditions, ideal_dcm_BT,
+                                         ideal_omega_BN_B, initial_conditions, simulate_attitude)
 from ideas_hpc.attitude.spacecraft import (SpacecraftModel, default_spacecraft, spacecraft_from_config,
                          validate_spacecraft)
 
 __all__ = ["GAIN_PRESETS", "MANEUVERS", "P_MIN_DEFAULT", "RPM", "THETA_MAX_DEFAULT",
            "AttitudeResult", "Gains", "Maneuver", "SpacecraftModel", "default_spacecraft",
            "campaign_maneuver", "draw_initial_conditions", "gains_from_config", "get_maneuver",
-           "ideal_dcm_BT", "initial_conditions",
+           "ideal_dcm_BT", "ideal_omega_BN_B", "initial_conditions",
            "simulate_attitude", "spacecraft_from_config", "validate_gains",
            "validate_spacecraft"]

@@ -12,7 +12,7 @@ import numpy as np
 from ideas_hpc.core.attitude.batch import simulate_batch
 from ideas_hpc.core.attitude.records import ControlGains, Initial, StepTables, Wheels
 from ideas_hpc.core.dynamics.frames import dcm_RT as _dcm_RT
-from ideas_hpc.core.attitude.maneuvers import TRACK_MODE, reference_dcm_BT
+from ideas_hpc.core.attitude.maneuvers import TRACK_MODE, reference, reference_dcm_BT
 from ideas_hpc.errors import InputError
 from ideas_hpc.seeds import sample_rng
 from ideas_hpc.units import RPM
@@ -159,6 +159,27 @@ def ideal_dcm_BT(theta, spin_rate, image_times, *, mode="np", periods=None,
     if times.ndim != 1 or not np.all(np.isfinite(times)):
         raise InputError("must be a 1-D array of finite times in s", field="image_times")
     return reference_dcm_BT(man.code, _ring_dcms(th, dcm_TS), tm, p, times)
+
+
+def ideal_omega_BN_B(theta, spin_rate, image_times, *, mode="np", periods=None,
+                     theta_max=None, dcm_TS=None, p_min=P_MIN_DEFAULT) -> np.ndarray:
+    """Inertial rate ``omega_BN`` (B components, rad/s) under perfect tracking at the
+    image times (s since t0): the reference's ``omega_RN_R`` (B = the reference frame),
+    with the spin ``spin_rate`` (rad/s) of the ring frames about ``z_T``. Arguments as
+    :func:`ideal_dcm_BT`; not for body tracking (its reference is a table, not a
+    function of time). Returns (N, n_img, 3)."""
+    th = check_theta(theta)
+    man, p, tm = maneuver_args(mode, th.size, periods, theta_max, p_min)
+    if man.code == TRACK_MODE:
+        raise InputError("body tracking has no reference function of time", field="mode")
+    times = np.atleast_1d(np.asarray(image_times, dtype=np.float64))
+    rings = _ring_dcms(th, dcm_TS)
+    out = np.empty((th.size, times.size, 3))
+    for i in range(th.size):
+        for k in range(times.size):
+            out[i, k] = reference(man.code, float(times[k]), float(spin_rate), rings[i],
+                                  float(tm), float(p[i]))[1]
+    return out
 
 
 def simulate_attitude(theta, spin_rate, t_f, *, mode="np", periods=None, theta_max=None,

@@ -49,6 +49,8 @@ class ExportFlight:
     attitude: object | None         # AttitudeResult (simulated) or None
     active: np.ndarray | None       # (N,) bool, False: failed in this sample
     what: str = ""                  # one line: which flight this is
+    theta: np.ndarray | None = None     # (N,) rad, the swarm angles flown
+    periods: np.ndarray | None = None   # (N,) s, sweep periods (None: no sweep)
     #: (N, 3, 3) ``[C B]``: the camera misalignment of a dispersed sample (None: aligned)
     dcm_CB: np.ndarray | None = None
     #: (N, T, 3) m: the nominal trajectory (what a store's ``position`` holds) when this
@@ -112,6 +114,7 @@ def flight_of(store, attrs: dict, sample: int | None = None) -> ExportFlight:
         out = _nominal(c, setup, theta, periods, kind.name)
     else:
         out = _sample(c, setup, theta, periods, sample, cov_k, kind.name)
+    out.theta, out.periods = theta, periods
     _check_trajectory(out, stored, setup.decimate)
     return out
 
@@ -153,15 +156,32 @@ def _sample(c, setup, theta, periods, k: int, stored_coverage: float, kind_name:
                             "again from the store's seed)", nominal_position_T=nom.position_T)
 
 
+def omega_BN_B(fl: ExportFlight) -> np.ndarray | None:
+    """(N, n_img, 3) the flown inertial rate of each spacecraft at the images, B
+    components (rad/s): the simulated attitude's, or the reference's under perfect
+    tracking on the ring (:func:`ideas_hpc.attitude.ideal_omega_BN_B`); None where the
+    reference is not a function of time (an encounter's or body tracking)."""
+    att = fl.attitude
+    if att is not None and getattr(att, "image_omega", None) is not None:
+        return np.asarray(att.image_omega[0], dtype=np.float64)
+    s = fl.setup
+    if att is not None or s.encounter is not None or s.maneuver.tracks_body:
+        return None
+    from ideas_hpc.attitude import ideal_omega_BN_B
+
+    return ideal_omega_BN_B(fl.theta, s.body.params.spin_rate, fl.image_times_s - s.t0_s,
+                            mode=s.maneuver.name, periods=fl.periods,
+                            theta_max=s.theta_max_rad, p_min=s.p_min_s)
+
+
 def camera_rates_J(fl: ExportFlight, dcm_CJ) -> np.ndarray | None:
     """(N, n_img, 3) the flown inertial angular velocity of each camera at the images in
-    J2000 components (rad/s), from the simulated attitude's ``omega_BN`` in B:
-    ``omega_J = [C J]^T [C B] omega_B`` (the camera is fixed in B, so its rate is B's);
-    None for ideal attitude (the CK then takes its rates from the attitudes)."""
-    att = fl.attitude
-    if att is None or getattr(att, "image_omega", None) is None:
+    J2000 components (rad/s), from :func:`omega_BN_B`: ``omega_J = [C J]^T [C B]
+    omega_B`` (the camera is fixed in B, so its rate is B's); None when that is None (the
+    CK then takes its rates from the attitudes)."""
+    w_b = omega_BN_B(fl)
+    if w_b is None:
         return None
-    w_b = np.asarray(att.image_omega[0], dtype=np.float64)
     w_c = w_b if fl.dcm_CB is None else np.einsum("kab,kib->kia", fl.dcm_CB, w_b)
     return np.einsum("kiab,kia->kib", dcm_CJ, w_c)
 
