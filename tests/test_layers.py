@@ -26,7 +26,7 @@ LAYERS = (
     ("kernels and engine", ("core", "core/attitude", "core/design", "core/dynamics",
                             "core/mapping", "engine")),
     ("models", ("body", "dynamics", "attitude", "mapping", "plots")),
-    ("flyby, design, montecarlo", ("flyby", "design", "design/ga", "design/pareto",
+    ("flyby, design, montecarlo", ("flyby", "design", "design/api", "design/ga", "design/pareto",
                                    "montecarlo")),
     ("campaign", ("campaign", "campaign/schema")),
     ("cli", ("cli.py", "__init__.py")),
