@@ -321,8 +321,7 @@ def min_swarm_reliable(rows, areas, settings: ReliableSettings | None = None,
         Scenario bank rows.
     areas : (V,) m^2
     settings : ReliableSettings
-        The search (:class:`~ideas_hpc.design.settings.ReliableSettings`); without
-        it, the keywords below (``time_limit`` in s).
+        The search (:mod:`ideas_hpc.design.settings`), or the keywords below.
     p : float
         Required success probability, 0 < p < 1.
     p_f : float
@@ -350,15 +349,12 @@ def min_swarm_reliable(rows, areas, settings: ReliableSettings | None = None,
         ``p`` when no swarm of at most ``n_max``
         reaches ``p`` on the bank (the message gives the best P found).
     """
-    s = settings if settings is not None else ReliableSettings(
-        time_limit_s=keywords.pop("time_limit", None), **keywords)
+    s = settings or ReliableSettings(time_limit_s=keywords.pop("time_limit", None), **keywords)
     p, p_f, need, n_max, sep_steps = s.p, s.p_f, s.need, s.n_max, s.sep_steps
-    time_limit, enumerate_budget = s.time_limit_s, s.enumerate_budget
-    ring_prebound = s.ring_prebound
-    bound_solver, tolerance_solver = s.bound_solver, s.tolerance_solver
+    time_limit, ring_prebound = s.time_limit_s, s.ring_prebound
     d = ReliabilityDesigner(rows, areas, need=need, p_f=p_f, sep_steps=sep_steps,
-                            time_limit=time_limit, enumerate_budget=enumerate_budget,
-                            bound_solver=bound_solver, tolerance_solver=tolerance_solver)
+                            time_limit=time_limit, enumerate_budget=s.enumerate_budget,
+                            bound_solver=s.bound_solver, tolerance_solver=s.tolerance_solver)
     upper: dict = {}
     unresolved: list = []
     if ring_prebound:

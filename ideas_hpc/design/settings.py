@@ -52,3 +52,23 @@ class ReliableSettings:
     ring_prebound: bool = True
     bound_solver: Callable | None = None
     tolerance_solver: Callable | None = None
+
+
+#: Most looks ``design.demonstrate`` plans when the file does not say.
+DEFAULT_LOOKS = 4
+
+
+@dataclass(frozen=True)
+class LookPlan:
+    """The looks of :func:`~ideas_hpc.design.certificate.certify`: requirement ``p``
+    and overall ``confidence``; ``n_max`` the largest swarm; ``n_samples`` (M)
+    validation samples per look; ``demonstrate`` steps N up while the bound
+    misses p, in at most ``max_looks`` looks; ``exact``: one exact scenario."""
+
+    p: float
+    confidence: float
+    n_max: int
+    n_samples: int
+    demonstrate: bool
+    max_looks: int = DEFAULT_LOOKS
+    exact: bool = False
