@@ -30,8 +30,9 @@ def camera_dcms(setup, theta, periods=None, *, state0: InitialState | None = Non
                 acquisition_s=0.0, **initial):
     """Camera DCMs at the image times, and the attitude result when simulated.
 
-    ``state0``: the initial attitude state (:class:`~ideas_hpc.attitude.run_settings.
-    InitialState`); the older keywords ``sigma0``, ``omega0``, ``wheel0`` fill it.
+    ``state0``: the initial attitude state
+    (:class:`~ideas_hpc.attitude.run_settings.InitialState`); the older keywords
+    ``sigma0``, ``omega0``, ``wheel0`` fill it.
     ``start = "reference"``: ``sigma0``, ``omega0`` are errors about the reference
     of the geometry flown (encounter swarm frame, body tracking included);
     ``acquisition_s``: fly the loop that long before the window
