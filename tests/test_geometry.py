@@ -5,7 +5,6 @@ geometry each one states (SPEC section 3 ring, SPEC 7c encounter ring)."""
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.campaign.setup import setup_from_campaign

@@ -46,7 +46,7 @@ from typing import Callable
 import numpy as np
 
 from ideas_hpc.design.reliability_stats import lower_confidence_bound
-from ideas_hpc.design.settings import DEFAULT_LOOKS, LookPlan
+from ideas_hpc.design.settings import DEFAULT_LOOKS, LookPlan  # noqa: F401 (its old home)
 from ideas_hpc.errors import InputError
 
 

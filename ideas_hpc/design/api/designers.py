@@ -13,7 +13,7 @@ from typing import Callable
 
 import numpy as np
 
-from ideas_hpc.design.api.result import DesignResult, Designer, gap_of, register
+from ideas_hpc.design.api.result import DesignResult, Designer, register
 from ideas_hpc.design.bank import CandidateBank
 from ideas_hpc.design.exact import min_swarm
 from ideas_hpc.design.failures import failure_tolerant

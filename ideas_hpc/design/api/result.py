@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, field, replace
 from typing import Any, Callable
@@ -114,7 +113,3 @@ def minimize(problem, settings, *, progress=None) -> DesignResult:
     res = d.solve(problem, settings, progress)
     return replace(res, timings_s={**res.timings_s, "wall": time.perf_counter() - t0})
 
-
-def gap_of(n: int, bound: float) -> float:
-    """``(n - bound) / n``, NaN without a bound."""
-    return (n - bound) / n if n and math.isfinite(bound) else math.nan
