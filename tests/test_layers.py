@@ -26,7 +26,7 @@ LAYERS = (
     ("kernels and engine", ("core", "core/attitude", "core/design", "core/dynamics",
                             "core/mapping", "engine")),
     ("models", ("body", "dynamics", "attitude", "mapping", "plots")),
-    ("flyby, design, montecarlo", ("flyby", "design", "design/ga", "design/pareto",
+    ("flyby, design, montecarlo", ("flyby", "design", "design/api", "design/ga", "design/pareto",
                                    "montecarlo")),
     ("campaign", ("campaign", "campaign/schema")),
     ("cli", ("cli.py", "__init__.py")),
@@ -222,3 +222,39 @@ def test_no_module_imports_another_folders_private_names():
                 if name in modules and _unit(modules[name]) != _unit(f):
                     hits.append(f"{f.relative_to(PACKAGE)}:{node.lineno} {alias.name}")
     assert not hits, f"private names imported from another folder: {hits}"
+
+
+#: Most parameters of a function outside ``core/`` (positional and keyword,
+#: ``*args`` and ``**kw`` counted once each, ``self``/``cls`` not): more travel
+#: together in a frozen settings object (issue 30).
+MAX_PARAMETERS = 10
+
+
+def _parameter_counts(root):
+    out = []
+    for f in root.rglob("*.py"):
+        rel = f.relative_to(root).as_posix()
+        if rel.startswith("core/"):
+            continue
+        for node in ast.walk(ast.parse(f.read_text(), str(f))):
+            if not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                continue
+            a = node.args
+            names = [x.arg for x in a.posonlyargs + a.args + a.kwonlyargs]
+            names += [x.arg for x in (a.vararg, a.kwarg) if x is not None]
+            n = len([x for x in names if x not in ("self", "cls")])
+            out.append((rel, node.lineno, node.name, n))
+    return out
+
+
+def test_no_function_outside_core_takes_more_than_ten_parameters():
+    over = [f"{rel}:{line} {name} ({n})" for rel, line, name, n in _parameter_counts(PACKAGE)
+            if n > MAX_PARAMETERS]
+    assert not over, "functions with more than 10 parameters (group them in a settings " \
+                     "object):\n" + "\n".join(sorted(over))
+
+
+def test_parameter_counter_counts_every_kind_of_parameter(tmp_path):
+    (tmp_path / "m.py").write_text(
+        "class A:\n    def f(self, a, /, b, *c, d, e=1, **f):\n        pass\n")
+    assert [(n, k) for _, _, n, k in _parameter_counts(tmp_path)] == [("f", 6)]

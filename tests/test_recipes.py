@@ -229,6 +229,36 @@ def test_recipe_torque(monkeypatch):
         assert dh[0] == pytest.approx(impulse, rel=0.03), i
 
 
+def test_recipe_torque_from_the_campaign_file(tmp_path, monkeypatch):
+    """The ``[torques]`` table of a campaign file chooses the registered terms: the toy jet
+    written there flies as the one built in code (same wheel history), and a wrong key is
+    one line naming the field and the file's line."""
+    from ideas_hpc.attitude import torque_terms
+    from ideas_hpc.campaign.setup import setup_from_campaign
+    from ideas_hpc.flyby.flight import fly
+
+    monkeypatch.setitem(torque_terms.TORQUE_TERMS, "toy_jet", ToyJet)
+    sets = [s for s in SHORT if not s.startswith("attitude.mode")] + [
+        'attitude.mode="simulated"', "attitude.decimate=1"]
+    path = tmp_path / "jet.toml"
+    path.write_text(FLYBY.read_text() + "\n[torques.toy_jet]\ntorque_N_m = 1e-4\n")
+    from_file = setup_from_campaign(load(path, sets))
+    assert from_file.torques == (ToyJet(1e-4),)
+    plain = setup_from_campaign(load(FLYBY, sets))
+    assert plain.torques == ()
+    theta = np.array([0.2, 2.4, 4.1])
+    got = fly(from_file, theta).attitude.wheel_speed
+    want = fly(plain.with_(torques=(ToyJet(1e-4),)), theta).attitude.wheel_speed
+    np.testing.assert_array_equal(got, want)
+    assert not np.array_equal(got, fly(plain, theta).attitude.wheel_speed)
+    bad = tmp_path / "bad.toml"
+    bad.write_text(FLYBY.read_text() + "\n[torques.toy_jet]\ntorque_Nm = 1e-4\n")
+    with pytest.raises(InputError) as err:
+        load(bad, sets)
+    assert err.value.field == "torques.toy_jet.torque_Nm"
+    assert "bad.toml" in str(err.value)
+
+
 # --- A new design objective: one Objective entry in OBJECTIVES
 
 def _angle_sum(bank, members):

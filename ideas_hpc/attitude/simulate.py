@@ -23,6 +23,8 @@ from ideas_hpc.attitude.maneuvers import P_MIN_DEFAULT, maneuver_args
 from ideas_hpc.attitude.spacecraft import default_spacecraft, validate_spacecraft
 from ideas_hpc.attitude.torque_terms import pack_torques
 from ideas_hpc.attitude.start import absolute_start, reference_state0
+from ideas_hpc.attitude.run_settings import (AttitudeModel, AttitudeRun, InitialState, Pointing,
+                                             from_keywords)
 
 
 def initial_conditions(seed: int, sample: int, n_spacecraft: int):
@@ -182,12 +184,19 @@ def ideal_omega_BN_B(theta, spin_rate, image_times, *, mode="np", periods=None,
     return out
 
 
-def simulate_attitude(theta, spin_rate, t_f, *, mode="np", periods=None, theta_max=None,
-                      gains=None, spacecraft=None, dt=0.1, image_dt=0.2, sigma0=None,
-                      omega0=None, wheel0=None, decimate=1, dcm_TS=None,
-                      p_min=P_MIN_DEFAULT, seed=0, n_samples=1, ref_table=None,
-                      torques=(), start="absolute", acquisition_s=0.0) -> AttitudeResult:
+def simulate_attitude(theta, spin_rate, t_f=None, *, run: AttitudeRun | None = None,
+                      pointing: Pointing | None = None, model: AttitudeModel | None = None,
+                      state0: InitialState | None = None, **keywords) -> AttitudeResult:
     """Closed-loop attitude of ``S`` samples of an ``N``-spacecraft swarm (SPEC section 5).
+
+    The settings travel in four records (:mod:`ideas_hpc.attitude.run_settings`):
+    ``run`` (:class:`AttitudeRun`: ``t_f_s``, ``dt_s``, ``image_dt_s``, ``decimate``,
+    ``seed``, ``n_samples``, ``start``, ``acquisition_s``), ``pointing``
+    (:class:`Pointing`: ``mode``, ``periods_s``, ``theta_max_rad``, ``p_min_s``,
+    ``dcm_TS``, ``ref_table``), ``model`` (:class:`AttitudeModel`: ``gains``,
+    ``spacecraft``, ``torques``) and ``state0`` (:class:`InitialState`). The older
+    keywords below (``dt=``, ``mode=``, ``sigma0=``...) fill the same fields, and
+    the errors name them.
 
     Parameters
     ----------
@@ -244,6 +253,13 @@ def simulate_attitude(theta, spin_rate, t_f, *, mode="np", periods=None, theta_m
     -------
     AttitudeResult
     """
+    run, pointing, model, state0 = from_keywords(t_f, run, pointing, model, state0, keywords)
+    t_f, dt, image_dt, decimate = run.t_f_s, run.dt_s, run.image_dt_s, run.decimate
+    seed, n_samples, start, acquisition_s = run.seed, run.n_samples, run.start, run.acquisition_s
+    mode, periods, theta_max = pointing.mode, pointing.periods_s, pointing.theta_max_rad
+    p_min, dcm_TS, ref_table = pointing.p_min_s, pointing.dcm_TS, pointing.ref_table
+    gains, spacecraft, torques = model.gains, model.spacecraft, model.torques
+    sigma0, omega0, wheel0 = state0.arrays()
     th = check_theta(theta)
     n = th.size
     man, p, tm = maneuver_args(mode, n, periods, theta_max, p_min,

@@ -6,7 +6,6 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from ideas_hpc.flyby.encounter import encounter_attrs
 from ideas_hpc.mapping.coverage import quality_arrays
 from ideas_hpc.engine.variables import with_attrs
 
@@ -83,7 +82,7 @@ def setup_attrs(setup) -> dict:
         "theta_max_rad": float(setup.theta_max_rad), "maneuver": setup.maneuver.campaign_name,
         "attitude_mode": setup.attitude_mode, "coverage_mode": setup.coverage.mode,
         "targeting_tolerance_m": float(setup.tol_m), "configuration": setup.configuration,
-        **encounter_attrs(setup),
+        **setup.geometry.attrs(setup),
     }
 
 

@@ -22,8 +22,9 @@ import numpy as np
 import xarray as xr
 
 from ideas_hpc.design.bank import grid_size, separation_steps
-from ideas_hpc.design import build_bank, coverage_curve, failure_tolerant, min_swarm, worst_failure
-from ideas_hpc.design.stereo import min_swarm_stereo, stereo_curve
+from ideas_hpc.design import build_bank, coverage_curve, worst_failure
+from ideas_hpc.design.api import CoverSettings, minimize
+from ideas_hpc.design.stereo import stereo_curve
 from ideas_hpc.design.stereo import scorer as stereo_scorer
 from ideas_hpc.engine.job_cluster import JobCluster, phase_client, visibility_tests
 from ideas_hpc.errors import InputError
@@ -115,31 +116,26 @@ def design_exact(c, setup, client) -> ExactDesign:
     if coarse is not None:          # it still runs: a strict requirement may be meant
         _log(coarse)
     target = _target(scorer, eps, setup.coverage, notes)
+    # the problem (the bank, or its stereo scorer) and the settings pick the designer
+    settings = CoverSettings(target=target, eps_tol=eps, n_max=d.n_max, min_separation_m=sep,
+                             time_limit_s=d.time_limit_s, failures_tolerated=k)
     with designer_errors(c):
-        if stereo:
-            res = min_swarm_stereo(scorer, target=target, eps_tol=eps, n_max=d.n_max,
-                                   min_separation=sep, time_limit=d.time_limit_s)
-        elif k:
-            res = failure_tolerant(bank, k, target=target, eps_tol=eps, n_max=d.n_max,
-                                   min_separation=sep, time_limit=d.time_limit_s)
-        else:
-            res = min_swarm(bank, target=target, eps_tol=eps, n_max=d.n_max,
-                            min_separation=sep, time_limit=d.time_limit_s)
+        res = minimize(scorer, settings)
     notes.extend(res.notes)
     t_design = time.perf_counter() - t0
     curve = (stereo_curve(scorer, d.n_max, min_separation=sep, time_limit=d.time_limit_s)
              if stereo else
              coverage_curve(bank, d.n_max, min_separation=sep, time_limit=d.time_limit_s))
-    curve.include(res.indices, res.coverage)
+    curve.include(res.indices, res.value)
     k_eval = k if k else 1
     data = {
         "design_method": ((), "exact"),
         "solver_status": ((), res.status),
         "optimality_gap": ((), res.gap),
         "proven_bound": ((), res.bound),
-        "solve_time": ((), res.solve_time),
+        "solve_time": ((), res.timings_s["solve"]),
         "best_swarm_size": ((), np.int64(res.n)),
-        "design_coverage": ((), res.coverage),
+        "design_coverage": ((), res.value),
         "coverage_vs_n": (("n_spacecraft",), curve.coverage),
         "coverage_vs_n_gap": (("n_spacecraft",), curve.gap),
         "coverage_vs_n_status": (("n_spacecraft",), np.array(curve.status, dtype="U16")),
@@ -158,10 +154,10 @@ def design_exact(c, setup, client) -> ExactDesign:
              "failures_evaluated": int(k_eval), "angle_step_rad": float(bank.step_rad),
              **({"eps_tol_warning": coarse} if coarse is not None else {})}
     summary = (f"exact design: N = {res.n} ({res.status}, gap {100 * res.gap:.1f} %, bound "
-               f"{res.bound:g}), {requirement_line(target, target - eps, res.coverage)}, "
+               f"{res.bound:g}), {requirement_line(target, target - eps, res.value)}, "
                f"{'k = %d tolerant, ' % k if k else ''}masks {t_masks:.1f} s + solve "
                f"{t_design - t_masks:.1f} s; coverage-vs-N curve in {curve.solve_time:.1f} s")
-    return ExactDesign(theta=res.theta, data=ds, attrs=attrs, notes=notes, summary=summary,
+    return ExactDesign(theta=res.swarm_rad, data=ds, attrs=attrs, notes=notes, summary=summary,
                        bank=bank)
 
 
@@ -175,9 +171,9 @@ def ga_gap(c, setup, mask_bank, n_ga: int, target: float) -> tuple[xr.Dataset, l
     bank = build_bank(setup, step, mask_bank=mask_bank, snap=False)
     try:
         with designer_errors():   # the note quotes the file's keys
-            ex = min_swarm(bank, target=target, eps_tol=d.eps_tol_pct / 100.0, n_max=d.n_max,
-                           min_separation=c.config.swarm.min_separation_m,
-                           time_limit=d.time_limit_s)
+            ex = minimize(bank, CoverSettings(
+                target=target, eps_tol=d.eps_tol_pct / 100.0, n_max=d.n_max,
+                min_separation_m=c.config.swarm.min_separation_m, time_limit_s=d.time_limit_s))
     except InputError as exc:
         return xr.Dataset({"design_method": ((), "ga")}), [f"no exact reference: {exc.message}"]
     if not ex.optimal:

@@ -20,6 +20,8 @@ import xarray as xr
 
 from ideas_hpc.progress import result
 from ideas_hpc.design.candidates import candidate_masks
+from ideas_hpc.design.api import (CoverSettings, FovGAProblem, FovGASettings, GASearch,
+                                  NadirGAProblem, NadirGASettings, minimize)
 from ideas_hpc.design.bank import grid_size
 from ideas_hpc.engine.job_cluster import JobCluster, visibility_tests
 from ideas_hpc.errors import InputError, config_fields
@@ -59,6 +61,15 @@ def _progress_printer(total: int, label: str):
     return cb
 
 
+def _search(c: Campaign) -> GASearch:
+    """The PyGAD search of the file's ``[design]`` table and seed."""
+    d = c.config.design
+    return GASearch(population=d.population, generations=d.generations, seed=c.config.seed,
+                    parents=d.parents, elitism=d.elitism,
+                    mutation_probability=d.mutation_probability,
+                    stall_generations=d.stall_generations)
+
+
 def _bank(setup, client, design) -> MaskBank:
     return MaskBank(functools.partial(candidate_masks, setup), setup.body.shape.n_vertices,
                     chunk_size=design.chunk_size, client=client)
@@ -81,8 +92,7 @@ def _stereo_ga(c: Campaign, setup, client):
     """The NP GA scoring stereo from two spacecraft with the pair model
     (:class:`~ideas_hpc.design.stereo.StereoBank` on the GA's own angle grid)."""
     from ideas_hpc.design import build_bank
-    from ideas_hpc.design.stereo import min_swarm_stereo, scorer
-    from ideas_hpc.design.ga.genetic import run_nadir_ga
+    from ideas_hpc.design.stereo import scorer
 
     d = c.config.design
     step = d.angle_step_rad
@@ -100,21 +110,18 @@ def _stereo_ga(c: Campaign, setup, client):
                for g in genomes]
         return sb.coverage(idx), np.rint(genomes[:, 0]).astype(int)
 
-    res = run_nadir_ga(evaluate, n_max=d.n_max, population=d.population,
-                       generations=d.generations, seed=c.config.seed, eps_tol=eps,
-                       angle_step=step, target=target, parents=d.parents, elitism=d.elitism,
-                       mutation_probability=d.mutation_probability,
-                       stall_generations=d.stall_generations,
-                       min_separation=min_separation_angle(c.config.swarm.min_separation_m,
-                                                           setup.d_sep_m),
-                       progress=_progress_printer(d.generations, "NP GA (stereo)"))
-    n = res.best_swarm_size
+    settings = NadirGASettings(
+        search=_search(c), n_max=d.n_max, eps_tol=eps, angle_step_rad=step, target=target,
+        min_separation_rad=min_separation_angle(c.config.swarm.min_separation_m, setup.d_sep_m))
+    out = minimize(NadirGAProblem(evaluate), settings,
+                   progress=_progress_printer(d.generations, "NP GA (stereo)"))
+    res, n = out.detail, out.n
     res.notes.append("GA scoring stereo from own tracks and from pairs of spacecraft (the "
                      "exact designer's pair model); no set-cover local search")
     try:
-        ex = min_swarm_stereo(sb, target=target, eps_tol=eps, n_max=d.n_max,
-                              min_separation=c.config.swarm.min_separation_m,
-                              time_limit=d.time_limit_s)
+        ex = minimize(sb, CoverSettings(target=target, eps_tol=eps, n_max=d.n_max,
+                                        min_separation_m=c.config.swarm.min_separation_m,
+                                        time_limit_s=d.time_limit_s))
         gap = (n - ex.bound) / n
         res.gap_data = xr.Dataset({"design_method": ((), "ga"), "solver_status": ((), "ga"),
                                    "optimality_gap": ((), gap),
@@ -125,13 +132,11 @@ def _stereo_ga(c: Campaign, setup, client):
     except InputError as exc:
         res.gap_data = xr.Dataset({"design_method": ((), "ga")})
         res.notes.append(f"no exact reference: {exc.message}")
-    best = [snap_angle(a, step)[0] for a in res.best_genome[1:1 + n]]
-    return res, np.sort(np.asarray(best)), None
+    return res, out.swarm_rad, None
 
 
 def design_nadir(c: Campaign, setup, client):
-    """NP swarm-size GA (SPEC section 7). Returns (GAResult, bank)."""
-    from ideas_hpc.design.ga.genetic import run_nadir_ga
+    """NP swarm-size GA (SPEC section 7). Returns (GAResult, angles, None)."""
 
     if setup.coverage.require_stereo:
         return _stereo_ga(c, setup, client)
@@ -161,24 +166,19 @@ def design_nadir(c: Campaign, setup, client):
     cover = None if masks is None else GridCover(
         masks, areas, step, target, eps, d.n_max,
         min_sep_steps=math.ceil(min_sep / step - 1e-9) if min_sep > 0 else 0)
-    res = run_nadir_ga(evaluate, n_max=d.n_max, population=d.population,
-                       generations=d.generations, seed=c.config.seed,
-                       eps_tol=eps, angle_step=step, target=target,
-                       parents=d.parents, elitism=d.elitism,
-                       mutation_probability=d.mutation_probability,
-                       stall_generations=d.stall_generations,
-                       min_separation=min_sep, cover=cover,
-                       progress=_progress_printer(d.generations, "NP GA"))
+    settings = NadirGASettings(search=_search(c), n_max=d.n_max, eps_tol=eps,
+                               angle_step_rad=step, target=target, min_separation_rad=min_sep)
+    out = minimize(NadirGAProblem(evaluate, cover), settings,
+                   progress=_progress_printer(d.generations, "NP GA"))
+    res = out.detail
     if cover is not None:
         notes.append(f"GA with set-cover local search on the {cover.k} grid-angle masks "
                      "(greedy seeding of 20 % of the first population; completion, removal "
                      "and 2-for-1 swaps after each generation)")
     res.notes.extend(notes)
-    n = res.best_swarm_size
-    best = [snap_angle(t, step)[0] for t in res.best_genome[1:1 + n]]
-    res.gap_data, gap_notes = ga_gap(c, setup, bank, n, target)
+    res.gap_data, gap_notes = ga_gap(c, setup, bank, out.n, target)
     res.notes.extend(gap_notes)
-    return res, np.sort(np.asarray(best)), None
+    return res, out.swarm_rad, None
 
 
 def _fov_swarm(c: Campaign) -> np.ndarray:
@@ -201,7 +201,6 @@ def _fov_swarm(c: Campaign) -> np.ndarray:
 
 def design_fov(c: Campaign, setup, client):
     """FoV sweep-period GA (SPEC section 7). Returns (GAResult, angles, periods)."""
-    from ideas_hpc.design.ga.genetic import run_fov_ga
 
     d = c.config.design
     theta = _fov_swarm(c)
@@ -214,12 +213,10 @@ def design_fov(c: Campaign, setup, client):
         cov, _ = bank.union_coverage(keys, areas)
         return cov
 
-    res = run_fov_ga(evaluate, n_spacecraft=theta.size, p_min=d.p_min_s,
-                     p_max=d.p_max_s, period_step=step, population=d.population,
-                     generations=d.generations, seed=c.config.seed, parents=d.parents,
-                     elitism=d.elitism, mutation_probability=d.mutation_probability,
-                     stall_generations=d.stall_generations,
-                     progress=_progress_printer(d.generations, "FoV GA"))
+    settings = FovGASettings(search=_search(c), n_spacecraft=theta.size, p_min_s=d.p_min_s,
+                             p_max_s=d.p_max_s, period_step_s=step)
+    res = minimize(FovGAProblem(evaluate, theta), settings,
+                   progress=_progress_printer(d.generations, "FoV GA")).detail
     periods = np.array([k[1] for k in fov_keys(res.best_genome, theta, d.p_min_s, step)])
     return res, theta, periods
 

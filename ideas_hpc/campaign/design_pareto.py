@@ -40,7 +40,7 @@ from ideas_hpc.design.stereo import check_grid
 from ideas_hpc.design import build_bank, coverage_curve
 from ideas_hpc.design.bank import grid_size, separation_steps
 from ideas_hpc.design.pareto.objectives import OBJECTIVES, bank_needs, check_objectives, evaluate
-from ideas_hpc.design.pareto.nsga2 import run_pareto
+from ideas_hpc.design.api import ParetoSettings, minimize
 from ideas_hpc.engine.job_cluster import JobCluster, visibility_tests
 from ideas_hpc.flyby.flight import target
 from ideas_hpc.campaign.setup import setup_from_campaign
@@ -152,10 +152,11 @@ def run_design_pareto(c, out, *, workers=None, scheduler=None, cluster="local",
     _log(f"candidate masks: {bank.n_candidates} grid angles ({math.degrees(bank.step_rad):g} deg) "
          f"in {t_masks:.1f} s")
     with designer_errors(c):
-        res = run_pareto(bank, names, n_max=d.n_max, population=d.population,
-                         generations=d.generations, seed=c.config.seed, min_separation=sep,
-                         parents=d.parents, mutation_probability=d.mutation_probability,
-                         progress=_progress(d.generations))
+        res = minimize(bank, ParetoSettings(
+            objectives=names, n_max=d.n_max, population=d.population,
+            generations=d.generations, seed=c.config.seed, min_separation_m=sep,
+            parents=d.parents, mutation_probability=d.mutation_probability),
+            progress=_progress(d.generations)).detail
     ds = pareto_dataset(bank, res, d.n_max)
     notes = list(res.notes)
     attrs = {"objectives": json.dumps(list(names)), "angle_step_rad": float(bank.step_rad),

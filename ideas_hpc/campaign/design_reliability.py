@@ -39,11 +39,12 @@ import numpy as np
 
 from ideas_hpc.progress import result
 from ideas_hpc.core.design.reliability import swarm_probabilities
-from ideas_hpc.design import failure_tolerant
+from ideas_hpc.design.api import CoverSettings, ReliableSettings, ScenarioProblem, minimize
+from ideas_hpc.design.settings import LookPlan
 from ideas_hpc.design.bank import grid_size, separation_steps
 from ideas_hpc.design.certificate import (certify, group_bounds, look_confidence, planned_looks,
                                          replicated_lower_bound)
-from ideas_hpc.design.reliability import ReliabilityDesigner, min_swarm_reliable
+from ideas_hpc.design.reliability import ReliabilityDesigner
 from ideas_hpc.design.reliability_stats import lower_confidence_bound
 from ideas_hpc.errors import InputError
 from ideas_hpc import progress
@@ -53,7 +54,7 @@ from ideas_hpc.montecarlo.scenarios import build_scenario_bank, fly_members
 from ideas_hpc.seeds import VALIDATION_STREAM, stream_rng
 from ideas_hpc.campaign.design_exact import design_exact
 from ideas_hpc.campaign.schema.design_checks import designer_errors
-from ideas_hpc.campaign.reliability_vars import reliability_dataset
+from ideas_hpc.campaign.reliability_vars import BankRun, reliability_dataset
 from ideas_hpc.campaign.schema.design_table import verify_samples
 
 #: Purpose word of the validation's sampled failures (the histogram only; the
@@ -110,14 +111,15 @@ def _validate(c, setup, theta, need, w, exact, client, *, first=0, confidence=No
 
 
 def _tolerant_designs(nominal_bank, target, eps, d, sep) -> list:
-    """(k, ExactResult) of the k-failure-tolerant designs on the nominal bank, k = 1..K_MARKED."""
+    """(k, DesignResult) of the k-failure-tolerant designs on the nominal bank, k = 1..K_MARKED."""
     out = []
     for k in range(1, K_MARKED + 1):
         if k >= d.n_max:
             break
         try:
-            r = failure_tolerant(nominal_bank, k, target=target, eps_tol=eps, n_max=d.n_max,
-                                 min_separation=sep, time_limit=min(d.time_limit_s, 30.0))
+            r = minimize(nominal_bank, CoverSettings(
+                target=target, eps_tol=eps, n_max=d.n_max, min_separation_m=sep,
+                time_limit_s=min(d.time_limit_s, 30.0), failures_tolerated=k))
         except InputError:
             break
         if r.n > 24:
@@ -203,8 +205,9 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=Non
     level = p if d.bank_level is None else float(d.bank_level)
     try:
         with designer_errors(c):
-            res = min_swarm_reliable(bank.rows, bank.areas, p=level, p_f=p_f, need=need,
-                                     n_max=d.n_max, sep_steps=m_sep, time_limit=left)
+            res = minimize(ScenarioProblem(bank.rows, bank.areas, bank.theta),
+                           ReliableSettings(p=level, p_f=p_f, need=need, n_max=d.n_max,
+                                            sep_steps=m_sep, time_limit_s=left)).detail
     except InputError as exc:
         if level == p or exc.field != "design.success_probability":
             raise
@@ -240,8 +243,8 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=Non
                          _tolerant_designs(nominal.bank, target, eps, d, sep), rel)
     stat = None if exact else statistical_bound(rel, p, p_f, d.n_max, d.confidence)
     return reliability_dataset(c, nominal, bank, res, chosen, chosen_val, curve, tolerant,
-                               stepped=stepped, need=need, exact=exact, t_bank=t_bank,
-                               cert=cert, level=level, stat=stat)
+                               BankRun(stepped=stepped, need=need, exact=exact, t_bank_s=t_bank,
+                                       cert=cert, level=level, stat=stat))
 
 
 #: Sample problems cut from the bank for the statistical lower bound, and the fewest
@@ -286,6 +289,6 @@ def _certify(c, setup, client, bank, res, rel, need, w, exact):
                       confidence=conf_look)
         return v.per_sample, v
 
-    return certify(res.n, best_of, validate, p=float(d.success_probability),
-                   confidence=d.confidence, n_max=d.n_max, n_samples=m,
-                   demonstrate=d.demonstrate, max_looks=d.demonstrate_looks, exact=exact)
+    return certify(res.n, best_of, validate, LookPlan(
+        p=float(d.success_probability), confidence=d.confidence, n_max=d.n_max, n_samples=m,
+        demonstrate=d.demonstrate, max_looks=d.demonstrate_looks, exact=exact))

@@ -45,6 +45,8 @@ at the look's share of the error; attr ``certificate`` words it in one line.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import xarray as xr
 
@@ -82,10 +84,27 @@ def _look_vars(cert) -> dict:
             "validation_look_first_sample": (dim, np.array([r[3] for r in rows], np.int64))}
 
 
-def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, tolerant, *,
-                        stepped, need: float, exact: bool, t_bank: float, cert=None,
-                        level: float | None = None, stat: dict | None = None) -> ExactDesign:
+@dataclass(frozen=True)
+class BankRun:
+    """How the design on the scenario bank went: ``stepped`` the looks' (N, P_bank) past
+    the first, ``need`` the coverage threshold (fraction), ``exact`` one exact scenario,
+    ``t_bank_s`` the bank's wall time, ``cert`` the certificate, ``level`` the level
+    the bank was solved at (None: p), ``stat`` the statistical lower bound."""
+
+    stepped: list
+    need: float
+    exact: bool
+    t_bank_s: float
+    cert: object = None
+    level: float | None = None
+    stat: dict | None = None
+
+
+def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, tolerant,
+                        run: BankRun) -> ExactDesign:
     """The :class:`ExactDesign` of the chosen swarm with the variables of the module docstring."""
+    stepped, need, exact, t_bank = run.stepped, run.need, run.exact, run.t_bank_s
+    cert, level, stat = run.cert, run.level, run.stat
     d = c.config.design
     p = float(d.success_probability)
     conf = float(d.confidence)

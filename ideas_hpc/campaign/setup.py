@@ -13,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 
 from ideas_hpc.attitude import campaign_maneuver
+from ideas_hpc.attitude.torque_terms import torques_from_config
 from ideas_hpc.campaign.body_checks import check_body, check_grid_step, check_pointing
 from ideas_hpc.body.bodies import load_body
 from ideas_hpc.body.shape import load_shape_file
@@ -99,7 +100,8 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
         force_model=ex["force_model"], spacecraft=ex["spacecraft"],
         gains=ex["gains"], coverage=ex["coverage"], p_min_s=cfg.design.p_min_s,
         epoch_s=epoch_s, encounter=enc, imaging=_imaging(cfg, eta),
-        attitude_start=cfg.monte_carlo.attitude_start)
+        attitude_start=cfg.monte_carlo.attitude_start,
+        torques=torques_from_config(c.raw.get("torques"), prefix="torques."))
 
 
 def _imaging(cfg, eta_rad: float) -> ImageUse | None:

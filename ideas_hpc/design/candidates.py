@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from ideas_hpc.attitude import initial_conditions
+from ideas_hpc.attitude.run_settings import InitialState
 from ideas_hpc.flyby.flight import FlybySetup, target
 from ideas_hpc.flyby.camera import camera_dcms, imaging_dcms
 from ideas_hpc.mapping.coverage import observed_per_spacecraft, quality_per_spacecraft, stereo_pair_table
@@ -40,7 +41,7 @@ def _views(setup: FlybySetup, keys):
             s0, w0, W0 = (np.zeros((th.size, 3)) for _ in range(3))
         dcm, att = camera_dcms(setup.with_(decimate=max(1, int(round((setup.tf_s - setup.t0_s)
                                                                       / setup.dt_s)))),
-                               th, periods, sigma0=s0, omega0=w0, wheel0=W0,
+                               th, periods, state0=InitialState(s0, w0, W0),
                                track_T=(tgt.position_T, tgt.velocity_T),
                                start="absolute" if setup.attitude_start == "paper"
                                else "reference")

@@ -46,10 +46,8 @@ from typing import Callable
 import numpy as np
 
 from ideas_hpc.design.reliability_stats import lower_confidence_bound
+from ideas_hpc.design.settings import DEFAULT_LOOKS, LookPlan  # noqa: F401 (its old home)
 from ideas_hpc.errors import InputError
-
-#: Most looks ``design.demonstrate`` plans when the file does not say.
-DEFAULT_LOOKS = 4
 
 
 def planned_looks(demonstrate: bool, n_bank: int, n_max: int, max_looks: int,
@@ -127,11 +125,13 @@ class Certificate:
                 f"{how}; overall confidence {100 * self.confidence:g} %")
 
 
-def certify(n_bank: int, best_of: Callable, validate: Callable, *, p: float,
-            confidence: float, n_max: int, n_samples: int, demonstrate: bool,
-            max_looks: int = DEFAULT_LOOKS, exact: bool = False,
-            bound: Callable = lower_confidence_bound) -> Certificate:
+def certify(n_bank: int, best_of: Callable, validate: Callable, plan: LookPlan | None = None,
+            *, bound: Callable = lower_confidence_bound, **keywords) -> Certificate:
     """Run the looks of the module docstring.
+
+    ``plan`` (:class:`~ideas_hpc.design.settings.LookPlan`) holds ``p``,
+    ``confidence``, ``n_max``, ``n_samples``, ``demonstrate``, ``max_looks`` and
+    ``exact`` below; without it, the same keywords.
 
     Parameters
     ----------
@@ -157,6 +157,9 @@ def certify(n_bank: int, best_of: Callable, validate: Callable, *, p: float,
     bound : callable
         ``(values, confidence) -> lower bound``.
     """
+    plan = plan if plan is not None else LookPlan(**keywords)
+    p, confidence, n_max, n_samples = plan.p, plan.confidence, plan.n_max, plan.n_samples
+    demonstrate, max_looks, exact = plan.demonstrate, plan.max_looks, plan.exact
     k = planned_looks(demonstrate, n_bank, n_max, max_looks, exact)
     conf_look = 1.0 if exact else look_confidence(confidence, k)
     cert = Certificate(p=float(p), confidence=float(confidence), planned=k, exact=exact)

@@ -51,6 +51,7 @@ from ideas_hpc.design.reliability_stats import failure_upper_bound
 from ideas_hpc.design.ring_bound import ring_bound
 from ideas_hpc.design.scenario_mip import ScenarioMIP
 from ideas_hpc.design.tolerance_bound import ToleranceBound
+from ideas_hpc.design.settings import ReliableSettings
 
 #: Largest swarm whose 2^N failure subsets are enumerated.
 N_ENUM_MAX = 24
@@ -310,10 +311,8 @@ class ReliabilityDesigner:
         return top
 
 
-def min_swarm_reliable(rows, areas, *, p: float, p_f: float, need: float, n_max: int,
-                       sep_steps: int = 0, time_limit: float | None = None,
-                       enumerate_budget: int = 20000, bound_solver=None,
-                       ring_prebound: bool = True, tolerance_solver=None) -> ReliableResult:
+def min_swarm_reliable(rows, areas, settings: ReliableSettings | None = None,
+                       **keywords) -> ReliableResult:
     """The fewest grid candidates with ``P_bank >= p`` (module docstring).
 
     Parameters
@@ -321,6 +320,8 @@ def min_swarm_reliable(rows, areas, *, p: float, p_f: float, need: float, n_max:
     rows : (S, C, V) bool
         Scenario bank rows.
     areas : (V,) m^2
+    settings : ReliableSettings
+        The search (:mod:`ideas_hpc.design.settings`), or the keywords below.
     p : float
         Required success probability, 0 < p < 1.
     p_f : float
@@ -348,9 +349,12 @@ def min_swarm_reliable(rows, areas, *, p: float, p_f: float, need: float, n_max:
         ``p`` when no swarm of at most ``n_max``
         reaches ``p`` on the bank (the message gives the best P found).
     """
+    s = settings or ReliableSettings(time_limit_s=keywords.pop("time_limit", None), **keywords)
+    p, p_f, need, n_max, sep_steps = s.p, s.p_f, s.need, s.n_max, s.sep_steps
+    time_limit, ring_prebound = s.time_limit_s, s.ring_prebound
     d = ReliabilityDesigner(rows, areas, need=need, p_f=p_f, sep_steps=sep_steps,
-                            time_limit=time_limit, enumerate_budget=enumerate_budget,
-                            bound_solver=bound_solver, tolerance_solver=tolerance_solver)
+                            time_limit=time_limit, enumerate_budget=s.enumerate_budget,
+                            bound_solver=s.bound_solver, tolerance_solver=s.tolerance_solver)
     upper: dict = {}
     unresolved: list = []
     if ring_prebound:

@@ -18,7 +18,7 @@ The force model lives in three modules: the settings objects of the terms
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -161,13 +161,31 @@ def sample_times(t0: float, tf: float, dt_sample: float) -> np.ndarray:
     return t0 + dt_sample * np.arange(n, dtype=np.float64)
 
 
+@dataclass(frozen=True)
+class TargetingSettings:
+    """The Newton targeting's knobs: output step ``dt_sample_s``, miss tolerance
+    ``tol_m``, at most ``max_iter`` updates; ``raise_on_failure``: raise rather
+    than flag a spacecraft that did not converge."""
+
+    dt_sample_s: float = 0.1
+    tol_m: float = 0.01
+    max_iter: int = 25
+    raise_on_failure: bool = True
+
+
+#: The older keywords of :func:`target_swarm` -> their :class:`TargetingSettings` field.
+_TARGETING_KEYWORDS = {"dt_sample": "dt_sample_s", "tol": "tol_m", "max_iter": "max_iter",
+                       "raise_on_failure": "raise_on_failure"}
+
+
 def target_swarm(body, r0_T, r_target_T, t0, tf, *, force_model: ForceModel = ForceModel(),
-                 dt_sample: float = 0.1, tol: float = 0.01, max_iter: int = 25,
-                 raise_on_failure: bool = True, params_override=None,
-                 packed: PackedForceModel | None = None) -> TargetingResult:
+                 settings: TargetingSettings | None = None, params_override=None,
+                 packed: PackedForceModel | None = None, **keywords) -> TargetingResult:
     """Newton-target every spacecraft from ``r0_T`` (at t0) to ``r_target_T`` (at tf).
 
     One compiled call for the whole swarm (:func:`ideas_hpc.core.dynamics.targeting.target_batch`).
+    ``settings`` (:class:`TargetingSettings`) holds ``dt_sample``, ``tol``,
+    ``max_iter`` and ``raise_on_failure`` below; the same keywords override it.
 
     Parameters
     ----------
@@ -200,6 +218,13 @@ def target_swarm(body, r0_T, r_target_T, t0, tf, *, force_model: ForceModel = Fo
     TargetingError
         When ``raise_on_failure`` and a spacecraft did not converge.
     """
+    unknown = set(keywords) - set(_TARGETING_KEYWORDS)
+    if unknown:
+        raise TypeError(f"target_swarm() got an unexpected keyword argument {unknown.pop()!r}")
+    s = replace(settings or TargetingSettings(),
+                **{_TARGETING_KEYWORDS[k]: v for k, v in keywords.items()})
+    dt_sample, tol, max_iter = s.dt_sample_s, s.tol_m, s.max_iter
+    raise_on_failure = s.raise_on_failure
     if not isinstance(force_model, ForceModel):
         raise InputError("must be a ForceModel", field="force_model")
     r0, rt, t0, tf, dt_sample = _check_arc("r_target_T", r0_T, r_target_T, t0, tf, dt_sample)

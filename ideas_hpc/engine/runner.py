@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import os
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
@@ -114,11 +114,21 @@ def run_chunk(store_path: str, chunk_fn: ChunkFn, chunk_id: int, start: int,
     return chunk_id, stop - start, t1 - t0, time.perf_counter() - t1
 
 
+@dataclass(frozen=True)
+class ClusterRequest:
+    """Where the chunks run (:func:`ideas_hpc.engine.cluster.connect`): ``cluster``
+    ("local" or "slurm"), ``workers``, a ``scheduler`` address, a ``slurm_config``."""
+
+    cluster: str = "local"
+    workers: int | None = None
+    scheduler: str | None = None
+    slurm_config: str | os.PathLike | None = None
+
+
 def run_chunks(store_path: str | os.PathLike, chunk_fn: ChunkFn, plan: ChunkPlan | None = None,
-               *, resume: bool = False, workers: int | None = None, scheduler: str | None = None,
-               cluster: str = "local", slurm_config: str | os.PathLike | None = None,
+               *, resume: bool = False, where: ClusterRequest | None = None,
                progress: bool = True, retries: int = 2, client=None,
-               in_process: bool = False) -> RunSummary:
+               in_process: bool = False, **cluster_keywords) -> RunSummary:
     """Run every not-done chunk of a store, one dask task each.
 
     Parameters
@@ -132,8 +142,9 @@ def run_chunks(store_path: str | os.PathLike, chunk_fn: ChunkFn, plan: ChunkPlan
         Must equal the store's plan (checked); default: the store's.
     resume : bool
         Skip chunks marked done. Without it, a store with done chunks is refused.
-    workers, scheduler, cluster, slurm_config
-        See :func:`ideas_hpc.engine.cluster.connect`.
+    where : ClusterRequest, optional
+        ``workers``, ``scheduler``, ``cluster``, ``slurm_config`` (also accepted as
+        keywords): see :func:`ideas_hpc.engine.cluster.connect`.
     progress : bool
         Show a tqdm bar over completed chunks (stderr).
     retries : int
@@ -155,6 +166,9 @@ def run_chunks(store_path: str | os.PathLike, chunk_fn: ChunkFn, plan: ChunkPlan
         When chunks still fail after their retries (the others are written;
         rerun with ``resume=True``).
     """
+    where = replace(where or ClusterRequest(), **cluster_keywords)
+    workers, scheduler, cluster = where.workers, where.scheduler, where.cluster
+    slurm_config = where.slurm_config
     path = Path(store_path)
     stored = store_plan(path)
     if plan is not None and (plan.n_samples, plan.chunk_size) != (stored.n_samples,

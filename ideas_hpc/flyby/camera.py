@@ -11,10 +11,11 @@ from __future__ import annotations
 import numpy as np
 
 from ideas_hpc.attitude import ideal_dcm_BT, initial_conditions, simulate_attitude
+from ideas_hpc.attitude.run_settings import InitialState, from_keywords
 from ideas_hpc.core.attitude.compose import compose_each
 from ideas_hpc.core.attitude.mrp import dcm_from_mrp, mrp_from_prv
 from ideas_hpc.errors import InputError
-from ideas_hpc.flyby.encounter import camera_dcms_encounter, track_dcms, track_reference
+from ideas_hpc.flyby.encounter import track_dcms, track_reference
 from ideas_hpc.flyby.usable import blind, usable_images
 
 
@@ -24,11 +25,14 @@ def misalignment_dcms(prv) -> np.ndarray:
     return np.stack([dcm_from_mrp(mrp_from_prv(np.ascontiguousarray(v))) for v in prv])
 
 
-def camera_dcms(setup, theta, periods=None, *, sigma0=None, omega0=None,
-                wheel0=None, spin_rate=None, r_img_T=None, track_T=None, start="absolute",
-                acquisition_s=0.0):
+def camera_dcms(setup, theta, periods=None, *, state0: InitialState | None = None,
+                spin_rate=None, r_img_T=None, track_T=None, start="absolute",
+                acquisition_s=0.0, **initial):
     """Camera DCMs at the image times, and the attitude result when simulated.
 
+    ``state0``: the initial attitude state
+    (:class:`~ideas_hpc.attitude.run_settings.InitialState`); the older keywords
+    ``sigma0``, ``omega0``, ``wheel0`` fill it.
     ``start = "reference"``: ``sigma0``, ``omega0`` are errors about the reference
     of the geometry flown (encounter swarm frame, body tracking included);
     ``acquisition_s``: fly the loop that long before the window
@@ -38,6 +42,7 @@ def camera_dcms(setup, theta, periods=None, *, sigma0=None, omega0=None,
     for body tracking with simulated attitude.
     Returns ``(dcm_BT (N, n_img, 3, 3), AttitudeResult or None)``.
     """
+    sigma0, omega0, wheel0 = from_keywords(None, None, None, None, state0, initial)[3].arrays()
     th = np.asarray(theta, dtype=np.float64)
     if setup.maneuver.tracks_body and setup.attitude_mode == "ideal":
         return track_dcms(setup, r_img_T)[0], None
@@ -58,14 +63,10 @@ def camera_dcms(setup, theta, periods=None, *, sigma0=None, omega0=None,
         else:
             sigma0, omega0, wheel0 = (np.zeros((th.size, 3)) for _ in range(3))
             sim_kw = dict(sim_kw, start="reference")
-    if setup.encounter is not None:
-        bt, att, _ = camera_dcms_encounter(
-            setup, th, periods, lambda w, ns: ideal_dcm_BT(th, w, img_t, dcm_TS=ns, **kw),
-            lambda w, ns: _simulate(setup, th, w, duration, sigma0, omega0, wheel0, ns, sim_kw))
-        return bt, att
-    if setup.attitude_mode == "ideal":
-        return ideal_dcm_BT(th, ws, img_t, **kw), None
-    return _simulate(setup, th, ws, duration, sigma0, omega0, wheel0, None, sim_kw)
+    # the geometry's ring frames (with the body, or fixed in N) and its turn into T
+    return setup.geometry.camera(
+        setup, ws, lambda w, ts: ideal_dcm_BT(th, w, img_t, dcm_TS=ts, **kw),
+        lambda w, ts: _simulate(setup, th, w, duration, sigma0, omega0, wheel0, ts, sim_kw))
 
 
 def _simulate(setup, th, ws, duration, sigma0, omega0, wheel0, dcm_TS, kw):
@@ -81,7 +82,7 @@ def camera_at_images(setup, th, periods, ics, misalignment, r_img, track_T=None,
     """Camera DCMs at the images (attitude, then the camera misalignment).
     ``start``, ``acquisition_s``: see :func:`camera_dcms`."""
     s0, w0, W0 = ics if ics is not None else (None, None, None)
-    dcm, att = camera_dcms(setup, th, periods, sigma0=s0, omega0=w0, wheel0=W0, r_img_T=r_img,
+    dcm, att = camera_dcms(setup, th, periods, state0=InitialState(s0, w0, W0), r_img_T=r_img,
                            track_T=track_T, start=start, acquisition_s=acquisition_s)
     return misaligned(dcm, misalignment), att
 

@@ -15,7 +15,7 @@ along the mean velocity; for a ring symmetric about the track the mean velocity
 at closest approach is ``v_inf`` to first order in the bending, about 1e-7 rad
 for Eros at 10 km/s): they are fixed in the inertial frame N (= T at ``t_ca``),
 so the camera frames are the paper's maneuvers in N, turned into T by the
-spin (:func:`camera_dcms_encounter`).
+spin (:class:`ideas_hpc.flyby.geometry.EncounterGeometry`).
 
 The start point lies on the straight track and the pass through the ring point
 at ``t_ca`` is exact (to the targeting tolerance); with gravity the speed and
@@ -186,27 +186,6 @@ def target_encounter(setup, theta, *, raise_on_failure: bool = True) -> Targetin
                            velocity_T=vel, nfev=arc.nfev)
 
 
-def camera_dcms_encounter(setup, theta, periods, ideal, simulate, *, sigma0=None, omega0=None,
-                          wheel0=None):
-    """Camera DCMs ``[B T]`` at the image times on an encounter, and the attitude result.
-
-    The maneuvers run unchanged with the ring frames fixed in N (spin 0 and
-    ``dcm_TS = [N S]``), so ``ideal``/``simulate`` return ``[B N]``; the spin then
-    turns them into T (:func:`ideas_hpc.core.dynamics.encounter.dcm_BT_from_BN`).
-    ``ideal(spin, dcm_TS)`` and ``simulate(spin, dcm_TS)`` are the flyby's two
-    attitude paths with everything else bound.
-    """
-    enc = setup.encounter
-    ns = np.ascontiguousarray(enc.dcm_NS)
-    if setup.attitude_mode == "ideal":
-        bn, att = ideal(0.0, ns), None
-    else:
-        bn, att = simulate(0.0, ns)
-    bt = dcm_BT_from_BN(np.ascontiguousarray(bn), setup.body.params.spin_rate,
-                        np.ascontiguousarray(setup.image_times), enc.t_ca_s)
-    return bt, att, bn
-
-
 def track_dcms(setup, r_img_T) -> tuple[np.ndarray, np.ndarray]:
     """``([B T], [B N])`` (N, n_img, 3, 3) of the body-tracking camera (``attitude.maneuver =
     "track"``) along the flown positions ``r_img_T`` at the image times."""
@@ -266,8 +245,9 @@ def pointing_check(dcm_BN, dt: float, spacecraft) -> dict:
 def pointing_profile(setup, theta, periods=None, r_img_T=None) -> dict:
     """:func:`pointing_check` of the swarm's reference attitude at the image times.
 
-    Paper geometry: ``[B N] = [B T] R3(w t)``; encounter: the maneuver in N;
-    body tracking: along the flown positions ``r_img_T``.
+    The maneuver runs in the geometry's ring frames and is turned into N
+    (paper: ``[B N] = [B T] R3(w t)``; encounter: already in N); body tracking:
+    along the flown positions ``r_img_T``.
     """
     th = np.asarray(theta, dtype=np.float64).ravel()
     sc = setup.spacecraft or default_spacecraft()
@@ -275,19 +255,15 @@ def pointing_profile(setup, theta, periods=None, r_img_T=None) -> dict:
         return pointing_check(track_dcms(setup, r_img_T)[1], setup.image_dt_s, sc)
     img_t = setup.image_times - setup.t0_s
     kw = dict(mode=setup.maneuver.name, periods=periods, theta_max=setup.theta_max_rad, p_min=setup.p_min_s)
-    if setup.encounter is not None:
-        bn = ideal_dcm_BT(th, 0.0, img_t, dcm_TS=setup.encounter.dcm_NS, **kw)
-    else:
-        ws = setup.body.params.spin_rate
-        bn = dcm_BT_from_BN(ideal_dcm_BT(th, ws, img_t, **kw), -ws, img_t, 0.0)
+    geo = setup.geometry
+    w, ts = geo.maneuver_frame(setup, setup.body.params.spin_rate)
+    bn = geo.to_N(setup, ideal_dcm_BT(th, w, img_t, dcm_TS=ts, **kw), img_t)
     return pointing_check(bn, setup.image_dt_s, sc)
 
 
 def encounter_attrs(setup) -> dict:
     """Store attrs of an encounter (SI): speed, approach angles, closest approach, phase."""
     enc = setup.encounter
-    if enc is None:
-        return {"geometry": "paper"}
     sun = setup.sun_T([enc.t_ca_s])[0]
     return {"geometry": "encounter", "speed_m_s": enc.speed_m_s, "approach_ra_rad": enc.ra_rad,
             "approach_dec_rad": enc.dec_rad, "t_ca_s": enc.t_ca_s,

@@ -21,14 +21,14 @@ independent spacecraft (which the GA relies on).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from ideas_hpc.attitude import Gains, Maneuver, SpacecraftModel, campaign_maneuver, initial_conditions
 from ideas_hpc.body.bodies import Body
-from ideas_hpc.flyby.encounter import Encounter, endpoints_encounter, target_encounter
+from ideas_hpc.flyby.encounter import Encounter
+from ideas_hpc.flyby.geometry import Geometry, geometry_of
 from ideas_hpc.errors import InputError
 from ideas_hpc.flyby.camera import (camera_at_images, imaging_dcms, misaligned,
                                     misalignment_dcms)
@@ -38,9 +38,7 @@ from ideas_hpc.flyby.sizing import Sizing
 from ideas_hpc.flyby.usable import ImageUse
 from ideas_hpc.dynamics.force_model import ForceModel
 from ideas_hpc.dynamics.trajectory import (TargetingError, TargetingResult, propagate_swarm,
-                                           ring_states, sun_direction_T, target_swarm)
-
-TWO_PI = 2.0 * math.pi
+                                           sun_direction_T)
 
 
 @dataclass(frozen=True)
@@ -93,6 +91,12 @@ class FlybySetup:
     attitude_start: str = "paper"
 
     @property
+    def geometry(self) -> Geometry:
+        """The geometry flown (:mod:`ideas_hpc.flyby.geometry`): the paper's, or the
+        encounter's when ``encounter`` is set."""
+        return geometry_of(self.encounter)
+
+    @property
     def image_every(self) -> int:
         return int(round(self.image_dt_s / self.dt_s))
 
@@ -117,13 +121,7 @@ class FlybySetup:
 def endpoints(setup: FlybySetup, theta) -> tuple[np.ndarray, np.ndarray]:
     """Start and target positions (N, 3) in T for swarm angles ``theta`` (rad); on an
     encounter the start and the ring point at closest approach."""
-    th = np.asarray(theta, dtype=np.float64).ravel()
-    if setup.encounter is not None:
-        return endpoints_encounter(setup, th)
-    rise = 0.0
-    if setup.configuration == "helix":
-        rise = setup.helix_rise_m * (np.mod(th, TWO_PI) / TWO_PI)
-    return ring_states(setup.body, th, setup.d_sep_m, setup.z_start_m + rise, setup.z_stop_m + rise)
+    return setup.geometry.endpoints(setup, np.asarray(theta, dtype=np.float64).ravel())
 
 
 def target(setup: FlybySetup, theta, *, raise_on_failure: bool = True) -> TargetingResult:
@@ -135,12 +133,7 @@ def target(setup: FlybySetup, theta, *, raise_on_failure: bool = True) -> Target
     """
     th = np.asarray(theta, dtype=np.float64).ravel()
     try:
-        if setup.encounter is not None:
-            return target_encounter(setup, th, raise_on_failure=raise_on_failure)
-        r0, rt = endpoints(setup, th)
-        return target_swarm(setup.body, r0, rt, setup.t0_s, setup.tf_s,
-                            force_model=setup.force_model, dt_sample=setup.dt_s, tol=setup.tol_m,
-                            max_iter=setup.max_iter, raise_on_failure=raise_on_failure)
+        return setup.geometry.target(setup, th, raise_on_failure=raise_on_failure)
     except TargetingError as exc:
         raise targeting_input_error(exc, setup, th) from None
     except InputError as exc:

@@ -37,7 +37,7 @@ from ideas_hpc.core.mapping import quality as _qual
 from ideas_hpc.core.mapping import quality_masks as _qmask
 from ideas_hpc.core.mapping import stereo_pairs as _pairs
 from ideas_hpc.core.mapping.records import Bvh, Camera, Mesh, Quality, Strict
-from ideas_hpc.mapping.options import CoverageOptions, _finite
+from ideas_hpc.mapping.options import CoverageOptions, _finite, frustum_of
 from ideas_hpc.errors import InputError
 from ideas_hpc.engine.variables import QUALITY, VARS
 #: Tolerance on ``C C^T = I`` for camera DCMs.
@@ -222,7 +222,7 @@ check_geometry, mesh_record, camera_record, strict_records = (
     _check_geometry, _mesh, _camera, _strict_args)
 
 
-def compute_coverage(shape, r_T, dcm_BT, image_times, eta, near, far, *,
+def compute_coverage(shape, r_T, dcm_BT, image_times, *frustum,
                      options: CoverageOptions = CoverageOptions(), sun_T=None,
                      active=None, counts: bool = True) -> CoverageResult:
     """Coverage of a flyby: per-vertex observed, first-seen time and counts.
@@ -236,10 +236,10 @@ def compute_coverage(shape, r_T, dcm_BT, image_times, eta, near, far, *,
         Camera DCM (B <- T) per image, camera along +z_B.
     image_times : (n_img,) array
         s, non-decreasing.
-    eta : float
-        Half angle of the square field of view, rad, in (0, pi/2).
-    near, far : float
-        Clipping distances, m, ``0 < near < far``.
+    *frustum : Frustum, or eta, near, far
+        The camera's view (:class:`~ideas_hpc.mapping.options.Frustum`), or its
+        three numbers: the half angle of the square field of view, rad, in
+        (0, pi/2), and the clipping distances, m, ``0 < near < far``.
     options : CoverageOptions
     sun_T : (n_img, 3) or (3,) array, optional
         Direction body -> Sun in T (any length); needed for illumination.
@@ -253,6 +253,7 @@ def compute_coverage(shape, r_T, dcm_BT, image_times, eta, near, far, *,
     -------
     CoverageResult
     """
+    eta, near, far = frustum_of(frustum)
     r, c, tan_eta, near, far, act = _check_geometry(shape, r_T, dcm_BT, eta, near, far, active)
     t = np.asarray(image_times, dtype=np.float64)
     if t.shape != (r.shape[1],):

@@ -225,3 +225,24 @@ def coverage_options_from_config(table: dict, prefix: str = "coverage.") -> Cove
     given = table or {}
     return CoverageOptions(**{COVERAGE_SCHEMA[k].si_name(k): values[k]
                               for k in COVERAGE_SCHEMA if k in given})
+
+
+@dataclass(frozen=True)
+class Frustum:
+    """The camera's view: square field-of-view half angle ``eta_rad`` in (0, pi/2)
+    and the clipping distances ``near_m`` < ``far_m``."""
+
+    eta_rad: float
+    near_m: float
+    far_m: float
+
+
+def frustum_of(values, field: str = "frustum") -> tuple:
+    """``(eta_rad, near_m, far_m)`` of a :class:`Frustum` given alone, or of the three
+    numbers given in its place (the older positional call)."""
+    if len(values) == 1 and isinstance(values[0], Frustum):
+        f = values[0]
+        return f.eta_rad, f.near_m, f.far_m
+    if len(values) == 3:
+        return tuple(values)
+    raise InputError(f"give a Frustum or eta, near, far; got {len(values)} values", field=field)

@@ -24,6 +24,7 @@ from __future__ import annotations
 import functools
 import shutil
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -67,14 +68,29 @@ def read_rows(path) -> np.ndarray:
         return np.ascontiguousarray(ds["rows"].values)
 
 
-def build_into_store(path, *, make_chunk_fn, theta, areas, n_scenarios: int, chunk_size: int,
-                     config: dict, seed: int, attrs: dict, client=None,
-                     progress: bool = True) -> tuple[np.ndarray, dict]:
+@dataclass(frozen=True)
+class BankLayout:
+    """What shapes a bank store: ``n_scenarios`` rows in chunks of ``chunk_size``,
+    drawn from ``seed`` under ``config`` (its hash decides reuse)."""
+
+    n_scenarios: int
+    chunk_size: int
+    seed: int
+    config: dict
+
+
+def build_into_store(path, layout: BankLayout | None = None, *, make_chunk_fn, theta, areas,
+                     attrs: dict, client=None, progress: bool = True,
+                     **layout_keywords) -> tuple[np.ndarray, dict]:
     """Fill (or reuse, or resume) the bank store at ``path``; return its rows and a note.
 
     ``make_chunk_fn()`` (called only when something must be flown) returns
     ``chunk_fn(chunk_id, start, stop) -> {"rows": (stop - start, C, V) bool}``.
+    ``layout`` (:class:`BankLayout`), or its fields as keywords.
     """
+    layout = layout if layout is not None else BankLayout(**layout_keywords)
+    n_scenarios, chunk_size = layout.n_scenarios, layout.chunk_size
+    config, seed = layout.config, layout.seed
     path = Path(path)
     chash = config_hash(config)
     note = {"store": str(path)}

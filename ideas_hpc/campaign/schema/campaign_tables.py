@@ -147,6 +147,8 @@ SCHEMA = {
     "spacecraft": Field("any", None, nullable=True),
     "controller": Field("any", None, nullable=True),
     "coverage": Field("any", None, nullable=True),
+    # disturbance torque terms by name (ideas_hpc.attitude.torque_terms.TORQUE_TERMS)
+    "torques": Field("any", None, nullable=True),
     "design": DESIGN,
     "monte_carlo": MC_SCHEMA,
     "run": RUN,
@@ -280,11 +282,12 @@ def validate_campaign(source: CampaignSource) -> Campaign:
 def build_models(raw: dict, config: CampaignConfig) -> dict:
     """Build the sub-models whose schemas live with their modules.
 
-    The ``[dynamics]``, ``[spacecraft]``, ``[controller]`` and ``[coverage]``
-    tables are validated by the modules that own them, so a field is checked
+    The ``[dynamics]``, ``[spacecraft]``, ``[controller]``, ``[coverage]`` and
+    ``[torques]`` tables are validated by the modules that own them, so a field is checked
     in one place only. They are read in the file's units, as written.
     """
     from ideas_hpc.attitude import gains_from_config, spacecraft_from_config
+    from ideas_hpc.attitude.torque_terms import torques_from_config
     from ideas_hpc.mapping.options import coverage_options_from_config
     from ideas_hpc.dynamics.force_model import force_model_from_config
 
@@ -306,6 +309,9 @@ def build_models(raw: dict, config: CampaignConfig) -> dict:
         sc = spacecraft_from_config(_sub_table(raw, "spacecraft"), prefix="spacecraft.")
     with config_fields(GAINS_FIELDS):
         gains = gains_from_config(ctrl, prefix="controller.")
+    # checked here (errors name torques.<term>.<parameter>); the setup builds the
+    # terms from the file's table, which the resolved config already records
+    torques_from_config(_sub_table(raw, "torques"), prefix="torques.")
     return {"force_model": force_model_from_config(_sub_table(raw, "dynamics"), prefix="dynamics."),
             "spacecraft": sc, "gains": gains, "coverage": coverage}
 

@@ -39,6 +39,7 @@ from typing import Callable
 
 import numpy as np
 
+from ideas_hpc.design.ga.settings import FovGASettings, GASearch, NadirGASettings
 from ideas_hpc.errors import InputError
 from ideas_hpc.seeds import GA_SEEDING, search_rng, search_seed
 
@@ -168,10 +169,11 @@ def swarm_keys(genomes: np.ndarray, angle_step: float) -> list[bytes]:
     return [r.tobytes() for r in rows]
 
 
-def _run_pygad(*, num_genes, gene_type, gene_space, population, generations, seed,
-               batch_fitness, parents, elitism, mutation_probability, stall, progress,
+def _run_pygad(*, num_genes, gene_type, gene_space, search: GASearch, batch_fitness, progress,
                repair=None, start=None):
     import pygad
+
+    population, stall = search.population, search.stall_generations
 
     history_best: list[float] = []
     history_mean: list[float] = []
@@ -205,8 +207,8 @@ def _run_pygad(*, num_genes, gene_type, gene_space, population, generations, see
             ga.population[:] = start(np.asarray(ga.population, dtype=float))
 
     ga = pygad.GA(
-        num_generations=int(generations),
-        num_parents_mating=int(parents or max(2, population // 2)),
+        num_generations=int(search.generations),
+        num_parents_mating=int(search.parents or max(2, population // 2)),
         fitness_func=fitness_func,
         fitness_batch_size=int(population),
         sol_per_pop=int(population),
@@ -215,27 +217,23 @@ def _run_pygad(*, num_genes, gene_type, gene_space, population, generations, see
         gene_space=gene_space,
         parent_selection_type="tournament",
         K_tournament=3,
-        keep_elitism=int(elitism),
+        keep_elitism=int(search.elitism),
         crossover_type="uniform",
         mutation_type="random",
-        mutation_probability=float(mutation_probability),
+        mutation_probability=float(search.mutation_probability),
         mutation_by_replacement=True,
         on_generation=on_generation,
         on_start=on_start,
-        random_seed=search_seed(seed),
+        random_seed=search_seed(search.seed),
         suppress_warnings=True,
     )
     ga.run()
     return ga, np.asarray(history_best), np.asarray(history_mean)
 
 
-def run_nadir_ga(evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]], *,
-                 n_max: int, population: int, generations: int, seed: int,
-                 eps_tol: float, angle_step: float, target: float = 1.0,
-                 parents: int | None = None, elitism: int = 2,
-                 mutation_probability: float = 0.1, stall_generations: int = 0,
-                 min_separation: float = 0.0, progress=None, cover=None,
-                 seed_fraction: float = 0.2) -> GAResult:
+def run_nadir_ga(evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
+                 settings: NadirGASettings | None = None, *, progress=None, cover=None,
+                 **keywords) -> GAResult:
     """NP swarm-size design.
 
     Parameters
@@ -243,16 +241,17 @@ def run_nadir_ga(evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
     evaluate : callable
         ``evaluate(genomes (P, 1 + n_max)) -> (coverage (P,), n (P,))``, the
         batch evaluator (coverage as a fraction).
-    angle_step : float
-        Gene step of the angles, rad (0: continuous).
-    target : float
-        Coverage fraction to reach (1.0, or the reachable maximum).
-    eps_tol : float
-        Allowed shortfall, fraction (0.001 = 0.1 %).
-    min_separation : float
-        Smallest angle between two spacecraft, rad
-        (:func:`~ideas_hpc.flyby.swarm_geometry.min_separation_angle`); genomes are repaired by :func:`separate_angles` before they are
-        scored, and the repaired genome replaces the original (Lamarckian).
+    settings : NadirGASettings
+        The search (``angle_step_rad``: gene step of the angles, 0 continuous;
+        ``target``: coverage fraction to reach, 1.0 or the reachable maximum;
+        ``eps_tol``: allowed shortfall, fraction; ``min_separation_rad``: smallest
+        angle between two spacecraft, see
+        :func:`~ideas_hpc.flyby.swarm_geometry.min_separation_angle`). Genomes are
+        repaired by :func:`separate_angles` before they are scored, and the
+        repaired genome replaces the original (Lamarckian).
+    **keywords
+        The older keyword call (``n_max=..., population=..., angle_step=...,
+        min_separation=...``), used when ``settings`` is None.
     cover : ideas_hpc.design.ga.local_search.GridCover, optional
         The masks of every grid angle. With it, the initial population gets
         ``seed_fraction`` greedy swarms from random first angles and every
@@ -260,7 +259,12 @@ def run_nadir_ga(evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
         :mod:`ideas_hpc.design.ga.local_search` (completion, removal, 2-for-1 swaps);
         without it, by :func:`reduce_swarms`.
     """
-    _check_ga(population, generations)
+    if settings is None:
+        settings = NadirGASettings.from_keywords(**keywords)
+    s = settings
+    n_max, eps_tol, angle_step, target = s.n_max, s.eps_tol, s.angle_step_rad, s.target
+    min_separation, seed, seed_fraction = s.min_separation_rad, s.search.seed, s.seed_fraction
+    _check_ga(s.search.population, s.search.generations)
     if int(n_max) < 1:
         raise InputError(f"must be >= 1, got {n_max}", field="n_max")
     ang = {"low": 0.0, "high": TWO_PI}
@@ -308,10 +312,8 @@ def run_nadir_ga(evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
         return repair(cover.seed_population(genomes, seed_fraction, rng))
 
     ga, hb, hm = _run_pygad(num_genes=1 + int(n_max), gene_type=gene_type, gene_space=gene_space,
-                            population=population, generations=generations, seed=seed,
-                            batch_fitness=batch, parents=parents, elitism=elitism,
-                            mutation_probability=mutation_probability, stall=stall_generations,
-                            progress=progress, repair=repair, start=start)
+                            search=s.search, batch_fitness=batch, progress=progress,
+                            repair=repair, start=start)
     pop = separate_angles(np.asarray(ga.population, dtype=float), min_separation, angle_step)
     cov, n = evaluate(pop)
     fit = nadir_fitness(cov, n, n_max, target, eps_tol)
@@ -322,16 +324,20 @@ def run_nadir_ga(evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
                     evaluations=count["n"], target_coverage=float(target))
 
 
-def run_fov_ga(evaluate: Callable[[np.ndarray], np.ndarray], *, n_spacecraft: int,
-               p_min: float, p_max: float, period_step: float, population: int,
-               generations: int, seed: int, parents: int | None = None, elitism: int = 2,
-               mutation_probability: float = 0.1, stall_generations: int = 0,
-               progress=None) -> GAResult:
+def run_fov_ga(evaluate: Callable[[np.ndarray], np.ndarray],
+               settings: FovGASettings | None = None, *, progress=None,
+               **keywords) -> GAResult:
     """FoV sweep-period design: maximise coverage over periods ``P_i`` (s).
 
-    ``evaluate(genomes (P, N)) -> coverage (P,)`` as fractions.
+    ``evaluate(genomes (P, N)) -> coverage (P,)`` as fractions. ``settings``
+    (:class:`~ideas_hpc.design.ga.settings.FovGASettings`), or the older keyword
+    call (``n_spacecraft=..., p_min=..., p_max=..., period_step=..., population=...``).
     """
-    _check_ga(population, generations)
+    if settings is None:
+        settings = FovGASettings.from_keywords(**keywords)
+    n_spacecraft, p_min, p_max = settings.n_spacecraft, settings.p_min_s, settings.p_max_s
+    period_step = settings.period_step_s
+    _check_ga(settings.search.population, settings.search.generations)
     if not (p_min > 0 and p_max > p_min):
         raise InputError(f"P_min ({p_min / 60:g} min) must be below P_max ({p_max / 60:g} min)",
                          field="p_min")
@@ -345,11 +351,8 @@ def run_fov_ga(evaluate: Callable[[np.ndarray], np.ndarray], *, n_spacecraft: in
         return 100.0 * evaluate(genomes)
 
     ga, hb, hm = _run_pygad(num_genes=int(n_spacecraft), gene_type=float,
-                            gene_space=[space] * int(n_spacecraft), population=population,
-                            generations=generations, seed=seed, batch_fitness=batch,
-                            parents=parents, elitism=elitism,
-                            mutation_probability=mutation_probability, stall=stall_generations,
-                            progress=progress)
+                            gene_space=[space] * int(n_spacecraft), search=settings.search,
+                            batch_fitness=batch, progress=progress)
     pop = np.asarray(ga.population, dtype=float)
     cov = evaluate(pop)
     b = int(np.argmax(cov))

@@ -1,0 +1,74 @@
+"""Frozen settings of the bank designers (issue 30): each search's knobs in one
+object, fields named with their units.
+
+:class:`CoverSettings` is read by the certified designers of the candidate
+bank (plain, failure-tolerant, stereo), :class:`ReliableSettings` by the
+success-probability designer of the scenario bank. Coverages and tolerances
+are area fractions; separations in m; times in s.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+
+@dataclass(frozen=True)
+class CoverSettings:
+    """Fewest grid candidates that cover ``target - eps_tol``.
+
+    ``failures_tolerated`` k > 0 asks for a swarm that keeps it after any k
+    failures; ``time_limit_s`` None: no limit.
+    """
+
+    target: float
+    eps_tol: float
+    n_max: int | None = None
+    min_separation_m: float = 0.0
+    time_limit_s: float | None = None
+    failures_tolerated: int = 0
+
+
+@dataclass(frozen=True)
+class ReliableSettings:
+    """Fewest grid candidates with ``P_bank >= p``
+    (:func:`~ideas_hpc.design.reliability.min_swarm_reliable`).
+
+    ``need``: the coverage threshold (area fraction, ``target - eps_tol``);
+    ``sep_steps``: candidates within this many grid steps conflict;
+    ``enumerate_budget``: score every swarm of a size when there are at most
+    this many; ``ring_prebound``: bound ``U_m`` first by the per-scenario
+    ring-gap bounds; ``bound_solver`` / ``tolerance_solver``: stand-ins for
+    the programmes (tests).
+    """
+
+    p: float
+    p_f: float
+    need: float
+    n_max: int
+    sep_steps: int = 0
+    time_limit_s: float | None = None
+    enumerate_budget: int = 20000
+    ring_prebound: bool = True
+    bound_solver: Callable | None = None
+    tolerance_solver: Callable | None = None
+
+
+#: Most looks ``design.demonstrate`` plans when the file does not say.
+DEFAULT_LOOKS = 4
+
+
+@dataclass(frozen=True)
+class LookPlan:
+    """The looks of :func:`~ideas_hpc.design.certificate.certify`: requirement ``p``
+    and overall ``confidence``; ``n_max`` the largest swarm; ``n_samples`` (M)
+    validation samples per look; ``demonstrate`` steps N up while the bound
+    misses p, in at most ``max_looks`` looks; ``exact``: one exact scenario."""
+
+    p: float
+    confidence: float
+    n_max: int
+    n_samples: int
+    demonstrate: bool
+    max_looks: int = DEFAULT_LOOKS
+    exact: bool = False

@@ -1,0 +1,150 @@
+"""The flyby geometry as an object (issue 30): the paper's and a real encounter's
+are two implementations of one interface, chosen once
+(:attr:`ideas_hpc.flyby.flight.FlybySetup.geometry`).
+
+What differs between them, and only that, is here:
+
+* start states: where each spacecraft starts and the point it is targeted to
+  (:meth:`Geometry.endpoints`, :meth:`Geometry.target`);
+* ring frames: the frame the maneuvers' reference attitude runs in -- the
+  paper's rings turn with the body (spin ``w``, ``[T S] = I``), an
+  encounter's are fixed in N (spin 0, ``[N S]``) -- and how a DCM in that frame
+  becomes ``[B T]`` and ``[B N]`` (:meth:`Geometry.maneuver_frame`,
+  :meth:`Geometry.to_T`, :meth:`Geometry.to_N`);
+* the Sun and the approach in the store attrs (:meth:`Geometry.attrs`).
+
+Callers never ask which geometry they fly.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ideas_hpc.core.dynamics.encounter import dcm_BT_from_BN
+from ideas_hpc.dynamics.trajectory import (TargetingResult, TargetingSettings, ring_states,
+                                           target_swarm)
+from ideas_hpc.flyby.encounter import (Encounter, encounter_attrs, endpoints_encounter,
+                                       target_encounter)
+
+TWO_PI = 2.0 * math.pi
+
+
+class Geometry:
+    """The interface (module docstring). ``setup`` is the
+    :class:`~ideas_hpc.flyby.flight.FlybySetup` flown, ``theta`` the swarm angles (rad)."""
+
+    name = ""
+
+    def endpoints(self, setup, theta) -> tuple[np.ndarray, np.ndarray]:
+        """Start and target positions (N, 3), m, frame T."""
+        raise NotImplementedError
+
+    def target(self, setup, theta, raise_on_failure: bool = True) -> TargetingResult:
+        """The targeted trajectories sampled every ``setup.dt_s`` over the window."""
+        raise NotImplementedError
+
+    def maneuver_frame(self, setup, spin_rad_s: float):
+        """``(spin, dcm_TS)`` the maneuvers' reference runs with (``dcm_TS`` None: identity)."""
+        raise NotImplementedError
+
+    def to_T(self, setup, dcm) -> np.ndarray:
+        """``[B T]`` at the image times of a DCM in the maneuver frame."""
+        raise NotImplementedError
+
+    def to_N(self, setup, dcm, times_s) -> np.ndarray:
+        """``[B N]`` at ``times_s`` (after ``t0``) of a DCM in the maneuver frame."""
+        raise NotImplementedError
+
+    def attrs(self, setup) -> dict:
+        """Store attrs of the geometry (SI)."""
+        raise NotImplementedError
+
+    def camera(self, setup, spin_rad_s: float, ideal, simulate):
+        """``([B T], AttitudeResult or None)``: ``ideal(spin, dcm_TS)`` or
+        ``simulate(spin, dcm_TS)`` (by ``setup.attitude_mode``) in the maneuver frame,
+        turned into T."""
+        w, ts = self.maneuver_frame(setup, spin_rad_s)
+        if setup.attitude_mode == "ideal":
+            dcm, att = ideal(w, ts), None
+        else:
+            dcm, att = simulate(w, ts)
+        return self.to_T(setup, dcm), att
+
+
+@dataclass(frozen=True)
+class PaperGeometry(Geometry):
+    """The paper's geometry: every spacecraft at fixed ``x, y`` in the rotating
+    body frame (a ring, or a helix rising with the swarm angle), flying from
+    ``z_start_m`` to ``z_stop_m``."""
+
+    name = "paper"
+
+    def endpoints(self, setup, theta):
+        th = np.asarray(theta, dtype=np.float64).ravel()
+        rise = 0.0
+        if setup.configuration == "helix":
+            rise = setup.helix_rise_m * (np.mod(th, TWO_PI) / TWO_PI)
+        return ring_states(setup.body, th, setup.d_sep_m, setup.z_start_m + rise,
+                           setup.z_stop_m + rise)
+
+    def target(self, setup, theta, raise_on_failure=True):
+        r0, rt = self.endpoints(setup, theta)
+        return target_swarm(setup.body, r0, rt, setup.t0_s, setup.tf_s,
+                            force_model=setup.force_model,
+                            settings=TargetingSettings(dt_sample_s=setup.dt_s, tol_m=setup.tol_m,
+                                                       max_iter=setup.max_iter,
+                                                       raise_on_failure=raise_on_failure))
+
+    def maneuver_frame(self, setup, spin_rad_s):
+        return spin_rad_s, None
+
+    def to_T(self, setup, dcm):
+        return dcm
+
+    def to_N(self, setup, dcm, times_s):
+        ws = setup.body.params.spin_rate
+        return dcm_BT_from_BN(np.ascontiguousarray(dcm), -ws, np.ascontiguousarray(times_s), 0.0)
+
+    def attrs(self, setup):
+        return {"geometry": "paper"}
+
+
+@dataclass(frozen=True)
+class EncounterGeometry(Geometry):
+    """A ballistic encounter (:mod:`ideas_hpc.flyby.encounter`): straight tracks
+    through the ring at closest approach, ring frames fixed in N."""
+
+    encounter: Encounter
+    name = "encounter"
+
+    def endpoints(self, setup, theta):
+        return endpoints_encounter(setup, np.asarray(theta, dtype=np.float64).ravel())
+
+    def target(self, setup, theta, raise_on_failure=True):
+        return target_encounter(setup, np.asarray(theta, dtype=np.float64).ravel(),
+                                raise_on_failure=raise_on_failure)
+
+    def maneuver_frame(self, setup, spin_rad_s):
+        return 0.0, np.ascontiguousarray(self.encounter.dcm_NS)
+
+    def to_T(self, setup, dcm):
+        return dcm_BT_from_BN(np.ascontiguousarray(dcm), setup.body.params.spin_rate,
+                              np.ascontiguousarray(setup.image_times), self.encounter.t_ca_s)
+
+    def to_N(self, setup, dcm, times_s):
+        return dcm
+
+    def attrs(self, setup):
+        return encounter_attrs(setup)
+
+
+#: The paper's geometry (it has no parameters of its own).
+PAPER = PaperGeometry()
+
+
+def geometry_of(encounter: Encounter | None) -> Geometry:
+    """The geometry a setup flies: an encounter's, or the paper's when it has none."""
+    return PAPER if encounter is None else EncounterGeometry(encounter)
