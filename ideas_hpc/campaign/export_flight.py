@@ -165,7 +165,7 @@ def omega_BN_B(fl: ExportFlight) -> np.ndarray | None:
     if att is not None and getattr(att, "image_omega", None) is not None:
         return np.asarray(att.image_omega[0], dtype=np.float64)
     s = fl.setup
-    if att is not None or s.encounter is not None or s.maneuver.tracks_body:
+    if att is not None or not s.geometry.analytic_reference_rate or s.maneuver.tracks_body:
         return None
     from ideas_hpc.attitude import ideal_omega_BN_B
 

@@ -37,6 +37,10 @@ class Geometry:
     :class:`~ideas_hpc.flyby.flight.FlybySetup` flown, ``theta`` the swarm angles (rad)."""
 
     name = ""
+    #: whether the reference attitude on the ring is a function of time whose rate
+    #: :func:`ideas_hpc.attitude.ideal_omega_BN_B` gives (an encounter's ring frames are
+    #: fixed in N, its reference is not that function)
+    analytic_reference_rate = True
 
     def endpoints(self, setup, theta) -> tuple[np.ndarray, np.ndarray]:
         """Start and target positions (N, 3), m, frame T."""
@@ -119,6 +123,7 @@ class EncounterGeometry(Geometry):
 
     encounter: Encounter
     name = "encounter"
+    analytic_reference_rate = False
 
     def endpoints(self, setup, theta):
         return endpoints_encounter(setup, np.asarray(theta, dtype=np.float64).ravel())
