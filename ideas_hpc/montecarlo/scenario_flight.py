@@ -31,10 +31,12 @@ from ideas_hpc.attitude.maneuvers import maneuver_args
 from ideas_hpc.attitude.spacecraft import default_spacecraft, validate_spacecraft
 from ideas_hpc.attitude.start import absolute_start, reference_state0
 from ideas_hpc.attitude.torque_terms import pack_torques
-from ideas_hpc.core.attitude.camera_batch import fly_cameras_into
+from ideas_hpc.core.attitude.camera_batch import fly_cameras_into, spin_table
+from ideas_hpc.core.dynamics.propagate_positions import propagate_positions_into
 from ideas_hpc.core.attitude.records import ControlGains, Initial, Wheels
 from ideas_hpc.core.dynamics.frames import dcm_RT as _dcm_RT
-from ideas_hpc.dynamics.trajectory import propagate_swarm
+from ideas_hpc.dynamics.force_model import pack_force_model
+from ideas_hpc.dynamics.trajectory import MAX_STEPS, propagate_swarm, sample_times
 from ideas_hpc.errors import InputError
 from ideas_hpc.flyby.camera import misalignment_dcms
 
@@ -58,6 +60,8 @@ class FlightStatics:
     omega_RN0_R: np.ndarray    # (N, 3) rad/s
     use: np.ndarray            # (3,) exposure s, smear limit rad, settle rad
     r_max_m: float
+    cs_img: np.ndarray         # (n_img, 2) cos, sin(w_s t) at the images
+    t_img: np.ndarray          # (n_img,) s, the orbit's samples at the images
 
 
 def covers(setup, pert) -> bool:
@@ -84,6 +88,9 @@ def flight_statics(setup, theta) -> FlightStatics:
                                  .reshape(-1, 3, 3))
     s_r, w_r = reference_state0(man.code, rings, ws, p, tm, np.empty((th.size, 0, 9)))
     use = setup.imaging
+    cs = spin_table(ws, dt, int(n_steps), int(img_every))
+    t0, tf = float(setup.t0_s), float(setup.tf_s)
+    t_img = np.ascontiguousarray(sample_times(t0, tf, float(setup.dt_s))[::setup.image_every])
     return FlightStatics(
         code=int(man.code), rings=rings, spin=ws, periods=p, theta_max=tm,
         gains=ControlGains(k_p, k_i, eta, phi, float(g.int_limit)),
@@ -92,7 +99,7 @@ def flight_statics(setup, theta) -> FlightStatics:
         torques=pack_torques(tuple(setup.torques), th, n_steps, dt, ws),
         sigma_RN0=s_r, omega_RN0_R=w_r,
         use=np.array([use.exposure_s, use.smear_pixels * use.ifov_rad, use.settle_rad]),
-        r_max_m=float(setup.body.shape.r_max))
+        r_max_m=float(setup.body.shape.r_max), cs_img=cs, t_img=t_img)
 
 
 def fly_views(setup, statics: FlightStatics, r0_T, v0_T, pert, buffers: dict):
@@ -102,11 +109,8 @@ def fly_views(setup, statics: FlightStatics, r0_T, v0_T, pert, buffers: dict):
     p = pert
     r0 = r0_T if p.position_error_T is None else r0_T + p.position_error_T
     v0 = v0_T if p.velocity_error_T is None else v0_T + p.velocity_error_T
-    _, pos, _ = propagate_swarm(setup.body, r0, v0, setup.t0_s, setup.tf_s,
-                                force_model=setup.force_model, dt_sample=setup.dt_s,
-                                params_override=p.params_override, views=True)
-    r_img = np.ascontiguousarray(pos[:, ::setup.image_every])
     n = statics.rings.shape[0]
+    r_img = _positions(setup, statics, r0, v0, p.params_override, buffers)
     mis = (np.empty((0, 3, 3)) if p.misalignment_prv is None
            else np.ascontiguousarray(misalignment_dcms(p.misalignment_prv)))
     s0, w0, W0 = p.ics_reference
@@ -128,9 +132,29 @@ def fly_views(setup, statics: FlightStatics, r0_T, v0_T, pert, buffers: dict):
                      statics.n_steps, statics.img_every,
                      Initial(np.ascontiguousarray(s_abs[0]), np.ascontiguousarray(w_abs[0]),
                              np.ascontiguousarray(W0[0])),
-                     statics.torques, mis, statics.use, dcm, ok)
+                     statics.torques, mis, statics.use, dcm, ok, statics.cs_img)
     _blind_into(dcm, r_img, ok, statics.r_max_m)
     return r_img, dcm
+
+
+def _positions(setup, statics, r0, v0, params_override, buffers):
+    """Positions at the images (N, n_img, 3) m, as ``propagate_swarm(...)[1][:, ::image_every]``;
+    a failed integration flies ``propagate_swarm`` for its error."""
+    r0 = np.ascontiguousarray(r0, dtype=np.float64)
+    v0 = np.ascontiguousarray(v0, dtype=np.float64)
+    fm = setup.force_model
+    shape = (r0.shape[0], statics.t_img.size, 3)
+    if buffers.get("r") is None or buffers["r"].shape != shape:
+        buffers["r"] = np.empty(shape)
+    pk = pack_force_model(setup.body, fm, params_override)
+    status = propagate_positions_into(r0, v0, float(setup.t0_s), float(setup.tf_s), fm.rtol,
+                                      fm.atol, MAX_STEPS, statics.t_img, buffers["r"],
+                                      *pk.args())
+    if np.any(status != 0) or r0.shape != v0.shape or r0.ndim != 2 or r0.shape[1] != 3:
+        propagate_swarm(setup.body, r0, v0, setup.t0_s, setup.tf_s, force_model=fm,
+                        dt_sample=setup.dt_s, params_override=params_override, views=True)
+        raise RuntimeError("propagation failed")    # propagate_swarm raised already
+    return buffers["r"]
 
 
 def _blind_into(dcm_BT, r_img_T, usable, r_max_m) -> None:
