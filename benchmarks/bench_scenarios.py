@@ -27,8 +27,9 @@ sensitive to a shared machine's load).
 
 ``--scaling``: the bank's cost per scenario against the number of candidates
 (180 / 360 / 720 on eros001708) and of vertices (eros001708 / eros007790 /
-eros022540 at 180 candidates), with the power-law exponents fitted to each
-(needs the Eros models on IDEAS_HPC_DATA; a few minutes).
+eros022540 at 180 candidates; the models' 856 / 3897 / 11272 vertices), with the
+power-law exponents fitted to each (needs the Eros models on IDEAS_HPC_DATA; a few
+minutes).
 
 Usage: ``python benchmarks/bench_scenarios.py [--scenarios 3] [--ideal] [--step 0.5]
 [--scaling]``
@@ -134,8 +135,9 @@ def compare(sets, step_deg: float, n_scenarios: int) -> None:
           "flight (the bank before issue 31)")
 
 
-def _cost(body: str, step_deg: float, n_scenarios: int) -> tuple[int, int, float, float]:
-    """``(candidates, vertices, s/scenario, preparation s)`` of the bank's path."""
+def _cost(body: str, step_deg: float, n_scenarios: int) -> tuple:
+    """``(candidates, vertices, wall s/scenario, preparation s, cpu s/scenario)`` of the
+    bank's path."""
     c, setup, mc = _campaign([f'body.name="{body}"'])
     theta = grid_theta(np.deg2rad(step_deg))
     t0 = time.perf_counter()
@@ -145,7 +147,8 @@ def _cost(body: str, step_deg: float, n_scenarios: int) -> tuple[int, int, float
     ck = Clock()
     for s in range(1, n_scenarios + 1):
         ck(_bank_rows, eng, _pert(c, setup, mc, theta, s))
-    return theta.size, setup.body.shape.n_vertices, ck.wall / n_scenarios, t_prep
+    return theta.size, setup.body.shape.n_vertices, ck.wall / n_scenarios, t_prep, \
+        ck.cpu / n_scenarios
 
 
 def _exponent(x, y) -> float:
@@ -157,22 +160,23 @@ def scaling(n_scenarios: int) -> None:
     if not all(have_data_file(f"{b}.tab") for b in SCALING_BODIES):
         print("scaling: needs eros001708/007790/022540 on IDEAS_HPC_DATA: not measured")
         return
-    print(f"scaling (bank path, {n_scenarios} scenarios each, wall s):")
+    print(f"scaling (bank path, {n_scenarios} scenarios each; cpu: the process's CPU "
+          "seconds, what the fits use, as wall time on a shared machine is the load's):")
     rows = [_cost(SCALING_BODIES[0], st, n_scenarios) for st in SCALING_STEPS_DEG]
-    for k, v, t, p in rows:
-        print(f"  {SCALING_BODIES[0]} {k:4d} candidates: {t:7.3f} s/scenario "
-              f"(preparation {p:6.1f} s)")
-    e_c = _exponent([r[0] for r in rows], [r[2] for r in rows])
+    for k, v, t, p, cpu in rows:
+        print(f"  {SCALING_BODIES[0]} {k:4d} candidates: {cpu:7.3f} s/scenario cpu "
+              f"({t:6.3f} wall), preparation {p:6.1f} s wall")
+    e_c = _exponent([r[0] for r in rows], [r[4] for r in rows])
     e_cp = _exponent([r[0] for r in rows], [r[3] for r in rows])
     rows_v = [rows[0]] + [_cost(b, SCALING_STEPS_DEG[0], n_scenarios)
                           for b in SCALING_BODIES[1:]]
-    for b, (k, v, t, p) in zip(SCALING_BODIES, rows_v):
-        print(f"  {b} {v:6d} vertices, {k} candidates: {t:7.3f} s/scenario "
-              f"(preparation {p:6.1f} s)")
-    e_v = _exponent([r[1] for r in rows_v], [r[2] for r in rows_v])
+    for b, (k, v, t, p, cpu) in zip(SCALING_BODIES, rows_v):
+        print(f"  {b} {v:6d} vertices, {k} candidates: {cpu:7.3f} s/scenario cpu "
+              f"({t:6.3f} wall), preparation {p:6.1f} s wall")
+    e_v = _exponent([r[1] for r in rows_v], [r[4] for r in rows_v])
     e_vp = _exponent([r[1] for r in rows_v], [r[3] for r in rows_v])
-    print(f"  fitted: cost/scenario ~ candidates^{e_c:.2f} x vertices^{e_v:.2f}; "
-          f"preparation ~ candidates^{e_cp:.2f} x vertices^{e_vp:.2f}")
+    print(f"  fitted: cost/scenario ~ candidates^{e_c:.2f} x vertices^{e_v:.2f} (cpu); "
+          f"preparation ~ candidates^{e_cp:.2f} x vertices^{e_vp:.2f} (wall)")
 
 
 def main(argv=None) -> None:

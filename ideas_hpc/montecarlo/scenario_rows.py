@@ -13,6 +13,7 @@ requirement (quality masks) take the full recomputation.
 
 from __future__ import annotations
 
+import threading
 import uuid
 from dataclasses import dataclass, field
 
@@ -125,13 +126,15 @@ class RowEngine:
     def flight(self, pert: Perturbation, reuse: bool = False):
         """Positions and camera DCMs at the images of the perturbed flight.
 
-        ``reuse``: the DCMs may live in this process's buffer of the engine, valid
-        until its next ``flight(..., reuse=True)`` (the bank's chunks)."""
+        ``reuse``: the positions and DCMs may live in this thread's buffers of the
+        engine, valid until its next ``flight(..., reuse=True)`` (the bank's chunks)."""
         if self.one_pass and _flight.covers(self.setup, pert):
             got = self._cached()
             if "statics" not in got:
                 got["statics"] = _flight.flight_statics(self.setup, self.theta)
-            buffers = got.setdefault("buffers", {}) if reuse else {}
+            # one buffer per thread: a worker may run chunks of one engine in threads
+            buffers = (got.setdefault("buffers", {}).setdefault(threading.get_ident(), {})
+                       if reuse else {})
             return _flight.fly_views(self.setup, got["statics"], self.r0_T, self.v0_T, pert,
                                      buffers)
         ideal = self.nominal()[1] if self.fast else None
