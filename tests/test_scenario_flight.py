@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from ideas_hpc.campaign.schema.campaign_tables import load
+from ideas_hpc.attitude.torque_terms import ConstantTorque
 from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.flyby.camera import usable_mask
 from ideas_hpc.flyby.flight import Perturbation, open_loop_views
@@ -29,10 +30,15 @@ def _main(sets=()):
     return c, setup_from_campaign(c), c.config.monte_carlo
 
 
-@pytest.mark.parametrize("sets", [WIDE, WIDE + ["monte_carlo.sigma_misalignment_deg=0.0"]],
-                         ids=["misaligned", "aligned"])
-def test_one_pass_flight_is_the_pipeline_flight(sets):
+@pytest.mark.parametrize("sets,torque", [(WIDE, None),
+                                         (WIDE + ["monte_carlo.sigma_misalignment_deg=0.0"],
+                                          None),
+                                         (WIDE, (2e-6, -1e-6, 5e-7))],
+                         ids=["misaligned", "aligned", "disturbed"])
+def test_one_pass_flight_is_the_pipeline_flight(sets, torque):
     c, setup, mc = _main(sets)
+    if torque is not None:      # a disturbance torque the controller is not told
+        setup = setup.with_(torques=(ConstantTorque(torque),))
     theta = grid_theta(np.deg2rad(20.0))
     r0, v0 = nominal_start(setup, theta)
     statics = scenario_flight.flight_statics(setup, theta)
