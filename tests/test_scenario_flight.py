@@ -39,7 +39,7 @@ def test_one_pass_flight_is_the_pipeline_flight(sets, torque):
     c, setup, mc = _main(sets)
     if torque is not None:      # a disturbance torque the controller is not told
         setup = setup.with_(torques=(ConstantTorque(torque),))
-    theta = grid_theta(np.deg2rad(20.0))
+    theta = grid_theta(np.deg2rad(4.0))    # 90: a full block of 64 lanes and a partial one
     r0, v0 = nominal_start(setup, theta)
     statics = scenario_flight.flight_statics(setup, theta)
     buffers: dict = {}

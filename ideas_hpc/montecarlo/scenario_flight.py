@@ -11,7 +11,11 @@ blinded), the same bits, at a fraction of the cost:
 * the closed loop writes the misaligned camera DCMs and the usable flags at
   the images straight into a buffer kept across scenarios
   (:func:`ideas_hpc.core.attitude.camera_batch.fly_cameras_into`) instead of
-  three fresh ``N x n_img x 9`` arrays (attitude, misaligned, blinded);
+  three fresh ``N x n_img x 9`` arrays (attitude, misaligned, blinded); Nadir
+  Pointing without disturbance torques (the main job) flies 64 spacecraft side by
+  side in vectorised loops (:func:`~ideas_hpc.core.attitude.camera_batch.fly_cameras_lanes_into`);
+* the orbits write only the positions at the images
+  (:func:`ideas_hpc.core.dynamics.propagate_positions.propagate_positions_into`);
 * only the unusable images are then blinded, in place, by the formula of
   :func:`ideas_hpc.flyby.usable.blind` on the same gathered rows.
 
@@ -31,7 +35,9 @@ from ideas_hpc.attitude.maneuvers import maneuver_args
 from ideas_hpc.attitude.spacecraft import default_spacecraft, validate_spacecraft
 from ideas_hpc.attitude.start import absolute_start, reference_state0
 from ideas_hpc.attitude.torque_terms import pack_torques
-from ideas_hpc.core.attitude.camera_batch import fly_cameras_into, spin_table
+from ideas_hpc.core.attitude.camera_batch import (fly_cameras_into, fly_cameras_lanes_into,
+                                                   spin_table)
+from ideas_hpc.core.attitude.maneuvers import NP_MODE
 from ideas_hpc.core.dynamics.propagate_positions import propagate_positions_into
 from ideas_hpc.core.attitude.records import ControlGains, Initial, Wheels
 from ideas_hpc.core.dynamics.frames import dcm_RT as _dcm_RT
@@ -127,12 +133,17 @@ def fly_views(setup, statics: FlightStatics, r0_T, v0_T, pert, buffers: dict):
         buffers["dcm"] = np.empty(shape)
         buffers["usable"] = np.empty((n, n_img), dtype=np.bool_)
     dcm, ok = buffers["dcm"], buffers["usable"]
-    fly_cameras_into(statics.code, statics.rings, statics.spin, statics.periods,
-                     statics.theta_max, statics.gains, statics.wheels, statics.dt,
-                     statics.n_steps, statics.img_every,
-                     Initial(np.ascontiguousarray(s_abs[0]), np.ascontiguousarray(w_abs[0]),
-                             np.ascontiguousarray(W0[0])),
-                     statics.torques, mis, statics.use, dcm, ok, statics.cs_img)
+    initial = Initial(np.ascontiguousarray(s_abs[0]), np.ascontiguousarray(w_abs[0]),
+                      np.ascontiguousarray(W0[0]))
+    if statics.code == NP_MODE and statics.torques.shape[1] == 0:
+        fly_cameras_lanes_into(statics.rings, statics.spin, statics.gains, statics.wheels,
+                               statics.dt, statics.n_steps, statics.img_every, initial, mis,
+                               statics.use, dcm, ok, statics.cs_img)
+    else:
+        fly_cameras_into(statics.code, statics.rings, statics.spin, statics.periods,
+                         statics.theta_max, statics.gains, statics.wheels, statics.dt,
+                         statics.n_steps, statics.img_every, initial, statics.torques, mis,
+                         statics.use, dcm, ok, statics.cs_img)
     _blind_into(dcm, r_img, ok, statics.r_max_m)
     return r_img, dcm
 

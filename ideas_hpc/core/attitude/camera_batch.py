@@ -23,8 +23,8 @@ from numba import njit, prange
 from ideas_hpc.core.attitude.compose import dot3_fma
 from ideas_hpc.core.attitude.control import sliding_mode_into
 from ideas_hpc.core.attitude.maneuvers import reference_into
-from ideas_hpc.core.attitude.mrp import mrp_from_dcm
-from ideas_hpc.core.attitude.rigid_body import rk4_step_into
+from ideas_hpc.core.attitude.mrp import mrp_add_s, mrp_from_dcm, mrp_rotate_s, mrp_sub_s
+from ideas_hpc.core.attitude.rigid_body import _eom_s, rk4_step_into, wheel_limit_s
 
 
 @njit(cache=True, error_model="numpy")
@@ -44,13 +44,11 @@ def spin_table(spin_rate, dt, n_steps, img_every):
 
 
 @njit(cache=True, error_model="numpy")
-def _dcm_CT_into(x, c, s, dcm_CB, i, misaligned, out, n):
-    """``out[i, n] = [C B][B N][T N]^T`` with ``cos, sin(w_s t) = c, s`` (the formulas of
+def _dcm_CT_into(s1, s2, s3, c, s, dcm_CB, i, misaligned, out, n):
+    """``out[i, n] = [C B][B N][T N]^T`` with ``sigma_BN = (s1, s2, s3)`` and
+    ``cos, sin(w_s t) = c, s`` (the formulas of
     :func:`~ideas_hpc.core.attitude.batch._dcm_BT`, then
     :func:`~ideas_hpc.core.attitude.compose.compose_each`'s products)."""
-    s1 = x[0]
-    s2 = x[1]
-    s3 = x[2]
     ss = s1 * s1 + s2 * s2 + s3 * s3
     d = 1.0 / ((1.0 + ss) * (1.0 + ss))
     q = 1.0 - ss
@@ -161,8 +159,8 @@ def fly_cameras_into(mode, dcm_RT_all, spin_rate, periods, theta_max, gains, whe
             img = c_img == 0
             rate = 0.0
             if img:
-                _dcm_CT_into(x, cs_img[n_img_done, 0], cs_img[n_img_done, 1], dcm_CB, i,
-                             misaligned, out, n_img_done)
+                _dcm_CT_into(x[0], x[1], x[2], cs_img[n_img_done, 0], cs_img[n_img_done, 1],
+                             dcm_CB, i, misaligned, out, n_img_done)
                 rate = np.sqrt(x[3] * x[3] + x[4] * x[4] + x[5] * x[5])
             c_img += 1
             if c_img == img_every:
@@ -183,3 +181,195 @@ def fly_cameras_into(mode, dcm_RT_all, spin_rate, periods, theta_max, gains, whe
                     z[0] += err[0] * dt
                     z[1] += err[1] * dt
                     z[2] += err[2] * dt
+
+
+#: Spacecraft flown side by side in :func:`fly_cameras_lanes_into` (the compiler
+#: vectorises the loop over them: 64 measured 2.5x faster than one at a time; 8, 2.5
+#: times slower than 64).
+LANES = 64
+
+
+@njit(cache=True, parallel=True, error_model="numpy")
+def fly_cameras_lanes_into(dcm_RT_all, spin_rate, gains, wheels, dt, n_steps, img_every,
+                           initial, dcm_CB, use, out, usable, cs_img):
+    """:func:`fly_cameras_into` for Nadir Pointing without disturbance torques, flying
+    :data:`LANES` spacecraft side by side: every step is a loop over them, with the
+    reference, :func:`~ideas_hpc.core.attitude.control.sliding_mode_into` and
+    :func:`~ideas_hpc.core.attitude.rigid_body.rk4_step_into` written out on scalars
+    (their operations, in their order: the same bits), which the compiler vectorises.
+    Arguments as :func:`fly_cameras_into` (no mode, periods, amplitude or torque table).
+    """
+    sigma0, omega0, wheel0 = initial
+    k_p = gains.k_p
+    k_i = gains.k_i
+    eta = gains.eta
+    phi = gains.phi
+    int_limit = gains.int_limit
+    I_rw = wheels.I_rw_kgm2
+    J_s = wheels.J_s_kgm2
+    u_max = wheels.u_max_Nm
+    h_max = wheels.h_max_Nms
+    n = sigma0.shape[0]
+    misaligned = dcm_CB.shape[0] > 0
+    exposure = use[0]
+    smear_lim = use[1]
+    settle = use[2]
+    B = LANES
+    for blk in prange((n + B - 1) // B):
+        i0 = blk * B
+        m = min(B, n - i0)
+        X = np.zeros((9, B))        # [sigma_BN, omega_BN_B, wheel speeds] per lane
+        Z = np.zeros((3, B))        # the MRP error integral
+        U = np.zeros((3, B))        # held wheel torques
+        D = np.zeros((3, B))        # sigma_B/R at the step
+        SR = np.zeros((3, B))       # sigma_RT
+        OR = np.zeros((3, B))       # omega_RN_R
+        RATE = np.zeros(B)
+        for lane in range(m):
+            i = i0 + lane
+            s = mrp_from_dcm(np.ascontiguousarray(dcm_RT_all[i]))
+            for j in range(3):
+                SR[j, lane] = s[j]
+                OR[j, lane] = dcm_RT_all[i, j, 2] * spin_rate
+                X[j, lane] = sigma0[i, j]
+                X[3 + j, lane] = omega0[i, j]
+                X[6 + j, lane] = wheel0[i, j]
+            ss = X[0, lane] * X[0, lane] + X[1, lane] * X[1, lane] + X[2, lane] * X[2, lane]
+            if ss > 1.0:
+                for j in range(3):
+                    X[j, lane] = -X[j, lane] / ss
+        c_img = 0
+        n_img_done = 0
+        h = 0.5 * dt
+        kk = dt / 6.0
+        for k in range(n_steps + 1):
+            t = k * dt
+            img = c_img == 0
+            if img:
+                c = cs_img[n_img_done, 0]
+                sn = cs_img[n_img_done, 1]
+                for lane in range(m):
+                    _dcm_CT_into(X[0, lane], X[1, lane], X[2, lane], c, sn, dcm_CB, i0 + lane,
+                                 misaligned, out, n_img_done)
+                    RATE[lane] = np.sqrt(X[3, lane] * X[3, lane] + X[4, lane] * X[4, lane]
+                                         + X[5, lane] * X[5, lane])
+            c_img += 1
+            if c_img == img_every:
+                c_img = 0
+            # nadir_reference_into: sigma_TN = tan(w_s t / 4) z, alike for every lane
+            tz = np.tan(0.25 * spin_rate * t)
+            for lane in range(m):
+                rr1, rr2, rr3 = mrp_add_s(0.0, 0.0, tz, SR[0, lane], SR[1, lane], SR[2, lane])
+                s1 = X[0, lane]
+                s2 = X[1, lane]
+                s3 = X[2, lane]
+                w1 = X[3, lane]
+                w2 = X[4, lane]
+                w3 = X[5, lane]
+                # sliding_mode_into (NP: no reference acceleration, no known torque)
+                d1, d2, d3 = mrp_sub_s(s1, s2, s3, rr1, rr2, rr3)
+                r1, r2, r3 = mrp_rotate_s(d1, d2, d3, OR[0, lane], OR[1, lane], OR[2, lane])
+                e1 = w1 - r1
+                e2 = w2 - r2
+                e3 = w3 - r3
+                dd = d1 * d1 + d2 * d2 + d3 * d3
+                de = d1 * e1 + d2 * e2 + d3 * e3
+                q = 1.0 - dd
+                sd1 = 0.25 * (q * e1 + 2.0 * (d2 * e3 - d3 * e2) + 2.0 * de * d1)
+                sd2 = 0.25 * (q * e2 + 2.0 * (d3 * e1 - d1 * e3) + 2.0 * de * d2)
+                sd3 = 0.25 * (q * e3 + 2.0 * (d1 * e2 - d2 * e1) + 2.0 * de * d3)
+                sv1 = e1 + k_p[0] * d1 + k_i[0] * Z[0, lane]
+                sv2 = e2 + k_p[1] * d2 + k_i[1] * Z[1, lane]
+                sv3 = e3 + k_p[2] * d3 + k_i[2] * Z[2, lane]
+                p1 = min(1.0, max(-1.0, phi[0] * sv1))
+                p2 = min(1.0, max(-1.0, phi[1] * sv2))
+                p3 = min(1.0, max(-1.0, phi[2] * sv3))
+                dwd1 = -k_p[0] * sd1 - k_i[0] * d1 - eta[0] * p1
+                dwd2 = -k_p[1] * sd2 - k_i[1] * d2 - eta[1] * p2
+                dwd3 = -k_p[2] * sd3 - k_i[2] * d3 - eta[2] * p3
+                wd1 = dwd1 + 0.0 - (w2 * r3 - w3 * r2)
+                wd2 = dwd2 + 0.0 - (w3 * r1 - w1 * r3)
+                wd3 = dwd3 + 0.0 - (w1 * r2 - w2 * r1)
+                h1 = I_rw[0] * w1 + J_s[0] * (X[6, lane] + w1)
+                h2 = I_rw[1] * w2 + J_s[1] * (X[7, lane] + w2)
+                h3 = I_rw[2] * w3 + J_s[2] * (X[8, lane] + w3)
+                U[0, lane] = wheel_limit_s(-I_rw[0] * wd1 - (w2 * h3 - w3 * h2) + 0.0,
+                                           X[6, lane], J_s[0], u_max, h_max)
+                U[1, lane] = wheel_limit_s(-I_rw[1] * wd2 - (w3 * h1 - w1 * h3) + 0.0,
+                                           X[7, lane], J_s[1], u_max, h_max)
+                U[2, lane] = wheel_limit_s(-I_rw[2] * wd3 - (w1 * h2 - w2 * h1) + 0.0,
+                                           X[8, lane], J_s[2], u_max, h_max)
+                D[0, lane] = d1
+                D[1, lane] = d2
+                D[2, lane] = d3
+            if img:
+                for lane in range(m):
+                    angle = 4.0 * np.arctan(np.sqrt(D[0, lane] * D[0, lane]
+                                                    + D[1, lane] * D[1, lane]
+                                                    + D[2, lane] * D[2, lane]))
+                    usable[i0 + lane, n_img_done] = not ((RATE[lane] * exposure > smear_lim)
+                                                         | (angle > settle))
+                n_img_done += 1
+            if k < n_steps:
+                _rk4_lanes(X, U, D, Z, m, I_rw, J_s, dt, h, kk, int_limit)
+
+
+@njit(cache=True, error_model="numpy")
+def _rk4_lanes(X, U, D, Z, m, I_rw, J_s, dt, h, kk, int_limit):
+    """:func:`~ideas_hpc.core.attitude.rigid_body.rk4_step_into` (no external torque) and
+    the conditional integral update of every lane, in place."""
+    I1 = I_rw[0]
+    I2 = I_rw[1]
+    I3 = I_rw[2]
+    J1 = J_s[0]
+    J2 = J_s[1]
+    J3 = J_s[2]
+    iI = (1.0 / I1, 1.0 / I2, 1.0 / I3)
+    iJ = (1.0 / J1, 1.0 / J2, 1.0 / J3)
+    I_ = (I1, I2, I3)
+    J_ = (J1, J2, J3)
+    L_ = (0.0, 0.0, 0.0)
+    for lane in range(m):
+        x0 = X[0, lane]
+        x1 = X[1, lane]
+        x2 = X[2, lane]
+        x3 = X[3, lane]
+        x4 = X[4, lane]
+        x5 = X[5, lane]
+        x6 = X[6, lane]
+        x7 = X[7, lane]
+        x8 = X[8, lane]
+        u_ = (U[0, lane], U[1, lane], U[2, lane])
+        a0, a1, a2, a3, a4, a5, a6, a7, a8 = _eom_s(
+            (x0, x1, x2, x3, x4, x5, x6, x7, x8), u_, L_, iI, I_, J_, iJ)
+        b0, b1, b2, b3, b4, b5, b6, b7, b8 = _eom_s(
+            (x0 + h * a0, x1 + h * a1, x2 + h * a2, x3 + h * a3, x4 + h * a4, x5 + h * a5,
+             x6 + h * a6, x7 + h * a7, x8 + h * a8), u_, L_, iI, I_, J_, iJ)
+        c0, c1, c2, c3, c4, c5, c6, c7, c8 = _eom_s(
+            (x0 + h * b0, x1 + h * b1, x2 + h * b2, x3 + h * b3, x4 + h * b4, x5 + h * b5,
+             x6 + h * b6, x7 + h * b7, x8 + h * b8), u_, L_, iI, I_, J_, iJ)
+        e0, e1, e2, e3, e4, e5, e6, e7, e8 = _eom_s(
+            (x0 + dt * c0, x1 + dt * c1, x2 + dt * c2, x3 + dt * c3, x4 + dt * c4,
+             x5 + dt * c5, x6 + dt * c6, x7 + dt * c7, x8 + dt * c8), u_, L_, iI, I_, J_, iJ)
+        s0 = x0 + kk * (a0 + 2.0 * b0 + 2.0 * c0 + e0)
+        s1 = x1 + kk * (a1 + 2.0 * b1 + 2.0 * c1 + e1)
+        s2 = x2 + kk * (a2 + 2.0 * b2 + 2.0 * c2 + e2)
+        X[3, lane] = x3 + kk * (a3 + 2.0 * b3 + 2.0 * c3 + e3)
+        X[4, lane] = x4 + kk * (a4 + 2.0 * b4 + 2.0 * c4 + e4)
+        X[5, lane] = x5 + kk * (a5 + 2.0 * b5 + 2.0 * c5 + e5)
+        X[6, lane] = x6 + kk * (a6 + 2.0 * b6 + 2.0 * c6 + e6)
+        X[7, lane] = x7 + kk * (a7 + 2.0 * b7 + 2.0 * c7 + e7)
+        X[8, lane] = x8 + kk * (a8 + 2.0 * b8 + 2.0 * c8 + e8)
+        ss = s0 * s0 + s1 * s1 + s2 * s2
+        if ss > 1.0:
+            s0 = -s0 / ss
+            s1 = -s1 / ss
+            s2 = -s2 / ss
+        X[0, lane] = s0
+        X[1, lane] = s1
+        X[2, lane] = s2
+        dsq = D[0, lane] * D[0, lane] + D[1, lane] * D[1, lane] + D[2, lane] * D[2, lane]
+        if dsq < int_limit * int_limit:
+            Z[0, lane] += D[0, lane] * dt
+            Z[1, lane] += D[1, lane] * dt
+            Z[2, lane] += D[2, lane] * dt
