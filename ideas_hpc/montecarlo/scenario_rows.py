@@ -8,7 +8,9 @@ deviation *budget* could see it, and then turns any perturbed flight
 :func:`ideas_hpc.design.candidates.rows_from_views` on that flight. The budget only
 decides speed, never the rows; it is taken from a pilot scenario (the
 deviations of scenario 0, with head room). Rows with a ``[coverage]``
-requirement (quality masks) take the full recomputation.
+requirement (quality masks) take the full recomputation. A closed-loop
+scenario started on its reference is flown in one pass
+(:mod:`ideas_hpc.montecarlo.scenario_flight`: the pipeline's flight, same bits).
 """
 
 from __future__ import annotations
