@@ -74,7 +74,7 @@ def covers(setup, pert) -> bool:
     """Does the one-pass flight apply to ``setup`` flown with ``pert``?"""
     return (setup.attitude_mode == "simulated" and setup.encounter is None
             and not setup.maneuver.tracks_body and pert.ics_reference is not None
-            and not pert.acquisition_s and getattr(setup, "imaging", None) is not None)
+            and not pert.acquisition_s)
 
 
 def flight_statics(setup, theta) -> FlightStatics:
@@ -93,7 +93,10 @@ def flight_statics(setup, theta) -> FlightStatics:
     rings = np.ascontiguousarray(np.array([_dcm_RT(float(t), np.eye(3)) for t in th])
                                  .reshape(-1, 3, 3))
     s_r, w_r = reference_state0(man.code, rings, ws, p, tm, np.empty((th.size, 0, 9)))
-    use = setup.imaging
+    use = getattr(setup, "imaging", None)
+    # no usable-image test: every image counts (no rate or angle exceeds inf)
+    limits = (np.array([0.0, np.inf, np.inf]) if use is None else
+              np.array([use.exposure_s, use.smear_pixels * use.ifov_rad, use.settle_rad]))
     cs = spin_table(ws, dt, int(n_steps), int(img_every))
     t0, tf = float(setup.t0_s), float(setup.tf_s)
     t_img = np.ascontiguousarray(sample_times(t0, tf, float(setup.dt_s))[::setup.image_every])
@@ -104,7 +107,7 @@ def flight_statics(setup, theta) -> FlightStatics:
         dt=dt, n_steps=int(n_steps), img_every=int(img_every),
         torques=pack_torques(tuple(setup.torques), th, n_steps, dt, ws),
         sigma_RN0=s_r, omega_RN0_R=w_r,
-        use=np.array([use.exposure_s, use.smear_pixels * use.ifov_rad, use.settle_rad]),
+        use=limits,
         r_max_m=float(setup.body.shape.r_max), cs_img=cs, t_img=t_img)
 
 
