@@ -13,7 +13,7 @@ blinded), the same bits, at a fraction of the cost:
   (:func:`ideas_hpc.core.attitude.camera_batch.fly_cameras_into`) instead of
   three fresh ``N x n_img x 9`` arrays (attitude, misaligned, blinded); Nadir
   Pointing without disturbance torques (the main job) flies 64 spacecraft side by
-  side in vectorised loops (:func:`~ideas_hpc.core.attitude.camera_batch.fly_cameras_lanes_into`);
+  side, one loop over them per step, which the CPU overlaps (:func:`~ideas_hpc.core.attitude.camera_batch.fly_cameras_lanes_into`);
 * the orbits write only the positions at the images
   (:func:`ideas_hpc.core.dynamics.propagate_positions.propagate_positions_into`);
 * only the unusable images are then blinded, in place, by the formula of
