@@ -1,27 +1,38 @@
-"""Benchmark: scenario rows of the reliability designer's bank (issue 20).
+"""Benchmark: the main job's scenario bank, per scenario (issues 20, 31).
 
-Workload: the main job's grid (eros001708 when the data is on IDEAS_HPC_DATA,
-else the built-in ellipsoid), strict visibility (exact culling, occlusion, 5 deg
-elevation), 0.5 deg grid = 720 candidates, the ``[monte_carlo]`` dispersions of
-``campaigns/eros-design.toml`` (gravity, SRP, initial state, misalignment);
-the closed-loop attitude from dispersed initial attitudes, as the main job
-(``--ideal``: ideal attitude).
+Workload: the bank of ``campaigns/eros-design.toml`` (eros001708 when the data
+is on IDEAS_HPC_DATA, else the built-in ellipsoid): strict visibility (exact
+culling, occlusion, 5 deg elevation), 0.5 deg grid = 720 candidates, the
+``[monte_carlo]`` dispersions (gravity, SRP, initial state, misalignment) and
+the closed-loop attitude started on its reference with knowledge and control
+errors, only sharp and settled images counted (``--ideal``: ideal attitude).
 
-Baseline: full recomputation with the flyby pipeline, what the bank would do
-without the shortcuts: each scenario's perturbed flight (open-loop propagation
-of every candidate, camera attitude and misalignment) and every candidate's row
-from :func:`ideas_hpc.design.candidates.rows_from_views`
-(:func:`ideas_hpc.montecarlo.scenario_rows.full_rows`). Fast path: the same
-flight, rows by :class:`~ideas_hpc.montecarlo.scenario_rows.RowEngine`
-(witness proofs, budget windows with occlusion proofs,
-:mod:`ideas_hpc.core.mapping.scenario_proofs`). Both are timed on the same
-scenarios in the same run and their rows must be identical; the rows alone
-(the pipeline's rows of the same flight against the fast rows) are printed
-too, and so is the floor the flight sets (both paths fly it). The engine's
-one-time preparation is reported and amortised over 256 scenarios in the
-headline.
+Three paths on the same scenarios, in the same run, interleaved scenario by
+scenario so that the machine's load falls alike on each; their rows must be
+identical:
 
-Usage: ``python benchmarks/bench_scenarios.py [--scenarios 3] [--ideal] [--step 0.5]``
+* **full recomputation**: the flyby pipeline flies the scenario and every row
+  comes from :func:`ideas_hpc.design.candidates.rows_from_views`
+  (:func:`ideas_hpc.montecarlo.scenario_rows.full_rows`);
+* **fast rows (pipeline flight)**: the bank before issue 31: the pipeline's
+  flight, rows from the witness proofs
+  (:class:`~ideas_hpc.montecarlo.scenario_rows.RowEngine` with ``one_pass = False``);
+* **bank**: what the bank does now: the one-pass flight
+  (:mod:`ideas_hpc.montecarlo.scenario_flight`) into reused buffers, then the
+  same fast rows.
+
+The engine's one-time preparation (targeting, proofs) is reported and amortised
+over 256 scenarios. Times are wall-clock (``cpu``: the process's CPU time, less
+sensitive to a shared machine's load).
+
+``--scaling``: the bank's cost per scenario against the number of candidates
+(180 / 360 / 720 on eros001708) and of vertices (eros001708 / eros007790 /
+eros022540 at 180 candidates; the models' 856 / 3897 / 11272 vertices), with the
+power-law exponents fitted to each (needs the Eros models on IDEAS_HPC_DATA; a few
+minutes).
+
+Usage: ``python benchmarks/bench_scenarios.py [--scenarios 3] [--ideal] [--step 0.5]
+[--scaling]``
 """
 
 from __future__ import annotations
@@ -32,16 +43,140 @@ from pathlib import Path
 
 import numpy as np
 
-from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.body.datapath import have_data_file
-from ideas_hpc.flyby.flight import Perturbation
+from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.campaign.setup import setup_from_campaign
+from ideas_hpc.flyby.flight import Perturbation
 from ideas_hpc.montecarlo.scenario_rows import full_rows
 from ideas_hpc.montecarlo.scenarios import draw_world, grid_theta, row_engine
 from ideas_hpc.seeds import SCENARIO_STREAM
 
 ROOT = Path(__file__).resolve().parent.parent
 AMORTISE = 256
+SCALING_STEPS_DEG = (2.0, 1.0, 0.5)           # 180 / 360 / 720 candidates
+SCALING_BODIES = ("eros001708", "eros007790", "eros022540")
+
+
+class Clock:
+    """Wall and CPU seconds of one path, summed over scenarios."""
+
+    def __init__(self):
+        self.wall = 0.0
+        self.cpu = 0.0
+
+    def __call__(self, fn, *args):
+        w, c = time.perf_counter(), time.process_time()
+        out = fn(*args)
+        self.wall += time.perf_counter() - w
+        self.cpu += time.process_time() - c
+        return out
+
+
+def _campaign(sets):
+    c = load(ROOT / "campaigns" / "eros-design.toml", sets)
+    return c, setup_from_campaign(c), c.config.monte_carlo
+
+
+def _pert(c, setup, mc, theta, s):
+    return Perturbation(**draw_world(mc, setup, theta, c.config.seed, SCENARIO_STREAM, s))
+
+
+def _bank_rows(eng, pert):
+    eng.one_pass = True
+    return eng.rows(*eng.flight(pert, reuse=True))
+
+
+def _old_rows(eng, pert):
+    eng.one_pass = False
+    try:
+        return eng.rows(*eng.flight(pert))
+    finally:
+        eng.one_pass = True
+
+
+def compare(sets, step_deg: float, n_scenarios: int) -> None:
+    """The three paths on scenarios 1..n (module docstring); prints the table."""
+    c, setup, mc = _campaign(sets)
+    theta = grid_theta(np.deg2rad(step_deg))
+    t0 = time.perf_counter()
+    eng = row_engine(setup, theta, mc, c.config.seed, SCENARIO_STREAM)
+    t_prep = time.perf_counter() - t0
+    p0 = _pert(c, setup, mc, theta, 0)          # warm (compile) every path, untimed
+    _bank_rows(eng, p0)
+    _old_rows(eng, p0)
+    new, old, full = Clock(), Clock(), Clock()
+    for s in range(1, n_scenarios + 1):
+        pert = _pert(c, setup, mc, theta, s)
+        a = new(_bank_rows, eng, pert)
+        b = old(_old_rows, eng, pert)
+        f = full(full_rows, setup, theta, None, eng.r0_T, eng.v0_T, pert)
+        for name, other in (("full recomputation", f), ("the fast rows of the pipeline's "
+                                                        "flight", b)):
+            if not np.array_equal(a, other):
+                raise SystemExit(f"scenario {s}: the bank's rows differ from {name} in "
+                                 f"{int((a != other).sum())} places")
+    ns = n_scenarios
+    att = {"simulated": "closed-loop attitude"}.get(setup.attitude_mode, "ideal attitude")
+    print(f"{setup.body.shape.name}, strict, {theta.size} candidates, {att}, {ns} scenarios "
+          f"(ratios are from the same run)")
+    print(f"  one-time preparation (targeting, proofs: windows, witnesses): {t_prep:7.2f} s "
+          f"(budget {eng.budget[0]:.3g} Frobenius, {eng.budget[1]:.3g} m)")
+    amort = t_prep / AMORTISE
+    for name, ck in (("full recomputation", full), ("fast rows, pipeline flight", old),
+                     ("bank (one-pass flight, fast rows)", new)):
+        print(f"  {name:36s} {ck.wall / ns:7.3f} s/scenario wall ({ck.cpu / ns:6.3f} cpu)")
+    per_new = new.wall / ns + amort
+    per_old = old.wall / ns + amort
+    print(f"  identical rows on all {ns} scenarios; preparation / {AMORTISE} added to both "
+          f"fast paths: bank {per_new:.3f} s, before {per_old:.3f} s "
+          f"(cpu ratio {old.cpu / new.cpu:.2f}x)")
+    print(f"  against full recomputation: {full.wall / ns / per_new:.1f}x")
+    print(f"scenarios: {per_old / per_new:.1f}x faster than the fast rows of the pipeline's "
+          "flight (the bank before issue 31)")
+
+
+def _cost(body: str, step_deg: float, n_scenarios: int) -> tuple:
+    """``(candidates, vertices, wall s/scenario, preparation s, cpu s/scenario)`` of the
+    bank's path."""
+    c, setup, mc = _campaign([f'body.name="{body}"'])
+    theta = grid_theta(np.deg2rad(step_deg))
+    t0 = time.perf_counter()
+    eng = row_engine(setup, theta, mc, c.config.seed, SCENARIO_STREAM)
+    t_prep = time.perf_counter() - t0
+    _bank_rows(eng, _pert(c, setup, mc, theta, 0))
+    ck = Clock()
+    for s in range(1, n_scenarios + 1):
+        ck(_bank_rows, eng, _pert(c, setup, mc, theta, s))
+    return theta.size, setup.body.shape.n_vertices, ck.wall / n_scenarios, t_prep, \
+        ck.cpu / n_scenarios
+
+
+def _exponent(x, y) -> float:
+    return float(np.polyfit(np.log(np.asarray(x, float)), np.log(np.asarray(y, float)), 1)[0])
+
+
+def scaling(n_scenarios: int) -> None:
+    """Cost per scenario against candidates and vertices, with fitted exponents."""
+    if not all(have_data_file(f"{b}.tab") for b in SCALING_BODIES):
+        print("scaling: needs eros001708/007790/022540 on IDEAS_HPC_DATA: not measured")
+        return
+    print(f"scaling (bank path, {n_scenarios} scenarios each; cpu: the process's CPU "
+          "seconds, what the fits use, as wall time on a shared machine is the load's):")
+    rows = [_cost(SCALING_BODIES[0], st, n_scenarios) for st in SCALING_STEPS_DEG]
+    for k, v, t, p, cpu in rows:
+        print(f"  {SCALING_BODIES[0]} {k:4d} candidates: {cpu:7.3f} s/scenario cpu "
+              f"({t:6.3f} wall), preparation {p:6.1f} s wall")
+    e_c = _exponent([r[0] for r in rows], [r[4] for r in rows])
+    e_cp = _exponent([r[0] for r in rows], [r[3] for r in rows])
+    rows_v = [rows[0]] + [_cost(b, SCALING_STEPS_DEG[0], n_scenarios)
+                          for b in SCALING_BODIES[1:]]
+    for b, (k, v, t, p, cpu) in zip(SCALING_BODIES, rows_v):
+        print(f"  {b} {v:6d} vertices, {k} candidates: {cpu:7.3f} s/scenario cpu "
+              f"({t:6.3f} wall), preparation {p:6.1f} s wall")
+    e_v = _exponent([r[1] for r in rows_v], [r[4] for r in rows_v])
+    e_vp = _exponent([r[1] for r in rows_v], [r[3] for r in rows_v])
+    print(f"  fitted: cost/scenario ~ candidates^{e_c:.2f} x vertices^{e_v:.2f} (cpu); "
+          f"preparation ~ candidates^{e_cp:.2f} x vertices^{e_vp:.2f} (wall)")
 
 
 def main(argv=None) -> None:
@@ -50,60 +185,16 @@ def main(argv=None) -> None:
     ap.add_argument("--ideal", action="store_true",
                     help="fly ideal attitude (the campaign flies the closed loop)")
     ap.add_argument("--step", type=float, default=0.5, help="grid step, deg")
+    ap.add_argument("--scaling", action="store_true",
+                    help="also the cost against candidates and vertices (a few minutes)")
+    ap.add_argument("--scaling-scenarios", type=int, default=2)
     args = ap.parse_args(argv)
     sets = [] if have_data_file("eros001708.tab") else ['body.name="ellipsoid"']
     if args.ideal:
         sets.append('attitude.mode="ideal"')
-    c = load(ROOT / "campaigns" / "eros-design.toml", sets)
-    setup = setup_from_campaign(c)
-    mc = c.config.monte_carlo
-    theta = grid_theta(np.deg2rad(args.step))
-    t0 = time.perf_counter()
-    eng = row_engine(setup, theta, mc, c.config.seed, SCENARIO_STREAM)
-    t_prep = time.perf_counter() - t0
-    # warm: compile both paths on scenario 0 (not timed)
-    p0 = Perturbation(**draw_world(mc, setup, theta, c.config.seed, SCENARIO_STREAM, 0))
-    eng.rows(*eng.flight(p0))
-    t_flight = t_fast = t_rows = t_full = 0.0
-    n_rows = 0
-    for s in range(1, args.scenarios + 1):
-        pert = Perturbation(**draw_world(mc, setup, theta, c.config.seed, SCENARIO_STREAM, s))
-        t0 = time.perf_counter()
-        view = eng.flight(pert)
-        t1 = time.perf_counter()
-        fast = eng.rows(*view)
-        t2 = time.perf_counter()
-        full = full_rows(setup, theta, None, eng.r0_T, eng.v0_T, pert)
-        t3 = time.perf_counter()
-        rows = eng._full(*view)              # the pipeline's rows of the same flight
-        t4 = time.perf_counter()
-        for name, other in (("full recomputation", full), ("the pipeline's rows", rows)):
-            if not np.array_equal(fast, other):
-                raise SystemExit(f"scenario {s}: rows differ from {name} in "
-                                 f"{int((fast != other).sum())} places")
-        t_flight += t1 - t0
-        t_fast += t2 - t1
-        t_full += t3 - t2
-        t_rows += t4 - t3
-        n_rows += theta.size
-    ns = args.scenarios
-    att = {"simulated": "closed-loop attitude"}.get(setup.attitude_mode, "ideal attitude")
-    print(f"{setup.body.shape.name}, strict, {theta.size} candidates, {att}, {ns} scenarios "
-          f"(ratios are from the same run)")
-    print(f"  one-time preparation (targeting, proofs: windows, witnesses): {t_prep:7.2f} s "
-          f"(budget {eng.budget[0]:.3g} Frobenius, {eng.budget[1]:.3g} m)")
-    print(f"  full recomputation (flight + rows):  {t_full / ns:7.3f} s/scenario  "
-          f"{n_rows / t_full:9.0f} rows/s")
-    print(f"  perturbed flight (both paths):       {t_flight / ns:7.3f} s/scenario")
-    print(f"  the pipeline's rows of the flight:   {t_rows / ns:7.3f} s/scenario")
-    print(f"  fast rows of the flight:             {t_fast / ns:7.3f} s/scenario  "
-          f"({t_rows / t_fast:.1f}x the pipeline's rows alone)")
-    per = (t_flight + t_fast) / ns + t_prep / AMORTISE
-    print(f"  fast scenario (flight + rows + preparation / {AMORTISE}): {per:7.3f} s  "
-          f"{theta.size / per:9.0f} rows/s; identical rows")
-    print(f"  floor: the flight alone would be {t_full / t_flight:.1f}x")
-    print(f"scenarios: {t_full / ns / per:.1f}x faster than full recomputation with the "
-          "flyby pipeline")
+    if args.scaling:
+        scaling(args.scaling_scenarios)
+    compare(sets, args.step, args.scenarios)
 
 
 if __name__ == "__main__":

@@ -8,17 +8,21 @@ deviation *budget* could see it, and then turns any perturbed flight
 :func:`ideas_hpc.design.candidates.rows_from_views` on that flight. The budget only
 decides speed, never the rows; it is taken from a pilot scenario (the
 deviations of scenario 0, with head room). Rows with a ``[coverage]``
-requirement (quality masks) take the full recomputation.
+requirement (quality masks) take the full recomputation. A closed-loop
+scenario started on its reference is flown in one pass
+(:mod:`ideas_hpc.montecarlo.scenario_flight`: the pipeline's flight, same bits).
 """
 
 from __future__ import annotations
 
+import threading
 import uuid
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ideas_hpc.design.candidates import rows_from_views
+from ideas_hpc.montecarlo import scenario_flight as _flight
 from ideas_hpc.core.mapping import scenario_rows as _k
 from ideas_hpc.core.mapping.coverage import first_image_by_spacecraft
 from ideas_hpc.core.mapping.scenario_proofs import BC_ANY, windows, witness_proofs
@@ -50,6 +54,9 @@ class RowEngine:
     window: np.ndarray | None = None       # (K, V, 2) int32
     unseen_any: np.ndarray | None = None   # (K, V) int32
     budget: tuple = (0.0, 0.0)             # (Frobenius, m)
+    #: Fly a closed-loop scenario in one pass (:mod:`~ideas_hpc.montecarlo.scenario_flight`,
+    #: same bits); False flies the flyby pipeline (the benchmark's baseline).
+    one_pass: bool = True
 
     @property
     def fast(self) -> bool:
@@ -118,8 +125,20 @@ class RowEngine:
             .astype(np.int32)
         return self
 
-    def flight(self, pert: Perturbation):
-        """Positions and camera DCMs at the images of the perturbed flight."""
+    def flight(self, pert: Perturbation, reuse: bool = False):
+        """Positions and camera DCMs at the images of the perturbed flight.
+
+        ``reuse``: the positions and DCMs may live in this thread's buffers of the
+        engine, valid until its next ``flight(..., reuse=True)`` (the bank's chunks)."""
+        if self.one_pass and _flight.covers(self.setup, pert):
+            got = self._cached()
+            if "statics" not in got:
+                got["statics"] = _flight.flight_statics(self.setup, self.theta)
+            # one buffer per thread: a worker may run chunks of one engine in threads
+            buffers = (got.setdefault("buffers", {}).setdefault(threading.get_ident(), {})
+                       if reuse else {})
+            return _flight.fly_views(self.setup, got["statics"], self.r0_T, self.v0_T, pert,
+                                     buffers)
         ideal = self.nominal()[1] if self.fast else None
         r_img, dcm, _, _ = open_loop_views(rows_setup(self.setup), self.theta, None, self.r0_T,
                                            self.v0_T, pert, ideal_dcm_BT=ideal)

@@ -113,7 +113,7 @@ def _rows_chunk(ks, *, engine: RowEngine, mc, seed, stream):
     out = np.empty((len(ks), engine.theta.size, setup.body.shape.n_vertices), dtype=bool)
     for i, k in enumerate(ks):
         pert = Perturbation(**draw_world(mc, setup, engine.theta, seed, stream, int(k)))
-        out[i] = engine.rows(*engine.flight(pert))
+        out[i] = engine.rows(*engine.flight(pert, reuse=True))
     return out
 
 
