@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ideas_hpc.core.attitude.batch import simulate_batch
+from ideas_hpc.attitude.device import batch_kernel
 from ideas_hpc.core.attitude.records import ControlGains, Initial, StepTables, Wheels
 from ideas_hpc.core.dynamics.frames import dcm_RT as _dcm_RT
 from ideas_hpc.core.attitude.maneuvers import TRACK_MODE, reference_dcm_BT
@@ -163,7 +163,8 @@ def simulate_attitude(theta, spin_rate, t_f, *, mode="np", periods=None, theta_m
                       gains=None, spacecraft=None, dt=0.1, image_dt=0.2, sigma0=None,
                       omega0=None, wheel0=None, decimate=1, dcm_TS=None,
                       p_min=P_MIN_DEFAULT, seed=0, n_samples=1, ref_table=None,
-                      torques=(), start="absolute", acquisition_s=0.0) -> AttitudeResult:
+                      torques=(), start="absolute", acquisition_s=0.0,
+                      device="cpu") -> AttitudeResult:
     """Closed-loop attitude of ``S`` samples of an ``N``-spacecraft swarm (SPEC section 5).
 
     Parameters
@@ -216,6 +217,8 @@ def simulate_attitude(theta, spin_rate, t_f, *, mode="np", periods=None, theta_m
         frame and rate (Nadir Pointing for body tracking), then start the window
         from the attitude, rate and wheel errors reached (the controller's
         integral restarts at zero).
+    device : {'cpu', 'cuda'}
+        Where the closed loop runs (:mod:`ideas_hpc.attitude.device`); same outputs.
 
     Returns
     -------
@@ -259,6 +262,7 @@ def simulate_attitude(theta, spin_rate, t_f, *, mode="np", periods=None, theta_m
     wheels = Wheels(sc.inertia_rw, sc.J_s, float(sc.u_max_N_m), float(sc.h_max_N_m_s))
     if start not in ("absolute", "reference"):
         raise InputError(f"must be 'absolute' or 'reference', got {start!r}", field="start")
+    simulate_batch = batch_kernel(device)
     acq = float(acquisition_s)
     if not (math.isfinite(acq) and acq >= 0.0):
         raise InputError(f"must be finite and >= 0 s, got {acquisition_s!r}",

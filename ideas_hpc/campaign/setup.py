@@ -13,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 
 from ideas_hpc.attitude import campaign_maneuver
+from ideas_hpc.attitude.device import check_device
 from ideas_hpc.campaign.body_checks import check_body, check_grid_step, check_pointing
 from ideas_hpc.body.bodies import load_body
 from ideas_hpc.body.shape import load_shape_file
@@ -58,6 +59,10 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
             raise c.error(msg, "body.name" if f == "body" else f) from None
         raise c.source.locate(exc) from None
     check_body(c, body)
+    try:    # before anything is flown: cuda where there is none is one line, exit 2
+        device = check_device(cfg.run.device, "run.device")
+    except InputError as exc:
+        raise c.error(exc.message, "run.device") from None
     inst = cfg.instrument
     sizing = size_flyby(r_max=body.shape.r_max, r_min=body.shape.r_min,
                         ground_resolution=inst.ground_resolution_m,
@@ -99,7 +104,7 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
         force_model=ex["force_model"], spacecraft=ex["spacecraft"],
         gains=ex["gains"], coverage=ex["coverage"], p_min_s=cfg.design.p_min_s,
         epoch_s=epoch_s, encounter=enc, imaging=_imaging(cfg, eta),
-        attitude_start=cfg.monte_carlo.attitude_start)
+        attitude_start=cfg.monte_carlo.attitude_start, device=device)
 
 
 def _imaging(cfg, eta_rad: float) -> ImageUse | None:
