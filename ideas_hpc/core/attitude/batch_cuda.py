@@ -30,14 +30,18 @@ import numpy as np
 from numba import cuda, float64
 
 from ideas_hpc.core.attitude.batch import _dcm_BT
-from ideas_hpc.core.attitude.maneuvers import (NP_MODE, TRACK_MODE, fov_reference_into,
-                                               nadir_reference_into)
+from ideas_hpc.core.attitude.maneuvers import (FOV_MODE, NP_MODE, TRACK_MODE,
+                                               fov_reference_into, nadir_reference_into)
 from ideas_hpc.core.attitude.mrp import mrp_from_dcm, mrp_rotate_s, mrp_sub_s
 from ideas_hpc.core.attitude.rigid_body import rk4_step_into, wheel_limit_s
 
-#: Threads per block: one job each; the loop is long and register-bound, so small blocks
-#: spread few jobs (a 720-candidate scenario) over more multiprocessors.
-THREADS = 64
+#: Threads per block (one job each), for few and for many jobs: a scenario's 720 jobs
+#: in warp-sized blocks reach 23 multiprocessors instead of 12 (64 a block); many
+#: scenarios at once fill the device either way, and larger blocks then keep more
+#: warps resident per multiprocessor.
+THREADS_FEW, THREADS_MANY = 32, 128
+#: Jobs from which a batch counts as many.
+MANY_JOBS = 16384
 
 _nadir = cuda.jit(device=True)(nadir_reference_into.py_func)
 _fov = cuda.jit(device=True)(fov_reference_into.py_func)
@@ -243,6 +247,8 @@ def simulate_batch_cuda(mode, dcm_RT_all, spin_rate, periods, theta_max, gains, 
     ``sigma_error, omega_error, wheel_speed, wheel_torque, dcm_BT, max_torque,
     max_momentum, image_rate, image_error``); units as there.
     """
+    if int(mode) not in (NP_MODE, FOV_MODE, TRACK_MODE):     # as reference_into refuses it
+        raise ValueError("simulate_batch_cuda: no reference kernel for this maneuver mode code")
     sigma0, omega0, wheel0 = (np.ascontiguousarray(a, dtype=np.float64) for a in initial)
     n_s, n_sc = sigma0.shape[0], sigma0.shape[1]
     decimate, img_every = int(every[0]), int(every[1])
@@ -267,8 +273,9 @@ def simulate_batch_cuda(mode, dcm_RT_all, spin_rate, periods, theta_max, gains, 
     out += [cuda.device_array((n_s, n_sc)) for _ in range(2)]
     sig, om, wh, tq, dcm, i_rate, i_err, mu, mh = out
     n_jobs = n_s * n_sc
-    blocks = max(1, -(-n_jobs // THREADS))
-    _flights[blocks, THREADS](int(mode), dev(rings), dev(sigma_RT), float(spin_rate),
+    threads = THREADS_FEW if n_jobs < MANY_JOBS else THREADS_MANY
+    blocks = max(1, -(-n_jobs // threads))
+    _flights[blocks, threads](int(mode), dev(rings), dev(sigma_RT), float(spin_rate),
                               dev(np.ascontiguousarray(periods, dtype=np.float64)),
                               float(theta_max), g, w, float(dt), n_steps, decimate, img_every,
                               dev(sigma0), dev(omega0), dev(wheel0), dev(ref_table),
