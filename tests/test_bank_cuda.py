@@ -51,17 +51,20 @@ def _kernel_cases():
     rings = np.ascontiguousarray([dcm_RT(float(t), np.eye(3)) for t in (0.0, 2.0, 4.0)])
     draws = [initial_conditions(11, k, n) for k in range(n_s)]
     init = Initial(*(np.ascontiguousarray(np.stack([d[j] for d in draws])) for j in range(3)))
-    gains = ControlGains(np.full(3, 0.2), np.full(3, 0.002), np.full(3, 0.05),
-                         np.full(3, 20.0), 0.2)
+    # the conditional integral both ways: always on (inf, as SPEC writes it) and only near
+    # the goal (0.2, mostly off from these starts)
+    always = ControlGains(np.full(3, 0.2), np.full(3, 0.002), np.full(3, 0.05),
+                          np.full(3, 20.0), np.inf)
+    near = always._replace(int_limit=0.2)
     wheels = Wheels(np.array([10.0, 11.0, 12.0]), np.full(3, 0.01), 0.01, 0.05)
     rng = np.random.default_rng(4)
     torque = rng.normal(size=(n, n_steps + 1, 3)) * 1e-4
     track = np.concatenate([rng.uniform(-0.3, 0.3, (n, n_steps + 1, 3)),
                             rng.normal(size=(n, n_steps + 1, 6)) * 1e-3], axis=2)
     none9, none3 = np.empty((n, 0, 9)), np.empty((n, 0, 3))
-    for name, mode, tables in (("np", 0, StepTables(none9, none3)),
-                               ("fov-torque", 1, StepTables(none9, torque)),
-                               ("track", 2, StepTables(track, none3))):
+    for name, mode, gains, tables in (("np", 0, always, StepTables(none9, none3)),
+                                      ("fov-torque", 1, near, StepTables(none9, torque)),
+                                      ("track", 2, always, StepTables(track, none3))):
         yield name, (mode, rings, 3.3e-4, np.array([30.0, 40.0, 50.0]), 0.03, gains, wheels,
                      0.1, n_steps, (4, 2), init, tables), wheels.u_max_Nm
 
