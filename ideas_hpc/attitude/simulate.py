@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ideas_hpc.core.attitude.batch import simulate_batch
+from ideas_hpc.attitude.device import batch_kernel
 from ideas_hpc.core.attitude.records import ControlGains, Initial, StepTables, Wheels
 from ideas_hpc.core.dynamics.frames import dcm_RT as _dcm_RT
 from ideas_hpc.core.attitude.maneuvers import TRACK_MODE, reference, reference_dcm_BT
@@ -186,7 +186,8 @@ def ideal_omega_BN_B(theta, spin_rate, image_times, *, mode="np", periods=None,
 
 def simulate_attitude(theta, spin_rate, t_f=None, *, run: AttitudeRun | None = None,
                       pointing: Pointing | None = None, model: AttitudeModel | None = None,
-                      state0: InitialState | None = None, **keywords) -> AttitudeResult:
+                      state0: InitialState | None = None, device: str = "cpu",
+                      **keywords) -> AttitudeResult:
     """Closed-loop attitude of ``S`` samples of an ``N``-spacecraft swarm (SPEC section 5).
 
     The settings travel in four records (:mod:`ideas_hpc.attitude.run_settings`):
@@ -248,6 +249,8 @@ def simulate_attitude(theta, spin_rate, t_f=None, *, run: AttitudeRun | None = N
         frame and rate (Nadir Pointing for body tracking), then start the window
         from the attitude, rate and wheel errors reached (the controller's
         integral restarts at zero).
+    device : {'cpu', 'cuda'}
+        Where the closed loop runs (:mod:`ideas_hpc.attitude.device`); same outputs.
 
     Returns
     -------
@@ -298,6 +301,7 @@ def simulate_attitude(theta, spin_rate, t_f=None, *, run: AttitudeRun | None = N
     wheels = Wheels(sc.inertia_rw, sc.J_s, float(sc.u_max_N_m), float(sc.h_max_N_m_s))
     if start not in ("absolute", "reference"):
         raise InputError(f"must be 'absolute' or 'reference', got {start!r}", field="start")
+    simulate_batch = batch_kernel(device)
     acq = float(acquisition_s)
     if not (math.isfinite(acq) and acq >= 0.0):
         raise InputError(f"must be finite and >= 0 s, got {acquisition_s!r}",

@@ -7,7 +7,10 @@ from __future__ import annotations
 def _cmd_run(args) -> int:
     from ideas_hpc.campaign.run import run_file
 
-    run_file(args.campaign, out=args.out, overrides=args.set, workers=args.workers,
+    sets = list(args.set)
+    if args.device is not None:     # the same as --set run.device="..." (docs/gpu.md)
+        sets.append(f'run.device="{args.device}"')
+    run_file(args.campaign, out=args.out, overrides=sets, workers=args.workers,
              scheduler=args.scheduler, resume=args.resume, cluster=args.cluster,
              slurm_config=args.slurm_config, progress=not args.no_progress)
     return 0
@@ -92,6 +95,9 @@ def add_commands(sub) -> None:
     p.add_argument("--slurm-config", default=None,
                    help="dask-jobqueue config file for --cluster slurm (default: dask.config "
                         "jobqueue.slurm, i.e. the package's jobqueue.yaml under your dask config)")
+    p.add_argument("--device", choices=("cpu", "cuda"), default=None,
+                   help="where the closed-loop attitude flights run (default: the "
+                        "campaign's run.device, cpu); cuda needs numba.cuda.is_available()")
     p.add_argument("--resume", action="store_true",
                    help="continue an interrupted store (skips finished chunks)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")

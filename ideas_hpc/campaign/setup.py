@@ -14,6 +14,7 @@ import dataclasses
 
 from ideas_hpc.attitude import campaign_maneuver
 from ideas_hpc.attitude.torque_terms import torques_from_config
+from ideas_hpc.attitude.device import check_device
 from ideas_hpc.campaign.body_checks import check_body, check_grid_step, check_pointing
 from ideas_hpc.body.bodies import load_body
 from ideas_hpc.body.shape import load_shape_file
@@ -59,6 +60,10 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
             raise c.error(msg, "body.name" if f == "body" else f) from None
         raise c.source.locate(exc) from None
     check_body(c, body)
+    try:    # before anything is flown: cuda where there is none is one line, exit 2
+        device = check_device(cfg.run.device, "run.device")
+    except InputError as exc:
+        raise c.error(exc.message, "run.device") from None
     inst = cfg.instrument
     sizing = size_flyby(r_max=body.shape.r_max, r_min=body.shape.r_min,
                         ground_resolution=inst.ground_resolution_m,
@@ -101,7 +106,8 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
         gains=ex["gains"], coverage=ex["coverage"], p_min_s=cfg.design.p_min_s,
         epoch_s=epoch_s, encounter=enc, imaging=_imaging(cfg, eta),
         attitude_start=cfg.monte_carlo.attitude_start,
-        torques=torques_from_config(c.raw.get("torques"), prefix="torques."))
+        torques=torques_from_config(c.raw.get("torques"), prefix="torques."),
+        device=device)
 
 
 def _imaging(cfg, eta_rad: float) -> ImageUse | None:

@@ -73,7 +73,8 @@ def _simulate(setup, th, ws, duration, sigma0, omega0, wheel0, dcm_TS, kw):
     res = simulate_attitude(th, ws, duration, gains=setup.gains, spacecraft=setup.spacecraft,
                             dt=setup.dt_s, image_dt=setup.image_dt_s, sigma0=sigma0, omega0=omega0,
                             wheel0=wheel0, decimate=setup.decimate, dcm_TS=dcm_TS,
-                            torques=setup.torques, **kw)
+                            torques=setup.torques, device=getattr(setup, "device", "cpu"),
+                            **kw)
     return np.ascontiguousarray(res.dcm_BT[0]), res
 
 

@@ -89,6 +89,9 @@ class FlybySetup:
     # where a flight without explicit initial conditions starts its closed loop:
     # "paper" (random, seeded by ``seed`` and the sample), else on the reference (SPEC 7d)
     attitude_start: str = "paper"
+    #: where the closed-loop flights run, "cpu" or "cuda" (ideas_hpc.attitude.device): an
+    #: execution choice, left out of the bank's shaping hash
+    device: str = "cpu"
 
     @property
     def geometry(self) -> Geometry:

@@ -72,7 +72,9 @@ class FlightStatics:
 
 def covers(setup, pert) -> bool:
     """Does the one-pass flight apply to ``setup`` flown with ``pert``?"""
-    return (setup.attitude_mode == "simulated" and setup.encounter is None
+    # a flight asked for on another device goes through simulate_attitude's kernel
+    return (getattr(setup, "device", "cpu") == "cpu"
+            and setup.attitude_mode == "simulated" and setup.encounter is None
             and not setup.maneuver.tracks_body and pert.ics_reference is not None
             and not pert.acquisition_s)
 

@@ -152,7 +152,7 @@ def shaping_config(setup: FlybySetup, mc, step_rad: float, seed: int, n: int) ->
     mc_d = {f.name: getattr(mc, f.name) for f in dataclasses.fields(mc) if f.name not in skip}
     sh = setup.body.shape
     fs = {f.name: repr(getattr(setup, f.name)) for f in dataclasses.fields(setup)
-          if f.name not in ("body", "seed", "decimate")}
+          if f.name not in ("body", "seed", "decimate", "device")}
     import hashlib
     mesh = hashlib.sha256(np.ascontiguousarray(sh.vertices_T).tobytes()
                           + np.ascontiguousarray(sh.faces).tobytes()).hexdigest()

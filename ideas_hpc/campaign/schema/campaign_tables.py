@@ -132,6 +132,8 @@ ATTITUDE = {
 RUN = {
     "chunk_size": Field("int", 8, lo=1, doc="samples per dask task"),
     "workers": Field("int", None, nullable=True, lo=0),
+    "device": Field("str", "cpu", choices=("cpu", "cuda"),
+                    doc="where the closed-loop attitude flights run (docs/gpu.md)"),
 }
 
 SCHEMA = {
@@ -323,7 +325,7 @@ def load(path, overrides: list[str] | None = None) -> Campaign:
 
 # Settings that change how a run is executed but not its numbers: kept out of
 # the resolved config (and so out of its hash), so a resume may change them.
-EXECUTION_KNOBS = ("run.workers", "run.chunk_size", "design.chunk_size")
+EXECUTION_KNOBS = ("run.workers", "run.chunk_size", "design.chunk_size", "run.device")
 
 
 class ResolvedConfig(dict):

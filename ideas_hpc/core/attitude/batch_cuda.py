@@ -1,0 +1,287 @@
+"""The batched closed loop of :mod:`ideas_hpc.core.attitude.batch` as a ``numba.cuda`` kernel.
+
+One GPU thread flies one (sample, spacecraft) job over all steps, exactly the
+loop of :func:`~ideas_hpc.core.attitude.batch.simulate_batch` (same step order,
+same recorded quantities). The physics is not written twice: the kernel calls
+the pure ``@njit`` functions of this folder (maneuver references, RK4 step, camera
+DCM) through ``cuda.jit(device=True)`` wrappers of their Python source, and the
+scalar helpers (``mrp_*_s``, ``wheel_limit_s``, ``_eom_s``) are compiled for the
+device by Numba's CUDA target on first use. Two pieces are mirrored here: the
+maneuver dispatch (three lines, so that its array-taking branches are device
+functions the simulator can run too) and the sliding-mode law, whose float
+``min``/``max`` clip Numba's CUDA target does not compile (:func:`_control`).
+
+Importing this module imports ``numba.cuda``: only
+:mod:`ideas_hpc.attitude.device` does, and only when ``device = "cuda"``, so
+CPU runs never pay for it. Under ``NUMBA_ENABLE_CUDASIM=1`` the same kernel
+runs on Numba's CUDA simulator (the tests).
+
+Floating point: the simulator evaluates the same IEEE double operations as the
+CPU kernel; on a GPU, NVVM contracts multiply-adds into FMAs and libdevice's
+``tan``/``atan``/``sin``/``cos`` may differ from the host's libm in the last
+bit, so states agree to rounding, not bit for bit (docs/gpu.md).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import cuda, float64
+
+from ideas_hpc.core.attitude.batch import _dcm_BT
+from ideas_hpc.core.attitude.maneuvers import (FOV_MODE, NP_MODE, TRACK_MODE,
+                                               fov_reference_into, nadir_reference_into)
+from ideas_hpc.core.attitude.mrp import mrp_from_dcm, mrp_rotate_s, mrp_sub_s
+from ideas_hpc.core.attitude.rigid_body import rk4_step_into, wheel_limit_s
+
+#: Threads per block (one job each), for few and for many jobs: a scenario's 720 jobs
+#: in warp-sized blocks reach 23 multiprocessors instead of 12 (64 a block); many
+#: scenarios at once fill the device either way, and larger blocks then keep more
+#: warps resident per multiprocessor.
+THREADS_FEW, THREADS_MANY = 32, 128
+#: Jobs from which a batch counts as many.
+MANY_JOBS = 16384
+
+_nadir = cuda.jit(device=True)(nadir_reference_into.py_func)
+_fov = cuda.jit(device=True)(fov_reference_into.py_func)
+_rk4 = cuda.jit(device=True)(rk4_step_into.py_func)
+_camera = cuda.jit(device=True)(_dcm_BT.py_func)
+
+
+@cuda.jit(device=True)
+def _reference(mode, t, spin_rate, sigma_RT, dcm_RT, theta_max, period, ref):
+    """``core.attitude.maneuvers.reference_into`` for the modes a kernel flies (NP, FoV);
+    its array-taking branches as device functions, so the simulator can run them too."""
+    if mode == NP_MODE:
+        _nadir(t, spin_rate, sigma_RT, dcm_RT, ref)
+    else:
+        _fov(t, spin_rate, sigma_RT, dcm_RT, theta_max, period, ref)
+
+
+@cuda.jit(device=True)
+def _sat(v):
+    """``min(1, max(-1, v))``: Numba's CUDA target does not type the float builtins."""
+    if v > 1.0:
+        return 1.0
+    if v < -1.0:
+        return -1.0
+    return v
+
+
+@cuda.jit(device=True)
+def _control(x, z, ref, gains, wheels, L_known, u_out, err_out):
+    """``core.attitude.control.sliding_mode_into`` line for line (same operations in
+    the same order), with :func:`_sat` for the builtin clip; see that function for the
+    law and units. ``tests/test_bank_cuda.py`` checks the two agree bit for bit."""
+    k_p = gains.k_p
+    k_i = gains.k_i
+    eta = gains.eta
+    phi = gains.phi
+    I_rw = wheels.I_rw_kgm2
+    J_s = wheels.J_s_kgm2
+    u_max = wheels.u_max_Nm
+    h_max = wheels.h_max_Nms
+    s1 = x[0]
+    s2 = x[1]
+    s3 = x[2]
+    w1 = x[3]
+    w2 = x[4]
+    w3 = x[5]
+    d1, d2, d3 = mrp_sub_s(s1, s2, s3, ref[0], ref[1], ref[2])
+    r1, r2, r3 = mrp_rotate_s(d1, d2, d3, ref[3], ref[4], ref[5])
+    if ref[6] == 0.0 and ref[7] == 0.0 and ref[8] == 0.0:
+        a1 = 0.0
+        a2 = 0.0
+        a3 = 0.0
+    else:
+        a1, a2, a3 = mrp_rotate_s(d1, d2, d3, ref[6], ref[7], ref[8])
+    e1 = w1 - r1
+    e2 = w2 - r2
+    e3 = w3 - r3
+    dd = d1 * d1 + d2 * d2 + d3 * d3
+    de = d1 * e1 + d2 * e2 + d3 * e3
+    q = 1.0 - dd
+    sd1 = 0.25 * (q * e1 + 2.0 * (d2 * e3 - d3 * e2) + 2.0 * de * d1)
+    sd2 = 0.25 * (q * e2 + 2.0 * (d3 * e1 - d1 * e3) + 2.0 * de * d2)
+    sd3 = 0.25 * (q * e3 + 2.0 * (d1 * e2 - d2 * e1) + 2.0 * de * d3)
+    sv1 = e1 + k_p[0] * d1 + k_i[0] * z[0]
+    sv2 = e2 + k_p[1] * d2 + k_i[1] * z[1]
+    sv3 = e3 + k_p[2] * d3 + k_i[2] * z[2]
+    p1 = _sat(phi[0] * sv1)
+    p2 = _sat(phi[1] * sv2)
+    p3 = _sat(phi[2] * sv3)
+    dwd1 = -k_p[0] * sd1 - k_i[0] * d1 - eta[0] * p1
+    dwd2 = -k_p[1] * sd2 - k_i[1] * d2 - eta[1] * p2
+    dwd3 = -k_p[2] * sd3 - k_i[2] * d3 - eta[2] * p3
+    wd1 = dwd1 + a1 - (w2 * r3 - w3 * r2)
+    wd2 = dwd2 + a2 - (w3 * r1 - w1 * r3)
+    wd3 = dwd3 + a3 - (w1 * r2 - w2 * r1)
+    h1 = I_rw[0] * w1 + J_s[0] * (x[6] + w1)
+    h2 = I_rw[1] * w2 + J_s[1] * (x[7] + w2)
+    h3 = I_rw[2] * w3 + J_s[2] * (x[8] + w3)
+    u_out[0] = wheel_limit_s(-I_rw[0] * wd1 - (w2 * h3 - w3 * h2) + L_known[0],
+                             x[6], J_s[0], u_max, h_max)
+    u_out[1] = wheel_limit_s(-I_rw[1] * wd2 - (w3 * h1 - w1 * h3) + L_known[1],
+                             x[7], J_s[1], u_max, h_max)
+    u_out[2] = wheel_limit_s(-I_rw[2] * wd3 - (w1 * h2 - w2 * h1) + L_known[2],
+                             x[8], J_s[2], u_max, h_max)
+    err_out[0] = d1
+    err_out[1] = d2
+    err_out[2] = d3
+    err_out[3] = e1
+    err_out[4] = e2
+    err_out[5] = e3
+
+
+@cuda.jit
+def _flights(mode, dcm_RT_all, sigma_RT_all, spin_rate, periods, theta_max, gains, wheels,
+             dt, n_steps, decimate, img_every, sigma0, omega0, wheel0, ref_table,
+             torque_table, disturbed, sig_err, om_err, wheel, torque, dcm_BT, img_omega,
+             img_err, max_u, max_h):
+    """One thread per job ``smp * N + i``: the body of ``simulate_batch``'s ``prange``."""
+    n_sc = sigma0.shape[1]
+    job = cuda.grid(1)
+    if job >= sigma0.shape[0] * n_sc:
+        return
+    smp = job // n_sc
+    i = job % n_sc
+    int_limit = gains.int_limit
+    I_rw = wheels.I_rw_kgm2
+    J_s = wheels.J_s_kgm2
+    x = cuda.local.array(9, float64)
+    z = cuda.local.array(3, float64)
+    ref = cuda.local.array(9, float64)
+    u = cuda.local.array(3, float64)
+    err = cuda.local.array(6, float64)
+    work = cuda.local.array((5, 9), float64)
+    L_ext = cuda.local.array(3, float64)
+    L_known = cuda.local.array(3, float64)
+    for j in range(3):
+        z[j] = 0.0
+        L_ext[j] = 0.0
+        L_known[j] = 0.0
+    sigma_RT = sigma_RT_all[i]
+    dcm_RT = dcm_RT_all[i]
+    period = periods[i]
+    for j in range(3):
+        x[j] = sigma0[smp, i, j]
+        x[3 + j] = omega0[smp, i, j]
+        x[6 + j] = wheel0[smp, i, j]
+    ss = x[0] * x[0] + x[1] * x[1] + x[2] * x[2]
+    if ss > 1.0:
+        for j in range(3):
+            x[j] = -x[j] / ss
+    mu = 0.0
+    mh = 0.0
+    c_img = 0
+    n_img_done = 0
+    c_rec = 0
+    r = 0
+    for k in range(n_steps + 1):
+        t = k * dt
+        img = c_img == 0
+        if img:
+            _camera(x, spin_rate, t, dcm_BT, smp, i, n_img_done)
+            for j in range(3):
+                img_omega[smp, i, n_img_done, j] = x[3 + j]
+        c_img += 1
+        if c_img == img_every:
+            c_img = 0
+        for j in range(3):
+            h = abs(J_s[j] * x[6 + j])
+            if h > mh:
+                mh = h
+        rec = c_rec == 0
+        if rec:
+            for j in range(3):
+                wheel[smp, i, r, j] = x[6 + j]
+        if mode == TRACK_MODE:
+            for j in range(9):
+                ref[j] = ref_table[i, k, j]
+        else:
+            _reference(mode, t, spin_rate, sigma_RT, dcm_RT, theta_max, period, ref)
+        if disturbed:
+            for j in range(3):
+                L_ext[j] = torque_table[i, k, j]
+        _control(x, z, ref, gains, wheels, L_known, u, err)
+        if img:
+            img_err[smp, i, n_img_done] = 4.0 * math.atan(
+                math.sqrt(err[0] * err[0] + err[1] * err[1] + err[2] * err[2]))
+            n_img_done += 1
+        if k < n_steps:
+            _rk4(x, u, L_ext, I_rw, J_s, dt, work, x)
+            if err[0] * err[0] + err[1] * err[1] + err[2] * err[2] < int_limit * int_limit:
+                z[0] += err[0] * dt
+                z[1] += err[1] * dt
+                z[2] += err[2] * dt
+        for j in range(3):
+            a = abs(u[j])
+            if a > mu:
+                mu = a
+        if rec:
+            for j in range(3):
+                sig_err[smp, i, r, j] = err[j]
+                om_err[smp, i, r, j] = err[3 + j]
+                torque[smp, i, r, j] = u[j]
+            r += 1
+        c_rec += 1
+        if c_rec == decimate:
+            c_rec = 0
+    max_u[smp, i] = mu
+    max_h[smp, i] = mh
+
+
+def _table(table: np.ndarray, width: int) -> tuple[np.ndarray, bool]:
+    """A step table for the device, and whether it has steps: an empty one ``(N, 0, w)``
+    becomes one zero step (never read), as zero-size device arrays are best avoided."""
+    if table.shape[1] > 0:
+        return np.ascontiguousarray(table, dtype=np.float64), True
+    return np.zeros((table.shape[0], 1, width)), False
+
+
+def simulate_batch_cuda(mode, dcm_RT_all, spin_rate, periods, theta_max, gains, wheels,
+                        dt, n_steps, every, initial, tables):
+    """:func:`~ideas_hpc.core.attitude.batch.simulate_batch` on the current CUDA device.
+
+    Same parameters and returns (host ``numpy`` arrays, same shapes and order:
+    ``sigma_error, omega_error, wheel_speed, wheel_torque, dcm_BT, max_torque,
+    max_momentum, image_omega, image_error``); units as there.
+    """
+    if int(mode) not in (NP_MODE, FOV_MODE, TRACK_MODE):     # as reference_into refuses it
+        raise ValueError("simulate_batch_cuda: no reference kernel for this maneuver mode code")
+    sigma0, omega0, wheel0 = (np.ascontiguousarray(a, dtype=np.float64) for a in initial)
+    n_s, n_sc = sigma0.shape[0], sigma0.shape[1]
+    decimate, img_every = int(every[0]), int(every[1])
+    n_steps = int(n_steps)
+    n_rec = n_steps // decimate + 1
+    n_img = n_steps // img_every + 1
+    rings = np.ascontiguousarray(dcm_RT_all, dtype=np.float64)
+    sigma_RT = np.empty((n_sc, 3))
+    for i in range(n_sc):
+        sigma_RT[i] = mrp_from_dcm(np.ascontiguousarray(rings[i]))
+    ref_table, _ = _table(tables.reference, 9)
+    torque_table, disturbed = _table(tables.torque_B_N_m, 3)
+    dev = cuda.to_device
+    g = type(gains)(*(dev(np.ascontiguousarray(a, dtype=np.float64)) for a in gains[:4]),
+                    float(gains.int_limit))
+    w = type(wheels)(dev(np.ascontiguousarray(wheels.I_rw_kgm2, dtype=np.float64)),
+                     dev(np.ascontiguousarray(wheels.J_s_kgm2, dtype=np.float64)),
+                     float(wheels.u_max_Nm), float(wheels.h_max_Nms))
+    out = [cuda.device_array((n_s, n_sc, n_rec, 3)) for _ in range(4)]
+    out.append(cuda.device_array((n_s, n_sc, n_img, 3, 3)))
+    out.append(cuda.device_array((n_s, n_sc, n_img, 3)))
+    out.append(cuda.device_array((n_s, n_sc, n_img)))
+    out += [cuda.device_array((n_s, n_sc)) for _ in range(2)]
+    sig, om, wh, tq, dcm, i_omega, i_err, mu, mh = out
+    n_jobs = n_s * n_sc
+    threads = THREADS_FEW if n_jobs < MANY_JOBS else THREADS_MANY
+    blocks = max(1, -(-n_jobs // threads))
+    _flights[blocks, threads](int(mode), dev(rings), dev(sigma_RT), float(spin_rate),
+                              dev(np.ascontiguousarray(periods, dtype=np.float64)),
+                              float(theta_max), g, w, float(dt), n_steps, decimate, img_every,
+                              dev(sigma0), dev(omega0), dev(wheel0), dev(ref_table),
+                              dev(torque_table), disturbed, sig, om, wh, tq, dcm, i_omega,
+                              i_err, mu, mh)
+    cuda.synchronize()
+    return tuple(a.copy_to_host() for a in (sig, om, wh, tq, dcm, mu, mh, i_omega, i_err))
