@@ -47,8 +47,11 @@ from ideas_hpc.core.design.ring_screen import relaxed_probabilities, screen_swar
 
 #: Most (n - 1)-swarms the screen lists before it gives up the proof.
 SCREEN_CAP = 4000
+#: Most members the screen's search tries (about a second or two per 10^6 on 256
+#: scenarios): it keeps the screen within a design's time limit on large swarms.
+SCREEN_NODES = 2_000_000
 #: Most extensions X scored by the relaxation in proof mode (candidates x members).
-EXTEND_CAP = 400_000
+EXTEND_CAP = 200_000
 #: (n - 1)-swarms extended in search-only mode (the screen found too many).
 SEARCH_POOL = 48
 #: Most X evaluated exactly per size.
@@ -152,10 +155,12 @@ def screen_size(mt, slack, ev, n: int, p: float, p_f: float, u_bar: list, m: int
         return ScreenOutcome(n=n, proven_short=True, swarm=None, probability=0.0,
                              upper=base + one * n, screened=0, checked=0)
     sl = np.asarray(slack, dtype=np.float64) + SLACK_TOL
-    found, counts = screen_swarms(mt, sl, n - 1, int(m), thr, SCREEN_CAP)
-    complete = found.shape[0] <= SCREEN_CAP and found.shape[0] * k_n <= EXTEND_CAP
+    found, counts, listed = screen_swarms(mt, sl, n - 1, int(m), thr, SCREEN_CAP, SCREEN_NODES)
+    complete = listed and found.shape[0] * k_n <= EXTEND_CAP
     if complete:
         pool = found
+    elif found.shape[0] == 0:
+        return none
     else:           # the (n - 1)-swarms of most scenarios, spread over the list
         top = np.flatnonzero(counts == counts.max())
         pool = found[top[np.linspace(0, top.size - 1, min(SEARCH_POOL, top.size)).astype(int)]]

@@ -37,7 +37,7 @@ def _gap_miss(Mt, i, d, s):
 
 
 @njit(cache=True)
-def screen_swarms(Mt, slack, n, m, thr, cap):
+def screen_swarms(Mt, slack, n, m, thr, cap, max_nodes):
     """Every n-swarm whose relaxed cover count is at least ``thr`` (module docstring).
 
     Parameters
@@ -55,6 +55,8 @@ def screen_swarms(Mt, slack, n, m, thr, cap):
     cap : int
         Most swarms returned; the search stops after ``cap + 1`` (the caller
         treats that as too many).
+    max_nodes : int
+        Most members tried in all (a bound on the time); past it the search stops.
 
     Returns
     -------
@@ -62,6 +64,8 @@ def screen_swarms(Mt, slack, n, m, thr, cap):
         Sorted grid indices, ``F <= cap + 1``.
     counts : (F,) int64
         Relaxed cover counts.
+    complete : bool
+        The list holds every such swarm (neither ``cap`` nor ``max_nodes`` was hit).
     """
     k, dn, s_n = Mt.shape
     out = np.empty((cap + 1, n), dtype=np.int64)
@@ -72,6 +76,7 @@ def screen_swarms(Mt, slack, n, m, thr, cap):
     n_alive = np.zeros(n + 1, dtype=np.int64)
     acc = np.empty((n + 1, s_n), dtype=np.float64)      # partial miss of those scenarios
     nxt = np.empty(n + 1, dtype=np.int64)               # next candidate per level
+    nodes = 0
     for x0 in range(k):
         sw[0] = x0
         for j in range(s_n):
@@ -96,6 +101,9 @@ def screen_swarms(Mt, slack, n, m, thr, cap):
                 continue
             sw[lvl] = c
             nxt[lvl] = c
+            nodes += 1
+            if nodes > max_nodes:
+                return out[:found], cnt[:found], False
             d = c - prev
             na = 0
             last = lvl == n - 1
@@ -119,13 +127,13 @@ def screen_swarms(Mt, slack, n, m, thr, cap):
                 cnt[found] = na
                 found += 1
                 if found > cap:
-                    return out[:found], cnt[:found]
+                    return out[:found], cnt[:found], False
                 nxt[lvl] += 1
                 continue
             n_alive[lvl + 1] = na
             lvl += 1
             nxt[lvl] = c + m + 1
-    return out[:found], cnt[:found]
+    return out[:found], cnt[:found], True
 
 
 @njit(cache=True)
