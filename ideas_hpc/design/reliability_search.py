@@ -1,17 +1,14 @@
 """Local search of the success-probability designer (issue 20): moves and extensions of
-swarms on the exact ``P_bank`` (:class:`ideas_hpc.design.reliability.Evaluator`, passed
-in), and the exhaustive list of separated swarms of a size."""
+swarms on the exact ``P_bank`` (``ev``: an :class:`ideas_hpc.design.reliability.Evaluator`,
+passed in, so this module imports nothing of the designer's), and the exhaustive list of
+separated swarms of a size."""
 
 from __future__ import annotations
 
 import itertools
 import time
-from typing import TYPE_CHECKING
 
 import numpy as np
-
-if TYPE_CHECKING:
-    from ideas_hpc.design.reliability import Evaluator
 
 
 def _dist_ok(c_n: int, rest: np.ndarray, m: int) -> np.ndarray:
@@ -23,7 +20,7 @@ def _dist_ok(c_n: int, rest: np.ndarray, m: int) -> np.ndarray:
     return (np.minimum(d, c_n - d) > m).all(axis=1)
 
 
-def improve(ev: Evaluator, start, m: int, *, radius: int = 6, rounds: int = 30,
+def improve(ev, start, m: int, *, radius: int = 6, rounds: int = 30,
             deadline: float | None = None):
     """Best-improvement single moves of each member within ``radius`` grid steps
     (keeping distances > ``m``), maximising the exact ``P_bank``; stops at ``deadline``
@@ -52,7 +49,7 @@ def improve(ev: Evaluator, start, m: int, *, radius: int = 6, rounds: int = 30,
     return sw, float(ev([sw])[0])
 
 
-def extend(ev: Evaluator, sw, m: int):
+def extend(ev, sw, m: int):
     """The best one-member extension of ``sw`` (exact ``P_bank``), or None."""
     c_n = ev.rows.shape[1]
     sw = np.asarray(sw, dtype=np.int64)

@@ -2,9 +2,9 @@
 
 The per-scenario ring-gap relaxation (:mod:`ideas_hpc.core.design.ring_gaps`)
 says: in scenario s a swarm ``p_1 < .. < p_n`` of grid indices can cover only if
-its gap misses sum to at most the scenario's slack,
+its gap misses sum to at most the scenario's slack::
 
-    miss_s(p) = sum_i M_s[p_i, p_{i+1} - p_i] <= slack_s = reach_s - need,
+    miss_s(p) = sum_i M_s[p_i, p_{i+1} - p_i] <= slack_s = reach_s - need
 
 with ``M_s[i, d]`` the weight of the vertex groups inside the open arc
 ``(i, i + d)`` (the last gap wraps to ``p_1 + K``). The kernels here take one
