@@ -101,6 +101,14 @@ class ScreenOutcome:
     checked: int                # swarms evaluated exactly
 
 
+def _spread_step(k: int) -> int:
+    """A step coprime with k near k / golden ratio: its multiples visit the ring evenly."""
+    step = max(1, int(round(k / 1.618033988749895)))
+    while math.gcd(step, k) != 1:
+        step += 1
+    return step % k or 1
+
+
 def _extensions(base: np.ndarray, k: int, m: int) -> np.ndarray:
     """Every sorted (n)-swarm ``T + x`` of the (n - 1)-swarms ``base``, gaps > ``m``."""
     ring = np.arange(k)
@@ -155,7 +163,8 @@ def screen_size(mt, slack, ev, n: int, p: float, p_f: float, u_bar: list, m: int
         return ScreenOutcome(n=n, proven_short=True, swarm=None, probability=0.0,
                              upper=base + one * n, screened=0, checked=0)
     sl = np.asarray(slack, dtype=np.float64) + SLACK_TOL
-    found, counts, listed = screen_swarms(mt, sl, n - 1, int(m), thr, SCREEN_CAP, SCREEN_NODES)
+    found, counts, listed = screen_swarms(mt, sl, n - 1, int(m), thr, SCREEN_CAP, SCREEN_NODES,
+                                          _spread_step(k_n))
     complete = listed and found.shape[0] * k_n <= EXTEND_CAP
     if complete:
         pool = found

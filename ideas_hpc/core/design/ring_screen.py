@@ -37,7 +37,7 @@ def _gap_miss(Mt, i, d, s):
 
 
 @njit(cache=True)
-def screen_swarms(Mt, slack, n, m, thr, cap, max_nodes):
+def screen_swarms(Mt, slack, n, m, thr, cap, max_nodes, x0_step=1):
     """Every n-swarm whose relaxed cover count is at least ``thr`` (module docstring).
 
     Parameters
@@ -57,6 +57,10 @@ def screen_swarms(Mt, slack, n, m, thr, cap, max_nodes):
         treats that as too many).
     max_nodes : int
         Most members tried in all (a bound on the time); past it the search stops.
+    x0_step : int
+        The smallest members are taken in the order ``0, x0_step, 2 x0_step, ..`` (mod K;
+        coprime with K, so every one is taken): a list cut short by ``cap`` then
+        spreads around the ring instead of starting at candidate 0.
 
     Returns
     -------
@@ -77,7 +81,8 @@ def screen_swarms(Mt, slack, n, m, thr, cap, max_nodes):
     acc = np.empty((n + 1, s_n), dtype=np.float64)      # partial miss of those scenarios
     nxt = np.empty(n + 1, dtype=np.int64)               # next candidate per level
     nodes = 0
-    for x0 in range(k):
+    for xi in range(k):
+        x0 = (xi * x0_step) % k
         sw[0] = x0
         for j in range(s_n):
             alive[1, j] = j
