@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from ideas_hpc.core.design.reliability import swarm_probabilities
-from ideas_hpc.design.reliability import min_swarm_reliable
+from ideas_hpc.design.reliability import ReliabilityDesigner, min_swarm_reliable
 from ideas_hpc.errors import InputError
 from ideas_hpc.campaign.schema.design_checks import designer_errors
 from ideas_hpc.design.reliability_stats import (failure_upper_bound, hoeffding_lower_bound,
@@ -143,9 +143,15 @@ def test_programme_and_swap_search_prove_the_fewest(seed, p, sep):
     assert brute_probability(rows, alt.indices, areas, 0.9, 0.1) >= p
 
 
-def test_programme_bound_short_of_proof_says_feasible():
+def test_programme_bound_short_of_proof_says_feasible(monkeypatch):
     rows, areas = random_bank(5, s_n=4, c_n=9, v_n=18)
     n_star, _ = oracle_min_n(rows, areas, 0.9, 0.1, 0.8, 6, 0)
+    # the screen over all scenarios settles this bank (issue 29): optimal, the oracle's N
+    full = min_swarm_reliable(rows, areas, p=0.8, p_f=0.1, need=0.9, n_max=6, sep_steps=0,
+                              time_limit=1000.0, enumerate_budget=0)
+    assert full.status == "optimal" and full.n == n_star and full.gap == 0.0
+    # without it, the programme's bound falls short of a proof: the gap says so
+    monkeypatch.setattr(ReliabilityDesigner, "screen", lambda self, n, p: None)
     alt = min_swarm_reliable(rows, areas, p=0.8, p_f=0.1, need=0.9, n_max=6, sep_steps=0,
                              time_limit=1000.0, enumerate_budget=0)
     assert alt.status == "feasible"

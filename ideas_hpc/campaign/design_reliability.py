@@ -42,7 +42,7 @@ from ideas_hpc.core.design.reliability import swarm_probabilities
 from ideas_hpc.design.api import CoverSettings, ReliableSettings, ScenarioProblem, minimize
 from ideas_hpc.design.settings import LookPlan
 from ideas_hpc.design.bank import grid_size, separation_steps
-from ideas_hpc.design.certificate import (certify, group_bounds, look_confidence, planned_looks,
+from ideas_hpc.design.certificate import (certify, group_bounds,
                                          replicated_lower_bound)
 from ideas_hpc.design.reliability import ReliabilityDesigner
 from ideas_hpc.design.reliability_stats import lower_confidence_bound
@@ -80,14 +80,16 @@ def continuous_off(mc, setup) -> bool:
 class Validation:
     """The chosen swarm flown through fresh samples (module docstring, step 4)."""
 
-    def __init__(self, rows, w, need, p_f, confidence, exact: bool, seed: int, first: int = 0):
+    def __init__(self, rows, w, need, p_f, seed: int, first: int = 0):
         n = rows.shape[1]
         self.first = int(first)
         self.per_sample = swarm_probabilities(np.ascontiguousarray(rows),
                                               np.arange(n, dtype=np.int64)[None, :],
                                               w, need, p_f)[0]
         self.p_hat = float(self.per_sample.mean())
-        self.lower = self.p_hat if exact else lower_confidence_bound(self.per_sample, confidence)
+        # the bound at the look's share of the error is computed once, by certify(): its
+        # look's value is copied here (_certify); None for flights that are no look
+        self.lower = None
         cov = np.empty(rows.shape[0])
         failed = np.empty(rows.shape[0], dtype=np.int32)
         for k in range(rows.shape[0]):
@@ -98,16 +100,14 @@ class Validation:
         self.coverage, self.n_failed = cov, failed
 
 
-def _validate(c, setup, theta, need, w, exact, client, *, first=0, confidence=None):
-    """Validation samples ``first .. first + M - 1`` of ``theta``; the bound at ``confidence``
-    (default ``design.confidence``)."""
+def _validate(c, setup, theta, need, w, exact, client, *, first=0):
+    """Validation samples ``first .. first + M - 1`` of ``theta`` (no bound: :func:`_certify`
+    and the curve compute theirs)."""
     d, mc = c.config.design, c.config.monte_carlo
     m = 1 if exact else verify_samples(d)
     rows = fly_members(setup, theta, None, mc, seed=c.config.seed, n_samples=m, client=client,
                        progress=progress.on(), first=first)
-    conf = d.confidence if confidence is None else confidence
-    return Validation(rows, w, need, mc.failure_probability, conf, exact, c.config.seed,
-                      first=first)
+    return Validation(rows, w, need, mc.failure_probability, c.config.seed, first=first)
 
 
 def _tolerant_designs(nominal_bank, target, eps, d, sep) -> list:
@@ -277,18 +277,18 @@ def _certify(c, setup, client, bank, res, rel, need, w, exact):
     """The looks of :func:`ideas_hpc.design.certificate.certify` on validation flights; each
     look's ``extra`` is its :class:`Validation` (bound at the look's share of the error)."""
     d = c.config.design
-    k = planned_looks(d.demonstrate, res.n, d.n_max, d.demonstrate_looks, exact)
-    conf_look = look_confidence(d.confidence, k)
     m = 1 if exact else verify_samples(d)
 
     def best_of(n):
         return (res.indices, res.probability) if n == res.n else rel.best_of(n)
 
     def validate(sw, first, size):
-        v = _validate(c, setup, bank.theta[sw], need, w, exact, client, first=first,
-                      confidence=conf_look)
+        v = _validate(c, setup, bank.theta[sw], need, w, exact, client, first=first)
         return v.per_sample, v
 
-    return certify(res.n, best_of, validate, LookPlan(
+    cert = certify(res.n, best_of, validate, LookPlan(
         p=float(d.success_probability), confidence=d.confidence, n_max=d.n_max, n_samples=m,
         demonstrate=d.demonstrate, max_looks=d.demonstrate_looks, exact=exact))
+    for lk in cert.looks:       # the one bound of each look: certify's
+        lk.extra.lower = lk.lower
+    return cert

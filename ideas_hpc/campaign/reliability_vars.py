@@ -52,6 +52,7 @@ import xarray as xr
 
 from ideas_hpc.seeds import SCENARIO_STREAM, VALIDATION_STREAM
 from ideas_hpc.campaign.design_exact import ExactDesign
+from ideas_hpc.design.certificate import verdict as certificate_verdict
 
 BOUND_METHOD = "Waudby-Smith & Ramdas betting (predictable plug-in), one-sided"
 
@@ -63,7 +64,7 @@ def _with(ds: xr.Dataset, name: str, units: str | None, long_name: str) -> None:
 
 
 def verdict(val, p: float) -> str:
-    return "DEMONSTRATED" if val.lower >= p else "NOT demonstrated"
+    return certificate_verdict(val.lower >= p)
 
 
 def bank_line(n: int, probability: float, status: str, bound: float, gap: float) -> str:
@@ -120,7 +121,7 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
     for i, r in enumerate(curve):
         sw[i, :r[0]] = bank.theta[r[5]]
     nominal_cov = float(nominal.bank.coverage([idx])[0]) if nominal.bank is not None else np.nan
-    outcome = "demonstrated" if val.lower >= p else "not demonstrated"
+    outcome = certificate_verdict(val.lower >= p, stored=True)
     steps = f"N stepped up from {res.n} to {chosen.n}" if stepped else "none"
     ds = nominal.data.copy()
     ds = ds.rename({"best_swarm_size": "nominal_swarm_size",

@@ -140,13 +140,12 @@ def _design_lines(ds) -> list[str]:
                    f"{100 * float(ds['worst_failure_coverage']):.3f} % (failed spacecraft "
                    f"{ds['worst_failure'].values.tolist()})")
     if "verify_coverage" in ds:
-        c = 100 * ds["verify_coverage"].values
-        out.append(f"Monte Carlo verification {swarm_label(ds)}: P(coverage >= threshold "
-                   f"{100 * a['verify_threshold']:.2f} %)"
-                   f" = {100 * a['verify_probability']:.1f} % over {c.size} dispersed samples "
-                   f"(min {c.min():.2f} %, 5th percentile {np.percentile(c, 5):.2f} %, median "
-                   f"{np.median(c):.2f} %; {int((ds['verify_n_failed'].values > 0).sum())} "
-                   "samples with a failed spacecraft)")
+        from ideas_hpc.montecarlo.verify import verification_line   # the one wording
+
+        c = ds["verify_coverage"].values
+        out.append(verification_line(c, ds["verify_n_failed"].values,
+                                     float(a["verify_threshold"]),
+                                     float(a["verify_probability"]), who=swarm_label(ds)))
         out.append(a.get("verify_verdict") or verification_verdict(
             float(a["verify_probability"]), c.size, float(a["verify_threshold"])))
     out.extend(reliability_lines(ds))

@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ideas_hpc.design.certificate import verdict
+
 
 def _title(ds, text: str) -> str:
     from ideas_hpc.plots.figures import body_name
@@ -37,9 +39,9 @@ def reliability_curve_figure(ds):
     fig.add_hline(y=p, line_dash="dashdot", line_color="purple",
                   annotation_text=f"required p = {p:g}")
     n_cert = int(ds["best_swarm_size"])
-    verdict = "DEMONSTRATED" if bool(ds["demonstrated"]) else "NOT demonstrated"
+    ok = bool(ds["demonstrated"])
     fig.add_vline(x=n_cert, line_dash="dash", line_color="crimson",
-                  annotation_text=f"certified N = {n_cert} ({verdict})")
+                  annotation_text=f"certified N = {n_cert} ({verdict(ok)})")
     if "bank_swarm_size" in ds and int(ds["bank_swarm_size"]) != n_cert:
         fig.add_vline(x=int(ds["bank_swarm_size"]), line_dash="dot", line_color="grey",
                       annotation_text=f"bank N = {int(ds['bank_swarm_size'])}",

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from ideas_hpc.campaign.reliability_vars import bank_line
+from ideas_hpc.design.certificate import verdict
 
 
 def bank_answer(ds) -> tuple:
@@ -62,9 +63,9 @@ def reliability_lines(ds) -> list[str]:
            f"validation of the N = {n} swarm: P-hat = {float(ds['validation_p_hat']):.4f}, "
            f"{100 * float(ds['validation_look_confidence']) if 'validation_look_confidence' in ds else conf:.4g} % lower bound "
            f"{float(ds['validation_lower_bound']):.4f} ({a['confidence_bound']}) -> "
-           + ("requirement DEMONSTRATED" if ok else "requirement NOT demonstrated"),
+           + "requirement " + verdict(ok),
            f"success-probability design: N = {n}, requirement "
-           + ("DEMONSTRATED" if ok else "NOT demonstrated") + " by validation"
+           + verdict(ok) + " by validation"
            + (f" (design.demonstrate: {steps})" if steps != "none" else "")
            + f"; P on the scenarios = {float(ds['reliability_probability']):.4f}; nominal "
            f"N = {a['nominal_swarm_size']}"]

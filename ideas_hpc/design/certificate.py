@@ -66,6 +66,14 @@ def look_confidence(confidence: float, looks: int) -> float:
     return 1.0 - (1.0 - float(confidence)) / int(looks)
 
 
+def verdict(ok: bool, *, stored: bool = False) -> str:
+    """The verdict in words, worded here only: ``DEMONSTRATED`` / ``NOT demonstrated`` in
+    the printed lines, ``demonstrated`` / ``not demonstrated`` in the store (``stored``)."""
+    if stored:
+        return "demonstrated" if ok else "not demonstrated"
+    return "DEMONSTRATED" if ok else "NOT demonstrated"
+
+
 @dataclass
 class Look:
     """One validation look: swarm of ``n``, samples ``first`` to ``first + size - 1``."""
@@ -116,9 +124,8 @@ class Certificate:
         how = ("one look, the full error" if self.planned == 1 else
                f"{len(self.looks)} of {self.planned} planned looks, each on fresh samples "
                f"and at alpha / {self.planned} (Bonferroni)")
-        verdict = "DEMONSTRATED" if self.demonstrated else "NOT demonstrated"
         cmp = ">=" if self.demonstrated else "<"
-        return (f"certificate: N = {f.n} swarm {verdict}, {100 * f.confidence:.4g} % lower "
+        return (f"certificate: N = {f.n} swarm {verdict(self.demonstrated)}, {100 * f.confidence:.4g} % lower "
                 f"bound {f.lower:.4f} {cmp} p = {self.p:g}"
                 + f" on validation samples {f.first}..{last} ({f.size} fresh draws, flown "
                 "only after this swarm was fixed: they chose nothing); "

@@ -36,7 +36,6 @@ together (:func:`ideas_hpc.design.bank.conflict_windows`).
 
 from __future__ import annotations
 
-import itertools
 import math
 import time
 from dataclasses import dataclass, field
@@ -47,9 +46,11 @@ from ideas_hpc import progress
 from ideas_hpc.core.design.reliability import swarm_coverages, swarm_probabilities
 from ideas_hpc.errors import InputError
 from ideas_hpc.design.bank import CandidateBank, reduce_problem
+from ideas_hpc.design.reliability_search import all_swarms, extend, improve
 from ideas_hpc.design.reliability_stats import failure_upper_bound
 from ideas_hpc.design.ring_bound import ring_bound
 from ideas_hpc.design.scenario_mip import ScenarioMIP
+from ideas_hpc.design.screen_bound import clip_gap_matrix, screen_size, stack_gap_matrices
 from ideas_hpc.design.tolerance_bound import ToleranceBound
 from ideas_hpc.design.settings import ReliableSettings
 
@@ -81,15 +82,6 @@ class ReliableResult:
     designer: object = field(default=None, repr=False, compare=False)
 
 
-def _dist_ok(c_n: int, rest: np.ndarray, m: int) -> np.ndarray:
-    """(C,) bool: candidates more than ``m`` grid steps from every member of ``rest``."""
-    ring = np.arange(c_n)
-    if rest.size == 0:
-        return np.ones(c_n, dtype=bool)
-    d = np.abs(ring[:, None] - rest[None, :])
-    return (np.minimum(d, c_n - d) > m).all(axis=1)
-
-
 class Evaluator:
     """Exact ``P_bank`` of swarms on one bank (compiled, batched)."""
 
@@ -115,57 +107,6 @@ class Evaluator:
         p = self(sw)
         cov = swarm_coverages(self.rows, sw, self.w).mean(axis=1)
         return np.round(p, 12) + 1e-6 * cov
-
-
-def improve(ev: Evaluator, start, m: int, *, radius: int = 6, rounds: int = 30,
-            deadline: float | None = None):
-    """Best-improvement single moves of each member within ``radius`` grid steps
-    (keeping distances > ``m``), maximising the exact ``P_bank``; stops at ``deadline``
-    (``time.perf_counter()``). Returns (swarm, P)."""
-    c_n = ev.rows.shape[1]
-    radius = c_n // 2 if c_n <= 96 else radius
-    sw = np.sort(np.asarray(start, dtype=np.int64))
-    cur = float(ev.scored([sw])[0])
-    for _ in range(rounds):
-        if deadline is not None and time.perf_counter() >= deadline:
-            break
-        trials = []
-        for p in range(sw.size):
-            rest = np.delete(sw, p)
-            ok = _dist_ok(c_n, rest, m)
-            ok[sw] = False
-            near = (sw[p] + np.arange(-radius, radius + 1)) % c_n
-            trials += [np.sort(np.r_[rest, c]) for c in near if ok[c]]
-        if not trials:
-            break
-        vals = ev.scored(np.array(trials))
-        i = int(np.argmax(vals))
-        if vals[i] <= cur + 1e-13:
-            break
-        sw, cur = trials[i], float(vals[i])
-    return sw, float(ev([sw])[0])
-
-
-def extend(ev: Evaluator, sw, m: int):
-    """The best one-member extension of ``sw`` (exact ``P_bank``), or None."""
-    c_n = ev.rows.shape[1]
-    sw = np.asarray(sw, dtype=np.int64)
-    ok = _dist_ok(c_n, sw, m)
-    ok[sw] = False
-    cand = np.flatnonzero(ok)
-    if cand.size == 0:
-        return None
-    trials = np.sort(np.c_[np.repeat(sw[None, :], cand.size, axis=0), cand], axis=1)
-    vals = ev.scored(trials)
-    return trials[int(np.argmax(vals))]
-
-
-def all_swarms(c_n: int, n: int, m: int):
-    """Every n-subset of the ring grid with circular distances > m, as (K, n) int64."""
-    out = [c for c in itertools.combinations(range(c_n), n)
-           if all(min(abs(a - b), c_n - abs(a - b)) > m
-                  for a, b in itertools.combinations(c, 2))]
-    return np.array(out, dtype=np.int64).reshape(-1, n)
 
 
 class ReliabilityDesigner:
@@ -194,6 +135,11 @@ class ReliabilityDesigner:
         self._tol = None
         self.tol_proved: set = set()
         self._tol_solver = tolerance_solver
+        self._clipped: list = []      # per scenario: clipped gap matrix (screen_bound)
+        self._slack: list = []
+        self._mt = None
+        self.screen_proved: set = set()
+        self.screen_found: set = set()
 
     def ring_lows(self, n_max: int) -> np.ndarray:
         """(S,) proven lower bound on each scenario's fewest covering spacecraft (ring-gap
@@ -212,8 +158,27 @@ class ReliabilityDesigner:
                 if rb is not None:
                     low = rb.n_bound(self.ev.need)
                     lows[s] = int(n_max) + 1 if low is None else max(1, low)
+                    # the screen's relaxation over all scenarios (screen_bound)
+                    self._clipped.append(clip_gap_matrix(rb.M, rb.reach - self.ev.need))
+                    self._slack.append(rb.reach - self.ev.need)
             self._lows = lows
         return self._lows
+
+    def screen(self, n: int, p: float):
+        """Settle size n by the screen of :mod:`ideas_hpc.design.screen_bound` (None when
+        the ring-gap matrices are missing: a grid above the ring bound's, or time ran out)."""
+        if self._mt is None:
+            if len(self._clipped) != self.s_n or self.out_of_time():
+                return None
+            self._mt = stack_gap_matrices(self._clipped)
+            self._clipped = []
+            if self._mt is None:
+                return None
+        u = [0.0] + [min(self.cheap_ubar(k), self.u_bar.get(k, 1.0)) for k in range(1, n + 1)]
+        progress.note(f"screen, N = {n}: every {n - 1}-swarm the ring-gap relaxation lets "
+                      f"cover enough of the {self.s_n} scenarios, plus one member")
+        return screen_size(self._mt, np.asarray(self._slack), self.ev, n, p, self.p_f, u,
+                           self.m, deadline_ok=lambda: not self.out_of_time())
 
     def cheap_ubar(self, m: int) -> float:
         """``U_m <=`` the fraction of scenarios whose ring-gap bound allows m spacecraft."""
@@ -311,6 +276,18 @@ class ReliabilityDesigner:
         return top
 
 
+def _screen_note(d: ReliabilityDesigner) -> str:
+    """What the screen (:mod:`ideas_hpc.design.screen_bound`) settled, in one note."""
+    parts = []
+    if d.screen_proved:
+        parts.append(f"sizes {sorted(d.screen_proved)} proven short of p")
+    if d.screen_found:
+        parts.append(f"sizes {sorted(d.screen_found)} met by a swarm found")
+    return (" and ".join(parts) + " by the screen over all scenarios (every swarm that could "
+            "reach p is one of the (N-1)-swarms the ring-gap relaxation lets cover enough "
+            "scenarios plus one member, ideas_hpc.design.screen_bound)")
+
+
 def min_swarm_reliable(rows, areas, settings: ReliableSettings | None = None,
                        **keywords) -> ReliableResult:
     """The fewest grid candidates with ``P_bank >= p`` (module docstring).
@@ -365,6 +342,17 @@ def min_swarm_reliable(rows, areas, settings: ReliableSettings | None = None,
         if upper[n] < p - 1e-12:
             continue
         sw, val = d.best_of(n)
+        sc = None
+        if val < p - 1e-12 and n not in d.exhausted and not d.out_of_time():
+            sc = d.screen(n, p)
+            if sc is not None and sc.swarm is not None:
+                sw, val = np.sort(sc.swarm), sc.probability
+                d.best[n] = (sw, val)
+                d.screen_found.add(n)
+            elif sc is not None and sc.proven_short:
+                upper[n] = min(upper[n], sc.upper)
+                d.screen_proved.add(n)
+                continue
         if val >= p - 1e-12:
             bound = unresolved[0] if unresolved else n
             gap = (n - bound) / n
@@ -380,6 +368,8 @@ def min_swarm_reliable(rows, areas, settings: ReliableSettings | None = None,
                 notes.append(f"sizes {sorted(d.tol_proved)} proven short of p by the "
                              "per-scenario failure-tolerance bound (fewest spacecraft "
                              "surviving any k failures, ideas_hpc.design.tolerance_bound)")
+            if d.screen_proved or d.screen_found:
+                notes.append(_screen_note(d))
             if unresolved:
                 notes.append(f"sizes {unresolved} are neither proven short of p nor met by a "
                              "swarm found")

@@ -39,12 +39,27 @@ class Verification:
             float("nan")
 
     def summary(self) -> str:
-        c = 100 * self.coverage
-        return (f"Monte Carlo verification: P(coverage >= {100 * self.threshold:.2f} %) = "
-                f"{100 * self.probability:.1f} % over {plural(c.size, 'sample')} (coverage min "
-                f"{c.min():.2f} %, 5th percentile {np.percentile(c, 5):.2f} %, median "
-                f"{np.median(c):.2f} %; {plural(int((self.n_failed > 0).sum()), 'sample')} "
-                f"with a failure) in {self.wall_s:.1f} s")
+        """The run's line (:func:`verification_line`, with the time it took)."""
+        return verification_line(self.coverage, self.n_failed, self.threshold,
+                                 self.probability, wall_s=self.wall_s)
+
+
+def verification_line(coverage, n_failed, threshold: float, probability: float, *,
+                      who: str = "", wall_s: float | None = None) -> str:
+    """The Monte Carlo verification in one line, worded here only (the run prints it with
+    ``wall_s``, the report with ``who``, the swarm it is about).
+
+    ``coverage`` (M,) area fractions, ``n_failed`` (M,) failed spacecraft per sample,
+    ``threshold`` and ``probability`` fractions.
+    """
+    c = 100 * np.asarray(coverage, dtype=np.float64)
+    failed = int((np.asarray(n_failed) > 0).sum())
+    return (f"Monte Carlo verification{' ' + who if who else ''}: P(coverage >= threshold "
+            f"{100 * threshold:.2f} %) = {100 * probability:.1f} % over "
+            f"{plural(c.size, 'dispersed sample')} (min {c.min():.2f} %, 5th percentile "
+            f"{np.percentile(c, 5):.2f} %, median {np.median(c):.2f} %; "
+            f"{plural(failed, 'sample')} with a failed spacecraft)"
+            + ("" if wall_s is None else f" in {wall_s:.1f} s"))
 
 
 def _samples(ks, *, setup: FlybySetup, nominal: Nominal, mc, seed: int):

@@ -1,0 +1,186 @@
+"""``ideas-hpc validate``: an independent check of a success-probability design's swarm.
+
+The certificate of a design (docs/certificate.md) already flies fresh samples,
+but on the campaign's own seed. This command flies the store's reported swarm
+(``swarm_angle``) through ``--samples`` draws of the same ``[monte_carlo]``
+dispersions from *another* seed (``--seed``, default the campaign seed + 1), so
+that no number of the design run, bank or validation, is reused. Each sample
+gives
+
+* the exact failure-weighted success probability of the swarm (failures
+  enumerated, as in the design): their mean ``P-hat`` and its one-sided betting
+  lower bound (:func:`~ideas_hpc.design.reliability_stats.lower_confidence_bound`);
+* one Bernoulli outcome, the same sample with its failures drawn
+  (``(VALIDATION_STREAM, m, STREAM_FAILURES)`` of the new seed, as the design's
+  validation draws them): the success count and its
+  two-sided Wilson score interval (:func:`wilson_interval`), the figure a reader
+  can check by hand.
+
+The body must be the one the design saw: a store made on the built-in ellipsoid
+(``IDEAS_HPC_DATA`` unset) is validated with it unset too; a mismatch of the
+mesh is refused.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+#: z of the two-sided 95 % Wilson interval.
+Z95 = 1.959963984540054
+
+
+def wilson_interval(successes: int, n: int, z: float = Z95) -> tuple[float, float]:
+    """Wilson score interval of a binomial proportion (two-sided, ``z`` standard errors).
+
+    ``(p + z^2 / 2n -+ z sqrt(p (1 - p) / n + z^2 / 4n^2)) / (1 + z^2 / n)`` with
+    ``p = successes / n`` (Wilson 1927).
+    """
+    from ideas_hpc.errors import InputError
+
+    if n < 1 or not 0 <= successes <= n:
+        raise InputError(f"needs 0 <= successes <= n and n >= 1, got {successes} of {n}",
+                         field="samples")
+    p = successes / n
+    den = 1.0 + z * z / n
+    mid = p + z * z / (2 * n)
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
+    # the ends are exactly 0 at no success and 1 at all (the rounding would miss them)
+    lo = 0.0 if successes == 0 else max(0.0, (mid - half) / den)
+    hi = 1.0 if successes == n else min(1.0, (mid + half) / den)
+    return lo, hi
+
+
+@dataclass(frozen=True)
+class StoreValidation:
+    """Outcome of :func:`validate_store`."""
+
+    n: int
+    seed: int
+    first: int
+    per_sample: np.ndarray      # (M,) exact failure-weighted P per sample
+    success: np.ndarray         # (M,) bool: the sample maps the threshold, failures drawn
+    lower: float                # one-sided betting lower bound on P at ``confidence``
+    confidence: float
+    p: float
+    wall_s: float
+
+    @property
+    def successes(self) -> int:
+        return int(self.success.sum())
+
+    @property
+    def samples(self) -> int:
+        return int(self.per_sample.size)
+
+    @property
+    def p_hat(self) -> float:
+        return float(self.per_sample.mean())
+
+    def line(self) -> str:
+        lo, hi = wilson_interval(self.successes, self.samples)
+        last = self.first + self.samples - 1
+        return (f"independent validation: N = {self.n} swarm, seed {self.seed}, samples "
+                f"{self.first}..{last}: P-hat = {self.p_hat:.4f} (failures exact), "
+                f"{100 * self.confidence:g} % lower bound {self.lower:.4f} "
+                f"{'>=' if self.lower >= self.p else '<'} p = {self.p:g}; with failures "
+                f"drawn {self.successes} of {self.samples} succeed "
+                f"({self.successes / self.samples:.4f}, Wilson 95 % [{lo:.4f}, {hi:.4f}]) "
+                f"in {self.wall_s:.0f} s")
+
+
+def validate_store(store, *, samples: int = 1024, seed: int | None = None, first: int = 0,
+                   progress: bool = True, same_seed: bool = False) -> StoreValidation:
+    """Fly a design store's swarm through fresh samples (module docstring).
+
+    ``same_seed`` lets ``seed`` be the design's own (then sample k is the design's
+    validation sample k: a check of this command, not an independent validation).
+    """
+    import xarray as xr
+
+    from ideas_hpc.campaign.schema.campaign_tables import validate_campaign
+    from ideas_hpc.campaign.schema.toml_file import CampaignSource
+    from ideas_hpc.campaign.design_reliability import STREAM_FAILURES
+    from ideas_hpc.campaign.setup import setup_from_campaign
+    from ideas_hpc.core.design.reliability import swarm_probabilities
+    from ideas_hpc.design.reliability_stats import lower_confidence_bound
+    from ideas_hpc.engine.store_meta import store_attrs
+    from ideas_hpc.errors import InputError
+    from ideas_hpc.montecarlo.scenarios import fly_members
+    from ideas_hpc.seeds import VALIDATION_STREAM, stream_rng
+
+    attrs = store_attrs(Path(store))
+    if "reliability_threshold" not in attrs:
+        raise InputError(f"{store} holds no success-probability design (no "
+                         "reliability_threshold)", field="store")
+    if samples < 1:
+        raise InputError(f"must be >= 1, got {samples}", field="--samples")
+    cfg = dict(attrs["config"])
+    cfg.pop("models", None)
+    src = Path(attrs["campaign_file"]) if attrs.get("campaign_file") else None
+    c = validate_campaign(CampaignSource(data=cfg, path=src))
+    seed = int(attrs["campaign_seed"]) + 1 if seed is None else int(seed)
+    if seed == int(attrs["campaign_seed"]) and not same_seed:
+        raise InputError(f"{seed} is the design's own seed: give another", field="--seed")
+    ds = xr.open_zarr(store)
+    theta = np.asarray(ds["swarm_angle"].values, dtype=np.float64)
+    w = np.asarray(ds["vertex_area"].values, dtype=np.float64)
+    w = w / w.sum()
+    setup = setup_from_campaign(c)
+    mc = c.config.monte_carlo
+    t0 = time.perf_counter()
+    rows = fly_members(setup, theta, None, mc, seed=seed, n_samples=int(samples),
+                       progress=progress, first=int(first))
+    if rows.shape[2] != w.size:
+        raise InputError(f"the body flown now has {rows.shape[2]} vertices, the store's "
+                         f"{w.size} ({attrs.get('body', '?')}): set IDEAS_HPC_DATA as the "
+                         "design run had it", field="store")
+    need, p_f = float(attrs["reliability_threshold"]), float(mc.failure_probability)
+    n = theta.size
+    per = swarm_probabilities(np.ascontiguousarray(rows), np.arange(n, dtype=np.int64)[None, :],
+                              w, need, p_f)[0]
+    wins = np.zeros(rows.shape[0], dtype=bool)
+    for k in range(rows.shape[0]):
+        alive = stream_rng(seed, VALIDATION_STREAM, int(first) + k,
+                           STREAM_FAILURES).random(n) >= p_f
+        # the same tolerance as the exact enumeration (coverage >= need - 1e-12)
+        wins[k] = bool(alive.any() and w[rows[k, alive].any(axis=0)].sum() >= need - 1e-12)
+    conf = float(attrs["confidence"])
+    return StoreValidation(n=n, seed=seed, first=int(first), per_sample=per, success=wins,
+                           lower=lower_confidence_bound(per, conf), confidence=conf,
+                           p=float(attrs["success_probability"]),
+                           wall_s=time.perf_counter() - t0)
+
+
+def _cmd_validate(args) -> int:
+    v = validate_store(args.store, samples=args.samples, seed=args.seed, first=args.first,
+                       progress=not args.no_progress)
+    print(v.line())
+    if args.out:
+        np.savez(args.out, per_sample=v.per_sample, success=v.success, seed=v.seed,
+                 first=v.first, n=v.n)
+        print(f"per-sample values: {args.out}")
+    return 0
+
+
+def add_validate_command(sub) -> None:
+    p = sub.add_parser("validate", help="fly a design store's swarm through fresh samples "
+                                        "from another seed",
+                       description="Independent validation of a success-probability design: "
+                                   "the store's swarm flown through fresh draws of the same "
+                                   "dispersions from a seed the design never used; prints "
+                                   "P-hat with its lower bound and the success count with "
+                                   "its Wilson interval (docs/certificate.md).")
+    p.add_argument("store", help="store of a design-nadir run with design.success_probability")
+    p.add_argument("--samples", type=int, default=1024, help="fresh samples (default 1024)")
+    p.add_argument("--seed", type=int, default=None,
+                   help="seed of the fresh samples (default: the campaign seed + 1)")
+    p.add_argument("--first", type=int, default=0, help="first sample index (default 0)")
+    p.add_argument("--out", default=None,
+                   help="also write the per-sample values (.npz: per_sample, success)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(handler=_cmd_validate)

@@ -1,0 +1,186 @@
+"""Ring-gap screening over swarms and scenarios at once (issue 29, proof at scale).
+
+The per-scenario ring-gap relaxation (:mod:`ideas_hpc.core.design.ring_gaps`)
+says: in scenario s a swarm ``p_1 < .. < p_n`` of grid indices can cover only if
+its gap misses sum to at most the scenario's slack::
+
+    miss_s(p) = sum_i M_s[p_i, p_{i+1} - p_i] <= slack_s = reach_s - need
+
+with ``M_s[i, d]`` the weight of the vertex groups inside the open arc
+``(i, i + d)`` (the last gap wraps to ``p_1 + K``). The kernels here take one
+array ``Mt[i, d, s]`` for every scenario, already *clipped*: an entry above its
+scenario's slack is ``+inf`` (that gap alone fails there), and gaps of ``Dn``
+steps or more fail in every scenario. Entries must never exceed the true
+``M_s`` (round down), so every count is an upper bound on the true one.
+
+* :func:`screen_swarms` lists every n-swarm (gaps > ``m``) that the relaxation
+  lets cover at least ``thr`` scenarios: a depth-first search over sorted
+  members that keeps, per level, the scenarios still alive and the partial
+  misses, and stops a branch as soon as fewer than ``thr`` are alive.
+* :func:`relaxed_probabilities` is the failure-weighted probability of swarms
+  with every survivor set judged by the relaxation, an upper bound on the exact
+  ``P_bank`` (:mod:`ideas_hpc.core.design.reliability`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+
+@njit(cache=True)
+def _gap_miss(Mt, i, d, s):
+    """``M_s[i, d]`` clipped (``+inf`` when the arc fails alone or ``d >= Dn``)."""
+    if d >= Mt.shape[1]:
+        return np.inf
+    return Mt[i, d, s]
+
+
+@njit(cache=True)
+def screen_swarms(Mt, slack, n, m, thr, cap, max_nodes, x0_step=1):
+    """Every n-swarm whose relaxed cover count is at least ``thr`` (module docstring).
+
+    Parameters
+    ----------
+    Mt : (K, Dn, S) float32
+        Clipped gap misses (area fractions), never above the true ones.
+    slack : (S,) float64
+        ``reach_s - need`` plus the comparison's tolerance.
+    n : int
+        Swarm size (>= 2).
+    m : int
+        Consecutive members must be more than ``m`` grid steps apart.
+    thr : int
+        Least number of scenarios.
+    cap : int
+        Most swarms returned; the search stops after ``cap + 1`` (the caller
+        treats that as too many).
+    max_nodes : int
+        Most members tried in all (a bound on the time); past it the search stops.
+    x0_step : int
+        The smallest members are taken in the order ``0, x0_step, 2 x0_step, ..`` (mod K;
+        coprime with K, so every one is taken): a list cut short by ``cap`` then
+        spreads around the ring instead of starting at candidate 0.
+
+    Returns
+    -------
+    swarms : (F, n) int64
+        Sorted grid indices, ``F <= cap + 1``.
+    counts : (F,) int64
+        Relaxed cover counts.
+    complete : bool
+        The list holds every such swarm (neither ``cap`` nor ``max_nodes`` was hit).
+    """
+    k, dn, s_n = Mt.shape
+    out = np.empty((cap + 1, n), dtype=np.int64)
+    cnt = np.empty(cap + 1, dtype=np.int64)
+    found = 0
+    sw = np.empty(n, dtype=np.int64)
+    alive = np.empty((n + 1, s_n), dtype=np.int64)      # scenario ids alive per level
+    n_alive = np.zeros(n + 1, dtype=np.int64)
+    acc = np.empty((n + 1, s_n), dtype=np.float64)      # partial miss of those scenarios
+    nxt = np.empty(n + 1, dtype=np.int64)               # next candidate per level
+    nodes = 0
+    for xi in range(k):
+        x0 = (xi * x0_step) % k
+        sw[0] = x0
+        for j in range(s_n):
+            alive[1, j] = j
+            acc[1, j] = 0.0
+        n_alive[1] = s_n
+        lvl = 1
+        nxt[1] = x0 + m + 1
+        while lvl >= 1:
+            c = nxt[lvl]
+            prev = sw[lvl - 1]
+            # members left after this one: n - lvl - 1, each gap < dn; the wrap to x0 + k too
+            left = n - lvl
+            hi = min(prev + dn - 1, x0 + k - (m + 1) * left, k - 1)
+            lo = max(c, x0 + k - (dn - 1) * left)
+            if c < lo:
+                c = lo
+            if c > hi:
+                lvl -= 1
+                if lvl >= 1:
+                    nxt[lvl] += 1
+                continue
+            sw[lvl] = c
+            nxt[lvl] = c
+            nodes += 1
+            if nodes > max_nodes:
+                return out[:found], cnt[:found], False
+            d = c - prev
+            na = 0
+            last = lvl == n - 1
+            dw = x0 + k - c
+            for q in range(n_alive[lvl]):
+                s = alive[lvl, q]
+                v = acc[lvl, q] + Mt[prev, d, s]
+                if last:
+                    v += _gap_miss(Mt, c, dw, s)
+                if v <= slack[s]:
+                    alive[lvl + 1, na] = s
+                    acc[lvl + 1, na] = v
+                    na += 1
+                elif n_alive[lvl] - q - 1 + na < thr:
+                    break
+            if na < thr:
+                nxt[lvl] += 1
+                continue
+            if last:
+                out[found, :] = sw
+                cnt[found] = na
+                found += 1
+                if found > cap:
+                    return out[:found], cnt[:found], False
+                nxt[lvl] += 1
+                continue
+            n_alive[lvl + 1] = na
+            lvl += 1
+            nxt[lvl] = c + m + 1
+    return out[:found], cnt[:found], True
+
+
+@njit(cache=True)
+def _subset_covers(Mt, slack, s, members, mask, k):
+    """The survivors ``members[mask]`` pass the relaxation in scenario s."""
+    first = -1
+    prev = -1
+    tot = 0.0
+    for i in range(members.size):
+        if mask >> i & 1:
+            if first < 0:
+                first = members[i]
+            else:
+                tot += _gap_miss(Mt, prev, members[i] - prev, s)
+                if tot > slack[s]:
+                    return False
+            prev = members[i]
+    if first < 0:
+        return False
+    tot += _gap_miss(Mt, prev, first + k - prev, s)
+    return tot <= slack[s]
+
+
+@njit(parallel=True, cache=True)
+def relaxed_probabilities(Mt, slack, swarms, p_f):
+    """(F,) mean over scenarios of the failure-weighted probability, each survivor set
+    judged by the relaxation (an upper bound on the exact ``P_bank``; swarms sorted)."""
+    k, dn, s_n = Mt.shape
+    f_n, n = swarms.shape
+    out = np.zeros(f_n)
+    full = (1 << n) - 1
+    for f in prange(f_n):
+        members = swarms[f]
+        tot = 0.0
+        for s in range(s_n):
+            if not _subset_covers(Mt, slack, s, members, full, k):
+                continue
+            for mask in range(1, full + 1):
+                if _subset_covers(Mt, slack, s, members, mask, k):
+                    alive = 0
+                    for i in range(n):
+                        alive += mask >> i & 1
+                    tot += (1.0 - p_f) ** alive * p_f ** (n - alive)
+        out[f] = tot / s_n
+    return out
