@@ -108,10 +108,7 @@ def test_stereo_campaign_end_to_end_flown_coverage_meets_the_design(tmp_path, er
     campaign = Path(__file__).resolve().parent.parent / "campaigns" / "eros-stereo-design.toml"
     # eps_tol 5 %: the programme proves N in ~20 s (loaded machine); 600 s is far above
     # need, so optimality is asserted (the time-limited branch: tests/test_time_limits.py)
-    # n_max 16, not the file's 20: the coverage-vs-N curve (one programme per N up to
-    # n_max, not checked here) was 85 % of the run; N (12 here) stays well below 16, and
-    # a larger N would fail the run (no swarm within n_max), not pass it
-    sets = ["design.angle_step_deg=12", "design.n_max=16", "design.verify_samples=0",
+    sets = ["design.angle_step_deg=12", "design.n_max=20", "design.verify_samples=0",
             "design.eps_tol_pct=5.0", "design.time_limit_s=600", "run.workers=0"]
     ds = xr.open_zarr(run_file(campaign, out=tmp_path / "s.zarr", overrides=sets))
     assert str(ds["design_method"].values) == "exact"
