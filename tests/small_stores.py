@@ -48,3 +48,18 @@ def small_store(kind: str, root: Path) -> Path:
         _BUILT[kind] = run_file(CAMPAIGNS / campaign, out=Path(root) / f"{kind}.zarr",
                                 overrides=sets, workers=workers, progress=False)
     return _BUILT[kind]
+
+
+_RUNS: dict[tuple, Path] = {}
+
+
+def run_once(campaign: str, sets: list[str], workers: int, root: Path) -> Path:
+    """The store of ``campaign`` with ``sets`` (in this order) and ``workers``, run under
+    ``root`` on first use: tests that check different things of one run share it (the
+    as-shipped GA campaign on eros001708 is both a shipped campaign and a GA seed)."""
+    key = (campaign, tuple(sets), workers)
+    if key not in _RUNS:
+        out = Path(root) / f"run{len(_RUNS)}-{Path(campaign).stem}.zarr"
+        _RUNS[key] = run_file(CAMPAIGNS / campaign, out=out, overrides=list(sets),
+                              workers=workers, progress=False)
+    return _RUNS[key]
