@@ -6,10 +6,11 @@ same recorded quantities). The physics is not written twice: the kernel calls
 the pure ``@njit`` functions of this folder (maneuver references, RK4 step, camera
 DCM) through ``cuda.jit(device=True)`` wrappers of their Python source, and the
 scalar helpers (``mrp_*_s``, ``wheel_limit_s``, ``_eom_s``) are compiled for the
-device by Numba's CUDA target on first use. Two pieces are mirrored here: the
-maneuver dispatch (three lines, so that its array-taking branches are device
-functions the simulator can run too) and the sliding-mode law, whose float
-``min``/``max`` clip Numba's CUDA target does not compile (:func:`_control`).
+device by Numba's CUDA target on first use; the sliding-mode law is
+``control.sliding_mode_into`` itself (its clip ``sat_s`` is written with branches,
+which this target compiles). One piece is mirrored here: the maneuver dispatch
+(three lines, so that its array-taking branches are device functions the
+simulator can run too).
 
 Importing this module imports ``numba.cuda``: only
 :mod:`ideas_hpc.attitude.device` does, and only when ``device = "cuda"``, so
@@ -30,10 +31,11 @@ import numpy as np
 from numba import cuda, float64
 
 from ideas_hpc.core.attitude.batch import _dcm_BT
+from ideas_hpc.core.attitude.control import sliding_mode_into
 from ideas_hpc.core.attitude.maneuvers import (FOV_MODE, NP_MODE, TRACK_MODE,
                                                fov_reference_into, nadir_reference_into)
-from ideas_hpc.core.attitude.mrp import mrp_from_dcm, mrp_rotate_s, mrp_sub_s
-from ideas_hpc.core.attitude.rigid_body import rk4_step_into, wheel_limit_s
+from ideas_hpc.core.attitude.mrp import mrp_from_dcm
+from ideas_hpc.core.attitude.rigid_body import rk4_step_into
 
 #: Threads per block (one job each), for few and for many jobs: a scenario's 720 jobs
 #: in warp-sized blocks reach 23 multiprocessors instead of 12 (64 a block); many
@@ -59,79 +61,8 @@ def _reference(mode, t, spin_rate, sigma_RT, dcm_RT, theta_max, period, ref):
         _fov(t, spin_rate, sigma_RT, dcm_RT, theta_max, period, ref)
 
 
-@cuda.jit(device=True)
-def _sat(v):
-    """``min(1, max(-1, v))``: Numba's CUDA target does not type the float builtins."""
-    if v > 1.0:
-        return 1.0
-    if v < -1.0:
-        return -1.0
-    return v
-
-
-@cuda.jit(device=True)
-def _control(x, z, ref, gains, wheels, L_known, u_out, err_out):
-    """``core.attitude.control.sliding_mode_into`` line for line (same operations in
-    the same order), with :func:`_sat` for the builtin clip; see that function for the
-    law and units. ``tests/test_bank_cuda.py`` checks the two agree bit for bit."""
-    k_p = gains.k_p
-    k_i = gains.k_i
-    eta = gains.eta
-    phi = gains.phi
-    I_rw = wheels.I_rw_kgm2
-    J_s = wheels.J_s_kgm2
-    u_max = wheels.u_max_Nm
-    h_max = wheels.h_max_Nms
-    s1 = x[0]
-    s2 = x[1]
-    s3 = x[2]
-    w1 = x[3]
-    w2 = x[4]
-    w3 = x[5]
-    d1, d2, d3 = mrp_sub_s(s1, s2, s3, ref[0], ref[1], ref[2])
-    r1, r2, r3 = mrp_rotate_s(d1, d2, d3, ref[3], ref[4], ref[5])
-    if ref[6] == 0.0 and ref[7] == 0.0 and ref[8] == 0.0:
-        a1 = 0.0
-        a2 = 0.0
-        a3 = 0.0
-    else:
-        a1, a2, a3 = mrp_rotate_s(d1, d2, d3, ref[6], ref[7], ref[8])
-    e1 = w1 - r1
-    e2 = w2 - r2
-    e3 = w3 - r3
-    dd = d1 * d1 + d2 * d2 + d3 * d3
-    de = d1 * e1 + d2 * e2 + d3 * e3
-    q = 1.0 - dd
-    sd1 = 0.25 * (q * e1 + 2.0 * (d2 * e3 - d3 * e2) + 2.0 * de * d1)
-    sd2 = 0.25 * (q * e2 + 2.0 * (d3 * e1 - d1 * e3) + 2.0 * de * d2)
-    sd3 = 0.25 * (q * e3 + 2.0 * (d1 * e2 - d2 * e1) + 2.0 * de * d3)
-    sv1 = e1 + k_p[0] * d1 + k_i[0] * z[0]
-    sv2 = e2 + k_p[1] * d2 + k_i[1] * z[1]
-    sv3 = e3 + k_p[2] * d3 + k_i[2] * z[2]
-    p1 = _sat(phi[0] * sv1)
-    p2 = _sat(phi[1] * sv2)
-    p3 = _sat(phi[2] * sv3)
-    dwd1 = -k_p[0] * sd1 - k_i[0] * d1 - eta[0] * p1
-    dwd2 = -k_p[1] * sd2 - k_i[1] * d2 - eta[1] * p2
-    dwd3 = -k_p[2] * sd3 - k_i[2] * d3 - eta[2] * p3
-    wd1 = dwd1 + a1 - (w2 * r3 - w3 * r2)
-    wd2 = dwd2 + a2 - (w3 * r1 - w1 * r3)
-    wd3 = dwd3 + a3 - (w1 * r2 - w2 * r1)
-    h1 = I_rw[0] * w1 + J_s[0] * (x[6] + w1)
-    h2 = I_rw[1] * w2 + J_s[1] * (x[7] + w2)
-    h3 = I_rw[2] * w3 + J_s[2] * (x[8] + w3)
-    u_out[0] = wheel_limit_s(-I_rw[0] * wd1 - (w2 * h3 - w3 * h2) + L_known[0],
-                             x[6], J_s[0], u_max, h_max)
-    u_out[1] = wheel_limit_s(-I_rw[1] * wd2 - (w3 * h1 - w1 * h3) + L_known[1],
-                             x[7], J_s[1], u_max, h_max)
-    u_out[2] = wheel_limit_s(-I_rw[2] * wd3 - (w1 * h2 - w2 * h1) + L_known[2],
-                             x[8], J_s[2], u_max, h_max)
-    err_out[0] = d1
-    err_out[1] = d2
-    err_out[2] = d3
-    err_out[3] = e1
-    err_out[4] = e2
-    err_out[5] = e3
+# the CPU's law itself (its clip is written with branches for this target)
+_control = cuda.jit(device=True)(sliding_mode_into.py_func)
 
 
 @cuda.jit

@@ -53,6 +53,19 @@ from ideas_hpc.core.attitude.rigid_body import wheel_limit_s
 from ideas_hpc.core.attitude.mrp import mrp_rotate_s, mrp_sub_s
 
 
+@njit(cache=True)
+def sat_s(v):
+    """The boundary-layer saturation ``sat(v) = min(1, max(-1, v))`` (dimensionless),
+    written with branches (the same value for every finite ``v``) so that the law
+    below also compiles for Numba's CUDA target, which does not type the float
+    builtins (:mod:`ideas_hpc.core.attitude.batch_cuda` flies this very function)."""
+    if v > 1.0:
+        return 1.0
+    if v < -1.0:
+        return -1.0
+    return v
+
+
 @njit(cache=True, error_model="numpy")
 def sliding_mode_into(x, z, ref, gains, wheels, L_known, u_out, err_out):
     """Sliding-mode wheel torques for one spacecraft (SPEC section 5).
@@ -116,9 +129,9 @@ def sliding_mode_into(x, z, ref, gains, wheels, L_known, u_out, err_out):
     sv1 = e1 + k_p[0] * d1 + k_i[0] * z[0]
     sv2 = e2 + k_p[1] * d2 + k_i[1] * z[1]
     sv3 = e3 + k_p[2] * d3 + k_i[2] * z[2]
-    p1 = min(1.0, max(-1.0, phi[0] * sv1))
-    p2 = min(1.0, max(-1.0, phi[1] * sv2))
-    p3 = min(1.0, max(-1.0, phi[2] * sv3))
+    p1 = sat_s(phi[0] * sv1)
+    p2 = sat_s(phi[1] * sv2)
+    p3 = sat_s(phi[2] * sv3)
     dwd1 = -k_p[0] * sd1 - k_i[0] * d1 - eta[0] * p1
     dwd2 = -k_p[1] * sd2 - k_i[1] * d2 - eta[1] * p2
     dwd3 = -k_p[2] * sd3 - k_i[2] * d3 - eta[2] * p3
