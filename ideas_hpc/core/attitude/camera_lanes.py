@@ -12,8 +12,72 @@ import numpy as np
 from numba import njit, prange
 
 from ideas_hpc.core.attitude.camera_batch import _dcm_CT_into
-from ideas_hpc.core.attitude.mrp import mrp_add_s, mrp_from_dcm, mrp_rotate_s, mrp_sub_s
+from ideas_hpc.core.attitude.mrp import mrp_from_dcm, mrp_rotate_s
 from ideas_hpc.core.attitude.rigid_body import _eom_s, wheel_limit_s
+
+# mrp_add_s, mrp_sub_s and mrp_switch_s with both sides of their branches computed and
+# one selected: the same operations on the taken side, so the same bits, but a loop
+# over lanes that calls them vectorises (with the branches LLVM left it scalar).
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _switch_lane(a, b, c):
+    """:func:`~ideas_hpc.core.attitude.mrp.mrp_switch_s`, branch-free."""
+    ss = a * a + b * b + c * c
+    sw = ss > 1.0
+    return (-a / ss if sw else a), (-b / ss if sw else b), (-c / ss if sw else c)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _mrp_add_lane(a1, a2, a3, b1, b2, b3):
+    """:func:`~ideas_hpc.core.attitude.mrp.mrp_add_s`, branch-free."""
+    s1s = a1 * a1 + a2 * a2 + a3 * a3
+    s2s = b1 * b1 + b2 * b2 + b3 * b3
+    den = 1.0 + s1s * s2s - 2.0 * (a1 * b1 + a2 * b2 + a3 * b3)
+    flip = abs(den) < 0.1
+    f1 = -a1 / s1s
+    f2 = -a2 / s1s
+    f3 = -a3 / s1s
+    fs = 1.0 / s1s
+    fden = 1.0 + fs * s2s - 2.0 * (f1 * b1 + f2 * b2 + f3 * b3)
+    a1 = f1 if flip else a1
+    a2 = f2 if flip else a2
+    a3 = f3 if flip else a3
+    s1s = fs if flip else s1s
+    den = fden if flip else den
+    c1 = b2 * a3 - b3 * a2
+    c2 = b3 * a1 - b1 * a3
+    c3 = b1 * a2 - b2 * a1
+    p = 1.0 - s1s
+    q = 1.0 - s2s
+    return _switch_lane((p * b1 + q * a1 - 2.0 * c1) / den, (p * b2 + q * a2 - 2.0 * c2) / den,
+                        (p * b3 + q * a3 - 2.0 * c3) / den)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _mrp_sub_lane(a1, a2, a3, r1, r2, r3):
+    """:func:`~ideas_hpc.core.attitude.mrp.mrp_sub_s`, branch-free."""
+    srs = r1 * r1 + r2 * r2 + r3 * r3
+    sbs = a1 * a1 + a2 * a2 + a3 * a3
+    den = 1.0 + srs * sbs + 2.0 * (r1 * a1 + r2 * a2 + r3 * a3)
+    flip = abs(den) < 0.1
+    f1 = -r1 / srs
+    f2 = -r2 / srs
+    f3 = -r3 / srs
+    fs = 1.0 / srs
+    fden = 1.0 + fs * sbs + 2.0 * (f1 * a1 + f2 * a2 + f3 * a3)
+    r1 = f1 if flip else r1
+    r2 = f2 if flip else r2
+    r3 = f3 if flip else r3
+    srs = fs if flip else srs
+    den = fden if flip else den
+    c1 = a2 * r3 - a3 * r2
+    c2 = a3 * r1 - a1 * r3
+    c3 = a1 * r2 - a2 * r1
+    p = 1.0 - srs
+    q = 1.0 - sbs
+    return _switch_lane((p * a1 - q * r1 + 2.0 * c1) / den, (p * a2 - q * r2 + 2.0 * c2) / den,
+                        (p * a3 - q * r3 + 2.0 * c3) / den)
+
 
 #: Spacecraft flown side by side in :func:`fly_cameras_lanes_into`. One spacecraft's
 #: step is a long chain of dependent operations; a loop over independent lanes lets
@@ -128,15 +192,15 @@ def _control_lanes(S, tz, gains, wheels):
     u_max = wheels.u_max_Nm
     h_max = wheels.h_max_Nms
     for lane in range(B):
-        rr1, rr2, rr3 = mrp_add_s(0.0, 0.0, tz, S[_SR * B + lane], S[(_SR + 1) * B + lane],
-                                  S[(_SR + 2) * B + lane])
+        rr1, rr2, rr3 = _mrp_add_lane(0.0, 0.0, tz, S[_SR * B + lane],
+                                      S[(_SR + 1) * B + lane], S[(_SR + 2) * B + lane])
         s1 = S[_X * B + lane]
         s2 = S[(_X + 1) * B + lane]
         s3 = S[(_X + 2) * B + lane]
         w1 = S[(_X + 3) * B + lane]
         w2 = S[(_X + 4) * B + lane]
         w3 = S[(_X + 5) * B + lane]
-        d1, d2, d3 = mrp_sub_s(s1, s2, s3, rr1, rr2, rr3)
+        d1, d2, d3 = _mrp_sub_lane(s1, s2, s3, rr1, rr2, rr3)
         r1, r2, r3 = mrp_rotate_s(d1, d2, d3, S[_OR * B + lane], S[(_OR + 1) * B + lane],
                                   S[(_OR + 2) * B + lane])
         e1 = w1 - r1
