@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from ideas_hpc.core.attitude.camera_batch import _dcm_CT_into
+from ideas_hpc.core.attitude.compose import dot3_fma
 from ideas_hpc.core.attitude.mrp import mrp_from_dcm, mrp_rotate_s
 from ideas_hpc.core.attitude.rigid_body import _eom_s, wheel_limit_s
 
@@ -99,7 +99,9 @@ _U = 12         # 3: held wheel torques, N m
 _D = 15         # 3: sigma_B/R at the step
 _SR = 18        # 3: sigma_RT
 _OR = 21        # 3: omega_RN_R, rad/s
-_NROW = 24
+_CB = 24        # 9: the camera misalignment [C B], row-major
+_CT = 33        # 9: the camera DCM [C T] at the image, row-major
+_NROW = 42
 
 
 @njit(cache=True, parallel=True, error_model="numpy")
@@ -134,6 +136,9 @@ def fly_cameras_lanes_into(dcm_RT_all, spin_rate, gains, wheels, dt, n_steps, im
                 S[(_X + j) * B + lane] = sigma0[i, j]
                 S[(_X + 3 + j) * B + lane] = omega0[i, j]
                 S[(_X + 6 + j) * B + lane] = wheel0[i, j]
+            if misaligned:
+                for j in range(9):
+                    S[(_CB + j) * B + lane] = dcm_CB[i, j // 3, j % 3]
             ss = (S[_X * B + lane] * S[_X * B + lane]
                   + S[(_X + 1) * B + lane] * S[(_X + 1) * B + lane]
                   + S[(_X + 2) * B + lane] * S[(_X + 2) * B + lane])
@@ -148,13 +153,13 @@ def fly_cameras_lanes_into(dcm_RT_all, spin_rate, gains, wheels, dt, n_steps, im
             if img:
                 c = cs_img[n_img_done, 0]
                 sn = cs_img[n_img_done, 1]
+                _dcm_CT_lanes(S, c, sn, misaligned)
                 for lane in range(m):
+                    for j in range(9):
+                        out[i0 + lane, n_img_done, j // 3, j % 3] = S[(_CT + j) * B + lane]
                     w1 = S[(_X + 3) * B + lane]
                     w2 = S[(_X + 4) * B + lane]
                     w3 = S[(_X + 5) * B + lane]
-                    _dcm_CT_into(S[_X * B + lane], S[(_X + 1) * B + lane],
-                                 S[(_X + 2) * B + lane], c, sn, dcm_CB, i0 + lane, misaligned,
-                                 out, n_img_done)
                     # the rate before the step's torque, as fly_cameras_into
                     usable[i0 + lane, n_img_done] = np.sqrt(w1 * w1 + w2 * w2 + w3 * w3) \
                         * exposure > smear_lim
@@ -174,6 +179,55 @@ def fly_cameras_lanes_into(dcm_RT_all, spin_rate, gains, wheels, dt, n_steps, im
                 n_img_done += 1
             if k < n_steps:
                 _rk4_lanes(S, wheels.I_rw_kgm2, wheels.J_s_kgm2, dt, gains.int_limit)
+
+
+@njit(cache=True, error_model="numpy")
+def _dcm_CT_lanes(S, c, s, misaligned):
+    """``[C T] = [C B][B N][T N]^T`` of every lane of ``S`` into its ``_CT`` rows, with
+    ``cos, sin(w_s t) = c, s``: the operations of
+    :func:`~ideas_hpc.core.attitude.camera_batch._dcm_CT_into` (the same bits), in a
+    loop over lanes that vectorises (``[C B]`` from the ``_CB`` rows when ``misaligned``)."""
+    B = LANES
+    for lane in range(B):
+        s1 = S[_X * B + lane]
+        s2 = S[(_X + 1) * B + lane]
+        s3 = S[(_X + 2) * B + lane]
+        ss = s1 * s1 + s2 * s2 + s3 * s3
+        d = 1.0 / ((1.0 + ss) * (1.0 + ss))
+        q = 1.0 - ss
+        b00 = (4.0 * (s1 * s1 - s2 * s2 - s3 * s3) + q * q) * d
+        b01 = (8.0 * s1 * s2 + 4.0 * s3 * q) * d
+        b02 = (8.0 * s1 * s3 - 4.0 * s2 * q) * d
+        b10 = (8.0 * s2 * s1 - 4.0 * s3 * q) * d
+        b11 = (4.0 * (-s1 * s1 + s2 * s2 - s3 * s3) + q * q) * d
+        b12 = (8.0 * s2 * s3 + 4.0 * s1 * q) * d
+        b20 = (8.0 * s3 * s1 + 4.0 * s2 * q) * d
+        b21 = (8.0 * s3 * s2 - 4.0 * s1 * q) * d
+        b22 = (4.0 * (-s1 * s1 - s2 * s2 + s3 * s3) + q * q) * d
+        t00 = b00 * c + b01 * s
+        t01 = -b00 * s + b01 * c
+        t10 = b10 * c + b11 * s
+        t11 = -b10 * s + b11 * c
+        t20 = b20 * c + b21 * s
+        t21 = -b20 * s + b21 * c
+        if not misaligned:
+            S[_CT * B + lane] = t00
+            S[(_CT + 1) * B + lane] = t01
+            S[(_CT + 2) * B + lane] = b02
+            S[(_CT + 3) * B + lane] = t10
+            S[(_CT + 4) * B + lane] = t11
+            S[(_CT + 5) * B + lane] = b12
+            S[(_CT + 6) * B + lane] = t20
+            S[(_CT + 7) * B + lane] = t21
+            S[(_CT + 8) * B + lane] = b22
+            continue
+        for r in range(3):
+            m0 = S[(_CB + 3 * r) * B + lane]
+            m1 = S[(_CB + 3 * r + 1) * B + lane]
+            m2 = S[(_CB + 3 * r + 2) * B + lane]
+            S[(_CT + 3 * r) * B + lane] = dot3_fma(m0, m1, m2, t00, t10, t20)
+            S[(_CT + 3 * r + 1) * B + lane] = dot3_fma(m0, m1, m2, t01, t11, t21)
+            S[(_CT + 3 * r + 2) * B + lane] = dot3_fma(m0, m1, m2, b02, b12, b22)
 
 
 @njit(cache=True, error_model="numpy")
