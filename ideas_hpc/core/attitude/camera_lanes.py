@@ -122,6 +122,15 @@ def fly_cameras_lanes_into(dcm_RT_all, spin_rate, gains, wheels, dt, n_steps, im
     exposure = use[0]
     smear_lim = use[1]
     settle = use[2]
+    # 4 atan(x) > settle decided without the atan away from x* = tan(settle / 4): the
+    # relative margin 1e-9 is 1e6 times the few ulp by which tan and atan round, so on
+    # either side the computed test is sure (the atan is called only in between)
+    x_lo = -1.0
+    x_hi = np.inf
+    if 0.0 < settle < np.pi:
+        x_star = np.tan(0.25 * settle)
+        x_lo = x_star * (1.0 - 1e-9)
+        x_hi = x_star * (1.0 + 1e-9)
     B = LANES
     for blk in prange((n + B - 1) // B):
         i0 = blk * B
@@ -173,9 +182,15 @@ def fly_cameras_lanes_into(dcm_RT_all, spin_rate, gains, wheels, dt, n_steps, im
                     d1 = S[_D * B + lane]
                     d2 = S[(_D + 1) * B + lane]
                     d3 = S[(_D + 2) * B + lane]
-                    angle = 4.0 * np.arctan(np.sqrt(d1 * d1 + d2 * d2 + d3 * d3))
+                    x = np.sqrt(d1 * d1 + d2 * d2 + d3 * d3)
+                    if x <= x_lo:
+                        unsettled = False
+                    elif x >= x_hi and x_hi < np.inf:
+                        unsettled = True
+                    else:
+                        unsettled = 4.0 * np.arctan(x) > settle
                     usable[i0 + lane, n_img_done] = not (usable[i0 + lane, n_img_done]
-                                                         | (angle > settle))
+                                                         | unsettled)
                 n_img_done += 1
             if k < n_steps:
                 _rk4_lanes(S, wheels.I_rw_kgm2, wheels.J_s_kgm2, dt, gains.int_limit)
