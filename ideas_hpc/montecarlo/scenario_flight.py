@@ -13,7 +13,8 @@ blinded), the same bits, at a fraction of the cost:
   (:func:`ideas_hpc.core.attitude.camera_batch.fly_cameras_into`) instead of
   three fresh ``N x n_img x 9`` arrays (attitude, misaligned, blinded); Nadir
   Pointing without disturbance torques (the main job) flies 64 spacecraft side by
-  side, one loop over them per step, which the CPU overlaps (:func:`~ideas_hpc.core.attitude.camera_batch.fly_cameras_lanes_into`);
+  side, one loop over them per step in packed (SIMD) arithmetic
+  (:func:`~ideas_hpc.core.attitude.camera_lanes.fly_cameras_lanes_into`);
 * the orbits write only the positions at the images
   (:func:`ideas_hpc.core.dynamics.propagate_positions.propagate_positions_into`);
 * only the unusable images are then blinded, in place, by the formula of
@@ -35,8 +36,8 @@ from ideas_hpc.attitude.maneuvers import maneuver_args
 from ideas_hpc.attitude.spacecraft import default_spacecraft, validate_spacecraft
 from ideas_hpc.attitude.start import absolute_start, reference_state0
 from ideas_hpc.attitude.torque_terms import pack_torques
-from ideas_hpc.core.attitude.camera_batch import (fly_cameras_into, fly_cameras_lanes_into,
-                                                   spin_table)
+from ideas_hpc.core.attitude.camera_batch import fly_cameras_into, spin_table
+from ideas_hpc.core.attitude.camera_lanes import fly_cameras_lanes_into
 from ideas_hpc.core.attitude.maneuvers import NP_MODE
 from ideas_hpc.core.dynamics.propagate_positions import propagate_positions_into
 from ideas_hpc.core.attitude.records import ControlGains, Initial, Wheels

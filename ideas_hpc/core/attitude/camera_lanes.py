@@ -1,0 +1,382 @@
+"""The closed loop of a scenario bank's flight for Nadir Pointing, many spacecraft
+side by side in packed arithmetic (issue 31).
+
+:func:`fly_cameras_lanes_into` is :func:`~ideas_hpc.core.attitude.camera_batch.fly_cameras_into`
+for Nadir Pointing without disturbance torques, bit for bit, with the step of
+:data:`LANES` spacecraft written as loops over lanes that LLVM vectorises.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+from ideas_hpc.core.attitude.compose import dot3_fma
+from ideas_hpc.core.attitude.mrp import mrp_from_dcm, mrp_rotate_s
+from ideas_hpc.core.attitude.rigid_body import _eom_s, wheel_limit_s
+
+# mrp_add_s, mrp_sub_s and mrp_switch_s with both sides of their branches computed and
+# one selected: the same operations on the taken side, so the same bits, but a loop
+# over lanes that calls them vectorises (with the branches LLVM left it scalar).
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _switch_lane(a, b, c):
+    """:func:`~ideas_hpc.core.attitude.mrp.mrp_switch_s`, branch-free."""
+    ss = a * a + b * b + c * c
+    sw = ss > 1.0
+    return (-a / ss if sw else a), (-b / ss if sw else b), (-c / ss if sw else c)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _mrp_add_lane(a1, a2, a3, b1, b2, b3):
+    """:func:`~ideas_hpc.core.attitude.mrp.mrp_add_s`, branch-free."""
+    s1s = a1 * a1 + a2 * a2 + a3 * a3
+    s2s = b1 * b1 + b2 * b2 + b3 * b3
+    den = 1.0 + s1s * s2s - 2.0 * (a1 * b1 + a2 * b2 + a3 * b3)
+    flip = abs(den) < 0.1
+    f1 = -a1 / s1s
+    f2 = -a2 / s1s
+    f3 = -a3 / s1s
+    fs = 1.0 / s1s
+    fden = 1.0 + fs * s2s - 2.0 * (f1 * b1 + f2 * b2 + f3 * b3)
+    a1 = f1 if flip else a1
+    a2 = f2 if flip else a2
+    a3 = f3 if flip else a3
+    s1s = fs if flip else s1s
+    den = fden if flip else den
+    c1 = b2 * a3 - b3 * a2
+    c2 = b3 * a1 - b1 * a3
+    c3 = b1 * a2 - b2 * a1
+    p = 1.0 - s1s
+    q = 1.0 - s2s
+    return _switch_lane((p * b1 + q * a1 - 2.0 * c1) / den, (p * b2 + q * a2 - 2.0 * c2) / den,
+                        (p * b3 + q * a3 - 2.0 * c3) / den)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _mrp_sub_lane(a1, a2, a3, r1, r2, r3):
+    """:func:`~ideas_hpc.core.attitude.mrp.mrp_sub_s`, branch-free."""
+    srs = r1 * r1 + r2 * r2 + r3 * r3
+    sbs = a1 * a1 + a2 * a2 + a3 * a3
+    den = 1.0 + srs * sbs + 2.0 * (r1 * a1 + r2 * a2 + r3 * a3)
+    flip = abs(den) < 0.1
+    f1 = -r1 / srs
+    f2 = -r2 / srs
+    f3 = -r3 / srs
+    fs = 1.0 / srs
+    fden = 1.0 + fs * sbs + 2.0 * (f1 * a1 + f2 * a2 + f3 * a3)
+    r1 = f1 if flip else r1
+    r2 = f2 if flip else r2
+    r3 = f3 if flip else r3
+    srs = fs if flip else srs
+    den = fden if flip else den
+    c1 = a2 * r3 - a3 * r2
+    c2 = a3 * r1 - a1 * r3
+    c3 = a1 * r2 - a2 * r1
+    p = 1.0 - srs
+    q = 1.0 - sbs
+    return _switch_lane((p * a1 - q * r1 + 2.0 * c1) / den, (p * a2 - q * r2 + 2.0 * c2) / den,
+                        (p * a3 - q * r3 + 2.0 * c3) / den)
+
+
+#: Spacecraft flown side by side in :func:`fly_cameras_lanes_into`. One spacecraft's
+#: step is a long chain of dependent operations; a loop over independent lanes lets
+#: the compiler turn it into packed (SIMD) arithmetic, lane for lane the same
+#: operations in the same order (no reassociation, no fused multiply-add: the same
+#: bits). Measured on a 64-lane block (AVX-512 host): the RK4 step 3-6x and the
+#: controller 3x faster packed than scalar; the bank's closed loop per scenario of
+#: 720 candidates 0.41 s -> 0.12 s CPU, then 0.11 s with the image's camera DCM
+#: packed too and 0.095 s with the settle test's atan only near its threshold. (Before packing, 64 and 128 lanes were
+#: 2-3x faster than one spacecraft at a time, 4 to 32 lanes 1.2-1.6x.)
+LANES = 64
+
+# Rows of the lanes' state ``S`` (flat, row ``r`` of lane ``l`` at ``r * LANES + l``):
+# the offsets are compile-time constants and the trip count is LANES, so LLVM sees that
+# the rows do not overlap and vectorises without run-time alias checks (with a 2-D
+# array or separate arrays per quantity it did not: the stride is a run-time value).
+_X = 0          # 9 rows: sigma_BN, omega_BN_B (rad/s), wheel speeds (rad/s)
+_Z = 9          # 3: the MRP error integral
+_U = 12         # 3: held wheel torques, N m
+_D = 15         # 3: sigma_B/R at the step
+_SR = 18        # 3: sigma_RT
+_OR = 21        # 3: omega_RN_R, rad/s
+_CB = 24        # 9: the camera misalignment [C B], row-major
+_CT = 33        # 9: the camera DCM [C T] at the image, row-major
+_NROW = 42
+
+
+@njit(cache=True, parallel=True, error_model="numpy")
+def fly_cameras_lanes_into(dcm_RT_all, spin_rate, gains, wheels, dt, n_steps, img_every,
+                           initial, dcm_CB, use, out, usable, cs_img):
+    """:func:`fly_cameras_into` for Nadir Pointing without disturbance torques, flying
+    :data:`LANES` spacecraft side by side: every step is a loop over them, with the
+    reference, :func:`~ideas_hpc.core.attitude.control.sliding_mode_into` and
+    :func:`~ideas_hpc.core.attitude.rigid_body.rk4_step_into` written out on scalars
+    (their operations, in their order: the same bits), independent from lane to lane
+    so that they compile to packed arithmetic (:data:`LANES`; a short last block pads
+    its unused lanes with a zero state that is flown but never written out).
+    Arguments as :func:`fly_cameras_into` (no mode, periods, amplitude or torque table).
+    """
+    sigma0, omega0, wheel0 = initial
+    n = sigma0.shape[0]
+    misaligned = dcm_CB.shape[0] > 0
+    exposure = use[0]
+    smear_lim = use[1]
+    settle = use[2]
+    # 4 atan(x) > settle decided without the atan away from x* = tan(settle / 4): the
+    # relative margin 1e-9 is 1e6 times the few ulp by which tan and atan round, so on
+    # either side the computed test is sure (the atan is called only in between)
+    x_lo = -1.0
+    x_hi = np.inf
+    if 0.0 < settle < np.pi:
+        x_star = np.tan(0.25 * settle)
+        x_lo = x_star * (1.0 - 1e-9)
+        x_hi = x_star * (1.0 + 1e-9)
+    B = LANES
+    for blk in prange((n + B - 1) // B):
+        i0 = blk * B
+        m = min(B, n - i0)
+        S = np.zeros(_NROW * B)
+        for lane in range(m):
+            i = i0 + lane
+            s = mrp_from_dcm(np.ascontiguousarray(dcm_RT_all[i]))
+            for j in range(3):
+                S[(_SR + j) * B + lane] = s[j]
+                S[(_OR + j) * B + lane] = dcm_RT_all[i, j, 2] * spin_rate
+                S[(_X + j) * B + lane] = sigma0[i, j]
+                S[(_X + 3 + j) * B + lane] = omega0[i, j]
+                S[(_X + 6 + j) * B + lane] = wheel0[i, j]
+            if misaligned:
+                for j in range(9):
+                    S[(_CB + j) * B + lane] = dcm_CB[i, j // 3, j % 3]
+            ss = (S[_X * B + lane] * S[_X * B + lane]
+                  + S[(_X + 1) * B + lane] * S[(_X + 1) * B + lane]
+                  + S[(_X + 2) * B + lane] * S[(_X + 2) * B + lane])
+            if ss > 1.0:
+                for j in range(3):
+                    S[(_X + j) * B + lane] = -S[(_X + j) * B + lane] / ss
+        c_img = 0
+        n_img_done = 0
+        for k in range(n_steps + 1):
+            t = k * dt
+            img = c_img == 0
+            if img:
+                c = cs_img[n_img_done, 0]
+                sn = cs_img[n_img_done, 1]
+                _dcm_CT_lanes(S, c, sn, misaligned)
+                for lane in range(m):
+                    for j in range(9):
+                        out[i0 + lane, n_img_done, j // 3, j % 3] = S[(_CT + j) * B + lane]
+                    w1 = S[(_X + 3) * B + lane]
+                    w2 = S[(_X + 4) * B + lane]
+                    w3 = S[(_X + 5) * B + lane]
+                    # the rate before the step's torque, as fly_cameras_into
+                    usable[i0 + lane, n_img_done] = np.sqrt(w1 * w1 + w2 * w2 + w3 * w3) \
+                        * exposure > smear_lim
+            c_img += 1
+            if c_img == img_every:
+                c_img = 0
+            # nadir_reference_into: sigma_TN = tan(w_s t / 4) z, alike for every lane
+            _control_lanes(S, np.tan(0.25 * spin_rate * t), gains, wheels)
+            if img:
+                for lane in range(m):
+                    d1 = S[_D * B + lane]
+                    d2 = S[(_D + 1) * B + lane]
+                    d3 = S[(_D + 2) * B + lane]
+                    x = np.sqrt(d1 * d1 + d2 * d2 + d3 * d3)
+                    if x <= x_lo:
+                        unsettled = False
+                    elif x >= x_hi and x_hi < np.inf:
+                        unsettled = True
+                    else:
+                        unsettled = 4.0 * np.arctan(x) > settle
+                    usable[i0 + lane, n_img_done] = not (usable[i0 + lane, n_img_done]
+                                                         | unsettled)
+                n_img_done += 1
+            if k < n_steps:
+                _rk4_lanes(S, wheels.I_rw_kgm2, wheels.J_s_kgm2, dt, gains.int_limit)
+
+
+@njit(cache=True, error_model="numpy")
+def _dcm_CT_lanes(S, c, s, misaligned):
+    """``[C T] = [C B][B N][T N]^T`` of every lane of ``S`` into its ``_CT`` rows, with
+    ``cos, sin(w_s t) = c, s``: the operations of
+    :func:`~ideas_hpc.core.attitude.camera_batch._dcm_CT_into` (the same bits), in a
+    loop over lanes that vectorises (``[C B]`` from the ``_CB`` rows when ``misaligned``)."""
+    B = LANES
+    for lane in range(B):
+        s1 = S[_X * B + lane]
+        s2 = S[(_X + 1) * B + lane]
+        s3 = S[(_X + 2) * B + lane]
+        ss = s1 * s1 + s2 * s2 + s3 * s3
+        d = 1.0 / ((1.0 + ss) * (1.0 + ss))
+        q = 1.0 - ss
+        b00 = (4.0 * (s1 * s1 - s2 * s2 - s3 * s3) + q * q) * d
+        b01 = (8.0 * s1 * s2 + 4.0 * s3 * q) * d
+        b02 = (8.0 * s1 * s3 - 4.0 * s2 * q) * d
+        b10 = (8.0 * s2 * s1 - 4.0 * s3 * q) * d
+        b11 = (4.0 * (-s1 * s1 + s2 * s2 - s3 * s3) + q * q) * d
+        b12 = (8.0 * s2 * s3 + 4.0 * s1 * q) * d
+        b20 = (8.0 * s3 * s1 + 4.0 * s2 * q) * d
+        b21 = (8.0 * s3 * s2 - 4.0 * s1 * q) * d
+        b22 = (4.0 * (-s1 * s1 - s2 * s2 + s3 * s3) + q * q) * d
+        t00 = b00 * c + b01 * s
+        t01 = -b00 * s + b01 * c
+        t10 = b10 * c + b11 * s
+        t11 = -b10 * s + b11 * c
+        t20 = b20 * c + b21 * s
+        t21 = -b20 * s + b21 * c
+        if not misaligned:
+            S[_CT * B + lane] = t00
+            S[(_CT + 1) * B + lane] = t01
+            S[(_CT + 2) * B + lane] = b02
+            S[(_CT + 3) * B + lane] = t10
+            S[(_CT + 4) * B + lane] = t11
+            S[(_CT + 5) * B + lane] = b12
+            S[(_CT + 6) * B + lane] = t20
+            S[(_CT + 7) * B + lane] = t21
+            S[(_CT + 8) * B + lane] = b22
+            continue
+        for r in range(3):
+            m0 = S[(_CB + 3 * r) * B + lane]
+            m1 = S[(_CB + 3 * r + 1) * B + lane]
+            m2 = S[(_CB + 3 * r + 2) * B + lane]
+            S[(_CT + 3 * r) * B + lane] = dot3_fma(m0, m1, m2, t00, t10, t20)
+            S[(_CT + 3 * r + 1) * B + lane] = dot3_fma(m0, m1, m2, t01, t11, t21)
+            S[(_CT + 3 * r + 2) * B + lane] = dot3_fma(m0, m1, m2, b02, b12, b22)
+
+
+@njit(cache=True, error_model="numpy")
+def _control_lanes(S, tz, gains, wheels):
+    """The Nadir Pointing reference (``sigma_TN = tz z``) and
+    :func:`~ideas_hpc.core.attitude.control.sliding_mode_into` of every lane of ``S``
+    (no reference acceleration, no known torque): writes the held torques and
+    ``sigma_B/R``."""
+    B = LANES
+    # every parameter a scalar before the loop: loads from other arrays inside it
+    # would need alias checks against the stores into S
+    kp1, kp2, kp3 = gains.k_p[0], gains.k_p[1], gains.k_p[2]
+    ki1, ki2, ki3 = gains.k_i[0], gains.k_i[1], gains.k_i[2]
+    et1, et2, et3 = gains.eta[0], gains.eta[1], gains.eta[2]
+    ph1, ph2, ph3 = gains.phi[0], gains.phi[1], gains.phi[2]
+    I1, I2, I3 = wheels.I_rw_kgm2[0], wheels.I_rw_kgm2[1], wheels.I_rw_kgm2[2]
+    J1, J2, J3 = wheels.J_s_kgm2[0], wheels.J_s_kgm2[1], wheels.J_s_kgm2[2]
+    u_max = wheels.u_max_Nm
+    h_max = wheels.h_max_Nms
+    for lane in range(B):
+        rr1, rr2, rr3 = _mrp_add_lane(0.0, 0.0, tz, S[_SR * B + lane],
+                                      S[(_SR + 1) * B + lane], S[(_SR + 2) * B + lane])
+        s1 = S[_X * B + lane]
+        s2 = S[(_X + 1) * B + lane]
+        s3 = S[(_X + 2) * B + lane]
+        w1 = S[(_X + 3) * B + lane]
+        w2 = S[(_X + 4) * B + lane]
+        w3 = S[(_X + 5) * B + lane]
+        d1, d2, d3 = _mrp_sub_lane(s1, s2, s3, rr1, rr2, rr3)
+        r1, r2, r3 = mrp_rotate_s(d1, d2, d3, S[_OR * B + lane], S[(_OR + 1) * B + lane],
+                                  S[(_OR + 2) * B + lane])
+        e1 = w1 - r1
+        e2 = w2 - r2
+        e3 = w3 - r3
+        dd = d1 * d1 + d2 * d2 + d3 * d3
+        de = d1 * e1 + d2 * e2 + d3 * e3
+        q = 1.0 - dd
+        sd1 = 0.25 * (q * e1 + 2.0 * (d2 * e3 - d3 * e2) + 2.0 * de * d1)
+        sd2 = 0.25 * (q * e2 + 2.0 * (d3 * e1 - d1 * e3) + 2.0 * de * d2)
+        sd3 = 0.25 * (q * e3 + 2.0 * (d1 * e2 - d2 * e1) + 2.0 * de * d3)
+        sv1 = e1 + kp1 * d1 + ki1 * S[_Z * B + lane]
+        sv2 = e2 + kp2 * d2 + ki2 * S[(_Z + 1) * B + lane]
+        sv3 = e3 + kp3 * d3 + ki3 * S[(_Z + 2) * B + lane]
+        p1 = min(1.0, max(-1.0, ph1 * sv1))
+        p2 = min(1.0, max(-1.0, ph2 * sv2))
+        p3 = min(1.0, max(-1.0, ph3 * sv3))
+        dwd1 = -kp1 * sd1 - ki1 * d1 - et1 * p1
+        dwd2 = -kp2 * sd2 - ki2 * d2 - et2 * p2
+        dwd3 = -kp3 * sd3 - ki3 * d3 - et3 * p3
+        wd1 = dwd1 + 0.0 - (w2 * r3 - w3 * r2)
+        wd2 = dwd2 + 0.0 - (w3 * r1 - w1 * r3)
+        wd3 = dwd3 + 0.0 - (w1 * r2 - w2 * r1)
+        W1 = S[(_X + 6) * B + lane]
+        W2 = S[(_X + 7) * B + lane]
+        W3 = S[(_X + 8) * B + lane]
+        h1 = I1 * w1 + J1 * (W1 + w1)
+        h2 = I2 * w2 + J2 * (W2 + w2)
+        h3 = I3 * w3 + J3 * (W3 + w3)
+        S[_U * B + lane] = wheel_limit_s(-I1 * wd1 - (w2 * h3 - w3 * h2) + 0.0, W1, J1,
+                                         u_max, h_max)
+        S[(_U + 1) * B + lane] = wheel_limit_s(-I2 * wd2 - (w3 * h1 - w1 * h3) + 0.0, W2, J2,
+                                               u_max, h_max)
+        S[(_U + 2) * B + lane] = wheel_limit_s(-I3 * wd3 - (w1 * h2 - w2 * h1) + 0.0, W3, J3,
+                                               u_max, h_max)
+        S[_D * B + lane] = d1
+        S[(_D + 1) * B + lane] = d2
+        S[(_D + 2) * B + lane] = d3
+
+
+@njit(cache=True, error_model="numpy")
+def _rk4_lanes(S, I_rw, J_s, dt, int_limit):
+    """:func:`~ideas_hpc.core.attitude.rigid_body.rk4_step_into` (no external torque) and
+    the conditional integral update of every lane of ``S``, in place."""
+    B = LANES
+    h = 0.5 * dt
+    kk = dt / 6.0
+    lim2 = int_limit * int_limit
+    I1 = I_rw[0]
+    I2 = I_rw[1]
+    I3 = I_rw[2]
+    J1 = J_s[0]
+    J2 = J_s[1]
+    J3 = J_s[2]
+    iI = (1.0 / I1, 1.0 / I2, 1.0 / I3)
+    iJ = (1.0 / J1, 1.0 / J2, 1.0 / J3)
+    I_ = (I1, I2, I3)
+    J_ = (J1, J2, J3)
+    L_ = (0.0, 0.0, 0.0)
+    for lane in range(B):
+        x0 = S[_X * B + lane]
+        x1 = S[(_X + 1) * B + lane]
+        x2 = S[(_X + 2) * B + lane]
+        x3 = S[(_X + 3) * B + lane]
+        x4 = S[(_X + 4) * B + lane]
+        x5 = S[(_X + 5) * B + lane]
+        x6 = S[(_X + 6) * B + lane]
+        x7 = S[(_X + 7) * B + lane]
+        x8 = S[(_X + 8) * B + lane]
+        u_ = (S[_U * B + lane], S[(_U + 1) * B + lane], S[(_U + 2) * B + lane])
+        a0, a1, a2, a3, a4, a5, a6, a7, a8 = _eom_s(
+            (x0, x1, x2, x3, x4, x5, x6, x7, x8), u_, L_, iI, I_, J_, iJ)
+        b0, b1, b2, b3, b4, b5, b6, b7, b8 = _eom_s(
+            (x0 + h * a0, x1 + h * a1, x2 + h * a2, x3 + h * a3, x4 + h * a4, x5 + h * a5,
+             x6 + h * a6, x7 + h * a7, x8 + h * a8), u_, L_, iI, I_, J_, iJ)
+        c0, c1, c2, c3, c4, c5, c6, c7, c8 = _eom_s(
+            (x0 + h * b0, x1 + h * b1, x2 + h * b2, x3 + h * b3, x4 + h * b4, x5 + h * b5,
+             x6 + h * b6, x7 + h * b7, x8 + h * b8), u_, L_, iI, I_, J_, iJ)
+        e0, e1, e2, e3, e4, e5, e6, e7, e8 = _eom_s(
+            (x0 + dt * c0, x1 + dt * c1, x2 + dt * c2, x3 + dt * c3, x4 + dt * c4,
+             x5 + dt * c5, x6 + dt * c6, x7 + dt * c7, x8 + dt * c8), u_, L_, iI, I_, J_, iJ)
+        s0 = x0 + kk * (a0 + 2.0 * b0 + 2.0 * c0 + e0)
+        s1 = x1 + kk * (a1 + 2.0 * b1 + 2.0 * c1 + e1)
+        s2 = x2 + kk * (a2 + 2.0 * b2 + 2.0 * c2 + e2)
+        S[(_X + 3) * B + lane] = x3 + kk * (a3 + 2.0 * b3 + 2.0 * c3 + e3)
+        S[(_X + 4) * B + lane] = x4 + kk * (a4 + 2.0 * b4 + 2.0 * c4 + e4)
+        S[(_X + 5) * B + lane] = x5 + kk * (a5 + 2.0 * b5 + 2.0 * c5 + e5)
+        S[(_X + 6) * B + lane] = x6 + kk * (a6 + 2.0 * b6 + 2.0 * c6 + e6)
+        S[(_X + 7) * B + lane] = x7 + kk * (a7 + 2.0 * b7 + 2.0 * c7 + e7)
+        S[(_X + 8) * B + lane] = x8 + kk * (a8 + 2.0 * b8 + 2.0 * c8 + e8)
+        # the shadow-set switch and the integral's condition as selects (branch-free);
+        # z + 0 is never taken: the untaken side keeps z itself
+        ss = s0 * s0 + s1 * s1 + s2 * s2
+        sw = ss > 1.0
+        S[_X * B + lane] = -s0 / ss if sw else s0
+        S[(_X + 1) * B + lane] = -s1 / ss if sw else s1
+        S[(_X + 2) * B + lane] = -s2 / ss if sw else s2
+        d0 = S[_D * B + lane]
+        d1 = S[(_D + 1) * B + lane]
+        d2 = S[(_D + 2) * B + lane]
+        ok = d0 * d0 + d1 * d1 + d2 * d2 < lim2
+        z0 = S[_Z * B + lane]
+        z1 = S[(_Z + 1) * B + lane]
+        z2 = S[(_Z + 2) * B + lane]
+        S[_Z * B + lane] = z0 + d0 * dt if ok else z0
+        S[(_Z + 1) * B + lane] = z1 + d1 * dt if ok else z1
+        S[(_Z + 2) * B + lane] = z2 + d2 * dt if ok else z2
