@@ -40,7 +40,7 @@ from ideas_hpc.core.attitude.camera_batch import fly_cameras_into, spin_table
 from ideas_hpc.core.attitude.camera_lanes import fly_cameras_lanes_into
 from ideas_hpc.core.attitude.maneuvers import NP_MODE
 from ideas_hpc.core.dynamics.propagate_positions import propagate_positions_into
-from ideas_hpc.core.attitude.records import ControlGains, Initial, Wheels
+from ideas_hpc.core.attitude.records import ControlGains, ImageViews, Initial, Wheels
 from ideas_hpc.core.dynamics.frames import dcm_RT as _dcm_RT
 from ideas_hpc.dynamics.force_model import pack_force_model
 from ideas_hpc.dynamics.trajectory import MAX_STEPS, propagate_swarm, sample_times
@@ -141,15 +141,14 @@ def fly_views(setup, statics: FlightStatics, r0_T, v0_T, pert, buffers: dict):
     dcm, ok = buffers["dcm"], buffers["usable"]
     initial = Initial(np.ascontiguousarray(s_abs[0]), np.ascontiguousarray(w_abs[0]),
                       np.ascontiguousarray(W0[0]))
+    views = ImageViews(statics.img_every, statics.cs_img, mis, statics.use, dcm, ok)
     if statics.code == NP_MODE and statics.torques.shape[1] == 0:
         fly_cameras_lanes_into(statics.rings, statics.spin, statics.gains, statics.wheels,
-                               statics.dt, statics.n_steps, statics.img_every, initial, mis,
-                               statics.use, dcm, ok, statics.cs_img)
+                               statics.dt, statics.n_steps, initial, views)
     else:
         fly_cameras_into(statics.code, statics.rings, statics.spin, statics.periods,
                          statics.theta_max, statics.gains, statics.wheels, statics.dt,
-                         statics.n_steps, statics.img_every, initial, statics.torques, mis,
-                         statics.use, dcm, ok, statics.cs_img)
+                         statics.n_steps, initial, statics.torques, views)
     _blind_into(dcm, r_img, ok, statics.r_max_m)
     return r_img, dcm
 

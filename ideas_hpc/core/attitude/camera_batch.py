@@ -92,8 +92,7 @@ def _dcm_CT_into(s1, s2, s3, c, s, dcm_CB, i, misaligned, out, n):
 
 @njit(cache=True, parallel=True, error_model="numpy")
 def fly_cameras_into(mode, dcm_RT_all, spin_rate, periods, theta_max, gains, wheels, dt,
-                     n_steps, img_every, initial, torque_table, dcm_CB, use, out, usable,
-                     cs_img):
+                     n_steps, initial, torque_table, views):
     """Camera DCMs and usable flags at the images of ``N`` closed-loop spacecraft.
 
     Parameters
@@ -101,25 +100,17 @@ def fly_cameras_into(mode, dcm_RT_all, spin_rate, periods, theta_max, gains, whe
     mode, dcm_RT_all, spin_rate, periods, theta_max, gains, wheels, dt, n_steps
         As :func:`~ideas_hpc.core.attitude.batch.simulate_batch` (not body tracking:
         ``mode`` 0 or 1).
-    img_every : int
-        Image every ``img_every``-th step (``k = 0, img_every, ...``).
     initial : :class:`~ideas_hpc.core.attitude.records.Initial`
         (N, 3) absolute ``sigma_BN``, ``omega_BN_B`` (rad/s), wheel speeds (rad/s).
     torque_table : (N, n_steps + 1, 3) float64
         External torque in B, N m, held over each step; ``(N, 0, 3)``: none.
-    dcm_CB : (N, 3, 3) float64
-        Camera misalignments ``[C B]``; ``(0, 3, 3)``: none (``[C T] = [B T]``).
-    use : (3,) float64
-        ``(exposure s, smear limit rad = pixels x IFOV, settle limit rad)``; an
-        image is usable unless ``rate * exposure > smear limit`` or ``error > settle``.
-    out : (N, n_img, 3, 3) float64
-        Receives ``[C T]`` at every image.
-    usable : (N, n_img) bool
-        Receives the usable-image flags.
-    cs_img : (n_img, 2) float64
-        :func:`spin_table` of ``spin_rate``, ``dt``, ``n_steps``, ``img_every``.
+    views : :class:`~ideas_hpc.core.attitude.records.ImageViews`
+        The image cadence, the spin table at the images (:func:`spin_table` of
+        ``spin_rate``, ``dt``, ``n_steps``, ``img_every``), the misalignments, the
+        usable-image limits, and the arrays that receive ``[C T]`` and the flags.
     """
     sigma0, omega0, wheel0 = initial
+    img_every, cs_img, dcm_CB, use, out, usable = views
     int_limit = gains.int_limit
     I_rw = wheels.I_rw_kgm2
     J_s = wheels.J_s_kgm2

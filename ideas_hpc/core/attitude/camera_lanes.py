@@ -106,8 +106,8 @@ _NROW = 42
 
 
 @njit(cache=True, parallel=True, error_model="numpy")
-def fly_cameras_lanes_into(dcm_RT_all, spin_rate, gains, wheels, dt, n_steps, img_every,
-                           initial, dcm_CB, use, out, usable, cs_img):
+def fly_cameras_lanes_into(dcm_RT_all, spin_rate, gains, wheels, dt, n_steps, initial,
+                           views):
     """:func:`fly_cameras_into` for Nadir Pointing without disturbance torques, flying
     :data:`LANES` spacecraft side by side: every step is a loop over them, with the
     reference, :func:`~ideas_hpc.core.attitude.control.sliding_mode_into` and
@@ -118,6 +118,7 @@ def fly_cameras_lanes_into(dcm_RT_all, spin_rate, gains, wheels, dt, n_steps, im
     Arguments as :func:`fly_cameras_into` (no mode, periods, amplitude or torque table).
     """
     sigma0, omega0, wheel0 = initial
+    img_every, cs_img, dcm_CB, use, out, usable = views
     n = sigma0.shape[0]
     misaligned = dcm_CB.shape[0] > 0
     exposure = use[0]

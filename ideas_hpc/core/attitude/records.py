@@ -79,3 +79,26 @@ class StepTables(NamedTuple):
     #: (N, n_steps + 1, 3) float64, the external (disturbance) torque in B, N m,
     #: held over the step (the sum of :mod:`ideas_hpc.attitude.torque_terms`).
     torque_B_N_m: np.ndarray
+
+
+class ImageViews(NamedTuple):
+    """What the scenario bank's one-pass flights
+    (:mod:`~ideas_hpc.core.attitude.camera_batch`, :mod:`~ideas_hpc.core.attitude.camera_lanes`)
+    read and write at the images of ``N`` spacecraft."""
+
+    #: Image every ``img_every``-th step (``k = 0, img_every, ...``).
+    img_every: int
+    #: (n_img, 2) float64, ``cos, sin`` of the spin angle at the images
+    #: (:func:`~ideas_hpc.core.attitude.camera_batch.spin_table`).
+    cs_img: np.ndarray
+    #: (N, 3, 3) float64, camera misalignments ``[C B]``; ``(0, 3, 3)``: none.
+    dcm_CB: np.ndarray
+    #: (3,) float64, ``(exposure s, smear limit rad = pixels x IFOV, settle limit
+    #: rad)``: an image is usable unless ``rate * exposure > smear limit`` or
+    #: ``error > settle``.
+    use: np.ndarray
+    #: (N, n_img, 3, 3) float64, receives ``[C T]`` at every image.
+    dcm_CT_out: np.ndarray
+    #: (N, n_img) bool, receives the usable-image flags.
+    usable_out: np.ndarray
+
