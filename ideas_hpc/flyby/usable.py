@@ -88,9 +88,18 @@ def usable_images(use: ImageUse, rate_rad_s: np.ndarray, error_rad: np.ndarray):
 def blind(dcm_BT: np.ndarray, r_img_T: np.ndarray, usable: np.ndarray,
           r_max_m: float) -> np.ndarray:
     """Camera DCMs (N, n_img, 3, 3) with every unusable image blinded (module docstring)."""
+    out = np.array(dcm_BT, dtype=np.float64, copy=True)
+    blind_into(out, r_img_T, usable, r_max_m)
+    return np.ascontiguousarray(out)
+
+
+def blind_into(dcm_BT: np.ndarray, r_img_T: np.ndarray, usable: np.ndarray,
+               r_max_m: float) -> None:
+    """:func:`blind` in place on ``dcm_BT`` (float64, N x n_img x 3 x 3): the scenario
+    bank blinds its reused buffer without a copy."""
     bad = ~np.asarray(usable, dtype=bool)
     if not bad.any():
-        return dcm_BT
+        return
     r = np.asarray(r_img_T, dtype=np.float64)[bad]
     dist = np.linalg.norm(r, axis=1)
     if not np.all(dist > r_max_m):
@@ -104,6 +113,4 @@ def blind(dcm_BT: np.ndarray, r_img_T: np.ndarray, usable: np.ndarray,
     x = np.cross(e, z)
     x /= np.linalg.norm(x, axis=1)[:, None]
     y = np.cross(z, x)
-    out = np.array(dcm_BT, dtype=np.float64, copy=True)
-    out[bad] = np.stack([x, y, z], axis=1)     # rows: the camera axes in T
-    return np.ascontiguousarray(out)
+    dcm_BT[bad] = np.stack([x, y, z], axis=1)     # rows: the camera axes in T

@@ -46,6 +46,7 @@ from ideas_hpc.dynamics.force_model import pack_force_model
 from ideas_hpc.dynamics.trajectory import MAX_STEPS, propagate_swarm, sample_times
 from ideas_hpc.errors import InputError
 from ideas_hpc.flyby.camera import misalignment_dcms
+from ideas_hpc.flyby.usable import blind_into
 
 
 @dataclass
@@ -149,7 +150,7 @@ def fly_views(setup, statics: FlightStatics, r0_T, v0_T, pert, buffers: dict):
         fly_cameras_into(statics.code, statics.rings, statics.spin, statics.periods,
                          statics.theta_max, statics.gains, statics.wheels, statics.dt,
                          statics.n_steps, initial, statics.torques, views)
-    _blind_into(dcm, r_img, ok, statics.r_max_m)
+    blind_into(dcm, r_img, ok, statics.r_max_m)
     return r_img, dcm
 
 
@@ -171,24 +172,3 @@ def _positions(setup, statics, r0, v0, params_override, buffers):
                         dt_sample=setup.dt_s, params_override=params_override, views=True)
         raise RuntimeError("propagation failed")    # propagate_swarm raised already
     return buffers["r"]
-
-
-def _blind_into(dcm_BT, r_img_T, usable, r_max_m) -> None:
-    """:func:`ideas_hpc.flyby.usable.blind` in place: the same gathered rows, the same
-    operations (so the same bits), the same error."""
-    bad = ~usable
-    if not bad.any():
-        return
-    r = np.asarray(r_img_T, dtype=np.float64)[bad]
-    dist = np.linalg.norm(r, axis=1)
-    if not np.all(dist > r_max_m):
-        raise InputError(f"an unusable image is taken {dist.min() / 1e3:.3g} km from the body "
-                         f"centre, inside its bounding sphere ({r_max_m / 1e3:.3g} km): "
-                         "it cannot be blinded", field="r_img_T")
-    z = r / dist[:, None]
-    e = np.zeros_like(z)
-    e[np.arange(z.shape[0]), np.argmin(np.abs(z), axis=1)] = 1.0
-    x = np.cross(e, z)
-    x /= np.linalg.norm(x, axis=1)[:, None]
-    y = np.cross(z, x)
-    dcm_BT[bad] = np.stack([x, y, z], axis=1)
