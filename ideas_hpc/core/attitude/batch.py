@@ -24,15 +24,12 @@ from ideas_hpc.core.attitude.mrp import mrp_from_dcm
 from ideas_hpc.core.attitude.maneuvers import TRACK_MODE, reference_into
 
 
-@njit(cache=True, error_model="numpy")
-def _dcm_BT(x, spin_rate, t, out, a, b, c_):
-    """``[B T] = [B N][T N]^T`` with ``[T N] = R3(w_s t)``; writes ``out[a, b, c_]`` (3, 3).
-
-    (Indices instead of a view: creating array views in the hot loop costs
-    more than the whole step.)"""
-    s1 = x[0]
-    s2 = x[1]
-    s3 = x[2]
+@njit(cache=True, error_model="numpy", inline="always")
+def dcm_BT_s(s1, s2, s3, c, s):
+    """``[B T] = [B N][T N]^T`` on scalars: ``sigma_BN = (s1, s2, s3)`` and
+    ``[T N] = R3(w_s t)`` given by ``c, s = cos, sin(w_s t)``; returns its nine
+    entries row by row. One formula for every closed loop that images
+    (:func:`_dcm_BT`, ``camera_batch``), so they give the same bits."""
     ss = s1 * s1 + s2 * s2 + s3 * s3
     d = 1.0 / ((1.0 + ss) * (1.0 + ss))
     q = 1.0 - ss
@@ -46,18 +43,30 @@ def _dcm_BT(x, spin_rate, t, out, a, b, c_):
     b20 = (8.0 * s3 * s1 + 4.0 * s2 * q) * d
     b21 = (8.0 * s3 * s2 - 4.0 * s1 * q) * d
     b22 = (4.0 * (-s1 * s1 - s2 * s2 + s3 * s3) + q * q) * d
+    # [TN]^T = [[c, -s, 0], [s, c, 0], [0, 0, 1]]
+    return (b00 * c + b01 * s, -b00 * s + b01 * c, b02,
+            b10 * c + b11 * s, -b10 * s + b11 * c, b12,
+            b20 * c + b21 * s, -b20 * s + b21 * c, b22)
+
+
+@njit(cache=True, error_model="numpy")
+def _dcm_BT(x, spin_rate, t, out, a, b, c_):
+    """:func:`dcm_BT_s` of the state ``x`` at time ``t`` (s); writes ``out[a, b, c_]`` (3, 3).
+
+    (Indices instead of a view: creating array views in the hot loop costs
+    more than the whole step.)"""
     c = np.cos(spin_rate * t)
     s = np.sin(spin_rate * t)
-    # [TN]^T = [[c, -s, 0], [s, c, 0], [0, 0, 1]]
-    out[a, b, c_, 0, 0] = b00 * c + b01 * s
-    out[a, b, c_, 0, 1] = -b00 * s + b01 * c
-    out[a, b, c_, 0, 2] = b02
-    out[a, b, c_, 1, 0] = b10 * c + b11 * s
-    out[a, b, c_, 1, 1] = -b10 * s + b11 * c
-    out[a, b, c_, 1, 2] = b12
-    out[a, b, c_, 2, 0] = b20 * c + b21 * s
-    out[a, b, c_, 2, 1] = -b20 * s + b21 * c
-    out[a, b, c_, 2, 2] = b22
+    t00, t01, t02, t10, t11, t12, t20, t21, t22 = dcm_BT_s(x[0], x[1], x[2], c, s)
+    out[a, b, c_, 0, 0] = t00
+    out[a, b, c_, 0, 1] = t01
+    out[a, b, c_, 0, 2] = t02
+    out[a, b, c_, 1, 0] = t10
+    out[a, b, c_, 1, 1] = t11
+    out[a, b, c_, 1, 2] = t12
+    out[a, b, c_, 2, 0] = t20
+    out[a, b, c_, 2, 1] = t21
+    out[a, b, c_, 2, 2] = t22
 
 
 @njit(cache=True, error_model="numpy")

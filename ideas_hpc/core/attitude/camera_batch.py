@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from ideas_hpc.core.attitude.batch import dcm_BT_s
 from ideas_hpc.core.attitude.compose import dot3_fma
 from ideas_hpc.core.attitude.control import sliding_mode_into
 from ideas_hpc.core.attitude.maneuvers import reference_into
@@ -46,30 +47,9 @@ def spin_table(spin_rate, dt, n_steps, img_every):
 @njit(cache=True, error_model="numpy")
 def _dcm_CT_into(s1, s2, s3, c, s, dcm_CB, i, misaligned, out, n):
     """``out[i, n] = [C B][B N][T N]^T`` with ``sigma_BN = (s1, s2, s3)`` and
-    ``cos, sin(w_s t) = c, s`` (the formulas of
-    :func:`~ideas_hpc.core.attitude.batch._dcm_BT`, then
+    ``cos, sin(w_s t) = c, s`` (:func:`~ideas_hpc.core.attitude.batch.dcm_BT_s`, then
     :func:`~ideas_hpc.core.attitude.compose.compose_each`'s products)."""
-    ss = s1 * s1 + s2 * s2 + s3 * s3
-    d = 1.0 / ((1.0 + ss) * (1.0 + ss))
-    q = 1.0 - ss
-    b00 = (4.0 * (s1 * s1 - s2 * s2 - s3 * s3) + q * q) * d
-    b01 = (8.0 * s1 * s2 + 4.0 * s3 * q) * d
-    b02 = (8.0 * s1 * s3 - 4.0 * s2 * q) * d
-    b10 = (8.0 * s2 * s1 - 4.0 * s3 * q) * d
-    b11 = (4.0 * (-s1 * s1 + s2 * s2 - s3 * s3) + q * q) * d
-    b12 = (8.0 * s2 * s3 + 4.0 * s1 * q) * d
-    b20 = (8.0 * s3 * s1 + 4.0 * s2 * q) * d
-    b21 = (8.0 * s3 * s2 - 4.0 * s1 * q) * d
-    b22 = (4.0 * (-s1 * s1 - s2 * s2 + s3 * s3) + q * q) * d
-    t00 = b00 * c + b01 * s
-    t01 = -b00 * s + b01 * c
-    t02 = b02
-    t10 = b10 * c + b11 * s
-    t11 = -b10 * s + b11 * c
-    t12 = b12
-    t20 = b20 * c + b21 * s
-    t21 = -b20 * s + b21 * c
-    t22 = b22
+    t00, t01, t02, t10, t11, t12, t20, t21, t22 = dcm_BT_s(s1, s2, s3, c, s)
     if not misaligned:
         out[i, n, 0, 0] = t00
         out[i, n, 0, 1] = t01
