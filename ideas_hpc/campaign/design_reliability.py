@@ -198,7 +198,10 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=Non
     need = target - eps
     s_n = bank.rows.shape[0]
     _log(f"scenario bank: {s_n} scenarios x {bank.theta.size} candidates in {t_bank:.1f} s"
-         + (" (continuous dispersions off: one exact scenario)" if exact else ""))
+         + (" (continuous dispersions off: one exact scenario)" if exact else "")
+         # the markers' ~60 s of HiGHS hold a worker the bank would otherwise use
+         + (" (one worker designed the failure-tolerant markers meanwhile)"
+            if tolerant is not None and not bank.attrs.get("reused") else ""))
     n_grid = grid_size(d.grid_step_rad)
     sep = c.config.swarm.min_separation_m
     m_sep = separation_steps(2 * math.pi / n_grid, setup.d_sep_m, sep, n_grid)
