@@ -92,7 +92,7 @@ class Quality(NamedTuple):
 class TimeTree(NamedTuple):
     """Time tree of the images (:func:`ideas_hpc.core.mapping.time_tree.time_tree`)."""
 
-    #: (N, n_nodes, 17) float64, per-node reference camera and motion bounds.
+    #: (N, n_nodes, 24) float64, per-node reference camera and motion bounds.
     NF: np.ndarray
     #: (n_nodes, 4) int64, image range and children per node.
     NI: np.ndarray

@@ -48,7 +48,7 @@ from numba import njit, prange
 from ideas_hpc.core.mapping.bvh import cone_clear
 from ideas_hpc.core.mapping.records import TimeTree
 from ideas_hpc.core.mapping.segments import face_blocks_cone, segment_hit
-from ideas_hpc.core.mapping.time_tree import _FP, _below_elevation, _classify, scan_tree
+from ideas_hpc.core.mapping.time_tree import _AX, _FP, _below_elevation, _classify, scan_tree
 from ideas_hpc.core.mapping.visibility import _seen
 
 #: Bound on ||C'||_2 for the flown rotation matrices (checked by the boundary layer).
@@ -307,6 +307,8 @@ def windows(mesh, cam, opts, bvh, bc, br, both):
         for node in range(tree.NI.shape[0]):
             NF[k, node, 14] = (NF[k, node, 14] + br) * S_MAX * (1.0 + 1e-12)
             NF[k, node, 13] = (NF[k, node, 13] + bc) * (1.0 + 1e-12)
+            for a in range(3):      # no per-axis bound for cameras within the budget
+                NF[k, node, _AX + a] = np.inf
     out = np.full((nsc, nv, 2), -1, dtype=np.int64)
     for j in prange(nv):
         stack = np.empty(128, dtype=np.int64)

@@ -34,8 +34,8 @@ from ideas_hpc.core.mapping.coverage import _is_strict
 from ideas_hpc.core.mapping.records import TimeTree
 from ideas_hpc.core.mapping.scenario_proofs import S_MAX
 from ideas_hpc.core.mapping.segments import face_blocks_cone
-from ideas_hpc.core.mapping.time_tree import (_below_elevation, _classify, dcm_gap2, gap,
-                                              gram_error2, scan_tree)
+from ideas_hpc.core.mapping.time_tree import (LEAF, _below_elevation, _classify, dcm_gap2,
+                                              fill_tree, gap, gram_error2, scan_tree_unfilled)
 from ideas_hpc.core.mapping.visibility import _seen, _seen_hint
 
 
@@ -191,11 +191,13 @@ def perturbed_rows(nominal, mesh, cam, opts, bvh):
     vertices = mesh.vertices_T_m
     nv = mesh.vertices_T_m.shape[0]
     nsc = cam.r_T_m.shape[0]
-    tree = TimeTree(*scan_tree(cam))
+    tree = TimeTree(*scan_tree_unfilled(cam))
     strict = _is_strict(opts)
     mask = np.zeros((nsc, nv), dtype=np.bool_)
-    # candidate-major: one candidate's flight, time tree and rows stay in cache
+    # candidate-major: one candidate's flight, time tree and rows stay in cache,
+    # the tree built right before it is walked
     for k in prange(nsc):
+        fill_tree(tree.NF, tree.NI, cam.r_T_m, cam.dcm_BT, k, LEAF)
         stack = np.empty(128, dtype=np.int64)
         hint = np.full(1, -1, dtype=np.int64)
         for j in range(nv):
