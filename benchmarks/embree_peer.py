@@ -209,7 +209,8 @@ def workload_section(shape, tree, scene, eps):
     win = np.empty((nsc, nv, 2), dtype=np.int64)
     win[..., 0], win[..., 1] = 0, nimg - 1
     nominal = Nominal(none, np.zeros((nsc, nv)), np.zeros((nsc, nv)), win, none,
-                      np.zeros(nsc, dtype=np.int64), np.zeros(nsc, dtype=np.int64), r, C)
+                      np.zeros(nsc, dtype=np.int64), np.zeros(nsc, dtype=np.int64), r, C,
+                      np.array([0.0, 0.0, 1e-10]))
     strict, bvh = _strict_args(shape, opts, None, nimg)
     recs = (_mesh(shape), _camera(r, C, np.zeros(nimg), te, setup.near_m, setup.far_m, True),
             strict, bvh)

@@ -157,7 +157,7 @@ def _witness_probe(j, r, dcm, r_w, dcm_w, slack, radius, mesh, cam0, opts, bvh):
     sl = np.full((1, mesh.vertices_T_m.shape[0]), slack)
     rad = np.full((1, mesh.vertices_T_m.shape[0]), radius)
     nominal = Nominal(z, sl, rad, np.zeros((1, 1, 2), dtype=np.int64), z, z[0], z[0],
-                      r_w.reshape(1, 1, 3), dcm_w.reshape(1, 1, 3, 3))
+                      r_w.reshape(1, 1, 3), dcm_w.reshape(1, 1, 3, 3), np.zeros(3))
     return (_proven(nominal, mesh.vertices_T_m, j, cam, 0, 0),
             _seen(j, 0, 0, mesh, cam, opts, bvh, opts.occlusion, opts.illumination))
 

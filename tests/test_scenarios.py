@@ -210,3 +210,36 @@ def test_closed_loop_rows_include_the_convergence(eros1708, start):
     ideal = full_rows(setup.with_(attitude_mode="ideal"), theta, None, eng.r0_T, eng.v0_T, pert)
     if start == "paper":
         assert (fast != ideal).any()
+
+
+def test_a_flight_the_proofs_cannot_take_is_recomputed_in_full(eros1708, monkeypatch):
+    # The proofs assume near-rotation DCMs and finite positions, checked per candidate
+    # inside perturbed_rows: one scaled DCM of one candidate at one image sends the
+    # whole scenario to the full recomputation, one non-finite position to the full
+    # path's validation, which names it.
+    from ideas_hpc.errors import InputError
+    from ideas_hpc.montecarlo.scenario_rows import RowEngine
+    from ideas_hpc.montecarlo.scenarios import grid_theta, row_engine
+
+    c = load(DESIGN, [])
+    setup = setup_from_campaign(c)
+    mc = c.config.monte_carlo
+    theta = grid_theta(np.deg2rad(6.0))
+    eng = row_engine(setup, theta, mc, 11, SCENARIO_STREAM)
+    pert = Perturbation(**draw_world(mc, setup, theta, 11, SCENARIO_STREAM, 1))
+    r_img, dcm = (np.array(a) for a in eng.flight(pert))
+    full_calls = []
+    real_full = RowEngine._full
+    monkeypatch.setattr(RowEngine, "_full",
+                        lambda self, *a: full_calls.append(1) or real_full(self, *a))
+    eng.rows(r_img, dcm)
+    assert not full_calls                               # a plain scenario: the proofs
+    # |C C^T - I| = 2e-8: beyond the proofs' 1e-10, within the pipeline's 1e-6
+    dcm[5, 10] *= 1.0 + 1e-8
+    np.testing.assert_array_equal(eng.rows(r_img, dcm), real_full(eng, r_img, dcm))
+    assert full_calls == [1]
+    r_img[3, 7, 0] = np.nan
+    dcm[5, 10] /= 1.0 + 1e-8
+    with pytest.raises(InputError, match="r_T"):
+        eng.rows(r_img, dcm)
+    assert full_calls == [1, 1]

@@ -153,17 +153,18 @@ class RowEngine:
         r_nom, dcm_nom = self.nominal()
         if r.shape != r_nom.shape or c.shape != dcm_nom.shape:
             return self._full(r_img, dcm)
-        bc, br = self.budget
-        i_ok, i_pos, ortho = _k.deviation_start(r_nom, dcm_nom, r, c, float(bc), float(br))
-        # the proofs need near-orthonormal DCMs; anything else (or non-finite
-        # input, which the full path rejects by name) takes the validated full path
-        if not ortho <= ORTHO_TOL or not np.isfinite(r).all():
-            return self._full(r_img, dcm)
         mesh, cam0, opts, bvh = self._static()
         cam = cam0._replace(r_T_m=r, dcm_BT=c)
+        n = r.shape[0]
         nominal = Nominal(self.witness, self.slack_q, self.radius, self.window, self.unseen_any,
-                          i_ok, i_pos, r_nom, dcm_nom)
-        return _k.perturbed_rows(nominal, mesh, cam, opts, bvh)
+                          np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64), r_nom,
+                          dcm_nom, np.array([*map(float, self.budget), ORTHO_TOL]))
+        rows = _k.perturbed_rows(nominal, mesh, cam, opts, bvh)
+        # the proofs need near-orthonormal DCMs; anything else (or non-finite
+        # input, which the full path rejects by name) takes the validated full path
+        if np.any(nominal.i_ok < 0):
+            return self._full(r_img, dcm)
+        return rows
 
     def _full(self, r_img, dcm) -> np.ndarray:
         sun = self.setup.sun_T() if self.setup.coverage.needs_sun else None

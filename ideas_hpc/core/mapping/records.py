@@ -157,14 +157,18 @@ class Nominal(NamedTuple):
     window: np.ndarray
     #: (N, V) int, first image any attitude might see it at (positions within the budget).
     unseen_any: np.ndarray
-    #: (N,) int64, first image from which the deviation stays within the budget, and
-    #: the same for the position deviation alone.
+    #: (N,) int64, written by ``perturbed_rows``: first image from which the deviation
+    #: stays within the budget (-1: the flight is not near-rotations or not finite),
+    #: and the same for the position deviation alone.
     i_ok: np.ndarray
     i_pos: np.ndarray
     #: (N, n_img, 3) and (N, n_img, 3, 3) float64, the nominal flight's positions (m)
     #: and camera DCMs at the images.
     r_nom_T_m: np.ndarray
     dcm_nom_BT: np.ndarray
+    #: (3,) float64: the budget ``B_C`` (Frobenius) and ``B_r`` (m), and the largest
+    #: ``||C C^T - I||_F`` of a flown DCM the proofs accept.
+    budget: np.ndarray
 
 
 @njit(cache=True, inline="always")

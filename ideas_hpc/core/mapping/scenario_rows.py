@@ -39,6 +39,37 @@ from ideas_hpc.core.mapping.time_tree import (LEAF, _below_elevation, _classify,
 from ideas_hpc.core.mapping.visibility import _seen, _seen_hint
 
 
+@njit(cache=True, inline="always")
+def _deviation(r_nom, dcm_nom, r_T, dcm_BT, k, bc, br):
+    """:func:`deviation_start` for candidate ``k``: ``(i_ok, i_pos, worst)``, ``worst``
+    the largest ``||C C^T - I||_F^2`` (inf: a reflection, or a DCM or position that
+    is not finite)."""
+    i_ok = 0
+    i_pos = 0
+    worst = 0.0
+    for i in range(r_T.shape[1] - 1, -1, -1):
+        dc = dcm_gap2(dcm_BT, k, i, dcm_nom, i)
+        g = gram_error2(dcm_BT, k, i)
+        det = (dcm_BT[k, i, 0, 0] * (dcm_BT[k, i, 1, 1] * dcm_BT[k, i, 2, 2]
+                                     - dcm_BT[k, i, 1, 2] * dcm_BT[k, i, 2, 1])
+               - dcm_BT[k, i, 0, 1] * (dcm_BT[k, i, 1, 0] * dcm_BT[k, i, 2, 2]
+                                       - dcm_BT[k, i, 1, 2] * dcm_BT[k, i, 2, 0])
+               + dcm_BT[k, i, 0, 2] * (dcm_BT[k, i, 1, 0] * dcm_BT[k, i, 2, 1]
+                                       - dcm_BT[k, i, 1, 1] * dcm_BT[k, i, 2, 0]))
+        if not det > 0.0:
+            g = np.inf                   # a reflection (or NaN): not a rotation
+        if not g <= worst:
+            worst = g                    # NaN sticks
+        dr = gap(r_T, k, i, r_nom, i)
+        if not dr < np.inf:
+            worst = np.inf               # a position that is not finite: sticks as well
+        if i_ok == 0 and not (np.sqrt(dc) <= bc and dr <= br):
+            i_ok = i + 1
+        if i_pos == 0 and not dr <= br:
+            i_pos = i + 1
+    return i_ok, i_pos, worst
+
+
 @njit(cache=True, parallel=True)
 def deviation_start(r_nom, dcm_nom, r_T, dcm_BT, bc, br):
     """How far a flight ``(r_T, dcm_BT)`` strays from the nominal ``(r_nom, dcm_nom)``.
@@ -47,38 +78,15 @@ def deviation_start(r_nom, dcm_nom, r_T, dcm_BT, bc, br):
     is within the budget ``(bc, br)`` (``n_img`` when the last image is already
     outside); (N,) int64 ``i_pos``, the same for the position deviation alone; and
     the largest ``||C C^T - I||_F`` of the flown DCMs, which bounds ``||C||_2 <=
-    sqrt(1 + it)`` for the proofs (inf when one is a reflection, NaN when one is
-    not finite).
+    sqrt(1 + it)`` for the proofs (inf when one is a reflection or not finite, or a
+    position is not). :func:`perturbed_rows` does the same per candidate itself.
     """
     nsc = r_T.shape[0]
-    nimg = r_T.shape[1]
     out = np.empty(nsc, dtype=np.int64)
     out_pos = np.empty(nsc, dtype=np.int64)
     ortho = np.zeros(nsc)
     for k in prange(nsc):
-        i_ok = 0
-        i_pos = 0
-        worst = 0.0
-        for i in range(nimg - 1, -1, -1):
-            dc = dcm_gap2(dcm_BT, k, i, dcm_nom, i)
-            g = gram_error2(dcm_BT, k, i)
-            det = (dcm_BT[k, i, 0, 0] * (dcm_BT[k, i, 1, 1] * dcm_BT[k, i, 2, 2]
-                                         - dcm_BT[k, i, 1, 2] * dcm_BT[k, i, 2, 1])
-                   - dcm_BT[k, i, 0, 1] * (dcm_BT[k, i, 1, 0] * dcm_BT[k, i, 2, 2]
-                                           - dcm_BT[k, i, 1, 2] * dcm_BT[k, i, 2, 0])
-                   + dcm_BT[k, i, 0, 2] * (dcm_BT[k, i, 1, 0] * dcm_BT[k, i, 2, 1]
-                                           - dcm_BT[k, i, 1, 1] * dcm_BT[k, i, 2, 0]))
-            if not det > 0.0:
-                g = np.inf                   # a reflection (or NaN): not a rotation
-            if not g <= worst:
-                worst = g                    # NaN sticks
-            dr = gap(r_T, k, i, r_nom, i)
-            if i_ok == 0 and not (np.sqrt(dc) <= bc and dr <= br):
-                i_ok = i + 1
-            if i_pos == 0 and not dr <= br:
-                i_pos = i + 1
-        out[k] = i_ok
-        out_pos[k] = i_pos
+        out[k], out_pos[k], worst = _deviation(r_nom, dcm_nom, r_T, dcm_BT, k, bc, br)
         ortho[k] = np.sqrt(worst)
     return out, out_pos, ortho.max() if nsc > 0 else 0.0
 
@@ -177,17 +185,21 @@ def perturbed_rows(nominal, mesh, cam, opts, bvh):
     :func:`~ideas_hpc.core.mapping.scenario_proofs.witness_proofs`, ``window``
     (N, V, 2) and ``unseen_any`` (N, V) from
     :func:`~ideas_hpc.core.mapping.scenario_proofs.windows` with the budget and
-    with any attitude, ``i_ok`` and ``i_pos`` (N,) from :func:`deviation_start`
-    with the same budget, and the nominal flight; other arguments as
+    with any attitude, the nominal flight and the ``budget`` ``(B_C, B_r, tolerance
+    on ||C C^T - I||_F)``; other arguments as
     :func:`ideas_hpc.core.mapping.coverage.observed_by_spacecraft`, for the
-    perturbed flight. A (candidate, vertex) not settled by its witness is
-    scanned exactly (:func:`_scan_range`).
+    perturbed flight. ``i_ok`` and ``i_pos`` (N,) are written here, per candidate
+    as :func:`deviation_start`; ``i_ok[k] = -1`` marks a candidate whose flown DCMs
+    are not rotations within the tolerance or whose flight is not finite: its row
+    is not computed, and the caller must recompute the rows in full. A (candidate,
+    vertex) not settled by its witness is scanned exactly (:func:`_scan_range`).
     """
     witness = nominal.witness
     window = nominal.window
     unseen_any = nominal.unseen_any
     i_ok = nominal.i_ok
     i_pos = nominal.i_pos
+    bc, br, ortho_tol = nominal.budget[0], nominal.budget[1], nominal.budget[2]
     vertices = mesh.vertices_T_m
     nv = mesh.vertices_T_m.shape[0]
     nsc = cam.r_T_m.shape[0]
@@ -197,6 +209,13 @@ def perturbed_rows(nominal, mesh, cam, opts, bvh):
     # candidate-major: one candidate's flight, time tree and rows stay in cache,
     # the tree built right before it is walked
     for k in prange(nsc):
+        # how far this candidate strays, while its flight comes into cache for the
+        # tree and the scans (a separate pass over every flight cost more)
+        i_ok[k], i_pos[k], worst = _deviation(nominal.r_nom_T_m, nominal.dcm_nom_BT,
+                                              cam.r_T_m, cam.dcm_BT, k, bc, br)
+        if not np.sqrt(worst) <= ortho_tol:
+            i_ok[k] = -1        # not near-rotations (or not finite): no proof holds
+            continue
         fill_tree(tree.NF, tree.NI, cam.r_T_m, cam.dcm_BT, k, LEAF)
         stack = np.empty(128, dtype=np.int64)
         hint = np.full(1, -1, dtype=np.int64)
