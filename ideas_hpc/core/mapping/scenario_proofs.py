@@ -307,8 +307,14 @@ def windows(mesh, cam, opts, bvh, bc, br, both):
         for node in range(tree.NI.shape[0]):
             NF[k, node, 14] = (NF[k, node, 14] + br) * S_MAX * (1.0 + 1e-12)
             NF[k, node, 13] = (NF[k, node, 13] + bc) * (1.0 + 1e-12)
-            for a in range(3):      # no per-axis bound for cameras within the budget
-                NF[k, node, _AX + a] = np.inf
+            # per camera axis (time_tree_build): a row of C' - C_m grows by at most
+            # bc, |r' - r_m| by br, and |row_a(C_m) . (r' - r_m)| by |row_a(C_m)| br
+            # <= S br
+            for a in range(3):
+                NF[k, node, _AX + a] = (NF[k, node, _AX + a] + bc) * (1.0 + 1e-12)
+                NF[k, node, _AX + 4 + a] = ((NF[k, node, _AX + 4 + a] + NF[k, node, 15] * br)
+                                            * (1.0 + 1e-12))
+            NF[k, node, _AX + 3] = (NF[k, node, _AX + 3] + br) * (1.0 + 1e-12)
     out = np.full((nsc, nv, 2), -1, dtype=np.int64)
     for j in prange(nv):
         stack = np.empty(128, dtype=np.int64)

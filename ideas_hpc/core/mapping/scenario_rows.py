@@ -216,7 +216,8 @@ def perturbed_rows(nominal, mesh, cam, opts, bvh):
         if not np.sqrt(worst) <= ortho_tol:
             i_ok[k] = -1        # not near-rotations (or not finite): no proof holds
             continue
-        fill_tree(tree.NF, tree.NI, cam.r_T_m, cam.dcm_BT, k, LEAF)
+        # the tree's S from the gram errors just checked, not computed again
+        fill_tree(tree.NF, tree.NI, cam.r_T_m, cam.dcm_BT, k, LEAF, worst)
         stack = np.empty(128, dtype=np.int64)
         hint = np.full(1, -1, dtype=np.int64)
         for j in range(nv):

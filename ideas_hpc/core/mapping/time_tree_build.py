@@ -64,9 +64,9 @@ from numba import njit, prange
 # (no ``s_k``: every term is explicit). For a parent with reference ``M`` and
 # children ``c``: ``E_a <= E_a,c + |row_a(C_mc - C_M)|``, ``R <= R_c + |r_mc - r_M|``
 # and ``P_a <= P_a,c + |row_a(C_M - C_mc)| R_c + |row_a(C_M) . (r_mc - r_M)|``. The
-# tests use the smaller of this and ``delta``; a tree whose bounds are inflated
-# for a deviation budget (scenario_proofs.windows) sets ``E_a`` to inf, which
-# leaves ``delta`` alone.
+# tests use the smaller of this and ``delta``; a tree inflated for every camera
+# within a deviation budget ``(b_C, b_r)`` (scenario_proofs.windows) adds ``b_C``
+# to ``E_a``, ``b_r`` to ``R`` and ``S b_r`` to ``P_a``.
 
 #: Images per leaf of the time tree.
 LEAF = 16
@@ -202,10 +202,14 @@ def tree_nodes(nimg, leaf):
 
 
 @njit(cache=True)
-def fill_tree(NF, NI, r_T, dcm_BT, k, leaf):
+def fill_tree(NF, NI, r_T, dcm_BT, k, leaf, gram2=-1.0):
     """Fill ``NF[k]`` of :func:`time_tree` for spacecraft ``k`` (``NI`` from
     :func:`tree_nodes`): one spacecraft's tree, so that a kernel can build it
-    right before it walks it, while that spacecraft's images are in cache."""
+    right before it walks it, while that spacecraft's images are in cache.
+
+    ``gram2`` >= 0: a bound on ``||C C^T - I||_F^2`` over all of ``k``'s images
+    the caller has already computed (used for every leaf's ``S``); < 0: computed
+    here per leaf."""
     nimg = r_T.shape[1]
     counts, offs = _time_tree_shape(nimg, leaf)
     nlev = counts.shape[0]
@@ -226,8 +230,11 @@ def fill_tree(NF, NI, r_T, dcm_BT, k, leaf):
         p_x = 0.0
         p_y = 0.0
         p_z = 0.0
+        if gram2 >= 0.0:
+            g2 = gram2
         for i in range(i0, i1):
-            g2 = max(g2, gram_error2(dcm_BT, k, i))
+            if gram2 < 0.0:
+                g2 = max(g2, gram_error2(dcm_BT, k, i))
             c2 = max(c2, dcm_gap2(dcm_BT, k, i, dcm_BT, m))
             dx = r_T[k, i, 0] - r_T[k, m, 0]
             dy = r_T[k, i, 1] - r_T[k, m, 1]
