@@ -61,11 +61,15 @@ def _is_bank(path: Path) -> bool:
 
 
 def read_rows(path) -> np.ndarray:
-    """(S, C, V) bool rows of a finished bank store."""
-    import xarray as xr
+    """(S, C, V) bool rows of a finished bank store.
 
-    with xr.open_zarr(path) as ds:
-        return np.ascontiguousarray(ds["rows"].values)
+    Read with zarr itself: the variable has no CF encoding, and xarray's lazy
+    ``.values`` computed the read through the dask client of a running campaign,
+    shipping 158 MB of rows from the workers (256 scenarios x 720 candidates x 856
+    vertices: 1.8 s, against 0.07 s here)."""
+    import zarr
+
+    return np.ascontiguousarray(zarr.open_group(str(path), mode="r")["rows"][...])
 
 
 @dataclass(frozen=True)

@@ -12,98 +12,10 @@ import numpy as np
 from numba import njit, prange
 
 from ideas_hpc.core.attitude.compose import dot3_fma
-from ideas_hpc.core.attitude.mrp import mrp_from_dcm, mrp_rotate_s
-from ideas_hpc.core.attitude.rigid_body import _eom_s, wheel_limit_s
-
-# mrp_add_s, mrp_sub_s and mrp_switch_s with both sides of their branches computed and
-# one selected: the same operations on the taken side, so the same bits, but a loop
-# over lanes that calls them vectorises (with the branches LLVM left it scalar).
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _switch_lane(a, b, c):
-    """:func:`~ideas_hpc.core.attitude.mrp.mrp_switch_s`, branch-free."""
-    ss = a * a + b * b + c * c
-    sw = ss > 1.0
-    return (-a / ss if sw else a), (-b / ss if sw else b), (-c / ss if sw else c)
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _mrp_add_lane(a1, a2, a3, b1, b2, b3):
-    """:func:`~ideas_hpc.core.attitude.mrp.mrp_add_s`, branch-free."""
-    s1s = a1 * a1 + a2 * a2 + a3 * a3
-    s2s = b1 * b1 + b2 * b2 + b3 * b3
-    den = 1.0 + s1s * s2s - 2.0 * (a1 * b1 + a2 * b2 + a3 * b3)
-    flip = abs(den) < 0.1
-    f1 = -a1 / s1s
-    f2 = -a2 / s1s
-    f3 = -a3 / s1s
-    fs = 1.0 / s1s
-    fden = 1.0 + fs * s2s - 2.0 * (f1 * b1 + f2 * b2 + f3 * b3)
-    a1 = f1 if flip else a1
-    a2 = f2 if flip else a2
-    a3 = f3 if flip else a3
-    s1s = fs if flip else s1s
-    den = fden if flip else den
-    c1 = b2 * a3 - b3 * a2
-    c2 = b3 * a1 - b1 * a3
-    c3 = b1 * a2 - b2 * a1
-    p = 1.0 - s1s
-    q = 1.0 - s2s
-    return _switch_lane((p * b1 + q * a1 - 2.0 * c1) / den, (p * b2 + q * a2 - 2.0 * c2) / den,
-                        (p * b3 + q * a3 - 2.0 * c3) / den)
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _mrp_sub_lane(a1, a2, a3, r1, r2, r3):
-    """:func:`~ideas_hpc.core.attitude.mrp.mrp_sub_s`, branch-free."""
-    srs = r1 * r1 + r2 * r2 + r3 * r3
-    sbs = a1 * a1 + a2 * a2 + a3 * a3
-    den = 1.0 + srs * sbs + 2.0 * (r1 * a1 + r2 * a2 + r3 * a3)
-    flip = abs(den) < 0.1
-    f1 = -r1 / srs
-    f2 = -r2 / srs
-    f3 = -r3 / srs
-    fs = 1.0 / srs
-    fden = 1.0 + fs * sbs + 2.0 * (f1 * a1 + f2 * a2 + f3 * a3)
-    r1 = f1 if flip else r1
-    r2 = f2 if flip else r2
-    r3 = f3 if flip else r3
-    srs = fs if flip else srs
-    den = fden if flip else den
-    c1 = a2 * r3 - a3 * r2
-    c2 = a3 * r1 - a1 * r3
-    c3 = a1 * r2 - a2 * r1
-    p = 1.0 - srs
-    q = 1.0 - sbs
-    return _switch_lane((p * a1 - q * r1 + 2.0 * c1) / den, (p * a2 - q * r2 + 2.0 * c2) / den,
-                        (p * a3 - q * r3 + 2.0 * c3) / den)
-
-
-#: Spacecraft flown side by side in :func:`fly_cameras_lanes_into`. One spacecraft's
-#: step is a long chain of dependent operations; a loop over independent lanes lets
-#: the compiler turn it into packed (SIMD) arithmetic, lane for lane the same
-#: operations in the same order (no reassociation, no fused multiply-add: the same
-#: bits). Measured on a 64-lane block (AVX-512 host): the RK4 step 3-6x and the
-#: controller 3x faster packed than scalar; the bank's closed loop per scenario of
-#: 720 candidates 0.41 s -> 0.12 s CPU, then 0.11 s with the image's camera DCM
-#: packed too and 0.095 s with the settle test's atan only near its threshold. (Before packing, 64 and 128 lanes were
-#: 2-3x faster than one spacecraft at a time, 4 to 32 lanes 1.2-1.6x.)
-LANES = 64
-
-# Rows of the lanes' state ``S`` (flat, row ``r`` of lane ``l`` at ``r * LANES + l``):
-# the offsets are compile-time constants and the trip count is LANES, so LLVM sees that
-# the rows do not overlap and vectorises without run-time alias checks (with a 2-D
-# array or separate arrays per quantity it did not: the stride is a run-time value).
-_X = 0          # 9 rows: sigma_BN, omega_BN_B (rad/s), wheel speeds (rad/s)
-_Z = 9          # 3: the MRP error integral
-_U = 12         # 3: held wheel torques, N m
-_D = 15         # 3: sigma_B/R at the step
-_SR = 18        # 3: sigma_RT
-_OR = 21        # 3: omega_RN_R, rad/s
-_CB = 24        # 9: the camera misalignment [C B], row-major
-_CT = 33        # 9: the camera DCM [C T] at the image, row-major
-_NROW = 42
-
+from ideas_hpc.core.attitude.lanes_control import (_CB, _CT, _D, _NROW, _OR, _RARE, _SR, _U,
+                                                   _X, _Z, LANES, _control_lanes)
+from ideas_hpc.core.attitude.mrp import mrp_from_dcm
+from ideas_hpc.core.attitude.rigid_body import _eom_s
 
 @njit(cache=True, parallel=True, error_model="numpy")
 def fly_cameras_lanes_into(dcm_RT_all, spin_rate, gains, wheels, dt, n_steps, initial,
@@ -248,73 +160,6 @@ def _dcm_CT_lanes(S, c, s, misaligned):
 
 
 @njit(cache=True, error_model="numpy")
-def _control_lanes(S, tz, gains, wheels):
-    """The Nadir Pointing reference (``sigma_TN = tz z``) and
-    :func:`~ideas_hpc.core.attitude.control.sliding_mode_into` of every lane of ``S``
-    (no reference acceleration, no known torque): writes the held torques and
-    ``sigma_B/R``."""
-    B = LANES
-    # every parameter a scalar before the loop: loads from other arrays inside it
-    # would need alias checks against the stores into S
-    kp1, kp2, kp3 = gains.k_p[0], gains.k_p[1], gains.k_p[2]
-    ki1, ki2, ki3 = gains.k_i[0], gains.k_i[1], gains.k_i[2]
-    et1, et2, et3 = gains.eta[0], gains.eta[1], gains.eta[2]
-    ph1, ph2, ph3 = gains.phi[0], gains.phi[1], gains.phi[2]
-    I1, I2, I3 = wheels.I_rw_kgm2[0], wheels.I_rw_kgm2[1], wheels.I_rw_kgm2[2]
-    J1, J2, J3 = wheels.J_s_kgm2[0], wheels.J_s_kgm2[1], wheels.J_s_kgm2[2]
-    u_max = wheels.u_max_Nm
-    h_max = wheels.h_max_Nms
-    for lane in range(B):
-        rr1, rr2, rr3 = _mrp_add_lane(0.0, 0.0, tz, S[_SR * B + lane],
-                                      S[(_SR + 1) * B + lane], S[(_SR + 2) * B + lane])
-        s1 = S[_X * B + lane]
-        s2 = S[(_X + 1) * B + lane]
-        s3 = S[(_X + 2) * B + lane]
-        w1 = S[(_X + 3) * B + lane]
-        w2 = S[(_X + 4) * B + lane]
-        w3 = S[(_X + 5) * B + lane]
-        d1, d2, d3 = _mrp_sub_lane(s1, s2, s3, rr1, rr2, rr3)
-        r1, r2, r3 = mrp_rotate_s(d1, d2, d3, S[_OR * B + lane], S[(_OR + 1) * B + lane],
-                                  S[(_OR + 2) * B + lane])
-        e1 = w1 - r1
-        e2 = w2 - r2
-        e3 = w3 - r3
-        dd = d1 * d1 + d2 * d2 + d3 * d3
-        de = d1 * e1 + d2 * e2 + d3 * e3
-        q = 1.0 - dd
-        sd1 = 0.25 * (q * e1 + 2.0 * (d2 * e3 - d3 * e2) + 2.0 * de * d1)
-        sd2 = 0.25 * (q * e2 + 2.0 * (d3 * e1 - d1 * e3) + 2.0 * de * d2)
-        sd3 = 0.25 * (q * e3 + 2.0 * (d1 * e2 - d2 * e1) + 2.0 * de * d3)
-        sv1 = e1 + kp1 * d1 + ki1 * S[_Z * B + lane]
-        sv2 = e2 + kp2 * d2 + ki2 * S[(_Z + 1) * B + lane]
-        sv3 = e3 + kp3 * d3 + ki3 * S[(_Z + 2) * B + lane]
-        p1 = min(1.0, max(-1.0, ph1 * sv1))
-        p2 = min(1.0, max(-1.0, ph2 * sv2))
-        p3 = min(1.0, max(-1.0, ph3 * sv3))
-        dwd1 = -kp1 * sd1 - ki1 * d1 - et1 * p1
-        dwd2 = -kp2 * sd2 - ki2 * d2 - et2 * p2
-        dwd3 = -kp3 * sd3 - ki3 * d3 - et3 * p3
-        wd1 = dwd1 + 0.0 - (w2 * r3 - w3 * r2)
-        wd2 = dwd2 + 0.0 - (w3 * r1 - w1 * r3)
-        wd3 = dwd3 + 0.0 - (w1 * r2 - w2 * r1)
-        W1 = S[(_X + 6) * B + lane]
-        W2 = S[(_X + 7) * B + lane]
-        W3 = S[(_X + 8) * B + lane]
-        h1 = I1 * w1 + J1 * (W1 + w1)
-        h2 = I2 * w2 + J2 * (W2 + w2)
-        h3 = I3 * w3 + J3 * (W3 + w3)
-        S[_U * B + lane] = wheel_limit_s(-I1 * wd1 - (w2 * h3 - w3 * h2) + 0.0, W1, J1,
-                                         u_max, h_max)
-        S[(_U + 1) * B + lane] = wheel_limit_s(-I2 * wd2 - (w3 * h1 - w1 * h3) + 0.0, W2, J2,
-                                               u_max, h_max)
-        S[(_U + 2) * B + lane] = wheel_limit_s(-I3 * wd3 - (w1 * h2 - w2 * h1) + 0.0, W3, J3,
-                                               u_max, h_max)
-        S[_D * B + lane] = d1
-        S[(_D + 1) * B + lane] = d2
-        S[(_D + 2) * B + lane] = d3
-
-
-@njit(cache=True, error_model="numpy")
 def _rk4_lanes(S, I_rw, J_s, dt, int_limit):
     """:func:`~ideas_hpc.core.attitude.rigid_body.rk4_step_into` (no external torque) and
     the conditional integral update of every lane of ``S``, in place."""
@@ -333,6 +178,7 @@ def _rk4_lanes(S, I_rw, J_s, dt, int_limit):
     I_ = (I1, I2, I3)
     J_ = (J1, J2, J3)
     L_ = (0.0, 0.0, 0.0)
+    n_sw = 0
     for lane in range(B):
         x0 = S[_X * B + lane]
         x1 = S[(_X + 1) * B + lane]
@@ -364,13 +210,17 @@ def _rk4_lanes(S, I_rw, J_s, dt, int_limit):
         S[(_X + 6) * B + lane] = x6 + kk * (a6 + 2.0 * b6 + 2.0 * c6 + e6)
         S[(_X + 7) * B + lane] = x7 + kk * (a7 + 2.0 * b7 + 2.0 * c7 + e7)
         S[(_X + 8) * B + lane] = x8 + kk * (a8 + 2.0 * b8 + 2.0 * c8 + e8)
-        # the shadow-set switch and the integral's condition as selects (branch-free);
-        # z + 0 is never taken: the untaken side keeps z itself
+        # the shadow-set switch is rare: flagged here and taken below, on the lanes
+        # that need it (its three packed divisions on every lane cost more)
         ss = s0 * s0 + s1 * s1 + s2 * s2
         sw = ss > 1.0
-        S[_X * B + lane] = -s0 / ss if sw else s0
-        S[(_X + 1) * B + lane] = -s1 / ss if sw else s1
-        S[(_X + 2) * B + lane] = -s2 / ss if sw else s2
+        S[_X * B + lane] = s0
+        S[(_X + 1) * B + lane] = s1
+        S[(_X + 2) * B + lane] = s2
+        S[_RARE * B + lane] = 1.0 if sw else 0.0
+        n_sw += 1 if sw else 0
+        # the integral's condition as a select (branch-free); z + 0 is never taken:
+        # the untaken side keeps z itself
         d0 = S[_D * B + lane]
         d1 = S[(_D + 1) * B + lane]
         d2 = S[(_D + 2) * B + lane]
@@ -381,3 +231,13 @@ def _rk4_lanes(S, I_rw, J_s, dt, int_limit):
         S[_Z * B + lane] = z0 + d0 * dt if ok else z0
         S[(_Z + 1) * B + lane] = z1 + d1 * dt if ok else z1
         S[(_Z + 2) * B + lane] = z2 + d2 * dt if ok else z2
+    if n_sw > 0:
+        for lane in range(B):
+            if S[_RARE * B + lane] != 0.0:      # S&J 3.150, as rk4_step_into
+                s0 = S[_X * B + lane]
+                s1 = S[(_X + 1) * B + lane]
+                s2 = S[(_X + 2) * B + lane]
+                ss = s0 * s0 + s1 * s1 + s2 * s2
+                S[_X * B + lane] = -s0 / ss
+                S[(_X + 1) * B + lane] = -s1 / ss
+                S[(_X + 2) * B + lane] = -s2 / ss

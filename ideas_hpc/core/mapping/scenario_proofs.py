@@ -152,6 +152,27 @@ def _slacks(vtx, k, i, cam, sec_eta, opts, br):
     return slack * (1.0 - 1e-9) - 1e-9, rad * (1.0 - 1e-9) - 1e-9, dn
 
 
+#: Images between the scores :func:`witness_proofs` evaluates before it refines around
+#: the best (1: every image). On the main job's bank (eros001708, 720 candidates) 8
+#: cut the proofs from 2.9 to 0.5 s of CPU with the rows' time unchanged.
+WITNESS_STRIDE = 8
+
+
+@njit(cache=True, inline="always")
+def _best_slack(vtx, k, a, b, stride, cam, sec_eta, opts, bc, br):
+    """The image of ``a, a + stride, ... < b`` whose geometric tests keep the most
+    slack at the budget ``(bc, br)`` (:func:`_slacks`; ``a`` when none is better)."""
+    best = -np.inf
+    b_i = a
+    for i in range(a, b, stride):
+        sq, rad, dn = _slacks(vtx, k, i, cam, sec_eta, opts, br)
+        score = min(sq - bc * dn, S_MAX * rad)      # slack left at the budget
+        if score > best:
+            best = score
+            b_i = i
+    return b_i
+
+
 @njit(cache=True, parallel=True)
 def witness_proofs(first, window, mesh, cam, opts, bvh, bc, br):
     """Witness images and their proofs (module docstring).
@@ -164,7 +185,8 @@ def witness_proofs(first, window, mesh, cam, opts, bvh, bc, br):
 
     Returns ``witness`` (N, V) int64, ``slack_q`` and ``radius`` (N, V) float64, m.
     The witness is the image of ``[first, window end]`` whose geometric tests
-    keep the most slack at the budget (:func:`_slacks`) if the full nominal test
+    keep the most slack at the budget (:func:`_slacks`; a search every
+    :data:`WITNESS_STRIDE` images refined around the best) if the full nominal test
     (:func:`~ideas_hpc.core.mapping.visibility._seen`) passes there, else
     ``first``. A flight whose camera at the witness has DCM deviation ``c``
     (Frobenius) and position deviation ``d`` sees the vertex there when
@@ -188,14 +210,12 @@ def witness_proofs(first, window, mesh, cam, opts, bvh, bc, br):
             w = first[k, j]
             if w < 0:
                 continue
-            best = -np.inf
-            b_i = w
-            for i in range(w, window[k, j, 1] + 1):
-                sq, rad, dn = _slacks(vtx, k, i, cam, sec_eta, opts, br)
-                score = min(sq - bc * dn, S_MAX * rad)      # slack left at the budget
-                if score > best:
-                    best = score
-                    b_i = i
+            # the score varies smoothly along the pass: every WITNESS_STRIDE-th image,
+            # then the images around the best (speed only: any seeing image is a witness)
+            end = window[k, j, 1] + 1
+            b_i = _best_slack(vtx, k, w, end, WITNESS_STRIDE, cam, sec_eta, opts, bc, br)
+            b_i = _best_slack(vtx, k, max(w, b_i - WITNESS_STRIDE + 1),
+                              min(end, b_i + WITNESS_STRIDE), 1, cam, sec_eta, opts, bc, br)
             if b_i != w and not _seen(j, k, b_i, mesh, cam, opts, bvh, opts.occlusion,
                                       opts.illumination):
                 b_i = w
