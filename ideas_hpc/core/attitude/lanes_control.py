@@ -10,8 +10,10 @@ of the step's 24 packed divisions, the slowest packed operation. So
 :func:`_control_lanes` first computes every lane on the common side only
 (:func:`_mrp_add_common`, :func:`_mrp_sub_common`: the same operations as the
 taken side, so the same bits) and flags the lanes where a rare side is taken;
-only those are computed again with both sides. The RK4 step's shadow-set switch
-is treated alike (:mod:`~ideas_hpc.core.attitude.camera_lanes`).
+only those are computed again with both sides (:func:`_control_lane`). The RK4
+step's shadow-set switch is treated alike (:mod:`~ideas_hpc.core.attitude.camera_lanes`).
+The bank's closed loop per scenario (720 candidates, 6,000 steps, one thread):
+0.090 -> 0.081 s.
 """
 
 from __future__ import annotations
@@ -162,17 +164,19 @@ def _params(gains, wheels):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _control_tail(S, lane, d1, d2, d3, P):
-    """:func:`~ideas_hpc.core.attitude.control.sliding_mode_into` of ``lane`` from its
-    attitude error ``sigma_B/R = (d1, d2, d3)``: writes the held torques and ``sigma_B/R``."""
-    B = LANES
-    kp1, kp2, kp3, ki1, ki2, ki3, et1, et2, et3, ph1, ph2, ph3 = P[:12]
-    I1, I2, I3, J1, J2, J3, u_max, h_max = P[12:]
-    w1 = S[(_X + 3) * B + lane]
-    w2 = S[(_X + 4) * B + lane]
-    w3 = S[(_X + 5) * B + lane]
-    r1, r2, r3 = mrp_rotate_s(d1, d2, d3, S[_OR * B + lane], S[(_OR + 1) * B + lane],
-                              S[(_OR + 2) * B + lane])
+def _sliding_mode(d1, d2, d3, w, W, z, om_R, P):
+    """:func:`~ideas_hpc.core.attitude.control.sliding_mode_into` on scalars: the held
+    wheel torques (N m) from the attitude error ``sigma_B/R = (d1, d2, d3)``, the rates
+    ``w`` (rad/s), wheel speeds ``W`` (rad/s), error integral ``z`` and reference rate
+    ``om_R`` (rad/s), all 3-tuples, and the parameters ``P`` (:func:`_params`).
+
+    Scalars in and out: an array passed to an inlined function inside the lane loop
+    brings reference counting into it, and LLVM no longer vectorises the loop."""
+    (kp1, kp2, kp3, ki1, ki2, ki3, et1, et2, et3, ph1, ph2, ph3,
+     I1, I2, I3, J1, J2, J3, u_max, h_max) = P
+    w1, w2, w3 = w
+    W1, W2, W3 = W
+    r1, r2, r3 = mrp_rotate_s(d1, d2, d3, om_R[0], om_R[1], om_R[2])
     e1 = w1 - r1
     e2 = w2 - r2
     e3 = w3 - r3
@@ -182,9 +186,9 @@ def _control_tail(S, lane, d1, d2, d3, P):
     sd1 = 0.25 * (q * e1 + 2.0 * (d2 * e3 - d3 * e2) + 2.0 * de * d1)
     sd2 = 0.25 * (q * e2 + 2.0 * (d3 * e1 - d1 * e3) + 2.0 * de * d2)
     sd3 = 0.25 * (q * e3 + 2.0 * (d1 * e2 - d2 * e1) + 2.0 * de * d3)
-    sv1 = e1 + kp1 * d1 + ki1 * S[_Z * B + lane]
-    sv2 = e2 + kp2 * d2 + ki2 * S[(_Z + 1) * B + lane]
-    sv3 = e3 + kp3 * d3 + ki3 * S[(_Z + 2) * B + lane]
+    sv1 = e1 + kp1 * d1 + ki1 * z[0]
+    sv2 = e2 + kp2 * d2 + ki2 * z[1]
+    sv3 = e3 + kp3 * d3 + ki3 * z[2]
     p1 = min(1.0, max(-1.0, ph1 * sv1))
     p2 = min(1.0, max(-1.0, ph2 * sv2))
     p3 = min(1.0, max(-1.0, ph3 * sv3))
@@ -194,32 +198,34 @@ def _control_tail(S, lane, d1, d2, d3, P):
     wd1 = dwd1 + 0.0 - (w2 * r3 - w3 * r2)
     wd2 = dwd2 + 0.0 - (w3 * r1 - w1 * r3)
     wd3 = dwd3 + 0.0 - (w1 * r2 - w2 * r1)
-    W1 = S[(_X + 6) * B + lane]
-    W2 = S[(_X + 7) * B + lane]
-    W3 = S[(_X + 8) * B + lane]
     h1 = I1 * w1 + J1 * (W1 + w1)
     h2 = I2 * w2 + J2 * (W2 + w2)
     h3 = I3 * w3 + J3 * (W3 + w3)
-    S[_U * B + lane] = wheel_limit_s(-I1 * wd1 - (w2 * h3 - w3 * h2) + 0.0, W1, J1,
-                                     u_max, h_max)
-    S[(_U + 1) * B + lane] = wheel_limit_s(-I2 * wd2 - (w3 * h1 - w1 * h3) + 0.0, W2, J2,
-                                           u_max, h_max)
-    S[(_U + 2) * B + lane] = wheel_limit_s(-I3 * wd3 - (w1 * h2 - w2 * h1) + 0.0, W3, J3,
-                                           u_max, h_max)
-    S[_D * B + lane] = d1
-    S[(_D + 1) * B + lane] = d2
-    S[(_D + 2) * B + lane] = d3
+    return (wheel_limit_s(-I1 * wd1 - (w2 * h3 - w3 * h2) + 0.0, W1, J1, u_max, h_max),
+            wheel_limit_s(-I2 * wd2 - (w3 * h1 - w1 * h3) + 0.0, W2, J2, u_max, h_max),
+            wheel_limit_s(-I3 * wd3 - (w1 * h2 - w2 * h1) + 0.0, W3, J3, u_max, h_max))
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _control_lane(S, lane, tz, P):
-    """The controller of one lane with both sides of every MRP branch (any lane)."""
+    """The controller of one lane of ``S`` with both sides of every MRP branch."""
     B = LANES
     rr1, rr2, rr3 = _mrp_add_lane(0.0, 0.0, tz, S[_SR * B + lane], S[(_SR + 1) * B + lane],
                                   S[(_SR + 2) * B + lane])
     d1, d2, d3 = _mrp_sub_lane(S[_X * B + lane], S[(_X + 1) * B + lane],
                                S[(_X + 2) * B + lane], rr1, rr2, rr3)
-    _control_tail(S, lane, d1, d2, d3, P)
+    u1, u2, u3 = _sliding_mode(
+        d1, d2, d3,
+        (S[(_X + 3) * B + lane], S[(_X + 4) * B + lane], S[(_X + 5) * B + lane]),
+        (S[(_X + 6) * B + lane], S[(_X + 7) * B + lane], S[(_X + 8) * B + lane]),
+        (S[_Z * B + lane], S[(_Z + 1) * B + lane], S[(_Z + 2) * B + lane]),
+        (S[_OR * B + lane], S[(_OR + 1) * B + lane], S[(_OR + 2) * B + lane]), P)
+    S[_U * B + lane] = u1
+    S[(_U + 1) * B + lane] = u2
+    S[(_U + 2) * B + lane] = u3
+    S[_D * B + lane] = d1
+    S[(_D + 1) * B + lane] = d2
+    S[(_D + 2) * B + lane] = d3
 
 
 @njit(cache=True, error_model="numpy")
@@ -227,9 +233,8 @@ def _control_lanes(S, tz, gains, wheels):
     """The Nadir Pointing reference (``sigma_TN = tz z``) and
     :func:`~ideas_hpc.core.attitude.control.sliding_mode_into` of every lane of ``S``
     (no reference acceleration, no known torque): writes the held torques and
-    ``sigma_B/R``. Common sides first, packed; the lanes where a rare side is taken
-    again with both (module docstring): the same bits as :func:`_control_lane` on
-    every lane."""
+    ``sigma_B/R``. Common sides first, packed; then the lanes where a rare side is
+    taken again with both sides (:func:`_control_lane`): the same bits on every lane."""
     B = LANES
     P = _params(gains, wheels)
     n_rare = 0
@@ -239,7 +244,19 @@ def _control_lanes(S, tz, gains, wheels):
                                                 S[(_SR + 2) * B + lane])
         d1, d2, d3, rare_s = _mrp_sub_common(S[_X * B + lane], S[(_X + 1) * B + lane],
                                              S[(_X + 2) * B + lane], rr1, rr2, rr3)
-        _control_tail(S, lane, d1, d2, d3, P)
+        # the lines of _control_lane: passing S to an inlined function would not vectorise
+        u1, u2, u3 = _sliding_mode(
+            d1, d2, d3,
+            (S[(_X + 3) * B + lane], S[(_X + 4) * B + lane], S[(_X + 5) * B + lane]),
+            (S[(_X + 6) * B + lane], S[(_X + 7) * B + lane], S[(_X + 8) * B + lane]),
+            (S[_Z * B + lane], S[(_Z + 1) * B + lane], S[(_Z + 2) * B + lane]),
+            (S[_OR * B + lane], S[(_OR + 1) * B + lane], S[(_OR + 2) * B + lane]), P)
+        S[_U * B + lane] = u1
+        S[(_U + 1) * B + lane] = u2
+        S[(_U + 2) * B + lane] = u3
+        S[_D * B + lane] = d1
+        S[(_D + 1) * B + lane] = d2
+        S[(_D + 2) * B + lane] = d3
         rare = rare_a | rare_s
         S[_RARE * B + lane] = 1.0 if rare else 0.0
         n_rare += 1 if rare else 0
