@@ -33,7 +33,7 @@ from numba import njit, prange
 from ideas_hpc.core.mapping.coverage import _is_strict
 from ideas_hpc.core.mapping.records import TimeTree
 from ideas_hpc.core.mapping.scenario_proofs import S_MAX
-from ideas_hpc.core.mapping.segments import face_blocks_cone
+from ideas_hpc.core.mapping.segments import FRAME, cone_in_frame, face_cone_frame
 from ideas_hpc.core.mapping.time_tree import (LEAF, _below_elevation, _classify, dcm_gap2,
                                               fill_tree, gap, gram_error2, scan_tree_unfilled)
 from ideas_hpc.core.mapping.visibility import _seen, _seen_hint
@@ -92,7 +92,7 @@ def deviation_start(r_nom, dcm_nom, r_T, dcm_BT, bc, br):
 
 
 @njit(cache=True, inline="always")
-def _scan_range(j, k, a, b, tree, stack, hint, mesh, cam, strict, opts, bvh):
+def _scan_range(j, k, a, b, tree, stack, hint, frame, mesh, cam, strict, opts, bvh):
     """Does spacecraft ``k`` see vertex ``j`` in an image ``a <= i < b``? Exact.
 
     Walks the perturbed flight's time tree: a node failing culling or clipping
@@ -136,14 +136,19 @@ def _scan_range(j, k, a, b, tree, stack, hint, mesh, cam, strict, opts, bvh):
                                 max_range):
                 continue
         if occlusion and hint[0] >= 0:
+            if hint[1] != hint[0]:      # the face's frame from p, once per blocking face
+                hint[1] = hint[0]
+                hint[2] = face_cone_frame(tri, tri_vid, hint[0], j, px, py, pz, frame)
             vx = NF[k, node, 9] - px
             vy = NF[k, node, 10] - py
             vz = NF[k, node, 11] - pz
             dist = np.sqrt(vx * vx + vy * vy + vz * vz)
             er = NF[k, node, 14]
-            if er < 0.5 * dist and face_blocks_cone(tri, tri_vid, hint[0], j, px, py, pz,
-                                                    vx / dist, vy / dist, vz / dist,
-                                                    np.arcsin(er / dist), dist - er):
+            # the cone's half-angle asin(er / dist) < pi/6: its sine er / dist, inflated as
+            # face_blocks_cone does (sin(a (1 + 1e-9) + 1e-9) <= sin a + 2e-9 for a <= pi/6)
+            if hint[2] and er < 0.5 * dist and cone_in_frame(frame, vx / dist, vy / dist,
+                                                             vz / dist, er / dist + 2e-9,
+                                                             dist - er):
                 continue
         if NI[node, 2] >= 0:
             if NI[node, 3] >= 0:
@@ -219,7 +224,8 @@ def perturbed_rows(nominal, mesh, cam, opts, bvh):
         # the tree's S from the gram errors just checked, not computed again
         fill_tree(tree.NF, tree.NI, cam.r_T_m, cam.dcm_BT, k, LEAF, worst)
         stack = np.empty(128, dtype=np.int64)
-        hint = np.full(1, -1, dtype=np.int64)
+        hint = np.full(3, -1, dtype=np.int64)
+        frame = np.empty(FRAME)
         for j in range(nv):
             w = witness[k, j]
             if w >= 0 and (_proven(nominal, vertices, j, cam, k, w)
@@ -228,17 +234,18 @@ def perturbed_rows(nominal, mesh, cam, opts, bvh):
                 mask[k, j] = True
                 continue
             hint[0] = -1
+            hint[1] = -1        # a new vertex: no face frame yet
             # before i_ok: every image until i_pos, then from what positions allow
-            seen = _scan_range(j, k, 0, min(i_pos[k], i_ok[k]), tree, stack, hint, mesh, cam,
-                               strict, opts, bvh)
+            seen = _scan_range(j, k, 0, min(i_pos[k], i_ok[k]), tree, stack, hint, frame, mesh,
+                               cam, strict, opts, bvh)
             a = max(i_pos[k], unseen_any[k, j])
             if not seen and unseen_any[k, j] >= 0 and a < i_ok[k]:
-                seen = _scan_range(j, k, a, i_ok[k], tree, stack, hint, mesh, cam, strict, opts,
-                                   bvh)
+                seen = _scan_range(j, k, a, i_ok[k], tree, stack, hint, frame, mesh, cam, strict,
+                                   opts, bvh)
             # from i_ok: in both windows (either proof holds there)
             if not seen and window[k, j, 0] >= 0 and unseen_any[k, j] >= 0:
                 seen = _scan_range(j, k, max(window[k, j, 0], i_ok[k], unseen_any[k, j]),
-                                   window[k, j, 1] + 1, tree, stack, hint, mesh, cam, strict,
+                                   window[k, j, 1] + 1, tree, stack, hint, frame, mesh, cam, strict,
                                    opts, bvh)
             mask[k, j] = seen
     return mask

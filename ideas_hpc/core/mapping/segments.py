@@ -90,6 +90,14 @@ def segment_blocked(node_bounds, node_info, tri, tri_vid,
                        skip_vertex, -1) >= 0
 
 
+@njit(cache=True, inline="always")
+def face_hit(tri, tri_vid, f, ox, oy, oz, dx, dy, dz, tmax, skip_vertex):
+    """Does face ``f`` block the segment as :func:`segment_hit` tests each face?"""
+    # Minimum t: 1 nm (ignore round-off hits at the start point).
+    t_min = 1e-9 / np.sqrt(dx * dx + dy * dy + dz * dz)
+    return _crosses(tri, tri_vid, f, ox, oy, oz, dx, dy, dz, t_min, tmax, skip_vertex)
+
+
 @njit(cache=True)
 def segment_hit(bvh, ox, oy, oz, dx, dy, dz, tmax, skip_vertex, hint):
     """:func:`segment_blocked` that returns the crossed face (BVH order, -1: none).
@@ -102,12 +110,10 @@ def segment_hit(bvh, ox, oy, oz, dx, dy, dz, tmax, skip_vertex, hint):
     any-hit query, so the answer ``>= 0`` is exactly ``segment_blocked``'s True.
     """
     node_bounds, node_info, tri, tri_vid = bvh
-    dn = np.sqrt(dx * dx + dy * dy + dz * dz)
-    # Minimum t: 1 nm (ignore round-off hits at the start point).
-    t_min = 1e-9 / dn
-    if hint >= 0 and _crosses(tri, tri_vid, hint, ox, oy, oz, dx, dy, dz, t_min, tmax,
-                              skip_vertex):
+    if hint >= 0 and face_hit(tri, tri_vid, hint, ox, oy, oz, dx, dy, dz, tmax, skip_vertex):
         return hint
+    # Minimum t: 1 nm (ignore round-off hits at the start point).
+    t_min = 1e-9 / np.sqrt(dx * dx + dy * dy + dz * dz)
     # A zero direction component gets a huge finite inverse: (b - o) * inf would
     # be NaN when the origin lies on a slab plane.
     ix = 1.0 / dx if dx != 0.0 else 1e300
@@ -164,8 +170,26 @@ def face_blocks_cone(tri, tri_vid, f, skip_vertex, px, py, pz, ax, ay, az, alpha
     exceeds ``alpha`` (inflated by 1e-9 rad, relative and absolute, far above
     the rounding of the Moller-Trumbore test). The crossing point is a convex
     combination of the corners, so it is nearer than the farthest corner,
-    which must be nearer than ``length``.
+    which must be nearer than ``length``. In two parts: :func:`face_cone_frame`
+    (what depends on ``p`` and the face) and :func:`cone_in_frame` (the cone).
     """
+    frame = np.empty(FRAME)
+    return (face_cone_frame(tri, tri_vid, f, skip_vertex, px, py, pz, frame)
+            and cone_in_frame(frame, ax, ay, az,
+                              np.sin(min(alpha * (1.0 + 1e-9) + 1e-9, 0.5 * np.pi)), length))
+
+
+#: Length of a :func:`face_cone_frame`.
+FRAME = 10
+
+
+@njit(cache=True, inline="always")
+def face_cone_frame(tri, tri_vid, f, skip_vertex, px, py, pz, frame):
+    """What :func:`face_blocks_cone` needs of face ``f`` seen from ``p`` (m), into
+    ``frame`` (:data:`FRAME`): the unit normals of the great circles through its
+    edges, oriented toward the inside of its spherical triangle, and its farthest
+    corner's distance inflated by 1e-9 (m). False when the face can block no cone
+    (``f < 0``, a face of vertex ``skip_vertex``, degenerate, or ``p`` on its plane)."""
     if f < 0 or tri_vid[f, 0] == skip_vertex or tri_vid[f, 1] == skip_vertex \
             or tri_vid[f, 2] == skip_vertex:
         return False
@@ -181,8 +205,7 @@ def face_blocks_cone(tri, tri_vid, f, skip_vertex, px, py, pz, ax, ay, az, alpha
     n0 = np.sqrt(x0 * x0 + y0 * y0 + z0 * z0)
     n1 = np.sqrt(x1 * x1 + y1 * y1 + z1 * z1)
     n2 = np.sqrt(x2 * x2 + y2 * y2 + z2 * z2)
-    if not max(n0, n1, n2) * (1.0 + 1e-9) < length:
-        return False
+    frame[9] = max(n0, n1, n2) * (1.0 + 1e-9)
     # distance from p to the face's plane
     cx = tri[f, 4] * tri[f, 8] - tri[f, 5] * tri[f, 7]
     cy = tri[f, 5] * tri[f, 6] - tri[f, 3] * tri[f, 8]
@@ -203,7 +226,6 @@ def face_blocks_cone(tri, tri_vid, f, skip_vertex, px, py, pz, ax, ay, az, alpha
     if abs(det) < 1e-12:
         return False
     sgn = 1.0 if det > 0.0 else -1.0
-    s_min = np.sin(min(alpha * (1.0 + 1e-9) + 1e-9, 0.5 * np.pi))
     for e in range(3):
         if e == 0:
             ux, uy, uz, vx, vy, vz = x0, y0, z0, x1, y1, z1
@@ -215,6 +237,22 @@ def face_blocks_cone(tri, tri_vid, f, skip_vertex, px, py, pz, ax, ay, az, alpha
         ny = uz * vx - ux * vz
         nz = ux * vy - uy * vx
         nn = np.sqrt(nx * nx + ny * ny + nz * nz)
-        if not (nn > 0.0 and sgn * (nx * ax + ny * ay + nz * az) > s_min * nn):
+        if not nn > 0.0:
+            return False
+        frame[3 * e] = sgn * nx / nn
+        frame[3 * e + 1] = sgn * ny / nn
+        frame[3 * e + 2] = sgn * nz / nn
+    return True
+
+
+@njit(cache=True, inline="always")
+def cone_in_frame(frame, ax, ay, az, s_min, length):
+    """:func:`face_blocks_cone` for a face's :func:`face_cone_frame`: the cone of unit
+    axis ``a`` whose half-angle has sine ``<= s_min`` (already inflated for rounding)
+    lies inside the face's spherical triangle and its segments are ``>= length`` (m)."""
+    if not frame[9] < length:
+        return False
+    for e in range(3):
+        if not frame[3 * e] * ax + frame[3 * e + 1] * ay + frame[3 * e + 2] * az > s_min:
             return False
     return True

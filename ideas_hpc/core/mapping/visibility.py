@@ -45,7 +45,7 @@ import numpy as np
 from numba import njit
 
 from ideas_hpc.core.mapping.bvh import segment_blocked
-from ideas_hpc.core.mapping.segments import segment_hit
+from ideas_hpc.core.mapping.segments import face_hit, segment_hit
 
 
 @njit(cache=True, inline="always")
@@ -152,20 +152,30 @@ def _seen_hint(j, k, i, hint, mesh, cam, opts, bvh):
     """:func:`_seen` with the occlusion query started at face ``hint`` (-1: none).
 
     Returns ``(seen, hint)``, ``hint`` updated to the face that blocks, if any.
-    Consecutive images of a scan are usually blocked by the same face, and any
-    crossed face answers the any-hit query, so ``seen`` is exactly ``_seen``'s.
+    Consecutive images of a scan are usually blocked by the same face, so that
+    face is tested first, before the geometric tests (a blocked vertex is unseen
+    whatever they say: a scenario's scans test 0.8 M such images); any crossed face
+    answers the any-hit query, so ``seen`` is exactly ``_seen``'s.
     """
-    if not _seen(j, k, i, mesh, cam, opts, bvh, False, opts.illumination):
-        return False, hint
-    if not opts.occlusion:
-        return True, hint
     vertices = mesh.vertices_T_m
     r_T = cam.r_T_m
     px = vertices[j, 0]
     py = vertices[j, 1]
     pz = vertices[j, 2]
-    f = segment_hit(bvh, px, py, pz, r_T[k, i, 0] - px,
-                    r_T[k, i, 1] - py, r_T[k, i, 2] - pz, 1.0, np.int64(j), hint)
+    dx = r_T[k, i, 0] - px
+    dy = r_T[k, i, 1] - py
+    dz = r_T[k, i, 2] - pz
+    tri = bvh[2]
+    tri_vid = bvh[3]
+    if opts.occlusion and hint >= 0 and face_hit(tri, tri_vid, hint, px, py, pz, dx, dy, dz,
+                                                 1.0, np.int64(j)):
+        return False, hint
+    if not _seen(j, k, i, mesh, cam, opts, bvh, False, opts.illumination):
+        return False, hint
+    if not opts.occlusion:
+        return True, hint
+    # the hint crosses nothing (tested above): the query starts at the root
+    f = segment_hit(bvh, px, py, pz, dx, dy, dz, 1.0, np.int64(j), np.int64(-1))
     if f >= 0:
         return False, f
     return True, hint
