@@ -13,7 +13,7 @@ from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.flyby.camera import usable_mask
 from ideas_hpc.flyby.flight import Perturbation, open_loop_views
 from ideas_hpc.montecarlo import scenario_flight
-from ideas_hpc.montecarlo.scenario_rows import full_rows, rows_setup
+from ideas_hpc.montecarlo.scenario_rows import RowEngine, full_rows, rows_setup
 from ideas_hpc.montecarlo.scenarios import draw_world, grid_theta, nominal_start, row_engine
 from ideas_hpc.seeds import SCENARIO_STREAM
 
@@ -93,3 +93,16 @@ def test_flights_it_does_not_cover_take_the_pipeline(sets):
     eng = row_engine(setup, theta, mc, 3, SCENARIO_STREAM)
     np.testing.assert_array_equal(eng.rows(*eng.flight(pert, reuse=True)),
                                   full_rows(setup, theta, None, eng.r0_T, eng.v0_T, pert))
+
+
+def test_the_engines_nominal_flight_is_the_pipelines():
+    # positions at the images only, the same bits (body tracking, which needs an
+    # encounter, takes the pipeline)
+    c, setup, mc = _main()
+    theta = grid_theta(np.deg2rad(30.0))
+    r0, v0 = nominal_start(setup, theta)
+    r_ref, dcm_ref, _, _ = open_loop_views(setup.with_(attitude_mode="ideal"), theta, None, r0,
+                                           v0, Perturbation())
+    r, dcm = RowEngine(setup, theta, r0, v0)._nominal_flight()
+    assert r.tobytes() == np.ascontiguousarray(r_ref).tobytes()
+    assert dcm.tobytes() == np.ascontiguousarray(dcm_ref).tobytes()

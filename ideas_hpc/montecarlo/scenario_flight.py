@@ -102,8 +102,7 @@ def flight_statics(setup, theta) -> FlightStatics:
     limits = (np.array([0.0, np.inf, np.inf]) if use is None else
               np.array([use.exposure_s, use.smear_pixels * use.ifov_rad, use.settle_rad]))
     cs = spin_table(ws, dt, int(n_steps), int(img_every))
-    t0, tf = float(setup.t0_s), float(setup.tf_s)
-    t_img = np.ascontiguousarray(sample_times(t0, tf, float(setup.dt_s))[::setup.image_every])
+    t_img = image_times(setup)
     return FlightStatics(
         code=int(man.code), rings=rings, spin=ws, periods=p, theta_max=tm,
         gains=ControlGains(k_p, k_i, eta, phi, float(g.int_limit)),
@@ -155,20 +154,31 @@ def fly_views(setup, statics: FlightStatics, r0_T, v0_T, pert, buffers: dict):
 
 
 def _positions(setup, statics, r0, v0, params_override, buffers):
-    """Positions at the images (N, n_img, 3) m, as ``propagate_swarm(...)[1][:, ::image_every]``;
-    a failed integration flies ``propagate_swarm`` for its error."""
+    """Positions at the images (N, n_img, 3) m, into ``buffers["r"]``."""
+    shape = (np.shape(r0)[0], statics.t_img.size, 3)
+    if buffers.get("r") is None or buffers["r"].shape != shape:
+        buffers["r"] = np.empty(shape)
+    return positions_into(setup, statics.t_img, r0, v0, params_override, buffers["r"])
+
+
+def image_times(setup) -> np.ndarray:
+    """The orbit's samples at the images, s (``sample_times(...)[::image_every]``)."""
+    t0, tf = float(setup.t0_s), float(setup.tf_s)
+    return np.ascontiguousarray(sample_times(t0, tf, float(setup.dt_s))[::setup.image_every])
+
+
+def positions_into(setup, t_img, r0, v0, params_override, out) -> np.ndarray:
+    """``out`` (N, n_img, 3) m: the positions at the images ``t_img`` (:func:`image_times`),
+    as ``propagate_swarm(...)[1][:, ::image_every]`` bit for bit; a failed integration
+    flies ``propagate_swarm`` for its error."""
     r0 = np.ascontiguousarray(r0, dtype=np.float64)
     v0 = np.ascontiguousarray(v0, dtype=np.float64)
     fm = setup.force_model
-    shape = (r0.shape[0], statics.t_img.size, 3)
-    if buffers.get("r") is None or buffers["r"].shape != shape:
-        buffers["r"] = np.empty(shape)
     pk = pack_force_model(setup.body, fm, params_override)
     status = propagate_positions_into(r0, v0, float(setup.t0_s), float(setup.tf_s), fm.rtol,
-                                      fm.atol, MAX_STEPS, statics.t_img, buffers["r"],
-                                      *pk.args())
+                                      fm.atol, MAX_STEPS, t_img, out, *pk.args())
     if np.any(status != 0) or r0.shape != v0.shape or r0.ndim != 2 or r0.shape[1] != 3:
         propagate_swarm(setup.body, r0, v0, setup.t0_s, setup.tf_s, force_model=fm,
                         dt_sample=setup.dt_s, params_override=params_override, views=True)
         raise RuntimeError("propagation failed")    # propagate_swarm raised already
-    return buffers["r"]
+    return out

@@ -26,6 +26,7 @@ from ideas_hpc.montecarlo import scenario_flight as _flight
 from ideas_hpc.core.mapping import scenario_rows as _k
 from ideas_hpc.core.mapping.coverage import first_image_by_spacecraft
 from ideas_hpc.core.mapping.scenario_proofs import BC_ANY, windows, witness_proofs
+from ideas_hpc.flyby.camera import camera_at_images, imaging_dcms
 from ideas_hpc.flyby.flight import FlybySetup, Perturbation, open_loop_views
 from ideas_hpc.core.mapping.records import Nominal
 from ideas_hpc.mapping.coverage import camera_record, check_geometry, mesh_record, strict_records
@@ -70,14 +71,27 @@ class RowEngine:
         every chunk task unpickles its own copy."""
         got = _NOMINAL.get(self.token)
         if got is None:
-            ideal = self.setup.with_(attitude_mode="ideal")
-            r_img, dcm, _, _ = open_loop_views(ideal, self.theta, None, self.r0_T, self.v0_T,
-                                               Perturbation())
-            got = {"flight": (r_img, dcm)}
+            got = {"flight": self._nominal_flight()}
             while len(_NOMINAL) >= 2:
                 _NOMINAL.pop(next(iter(_NOMINAL)))
             _NOMINAL[self.token] = got
         return got
+
+    def _nominal_flight(self):
+        """:func:`~ideas_hpc.flyby.flight.open_loop_views` with ideal attitude, the same bits:
+        without body tracking (which points at every step's position) only the
+        positions at the images are integrated (0.03 against 0.13 s for 720
+        candidates, in every worker)."""
+        ideal = self.setup.with_(attitude_mode="ideal")
+        if ideal.maneuver.tracks_body or ideal.encounter is not None:
+            r_img, dcm, _, _ = open_loop_views(ideal, self.theta, None, self.r0_T, self.v0_T,
+                                               Perturbation())
+            return r_img, dcm
+        t_img = _flight.image_times(ideal)
+        r_img = _flight.positions_into(ideal, t_img, self.r0_T, self.v0_T, None,
+                                       np.empty((len(self.r0_T), t_img.size, 3)))
+        dcm, att = camera_at_images(ideal, self.theta, None, None, None, r_img)
+        return r_img, imaging_dcms(ideal, dcm, att, r_img)
 
     def nominal(self):
         """Positions and ideal camera DCMs of the nominal flight at the images."""
