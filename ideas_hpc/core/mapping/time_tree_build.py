@@ -235,14 +235,19 @@ def fill_tree(NF, NI, r_T, dcm_BT, k, leaf, gram2=-1.0):
         for i in range(i0, i1):
             if gram2 < 0.0:
                 g2 = max(g2, gram_error2(dcm_BT, k, i))
-            c2 = max(c2, dcm_gap2(dcm_BT, k, i, dcm_BT, m))
             dx = r_T[k, i, 0] - r_T[k, m, 0]
             dy = r_T[k, i, 1] - r_T[k, m, 1]
             dz = r_T[k, i, 2] - r_T[k, m, 2]
             r2 = max(r2, dx * dx + dy * dy + dz * dz)
-            e2x = max(e2x, _row_gap2(dcm_BT, k, i, m, 0))
-            e2y = max(e2y, _row_gap2(dcm_BT, k, i, m, 1))
-            e2z = max(e2z, _row_gap2(dcm_BT, k, i, m, 2))
+            gx = _row_gap2(dcm_BT, k, i, m, 0)
+            gy = _row_gap2(dcm_BT, k, i, m, 1)
+            gz = _row_gap2(dcm_BT, k, i, m, 2)
+            e2x = max(e2x, gx)
+            e2y = max(e2y, gy)
+            e2z = max(e2z, gz)
+            # ||C_i - C_m||_F^2 as the sum of the row gaps (not computed twice); its
+            # rounding is far inside the 1e-12 growth of every bound
+            c2 = max(c2, gx + gy + gz)
             p_x = max(p_x, abs(dcm_BT[k, m, 0, 0] * dx + dcm_BT[k, m, 0, 1] * dy
                                + dcm_BT[k, m, 0, 2] * dz))
             p_y = max(p_y, abs(dcm_BT[k, m, 1, 0] * dx + dcm_BT[k, m, 1, 1] * dy
