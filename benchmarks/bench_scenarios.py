@@ -14,8 +14,8 @@ identical:
 * **full recomputation**: the flyby pipeline flies the scenario and every row
   comes from :func:`ideas_hpc.design.candidates.rows_from_views`
   (:func:`ideas_hpc.montecarlo.scenario_rows.full_rows`);
-* **fast rows (pipeline flight)**: the bank before issue 31: the pipeline's
-  flight, rows from the witness proofs
+* **fast rows (pipeline flight)**: the pipeline's flight, then the same rows
+  from the witness proofs
   (:class:`~ideas_hpc.montecarlo.scenario_rows.RowEngine` with ``one_pass = False``);
 * **bank**: what the bank does now: the one-pass flight
   (:mod:`ideas_hpc.montecarlo.scenario_flight`) into reused buffers, then the
@@ -37,8 +37,14 @@ eros022540 at 180 candidates; the models' 856 / 3897 / 11272 vertices), with the
 power-law exponents fitted to each (needs the Eros models on IDEAS_HPC_DATA; a few
 minutes).
 
+``--against REV``: then the main job's whole bank (256 scenarios on two local
+workers, preparation and read-back included), built by git revision ``REV`` and by
+this checkout in the same run, rows compared bit for bit
+(:mod:`whole_bank`); the headline is that ratio. Issue 31's reference is
+``--against 01c8c61``, the bank before it.
+
 Usage: ``python benchmarks/bench_scenarios.py [--scenarios 3] [--ideal] [--step 0.5]
-[--scaling]``
+[--scaling] [--against REV [--bank-scenarios 256] [--workers 2]]``
 """
 
 from __future__ import annotations
@@ -139,8 +145,8 @@ def compare(sets, step_deg: float, n_scenarios: int) -> None:
           f"fast paths: bank {per_new:.3f} s, before {per_old:.3f} s "
           f"(cpu ratio {old.cpu / new.cpu:.2f}x)")
     print(f"  against full recomputation: {full.wall / ns / per_new:.1f}x")
-    print(f"scenarios: {per_old / per_new:.1f}x faster than the fast rows of the pipeline's "
-          "flight (the bank before issue 31)")
+    print(f"scenarios: {per_old / per_new:.1f}x faster than the pipeline's flight with the "
+          "same fast rows")
 
 
 def _cost(body: str, step_deg: float, n_scenarios: int) -> tuple:
@@ -209,6 +215,11 @@ def main(argv=None) -> None:
     ap.add_argument("--scaling", action="store_true",
                     help="also the cost against candidates and vertices (a few minutes)")
     ap.add_argument("--scaling-scenarios", type=int, default=2)
+    ap.add_argument("--against", metavar="REV",
+                    help="also the main job's whole bank, built by REV and by this checkout "
+                         "(whole_bank.py; eros001708 needed; headline last)")
+    ap.add_argument("--bank-scenarios", type=int, default=256)
+    ap.add_argument("--workers", type=int, default=2)
     args = ap.parse_args(argv)
     sets = [] if have_data_file("eros001708.tab") else ['body.name="ellipsoid"']
     if args.ideal:
@@ -216,6 +227,12 @@ def main(argv=None) -> None:
     if args.scaling:
         scaling(args.scaling_scenarios)
     compare(sets, args.step, args.scenarios)
+    if args.against:
+        if not have_data_file("eros001708.tab"):
+            print("whole bank: needs eros001708 on IDEAS_HPC_DATA: not measured")
+            return
+        from whole_bank import against
+        against(args.against, args.bank_scenarios, args.workers)
 
 
 if __name__ == "__main__":
