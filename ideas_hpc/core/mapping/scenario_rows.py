@@ -92,7 +92,7 @@ def deviation_start(r_nom, dcm_nom, r_T, dcm_BT, bc, br):
 
 
 @njit(cache=True, inline="always")
-def _scan_range(j, k, a, b, tree, stack, hint, frame, mesh, cam, strict, opts, bvh):
+def _scan_range(j, k, a, b, tree, stack, hint, frame, mesh, cam, opts, bvh):
     """Does spacecraft ``k`` see vertex ``j`` in an image ``a <= i < b``? Exact.
 
     Walks the perturbed flight's time tree: a node failing culling or clipping
@@ -103,6 +103,7 @@ def _scan_range(j, k, a, b, tree, stack, hint, frame, mesh, cam, strict, opts, b
     """
     NF = tree.NF
     NI = tree.NI
+    strict = _is_strict(opts)
     vertices = mesh.vertices_T_m
     normals = mesh.normals_T
     sin_min_elev = opts.sin_min_elev
@@ -209,7 +210,6 @@ def perturbed_rows(nominal, mesh, cam, opts, bvh):
     nv = mesh.vertices_T_m.shape[0]
     nsc = cam.r_T_m.shape[0]
     tree = TimeTree(*scan_tree_unfilled(cam))
-    strict = _is_strict(opts)
     mask = np.zeros((nsc, nv), dtype=np.bool_)
     # candidate-major: one candidate's flight, time tree and rows stay in cache,
     # the tree built right before it is walked
@@ -237,15 +237,15 @@ def perturbed_rows(nominal, mesh, cam, opts, bvh):
             hint[1] = -1        # a new vertex: no face frame yet
             # before i_ok: every image until i_pos, then from what positions allow
             seen = _scan_range(j, k, 0, min(i_pos[k], i_ok[k]), tree, stack, hint, frame, mesh,
-                               cam, strict, opts, bvh)
+                               cam, opts, bvh)
             a = max(i_pos[k], unseen_any[k, j])
             if not seen and unseen_any[k, j] >= 0 and a < i_ok[k]:
-                seen = _scan_range(j, k, a, i_ok[k], tree, stack, hint, frame, mesh, cam, strict,
-                                   opts, bvh)
+                seen = _scan_range(j, k, a, i_ok[k], tree, stack, hint, frame, mesh, cam, opts,
+                                   bvh)
             # from i_ok: in both windows (either proof holds there)
             if not seen and window[k, j, 0] >= 0 and unseen_any[k, j] >= 0:
                 seen = _scan_range(j, k, max(window[k, j, 0], i_ok[k], unseen_any[k, j]),
-                                   window[k, j, 1] + 1, tree, stack, hint, frame, mesh, cam, strict,
-                                   opts, bvh)
+                                   window[k, j, 1] + 1, tree, stack, hint, frame, mesh, cam, opts,
+                                   bvh)
             mask[k, j] = seen
     return mask
