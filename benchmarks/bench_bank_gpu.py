@@ -61,7 +61,7 @@ def main(argv=None) -> int:
     from ideas_hpc.campaign.setup import setup_from_campaign
     from ideas_hpc.flyby.flight import Perturbation
     from ideas_hpc.montecarlo.scenarios import draw_world, grid_theta, row_engine
-    from ideas_hpc.seeds import SCENARIO_STREAM
+    from ideas_hpc.base.seeds import SCENARIO_STREAM
 
     sets = [] if have_data_file("eros001708.tab") else ['body.name="ellipsoid"']
     c = load(ROOT / "campaigns" / "eros-design.toml", sets)

@@ -63,7 +63,7 @@ from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.flyby.flight import Perturbation
 from ideas_hpc.montecarlo.scenario_rows import full_rows
 from ideas_hpc.montecarlo.scenarios import draw_world, grid_theta, row_engine
-from ideas_hpc.seeds import SCENARIO_STREAM
+from ideas_hpc.base.seeds import SCENARIO_STREAM
 
 ROOT = Path(__file__).resolve().parent.parent
 AMORTISE = 256

@@ -37,7 +37,7 @@ from numba import njit
 from scipy.integrate import solve_ivp
 
 from ideas_hpc.body.bodies import load_body
-from ideas_hpc.constants import MU_SUN
+from ideas_hpc.base.constants import MU_SUN
 from ideas_hpc.core.dynamics import propagate as P
 from ideas_hpc.core.dynamics.forces import K_SRP
 from ideas_hpc.dynamics.force_model import ForceModel, pack_force_model

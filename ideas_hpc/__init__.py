@@ -15,6 +15,6 @@ _os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 from ideas_hpc._version import __version__
 from ideas_hpc.body.bodies import Body, load_body
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 
 __all__ = ["Body", "InputError", "__version__", "load_body"]

@@ -1,6 +1,6 @@
 """``ideas-hpc`` command line: ``size``, ``run``, ``report``, ``scan-arrival``, ``resolution``...
 
-Bad input (an :class:`~ideas_hpc.errors.InputError`) prints one line naming
+Bad input (an :class:`~ideas_hpc.base.errors.InputError`) prints one line naming
 the problem and exits with status 2; no traceback. SIGINT and SIGTERM print one
 line and exit with 128 + the signal number (130, 143); stores stay resumable.
 """
@@ -13,8 +13,8 @@ import sys
 from contextlib import contextmanager
 
 from ideas_hpc import __version__
-from ideas_hpc.errors import InputError
-from ideas_hpc.units import CM, DEG, KM, UM
+from ideas_hpc.base.errors import InputError
+from ideas_hpc.base.units import CM, DEG, KM, UM
 
 
 
@@ -29,7 +29,7 @@ def _add_size(sub) -> None:
     g.add_argument("--r-av", type=float, metavar="KM", help="given mean radius, km")
     g.add_argument("--paper", action="store_true",
                    help="use the paper's R_max/R_min (17.670/3.222 km) to reproduce its tables")
-    from ideas_hpc.instrument import INSTRUMENT_DEFAULTS as cam
+    from ideas_hpc.base.instrument import INSTRUMENT_DEFAULTS as cam
 
     p.add_argument("--resolution", type=float, default=cam["ground_resolution_m"], metavar="M",
                    help=f"ground resolution X, m (default {cam['ground_resolution_m']:g})")
@@ -101,7 +101,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     _add_size(sub)
     try:
-        from ideas_hpc.campaign.cli import add_commands  # run / report, when present
+        from ideas_hpc.commands import add_commands  # run / report, when present
     except ImportError:
         add_commands = None
     if add_commands is not None:

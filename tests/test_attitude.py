@@ -24,7 +24,7 @@ from ideas_hpc.core.attitude.batch import closed_loop_step
 from ideas_hpc.core.attitude.records import ControlGains, Ring, Wheels
 from ideas_hpc.core.dynamics.frames import dcm_RT
 from ideas_hpc.core.attitude.maneuvers import reference
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 
 W_EROS = 2.0 * math.pi / (5.270 * 3600.0)  # Eros spin, rad/s (SPEC section 1)
 THETA_PAPER = np.array([0.2, 1.7, 2.4, 2.9, 3.3, 3.5, 5.6, 6.0])  # paper Fig. 21, rad
@@ -389,7 +389,7 @@ def test_bad_input_names_field(call, field):
 def test_campaign_layer_names_the_spacecraft_key(table, key):
     """The config layer's map (an explicit table of keys) puts the file's key back."""
     from ideas_hpc.campaign.schema.model_fields import SPACECRAFT_FIELDS
-    from ideas_hpc.errors import config_fields
+    from ideas_hpc.base.errors import config_fields
 
     with pytest.raises(InputError) as ei, config_fields(SPACECRAFT_FIELDS):
         spacecraft_from_config(table)

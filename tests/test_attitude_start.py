@@ -20,7 +20,7 @@ from ideas_hpc.attitude import initial_conditions, simulate_attitude
 from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.core.attitude.mrp import prv_from_mrp
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.flyby.camera import discarded_images
 from ideas_hpc.flyby.flight import Perturbation, fly_open_loop
 from ideas_hpc.flyby.usable import ImageUse, blind, ifov_rad, usable_images

@@ -1,7 +1,7 @@
 import pytest
 
 from ideas_hpc import load_body
-from ideas_hpc.errors import DataNotFoundError, InputError
+from ideas_hpc.base.errors import DataNotFoundError, InputError
 
 
 def test_eros_falls_back_to_ellipsoid_without_data(monkeypatch, tmp_path):

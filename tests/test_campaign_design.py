@@ -14,7 +14,7 @@ import xarray as xr
 from ideas_hpc.campaign.run import run_file
 from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.core.design.union import population_coverage
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.design.candidates import candidate_masks
 from ideas_hpc.flyby.flight import fly
 from ideas_hpc.campaign.setup import setup_from_campaign
@@ -135,7 +135,7 @@ def test_fov_design_runs_and_reports(tmp_path):
     assert np.all((p >= 0.3 - 1e-9) & (p <= 2.0 + 1e-9))
     assert float(ds["best_coverage"]) == pytest.approx(float(ds["population_coverage"].max()),
                                                        abs=1e-12)
-    from ideas_hpc.campaign.report import write_report
+    from ideas_hpc.report.write import write_report
     summary = write_report(out, tmp_path / "rep")
     names = {p.name for p in (tmp_path / "rep").iterdir()}
     assert {"fig30_ga_fitness.png", "fig31_final_population.png",
@@ -196,7 +196,7 @@ def test_helix_configuration(tmp_path):
 
 
 def test_flyby_campaign_report_has_paper_figures(tmp_path):
-    from ideas_hpc.campaign.report import write_report
+    from ideas_hpc.report.write import write_report
 
     sets = ['body.name="ellipsoid"', "flyby.tf_s=60", "flyby.z_start_km=-3",
             "flyby.z_stop_km=3"]

@@ -17,7 +17,7 @@ from ideas_hpc.campaign.montecarlo import run_sample
 from ideas_hpc.campaign.run import run_file
 from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.engine.chunk_write import done_mask
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 
 ROOT = Path(__file__).resolve().parent.parent
 MC = ROOT / "campaigns" / "eros-monte-carlo.toml"

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from ideas_hpc.campaign.report import write_report
-from ideas_hpc.campaign.report_html_reliability import reliability_html_figures
-from ideas_hpc.campaign.report_reliability import bank_answer
+from ideas_hpc.report.write import write_report
+from ideas_hpc.report.html_reliability import reliability_html_figures
+from ideas_hpc.report.reliability import bank_answer
 from ideas_hpc.campaign.run import run_file
 from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.core.design.reliability import swarm_probabilities

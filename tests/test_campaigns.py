@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 import xarray as xr
 
-from ideas_hpc.campaign.report import write_report
+from ideas_hpc.report.write import write_report
 from ideas_hpc.campaign.run import run_file
 from ideas_hpc.campaign.schema.campaign_tables import load
 from small_stores import run_once

@@ -1,8 +1,8 @@
 import pytest
 
 from ideas_hpc.campaign.schema.toml_file import apply_overrides, line_index, load_campaign, parse_override
-from ideas_hpc.errors import InputError
-from ideas_hpc.fields import Field, validate
+from ideas_hpc.base.errors import InputError
+from ideas_hpc.base.fields import Field, validate
 
 TOML = """\
 kind = "flyby"   # comment

@@ -17,7 +17,7 @@ from ideas_hpc.core.mapping.records import Bvh, Camera, Mesh, Strict
 from ideas_hpc.core.mapping.records import TimeTree
 from ideas_hpc.core.mapping.time_tree import _AX, _classify, scan_tree
 from coverage_tiles import coverage_counts_tiles
-from ideas_hpc.errors import InputError, config_fields
+from ideas_hpc.base.errors import InputError, config_fields
 from ideas_hpc.mapping.coverage import compute_coverage, observed_per_spacecraft
 from ideas_hpc.campaign.schema.model_fields import COVERAGE_FIELDS
 from ideas_hpc.mapping.options import CoverageOptions, coverage_options_from_config

@@ -19,8 +19,8 @@ import pytest
 from ideas_hpc.body.mass_properties import implied_density, mass_properties
 from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.campaign.schema.campaign_tables import load
-from ideas_hpc.constants import G
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.constants import G
+from ideas_hpc.base.errors import InputError
 
 ROOT = Path(__file__).resolve().parent.parent
 MASS_KG = 4.5e10

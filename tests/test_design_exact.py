@@ -17,7 +17,7 @@ from design_oracle import (best_triple, min_tolerant_size, pair_coverage, subset
 from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.design import (CandidateBank, build_bank, coverage_curve, failure_tolerant,
                               max_coverage, min_swarm, worst_failure)
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.design.ga.genetic import separate_angles
 

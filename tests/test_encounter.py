@@ -15,7 +15,7 @@ from scipy.spatial.transform import Rotation
 from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.core.dynamics.encounter import dcm_NS, pointing_demand
 from ideas_hpc.flyby.encounter import phase_angle
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.flyby.flight import fly, target
 from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.campaign.schema.model_fields import flyby_errors
@@ -298,7 +298,7 @@ def test_pointing_the_wheels_cannot_follow_is_reported():
 def test_encounter_flyby_store_and_report(tmp_path):
     import xarray as xr
 
-    from ideas_hpc.campaign.report import write_report
+    from ideas_hpc.report.write import write_report
     from ideas_hpc.campaign.run import run_file
 
     p = tmp_path / "enc.toml"

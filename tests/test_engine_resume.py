@@ -25,7 +25,7 @@ from ideas_hpc.engine.gate import GATE_ENV
 from ideas_hpc.engine.lock import lock_path
 from ideas_hpc.engine.runner import CampaignError
 from ideas_hpc.engine.chunk_write import done_mask
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from toy_campaign import run_toy
 from toy_stores import assert_same_as, serial_reference
 

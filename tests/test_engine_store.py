@@ -19,10 +19,10 @@ from ideas_hpc.engine.lock import StoreLock, StoreLockedError, lock_path
 from ideas_hpc.engine.chunk_write import done_mask, write_chunk_region
 from ideas_hpc.engine.store import create_store
 from ideas_hpc.engine.store_meta import ChunkPlan, config_hash, store_attrs
-from ideas_hpc.seeds import sample_rng, seeds_for
+from ideas_hpc.base.seeds import sample_rng, seeds_for
 from toy_campaign import (run_toy_serial, toy_areas, toy_chunk, toy_config,
                                   toy_template)
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 
 SEED = 2024
 

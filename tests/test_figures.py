@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from ideas_hpc.campaign.report import write_report
+from ideas_hpc.report.write import write_report
 from ideas_hpc.plots import design, figures
 from small_stores import small_store
 

@@ -98,7 +98,7 @@ def test_ring_spacing_names_the_angles_line(tmp_path, capsys):
 def test_scan_names_the_file_key(tmp_path):
     """The arrival scan flies the setup outside ``run``: same key (no file line, as before)."""
     from ideas_hpc.campaign.scan import scan_file
-    from ideas_hpc.errors import InputError
+    from ideas_hpc.base.errors import InputError
 
     p = _campaign(tmp_path, "eros-flyby.toml", FLYBY_EDITS)
     with pytest.raises(InputError) as ei:

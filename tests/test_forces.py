@@ -13,7 +13,7 @@ import pytest
 from ideas_hpc.body.bodies import load_body
 from ideas_hpc.core.dynamics import forces as F
 from ideas_hpc.core.dynamics import gravity as gk
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.dynamics.force_model import ForceModel, pack_force_model
 from ideas_hpc.dynamics.force_terms import (CannonballSRP, Degree2, PointMass, Polyhedron,
                                             SphericalHarmonics)

@@ -18,7 +18,7 @@ from scipy.special import lpmv
 from ideas_hpc.core.dynamics import gravity as gk
 from ideas_hpc.core.dynamics import harmonics as hk
 from ideas_hpc.body.datapath import have_data_file
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.body.gravity_field import load_sh_field, sh_from_degree2
 from ideas_hpc.body.params import get_params
 

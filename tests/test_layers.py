@@ -1,9 +1,10 @@
 """The layer order of CONTRIBUTING.md, enforced with plain ``ast`` over ``ideas_hpc``.
 
-Data flows one way: cli -> campaign (kinds and schema) -> flyby / design /
+Data flows one way: cli -> report and export (they read stores, and re-fly them
+through the campaign layer) -> campaign (kinds and schema) -> flyby / design /
 montecarlo -> models (body, dynamics, attitude, mapping, plots) -> the
-execution engine and the ``core/`` kernels -> the ground floor (errors, units,
-constants, seeds, progress, fields, instrument). A module may import its own
+execution engine and the ``core/`` kernels -> the ground floor ``base/`` (errors,
+units, constants, seeds, progress, fields, instrument, spice). A module may import its own
 layer or any layer below it; folders of one layer may import each other, but
 never in a cycle. Every import counts, also those inside functions: a lazy
 import still ties the folders together.
@@ -22,14 +23,15 @@ PACKAGE = Path(__file__).resolve().parents[1] / "ideas_hpc"
 #: Bottom to top. A folder is named by its path under ``ideas_hpc`` ("" for
 #: the package's own modules); a module listed by file overrides its folder.
 LAYERS = (
-    ("ground", ("",)),
+    ("ground", ("base", "_version.py")),
     ("kernels and engine", ("core", "core/attitude", "core/design", "core/dynamics",
                             "core/mapping", "engine")),
     ("models", ("body", "dynamics", "attitude", "mapping", "plots")),
     ("flyby, design, montecarlo", ("flyby", "design", "design/api", "design/ga", "design/pareto",
                                    "montecarlo")),
     ("campaign", ("campaign", "campaign/schema")),
-    ("cli", ("cli.py", "__init__.py")),
+    ("report and export", ("report", "export")),
+    ("cli", ("cli.py", "commands.py", "__init__.py")),
 )
 
 
@@ -258,3 +260,13 @@ def test_parameter_counter_counts_every_kind_of_parameter(tmp_path):
     (tmp_path / "m.py").write_text(
         "class A:\n    def f(self, a, /, b, *c, d, e=1, **f):\n        pass\n")
     assert [(n, k) for _, _, n, k in _parameter_counts(tmp_path)] == [("f", 6)]
+
+
+#: Most modules at the top of ``ideas_hpc/`` (issue 40): the top level shows the layers
+#: (folders) and the CLI; the ground-floor helpers live in ``base/``.
+MAX_TOP_MODULES = 8
+
+
+def test_the_top_level_shows_only_the_layers_and_the_cli():
+    top = sorted(f.name for f in PACKAGE.glob("*.py"))
+    assert len(top) <= MAX_TOP_MODULES, f"{len(top)} modules at the top of ideas_hpc: {top}"

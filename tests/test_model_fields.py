@@ -16,7 +16,7 @@ from ideas_hpc.attitude.spacecraft import SPACECRAFT_SCHEMA, SpacecraftModel
 from ideas_hpc.campaign.schema.campaign_tables import SCHEMA
 from ideas_hpc.campaign.schema.model_fields import (COVERAGE_FIELDS, FLYBY_FIELDS, GAINS_FIELDS,
                                            SPACECRAFT_FIELDS, flyby_errors)
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.flyby.flight import FlybySetup
 from ideas_hpc.mapping.options import COVERAGE_SCHEMA, CoverageOptions
 

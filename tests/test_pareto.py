@@ -16,7 +16,7 @@ from ideas_hpc.cli import main
 from ideas_hpc.design import CandidateBank, build_bank, coverage_curve, worst_failure
 from ideas_hpc.design.pareto.nsga2 import (check_objectives, evaluate, members_of, minimised,
                                      non_dominated, repair, run_pareto, swap_ascent)
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.campaign.setup import setup_from_campaign
 from design_oracle import pair_coverage
 from test_design_exact import eros_bank   # same flyby geometry; shares its bank cache

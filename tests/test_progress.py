@@ -1,7 +1,7 @@
 """Progress bars of the long phases (issue 22): shown on stderr, off with --no-progress,
 results in order."""
 
-from ideas_hpc import progress
+from ideas_hpc.base import progress
 
 
 def test_map_chunks_bar_and_order(capsys):

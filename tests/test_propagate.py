@@ -15,7 +15,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from ideas_hpc.body.bodies import load_body
-from ideas_hpc.constants import AU, MU_SUN, P_SUN_1AU
+from ideas_hpc.base.constants import AU, MU_SUN, P_SUN_1AU
 from ideas_hpc.core.dynamics import propagate as P
 from ideas_hpc.core.dynamics.forces import K_SRP
 from ideas_hpc.core.dynamics.ephemeris import body_position_N

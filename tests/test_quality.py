@@ -14,7 +14,7 @@ from ideas_hpc.body.analytic import sphere_mesh
 from ideas_hpc.core.mapping import quality as cq
 from ideas_hpc.campaign.schema.model_fields import COVERAGE_FIELDS
 from ideas_hpc.mapping.options import coverage_options_from_config
-from ideas_hpc.errors import InputError, config_fields
+from ideas_hpc.base.errors import InputError, config_fields
 from ideas_hpc.mapping.coverage import compute_coverage
 from ideas_hpc.mapping.options import CoverageOptions
 from test_coverage import look_at
@@ -245,7 +245,7 @@ def test_quality_in_flyby_and_mc_stores(tmp_path):
     for name in QUALITY_VARS:
         assert ds[name].dims == ("vertex",), name
     assert float(ds["coverage"]) <= float(ds["coverage_seen"])
-    from ideas_hpc.campaign.report import write_report
+    from ideas_hpc.report.write import write_report
 
     for store in (tmp_path / "mc.zarr", tmp_path / "fb.zarr"):
         rep = write_report(store, tmp_path / (store.stem + "-report"))

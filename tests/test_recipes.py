@@ -22,9 +22,9 @@ from ideas_hpc.campaign.run import run_file
 from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.core.attitude.maneuvers import FOV_MODE
 from ideas_hpc.design.pareto import objectives
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.montecarlo import dispersions
-from ideas_hpc.fields import Field
+from ideas_hpc.base.fields import Field
 from ideas_hpc.engine.variables import StoreVar
 
 CAMPAIGNS = Path(__file__).resolve().parent.parent / "campaigns"
@@ -159,7 +159,7 @@ def test_recipe_dispersion_reaches_the_success_probability_designer(tmp_path, mo
     """The toy entry alone makes the designer's campaign dispersed: it is drawn into
     every scenario from the body-level generator of the seed scheme (its declared
     level), and with its key at 0 (inactive) the design is the one exact scenario."""
-    from ideas_hpc.seeds import SCENARIO_STREAM, STREAM_BODY, stream_rng
+    from ideas_hpc.base.seeds import SCENARIO_STREAM, STREAM_BODY, stream_rng
 
     drawn = []
 
@@ -331,7 +331,7 @@ def test_one_angle_step_key_keeps_each_default_and_the_alias_warns_once(monkeypa
 
 
 def test_designers_name_their_own_parameters():
-    from ideas_hpc.errors import config_fields
+    from ideas_hpc.base.errors import config_fields
     from ideas_hpc.design.ga.genetic import run_fov_ga
     from ideas_hpc.campaign.design_ga import GA_FIELDS
 

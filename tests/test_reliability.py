@@ -11,7 +11,7 @@ import pytest
 
 from ideas_hpc.core.design.reliability import swarm_probabilities
 from ideas_hpc.design.reliability import ReliabilityDesigner, min_swarm_reliable
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.campaign.schema.design_checks import designer_errors
 from ideas_hpc.design.reliability_stats import (failure_upper_bound, hoeffding_lower_bound,
                                                 lower_confidence_bound)

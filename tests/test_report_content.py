@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from ideas_hpc.campaign.report import write_report
+from ideas_hpc.report.write import write_report
 from ideas_hpc.campaign.run import run_file
 from report_numbers import printed, printed_int, sig
 from test_campaign_mc import MC, SHORT

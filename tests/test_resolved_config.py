@@ -11,8 +11,8 @@ import xarray as xr
 from ideas_hpc.campaign.schema import campaign_tables as schema
 from ideas_hpc.campaign.run import run_file
 from ideas_hpc.campaign.schema.campaign_tables import EXECUTION_KNOBS, SCHEMA, load, resolved_config
-from ideas_hpc.errors import InputError
-from ideas_hpc.fields import Field
+from ideas_hpc.base.errors import InputError
+from ideas_hpc.base.fields import Field
 
 FLYBY = Path(__file__).resolve().parent.parent / "campaigns" / "eros-flyby.toml"
 TINY = ['body.name="ellipsoid"', 'attitude.mode="ideal"', "flyby.tf_s=60", "flyby.z_start_km=-3",

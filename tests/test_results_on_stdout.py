@@ -11,7 +11,7 @@ import pytest
 
 from ideas_hpc.campaign.montecarlo import coverage_result
 from ideas_hpc.cli import main
-from ideas_hpc.progress import plural
+from ideas_hpc.base.progress import plural
 
 CAMPAIGNS = Path(__file__).resolve().parent.parent / "campaigns"
 SMALL = ["--set", 'body.name="ellipsoid"', "--set", "flyby.tf_s=60",

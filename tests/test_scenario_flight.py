@@ -15,7 +15,7 @@ from ideas_hpc.flyby.flight import Perturbation, open_loop_views
 from ideas_hpc.montecarlo import scenario_flight
 from ideas_hpc.montecarlo.scenario_rows import RowEngine, full_rows, rows_setup
 from ideas_hpc.montecarlo.scenarios import draw_world, grid_theta, nominal_start, row_engine
-from ideas_hpc.seeds import SCENARIO_STREAM
+from ideas_hpc.base.seeds import SCENARIO_STREAM
 
 ROOT = Path(__file__).resolve().parent.parent
 # the main job's model (closed loop from the reference, usable images) on a short pass

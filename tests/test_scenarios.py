@@ -14,7 +14,7 @@ from ideas_hpc.flyby.flight import Perturbation, fly_open_loop
 from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.montecarlo.scenarios import (build_scenario_bank, draw_world, fly_members,
                                             nominal_start)
-from ideas_hpc.seeds import SCENARIO_STREAM, VALIDATION_STREAM
+from ideas_hpc.base.seeds import SCENARIO_STREAM, VALIDATION_STREAM
 
 ROOT = Path(__file__).resolve().parent.parent
 DESIGN = ROOT / "campaigns" / "eros-design-nominal.toml"
@@ -136,7 +136,7 @@ def test_a_later_look_flies_later_validation_samples():
 def test_streams_share_no_seed():
     # Scenario draws, validation draws and Monte Carlo samples (and their
     # children) never share a seed sequence state.
-    from ideas_hpc.seeds import sample_seed_sequence, stream_seed_sequence
+    from ideas_hpc.base.seeds import sample_seed_sequence, stream_seed_sequence
 
     def words(ss):
         return tuple(ss.generate_state(4).tolist())
@@ -217,7 +217,7 @@ def test_a_flight_the_proofs_cannot_take_is_recomputed_in_full(eros1708, monkeyp
     # inside perturbed_rows: one scaled DCM of one candidate at one image sends the
     # whole scenario to the full recomputation, one non-finite position to the full
     # path's validation, which names it.
-    from ideas_hpc.errors import InputError
+    from ideas_hpc.base.errors import InputError
     from ideas_hpc.montecarlo.scenario_rows import RowEngine
     from ideas_hpc.montecarlo.scenarios import grid_theta, row_engine
 

@@ -1,4 +1,4 @@
-"""Seeds only from ``ideas_hpc.seeds`` (issue 21 item 6).
+"""Seeds only from ``ideas_hpc.base.seeds`` (issue 21 item 6).
 
 The designers' streams moved into ``seeds.py``; they must be the very streams the
 old code drew (written out here as the old literal formulas), so designs stay
@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ideas_hpc import seeds
+from ideas_hpc.base import seeds
 
 PKG = Path(seeds.__file__).parent
 

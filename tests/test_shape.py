@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from ideas_hpc.body.analytic import ellipsoid_mesh, sphere_mesh
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.body.shape import build_shape, load_shape_file, read_plate_tab
 
 KM = 1e3

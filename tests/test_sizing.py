@@ -2,7 +2,7 @@ import math
 
 import pytest
 
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.flyby.sizing import PAPER_R_MAX, PAPER_R_MIN, size_flyby, size_for_body
 
 KM, DEG = 1e3, math.pi / 180

@@ -25,7 +25,7 @@ from ideas_hpc.engine.cluster import (DEFAULT_SLURM_CONFIG, WORKER_MALLOC_ENV, l
                                       slurm_cluster)
 from gates import wait_until
 from toy_campaign import run_toy
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from toy_stores import assert_same_as, serial_reference
 
 REPO = Path(__file__).resolve().parent.parent

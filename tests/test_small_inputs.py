@@ -11,7 +11,7 @@ import pytest
 from ideas_hpc.campaign.schema.campaign_tables import load, resolved_config
 from ideas_hpc.engine.store import config_problems
 from ideas_hpc.engine.store_meta import config_hash
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 
 CAMPAIGNS = Path(__file__).resolve().parent.parent / "campaigns"
 

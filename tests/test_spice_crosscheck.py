@@ -30,7 +30,7 @@ sp = pytest.importorskip("spiceypy")
 
 from ideas_hpc.body.dsk import write_dsk  # noqa: E402
 from ideas_hpc.body.shape import build_shape  # noqa: E402
-from ideas_hpc.constants import AU, MU_SUN  # noqa: E402
+from ideas_hpc.base.constants import AU, MU_SUN  # noqa: E402
 from ideas_hpc.core.mapping.bvh import build_bvh  # noqa: E402
 from ideas_hpc.core.mapping.segments import segments_blocked  # noqa: E402
 from ideas_hpc.mapping.coverage import compute_coverage  # noqa: E402

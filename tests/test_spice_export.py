@@ -20,9 +20,9 @@ import xarray as xr
 
 sp = pytest.importorskip("spiceypy")
 
-from ideas_hpc.campaign.export import export_store  # noqa: E402
+from ideas_hpc.export.kernels import export_store  # noqa: E402
 from ideas_hpc.campaign.run import run_file  # noqa: E402
-from ideas_hpc.errors import InputError  # noqa: E402
+from ideas_hpc.base.errors import InputError  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 SETS = ['body.name="ellipsoid"', "flyby.tf_s=60", "flyby.z_start_km=-3", "flyby.z_stop_km=3",
@@ -118,7 +118,7 @@ def test_export_refuses_what_it_cannot_write(exported, tmp_path):
 def test_usable_column_is_the_body_in_view(exported):
     rows = list(csv.DictReader(open(exported[1] / "images.csv")))
     assert all(r["usable"] == "1" for r in rows)       # nadir pointing keeps the body in view
-    from ideas_hpc.campaign.export import body_in_view
+    from ideas_hpc.export.kernels import body_in_view
     r = np.array([[[100e3, 0.0, 0.0]]])
     away = np.array([[[[0, 1.0, 0], [0, 0, 1.0], [1.0, 0, 0]]]])   # boresight +x_T: away
     assert not body_in_view(r, away, 0.05, 17e3)[0, 0]

@@ -27,9 +27,9 @@ sp = pytest.importorskip("spiceypy")
 
 from small_stores import CAMPAIGNS, KINDS  # noqa: E402
 
-from ideas_hpc.campaign.export import export_store  # noqa: E402
+from ideas_hpc.export.kernels import export_store  # noqa: E402
 from ideas_hpc.campaign.run import run_file  # noqa: E402
-from ideas_hpc.errors import InputError  # noqa: E402
+from ideas_hpc.base.errors import InputError  # noqa: E402
 
 BID = 2000433
 ET0 = 8.0e8                 # TDB of the element epoch

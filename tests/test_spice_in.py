@@ -21,9 +21,9 @@ from ideas_hpc.body.dsk import write_dsk  # noqa: E402
 from ideas_hpc.body.shape import load_shape_file, read_plate_tab  # noqa: E402
 from ideas_hpc.campaign.setup import setup_from_campaign  # noqa: E402
 from ideas_hpc.campaign.schema.campaign_tables import load, resolved_config  # noqa: E402
-from ideas_hpc.constants import AU, MU_SUN  # noqa: E402
+from ideas_hpc.base.constants import AU, MU_SUN  # noqa: E402
 from ideas_hpc.dynamics.trajectory import sun_direction_T  # noqa: E402
-from ideas_hpc.errors import InputError  # noqa: E402
+from ideas_hpc.base.errors import InputError  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 EROS = 2000433

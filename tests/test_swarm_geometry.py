@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.campaign.schema.model_fields import flyby_errors
 from ideas_hpc.flyby.swarm_geometry import check_separation, closest_pair
 

@@ -15,9 +15,9 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from ideas_hpc.body.bodies import load_body
-from ideas_hpc.constants import AU, MU_SUN, P_SUN_1AU
+from ideas_hpc.base.constants import AU, MU_SUN, P_SUN_1AU
 from ideas_hpc.core.dynamics.ephemeris import body_position_N
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.dynamics.force_model import ForceModel, force_model_from_config
 from ideas_hpc.dynamics.force_terms import BOX_AREA
 from ideas_hpc.dynamics.trajectory import TargetingError, ring_states, sun_direction_T, target_swarm

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from ideas_hpc.campaign.schema.model_fields import flyby_errors
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.flyby.flight import targeting_input_error
 from ideas_hpc.dynamics.trajectory import TargetingError, TargetingResult
 

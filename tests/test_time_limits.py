@@ -22,7 +22,7 @@ import ideas_hpc.design.exact as ex
 import ideas_hpc.design.stereo as st
 from design_oracle import subset_coverage
 from ideas_hpc.design import CandidateBank, coverage_curve, failure_tolerant, min_swarm
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from test_design_stereo import _bank as stereo_bank
 from test_design_stereo import _best as stereo_best
 from test_design_stereo import _truth as stereo_truth

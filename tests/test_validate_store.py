@@ -10,7 +10,7 @@ import xarray as xr
 
 from ideas_hpc.campaign.validate_store import wilson_interval, validate_store
 from ideas_hpc.cli import main
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from small_stores import small_store
 
 

@@ -1,7 +1,7 @@
 """A toy campaign that exercises the engine without any physics.
 
 Each sample draws four numbers from its own generator
-(:func:`~ideas_hpc.seeds.sample_rng`) and a compiled kernel turns them
+(:func:`~ideas_hpc.base.seeds.sample_rng`) and a compiled kernel turns them
 into store-shaped results (per-vertex ``observed`` / ``first_seen`` /
 ``times_seen``, a ``coverage`` scalar and a ``sigma_error`` time series) by
 iterating a chaotic logistic map ``work`` times per vertex. The chaos makes
@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 from numba import njit, prange
 
-from ideas_hpc.seeds import sample_rng
+from ideas_hpc.base.seeds import sample_rng
 
 N_PARAMS = 4
 
@@ -190,7 +190,7 @@ def run_toy_serial(out, *, n_samples: int = 64, chunk_size: int = 4, n_vertex: i
 
 
 def main(argv: list[str] | None = None) -> int:
-    from ideas_hpc.errors import InputError
+    from ideas_hpc.base.errors import InputError
 
     p = argparse.ArgumentParser(prog="python tests/toy_campaign.py",
                                 description="Run the engine's toy campaign into a zarr store.")

@@ -41,7 +41,7 @@ paper's Eros NP swarm) reach a worst MRP error of 3.9e-4 after 120 s and
 (``tests/test_attitude.py``, slow test).
 """
 
-from ideas_hpc.units import RPM
+from ideas_hpc.base.units import RPM
 from ideas_hpc.attitude.gains import GAIN_PRESETS, Gains, gains_from_config, validate_gains
 from ideas_hpc.attitude.maneuvers import (MANEUVERS, P_MIN_DEFAULT, THETA_MAX_DEFAULT, Maneuver,
                         campaign_maneuver, get_maneuver)

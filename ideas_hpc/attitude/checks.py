@@ -1,11 +1,11 @@
 """Input checks shared by the attitude boundary layer: each raises
-:class:`~ideas_hpc.errors.InputError` naming the field."""
+:class:`~ideas_hpc.base.errors.InputError` naming the field."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 
 
 def vec3(value, name):

@@ -8,7 +8,7 @@ start as fast as before (docs/gpu.md).
 
 from __future__ import annotations
 
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 
 #: The devices a flight can run on.
 DEVICES = ("cpu", "cuda")
@@ -23,7 +23,7 @@ def cuda_available() -> bool:
 
 def check_device(device: str, field: str = "device") -> str:
     """``device`` if it is one of :data:`DEVICES` and can run here, else an
-    :class:`~ideas_hpc.errors.InputError` naming ``field``."""
+    :class:`~ideas_hpc.base.errors.InputError` naming ``field``."""
     if device not in DEVICES:
         raise InputError(f"must be one of {', '.join(DEVICES)}, got {device!r}", field=field)
     if device == "cuda" and not cuda_available():

@@ -11,8 +11,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ideas_hpc.errors import InputError
-from ideas_hpc.fields import Field, validate
+from ideas_hpc.base.errors import InputError
+from ideas_hpc.base.fields import Field, validate
 from ideas_hpc.attitude.checks import vec3 as _vec3
 
 #: The ``[controller]`` table: a preset and overrides; ranges are checked by

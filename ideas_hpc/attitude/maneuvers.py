@@ -31,9 +31,9 @@ from typing import Callable
 import numpy as np
 
 from ideas_hpc.core.attitude.maneuvers import FOV_MODE, NP_MODE, TRACK_MODE
-from ideas_hpc.errors import InputError
-from ideas_hpc.units import MINUTE
-from ideas_hpc.fields import number
+from ideas_hpc.base.errors import InputError
+from ideas_hpc.base.units import MINUTE
+from ideas_hpc.base.fields import number
 
 P_MIN_DEFAULT = 0.3 * MINUTE  #: paper: P_min = 0.3 min/sweep, s
 THETA_MAX_DEFAULT = math.radians(1.9138)  #: SPEC section 2 / Table 6, rad

@@ -13,11 +13,11 @@ from ideas_hpc.attitude.device import batch_kernel
 from ideas_hpc.core.attitude.records import ControlGains, Initial, StepTables, Wheels
 from ideas_hpc.core.dynamics.frames import dcm_RT as _dcm_RT
 from ideas_hpc.core.attitude.maneuvers import TRACK_MODE, reference, reference_dcm_BT
-from ideas_hpc.errors import InputError
-from ideas_hpc.seeds import sample_rng
-from ideas_hpc.units import RPM
+from ideas_hpc.base.errors import InputError
+from ideas_hpc.base.seeds import sample_rng
+from ideas_hpc.base.units import RPM
 from ideas_hpc.attitude.checks import check_theta, init_array, steps
-from ideas_hpc.fields import number
+from ideas_hpc.base.fields import number
 from ideas_hpc.attitude.gains import gains_from_config
 from ideas_hpc.attitude.maneuvers import P_MIN_DEFAULT, maneuver_args
 from ideas_hpc.attitude.spacecraft import default_spacecraft, validate_spacecraft
@@ -30,7 +30,7 @@ from ideas_hpc.attitude.run_settings import (AttitudeModel, AttitudeRun, Initial
 def initial_conditions(seed: int, sample: int, n_spacecraft: int):
     """Random initial attitude state of one Monte Carlo sample (SPEC section 5).
 
-    Drawn from the sample's own stream (:func:`ideas_hpc.seeds.sample_rng`,
+    Drawn from the sample's own stream (:func:`ideas_hpc.base.seeds.sample_rng`,
     ``SeedSequence(seed, spawn_key=(sample,))``) in this order: sigma (N, 3) uniform in [-1, 1]
     then shadow-switched when ``|sigma| > 1``; omega (N, 3) uniform in
     [-1, 1] rpm; wheel speeds (N, 3) uniform in [-10, 10] rpm.

@@ -6,8 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ideas_hpc.errors import InputError
-from ideas_hpc.fields import Field, number, validate
+from ideas_hpc.base.errors import InputError
+from ideas_hpc.base.fields import Field, number, validate
 
 def _opt(kind: str, doc: str, **kw) -> Field:
     # None: not given, the SpacecraftModel default applies (defaults live there only)

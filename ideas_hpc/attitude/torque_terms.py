@@ -1,7 +1,7 @@
 """Disturbance torques on the spacecraft, declared as settings objects (as the force terms).
 
 A term is a frozen dataclass that checks its fields in ``__post_init__``
-(:class:`~ideas_hpc.errors.InputError` naming the field) and adds its torque,
+(:class:`~ideas_hpc.base.errors.InputError` naming the field) and adds its torque,
 in the body frame B (N m), to the step table in ``_pack(table, ctx)``:
 ``table`` is ``(N, n_steps + 1, 3)`` (spacecraft, step ``k`` at ``t = k dt``,
 component), ``ctx`` a :class:`TorqueContext`. :func:`pack_torques` sums the
@@ -25,7 +25,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 
 
 class TorqueContext(NamedTuple):

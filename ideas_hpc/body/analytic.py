@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ideas_hpc.errors import InputError
-from ideas_hpc.fields import number
+from ideas_hpc.base.errors import InputError
+from ideas_hpc.base.fields import number
 from ideas_hpc.body.shape import Shape, build_shape
 
 #: Eros-sized stand-in used when the real shape model is not on the data path:

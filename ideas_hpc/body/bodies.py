@@ -23,7 +23,7 @@ from pathlib import Path
 
 from ideas_hpc.body import analytic
 from ideas_hpc.body.datapath import candidates, find_data_file, have_data_file
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.body.params import PhysicalParams, get_params
 from ideas_hpc.body.shape import Shape, load_shape_file
 

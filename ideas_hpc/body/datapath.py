@@ -11,7 +11,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from ideas_hpc.errors import DataNotFoundError
+from ideas_hpc.base.errors import DataNotFoundError
 
 ENV_VAR = "IDEAS_HPC_DATA"
 _SUBDIRS = ("", "eros")

@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from ideas_hpc.body.datapath import find_data_file
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 
 KM = 1000.0
 MAX_DEGREE = 60  # unnormalised solid harmonics (core.gravity) overflow near degree 80

@@ -101,7 +101,7 @@ def mass_properties(vertices_T, faces) -> MassProperties:
 
 def implied_density(mu_m3_s2: float, volume_m3: float) -> float:
     """Bulk density, kg/m^3, of a body of gravitational parameter ``mu`` and volume ``V``."""
-    from ideas_hpc.constants import G
+    from ideas_hpc.base.constants import G
 
     return mu_m3_s2 / G / volume_m3
 

@@ -10,10 +10,10 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass
 
-from ideas_hpc.constants import AU, G
-from ideas_hpc.errors import InputError
-from ideas_hpc.fields import number
-from ideas_hpc.units import DEG, HOUR, KM
+from ideas_hpc.base.constants import AU, G
+from ideas_hpc.base.errors import InputError
+from ideas_hpc.base.fields import number
+from ideas_hpc.base.units import DEG, HOUR, KM
 
 
 

@@ -16,8 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ideas_hpc.errors import InputError
-from ideas_hpc.units import KM
+from ideas_hpc.base.errors import InputError
+from ideas_hpc.base.units import KM
 
 
 

@@ -3,7 +3,7 @@
 A custom body used to run on whatever it was given: a mesh in metres read as km
 (a 500 km body of density 2e-6 kg/m^3), a mesh whose origin lies outside the body,
 a candidate grid of 360,000 angles, dispersions larger than the field of view.
-These checks refuse (an :class:`~ideas_hpc.errors.InputError` naming the key, exit 2)
+These checks refuse (an :class:`~ideas_hpc.base.errors.InputError` naming the key, exit 2)
 what cannot be meant, and warn (one line on stderr naming the key) about what is
 legal but will not map the body:
 
@@ -28,9 +28,9 @@ from ideas_hpc.body.mass_properties import (com_problem, density_problem, implie
                                             mean_radius)
 from ideas_hpc.campaign.schema.design_checks import step_key
 from ideas_hpc.campaign.schema.kinds import KINDS
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.flyby.swarm_geometry import min_separation_angle
-from ideas_hpc.units import DEG
+from ideas_hpc.base.units import DEG
 
 #: Most candidate angles allowed within one minimum-separation angle.
 GRID_PER_SEPARATION = 10

@@ -16,8 +16,8 @@ import math
 
 import numpy as np
 
-from ideas_hpc.errors import InputError
-from ideas_hpc.units import DEG, KM
+from ideas_hpc.base.errors import InputError
+from ideas_hpc.base.units import DEG, KM
 
 
 def add_body_command(sub) -> None:
@@ -42,7 +42,7 @@ def add_body_command(sub) -> None:
 
 
 def _mu(args, body):
-    from ideas_hpc.constants import G
+    from ideas_hpc.base.constants import G
 
     if args.mass_kg is not None:
         if not args.mass_kg > 0:
@@ -60,7 +60,7 @@ def _mu(args, body):
 def body_lines(body, mu) -> list[str]:
     """The report of :func:`_cmd_body` for a loaded body and ``mu`` (m^3/s^2 or None)."""
     from ideas_hpc.body.mass_properties import implied_density, mean_radius
-    from ideas_hpc.constants import G
+    from ideas_hpc.base.constants import G
 
     s = body.shape
     p = s.mass_properties

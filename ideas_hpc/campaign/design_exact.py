@@ -27,8 +27,8 @@ from ideas_hpc.design.api import CoverSettings, minimize
 from ideas_hpc.design.stereo import stereo_curve
 from ideas_hpc.design.stereo import scorer as stereo_scorer
 from ideas_hpc.engine.job_cluster import JobCluster, phase_client, visibility_tests
-from ideas_hpc.errors import InputError
-from ideas_hpc.progress import result
+from ideas_hpc.base.errors import InputError
+from ideas_hpc.base.progress import result
 from ideas_hpc.design.candidates import candidate_masks
 from ideas_hpc.design.resolution import eps_tol_warning
 from ideas_hpc.flyby.flight import fly, target

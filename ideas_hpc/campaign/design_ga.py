@@ -18,17 +18,17 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from ideas_hpc.progress import result
+from ideas_hpc.base.progress import result
 from ideas_hpc.design.candidates import candidate_masks
 from ideas_hpc.design.api import (CoverSettings, FovGAProblem, FovGASettings, GASearch,
                                   NadirGAProblem, NadirGASettings, minimize)
 from ideas_hpc.design.bank import grid_size
 from ideas_hpc.engine.job_cluster import JobCluster, visibility_tests
-from ideas_hpc.errors import InputError, config_fields
+from ideas_hpc.base.errors import InputError, config_fields
 from ideas_hpc.flyby.flight import fly
 from ideas_hpc.design.ga.local_search import GridCover
 from ideas_hpc.design.ga.swarm_eval import MaskBank, fov_keys, nadir_keys, snap_angle
-from ideas_hpc.progress import bar as progress_bar
+from ideas_hpc.base.progress import bar as progress_bar
 from ideas_hpc.flyby.swarm_geometry import min_separation_angle
 from ideas_hpc.campaign import datasets
 from ideas_hpc.engine.variables import with_attrs

@@ -35,7 +35,7 @@ import time
 import numpy as np
 import xarray as xr
 
-from ideas_hpc.progress import result
+from ideas_hpc.base.progress import result
 from ideas_hpc.design.stereo import check_grid
 from ideas_hpc.design import build_bank, coverage_curve
 from ideas_hpc.design.bank import grid_size, separation_steps
@@ -56,7 +56,7 @@ def _log(msg: str) -> None:
 
 
 def _progress(total: int):
-    from ideas_hpc.progress import bar as progress_bar
+    from ideas_hpc.base.progress import bar as progress_bar
 
     bar = progress_bar(total, "NSGA-II", unit="gen")
 

@@ -37,7 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ideas_hpc.progress import result
+from ideas_hpc.base.progress import result
 from ideas_hpc.core.design.reliability import swarm_probabilities
 from ideas_hpc.design.api import CoverSettings, ReliableSettings, ScenarioProblem, minimize
 from ideas_hpc.design.settings import LookPlan
@@ -46,12 +46,12 @@ from ideas_hpc.design.certificate import (certify, group_bounds,
                                          replicated_lower_bound)
 from ideas_hpc.design.reliability import ReliabilityDesigner
 from ideas_hpc.design.reliability_stats import lower_confidence_bound
-from ideas_hpc.errors import InputError
-from ideas_hpc import progress
+from ideas_hpc.base.errors import InputError
+from ideas_hpc.base import progress
 from ideas_hpc.engine.job_cluster import phase_client
 from ideas_hpc.montecarlo.dispersions import scenario_dispersed
 from ideas_hpc.montecarlo.scenarios import build_scenario_bank, fly_members
-from ideas_hpc.seeds import VALIDATION_STREAM, stream_rng
+from ideas_hpc.base.seeds import VALIDATION_STREAM, stream_rng
 from ideas_hpc.campaign.design_exact import design_exact
 from ideas_hpc.campaign.schema.design_checks import designer_errors
 from ideas_hpc.campaign.reliability_vars import BankRun, reliability_dataset

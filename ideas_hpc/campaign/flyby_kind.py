@@ -8,7 +8,7 @@ from pathlib import Path
 
 import xarray as xr
 
-from ideas_hpc.progress import result
+from ideas_hpc.base.progress import result
 from ideas_hpc.flyby.encounter import pointing_profile
 from ideas_hpc.flyby.flight import fly
 from ideas_hpc.campaign.setup import setup_from_campaign

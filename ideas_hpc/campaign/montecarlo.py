@@ -26,7 +26,7 @@ import xarray as xr
 
 from ideas_hpc.engine.job_cluster import JobCluster, visibility_tests
 from ideas_hpc.engine.runner import run_campaign
-from ideas_hpc.progress import plural, result
+from ideas_hpc.base.progress import plural, result
 from ideas_hpc.flyby.flight import FlybySetup, Perturbation
 from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.montecarlo.dispersions import dispersion_order, dispersion_vars, draw_sample

@@ -50,7 +50,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
-from ideas_hpc.seeds import SCENARIO_STREAM, VALIDATION_STREAM
+from ideas_hpc.base.seeds import SCENARIO_STREAM, VALIDATION_STREAM
 from ideas_hpc.campaign.design_exact import ExactDesign
 from ideas_hpc.design.certificate import verdict as certificate_verdict
 

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 
 #: The four NASA PDS models of Eros, coarse to fine (plates).
 EROS_MODELS = ("eros001708", "eros007790", "eros010152", "eros022540")

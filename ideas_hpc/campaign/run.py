@@ -17,9 +17,9 @@ from pathlib import Path
 
 from ideas_hpc.engine.lock import StoreLock
 from ideas_hpc.engine.single import check_existing, write_complete
-from ideas_hpc.errors import InputError
-from ideas_hpc.progress import result
-from ideas_hpc.progress import enabled as progress_enabled
+from ideas_hpc.base.errors import InputError
+from ideas_hpc.base.progress import result
+from ideas_hpc.base.progress import enabled as progress_enabled
 from ideas_hpc.campaign.schema.kinds import KINDS
 from ideas_hpc.campaign.schema.campaign_tables import SCHEMA, Campaign, load, resolved_config
 from ideas_hpc.campaign.schema.model_fields import flyby_errors
@@ -33,7 +33,7 @@ def run_file(path, *, out=None, overrides=None, workers=None, scheduler=None, re
              cluster="local", slurm_config=None, progress=True) -> Path:
     """Run any campaign file; returns the store path.
 
-    Every :class:`~ideas_hpc.errors.InputError` leaves here with the campaign
+    Every :class:`~ideas_hpc.base.errors.InputError` leaves here with the campaign
     file and line of its field (when it names one), and no store is left.
     """
     c = load(path, overrides)

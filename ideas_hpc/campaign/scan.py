@@ -90,7 +90,7 @@ def scan_file(path, overrides=None, *, n: int = 24, span_h: float | None = None,
               out=None) -> xr.Dataset:
     """Scan ``n`` arrival epochs over ``span_h`` hours (default: one rotation period)
     from the campaign's ``flyby.epoch_s``; print a table, optionally write ``out``."""
-    from ideas_hpc.errors import InputError
+    from ideas_hpc.base.errors import InputError
     from ideas_hpc.campaign.schema.campaign_tables import load
 
     c = load(path, overrides or [])

@@ -23,11 +23,11 @@ import xarray as xr
 
 from ideas_hpc.design.candidates import candidate_masks
 from ideas_hpc.flyby.encounter import Encounter, approach_angles
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.flyby.flight import fly
 from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.campaign.schema.model_fields import flyby_errors
-from ideas_hpc.units import DEG
+from ideas_hpc.base.units import DEG
 
 SCAN_ATTRS = {
     "ring_coverage": {"units": "1", "long_name": "area fraction the ring's candidates map "

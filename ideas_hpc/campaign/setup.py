@@ -21,7 +21,7 @@ from ideas_hpc.body.shape import load_shape_file
 from ideas_hpc.campaign.schema.spice_table import apply_spice
 from ideas_hpc.campaign.schema.model_fields import flyby_errors
 from ideas_hpc.dynamics.trajectory import sun_direction_T
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.flyby.encounter import Encounter, approach_angles, approach_speed, window_s
 from ideas_hpc.flyby.flight import FlybySetup
 from ideas_hpc.flyby.sizing import size_flyby

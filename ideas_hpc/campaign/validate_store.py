@@ -40,7 +40,7 @@ def wilson_interval(successes: int, n: int, z: float = Z95) -> tuple[float, floa
     ``(p + z^2 / 2n -+ z sqrt(p (1 - p) / n + z^2 / 4n^2)) / (1 + z^2 / n)`` with
     ``p = successes / n`` (Wilson 1927).
     """
-    from ideas_hpc.errors import InputError
+    from ideas_hpc.base.errors import InputError
 
     if n < 1 or not 0 <= successes <= n:
         raise InputError(f"needs 0 <= successes <= n and n >= 1, got {successes} of {n}",
@@ -109,9 +109,9 @@ def validate_store(store, *, samples: int = 1024, seed: int | None = None, first
     from ideas_hpc.core.design.reliability import swarm_probabilities
     from ideas_hpc.design.reliability_stats import lower_confidence_bound
     from ideas_hpc.engine.store_meta import store_attrs
-    from ideas_hpc.errors import InputError
+    from ideas_hpc.base.errors import InputError
     from ideas_hpc.montecarlo.scenarios import fly_members
-    from ideas_hpc.seeds import VALIDATION_STREAM, stream_rng
+    from ideas_hpc.base.seeds import VALIDATION_STREAM, stream_rng
 
     attrs = store_attrs(Path(store))
     if "reliability_threshold" not in attrs:

@@ -23,8 +23,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ideas_hpc.core.design.union import population_coverage
-from ideas_hpc.errors import InputError
-from ideas_hpc.progress import map_chunks
+from ideas_hpc.base.errors import InputError
+from ideas_hpc.base.progress import map_chunks
 from ideas_hpc.flyby.swarm_geometry import min_separation_angle
 
 TWO_PI = 2.0 * math.pi

@@ -17,7 +17,7 @@ Each look pays for itself twice over:
 
 * **fresh data**: look ``j`` (0-based) flies validation samples
   ``j M .. (j + 1) M - 1`` of the validation stream
-  (:data:`ideas_hpc.seeds.VALIDATION_STREAM`; disjoint ``SeedSequence`` keys),
+  (:data:`ideas_hpc.base.seeds.VALIDATION_STREAM`; disjoint ``SeedSequence`` keys),
   so the data that certifies the reported swarm was drawn after that swarm was
   fixed and took part in no selection, step-up or tie-break;
 * **split error**: every look is made at ``alpha / K`` (``alpha = 1 -
@@ -47,7 +47,7 @@ import numpy as np
 
 from ideas_hpc.design.reliability_stats import lower_confidence_bound
 from ideas_hpc.design.settings import DEFAULT_LOOKS, LookPlan  # noqa: F401 (its old home)
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 
 
 def planned_looks(demonstrate: bool, n_bank: int, n_max: int, max_looks: int,

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ideas_hpc.progress import steps
+from ideas_hpc.base.progress import steps
 from ideas_hpc.design.bank import CandidateBank
 from ideas_hpc.design.exact import greedy_swarm, max_coverage, prepare
 from ideas_hpc.design.ring_bound import ring_bound, swap_search

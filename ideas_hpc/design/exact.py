@@ -48,8 +48,8 @@ from scipy.optimize import Bounds, LinearConstraint
 
 from ideas_hpc.design.highs import run_milp
 
-from ideas_hpc.errors import InputError
-from ideas_hpc.progress import plural
+from ideas_hpc.base.errors import InputError
+from ideas_hpc.base.progress import plural
 from ideas_hpc.design.bank import CandidateBank, Reduced, conflict_windows, reduce_problem, separation_steps
 from ideas_hpc.design.ring_bound import redundancy_polish, ring_bound, swap_search
 

@@ -38,7 +38,7 @@ import numpy as np
 from scipy import sparse
 from scipy.optimize import LinearConstraint
 
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.design.bank import CandidateBank
 from ideas_hpc.design.exact import (FEAS_TOL, ExactResult, _separation_rows, check_time_limit, heavy_groups,
                     min_swarm, prepare, solve)

@@ -42,9 +42,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ideas_hpc import progress
+from ideas_hpc.base import progress
 from ideas_hpc.core.design.reliability import swarm_coverages, swarm_probabilities
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.design.bank import CandidateBank, reduce_problem
 from ideas_hpc.design.reliability_search import all_swarms, extend, improve
 from ideas_hpc.design.reliability_stats import failure_upper_bound

@@ -23,7 +23,7 @@ import math
 
 import numpy as np
 
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 
 
 def failure_upper_bound(n: int, u_bar, p_f: float) -> float:

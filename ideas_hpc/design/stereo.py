@@ -35,8 +35,8 @@ from scipy.optimize import LinearConstraint
 
 from ideas_hpc.core.mapping.stereo_pairs import pair_index
 from ideas_hpc.core.design.union import population_coverage
-from ideas_hpc.errors import InputError
-from ideas_hpc.progress import steps
+from ideas_hpc.base.errors import InputError
+from ideas_hpc.base.progress import steps
 from ideas_hpc.design.bank import (CandidateBank, conflict_windows, reduce_problem,
                    separation_steps)
 from ideas_hpc.design.exact import (FEAS_TOL, ExactResult, check_time_limit, coverage_result, heavy_groups,

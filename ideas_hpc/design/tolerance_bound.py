@@ -40,8 +40,8 @@ import time
 
 import numpy as np
 
-from ideas_hpc import progress
-from ideas_hpc.errors import InputError
+from ideas_hpc.base import progress
+from ideas_hpc.base.errors import InputError
 
 #: Most scenarios to solve before any solve has shown its pace (each is an integer
 #: programme of 5-60 s on eros001708's 720 candidates: a 256-scenario bank is out of

@@ -31,8 +31,8 @@ import numpy as np
 from ideas_hpc.dynamics.force_terms import (BOX_AREA, CannonballSRP, Degree2, PointMass, Polyhedron,
                                             SphericalHarmonics, _sh_field)
 from ideas_hpc.dynamics.forces import PackedForceModel, pack_forces
-from ideas_hpc.errors import InputError, config_fields
-from ideas_hpc.fields import number
+from ideas_hpc.base.errors import InputError, config_fields
+from ideas_hpc.base.fields import number
 from ideas_hpc.body.params import PhysicalParams
 
 

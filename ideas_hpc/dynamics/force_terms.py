@@ -1,7 +1,7 @@
 """Force terms of the flyby dynamics: one settings object per term (SPEC section 4).
 
 Tudatpy style: each term is a frozen dataclass that validates its fields when
-built (an :class:`~ideas_hpc.errors.InputError` naming the field, in the
+built (an :class:`~ideas_hpc.base.errors.InputError` naming the field, in the
 term's own parameter names) and fills its part of the kernels' force record in
 ``_pack(rec, params, shape)``. :func:`ideas_hpc.dynamics.forces.pack_forces`
 turns a list of them into the record of :mod:`ideas_hpc.core.dynamics.forces`::
@@ -18,12 +18,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ideas_hpc.constants import AU, G, P_SUN_1AU
+from ideas_hpc.base.constants import AU, G, P_SUN_1AU
 from ideas_hpc.core.dynamics import forces as _cf
 from ideas_hpc.core.dynamics.gravity import polyhedron_precompute
 from ideas_hpc.core.dynamics.harmonics import sh_derivative_tables, sh_unnormalise
-from ideas_hpc.errors import InputError
-from ideas_hpc.fields import number
+from ideas_hpc.base.errors import InputError
+from ideas_hpc.base.fields import number
 
 #: 30 x 10 x 10 cm box (SPEC section 4): total surface area / 4, m^2.
 BOX_AREA = (4 * 0.30 * 0.10 + 2 * 0.10 * 0.10) / 4.0

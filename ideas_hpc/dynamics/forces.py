@@ -17,10 +17,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ideas_hpc.constants import MU_SUN
+from ideas_hpc.base.constants import MU_SUN
 from ideas_hpc.core.dynamics import forces as _cf
 from ideas_hpc.dynamics.force_terms import GRAVITY_TERMS, CannonballSRP
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.body.params import PhysicalParams
 
 

@@ -22,10 +22,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ideas_hpc.constants import MU_SUN
+from ideas_hpc.base.constants import MU_SUN
 from ideas_hpc.core.dynamics.ephemeris import sun_T_batch
 from ideas_hpc.core.dynamics.targeting import propagate_batch, target_batch
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.dynamics.force_model import ForceModel, pack_force_model
 from ideas_hpc.dynamics.forces import PackedForceModel, elements_and_pole
 from ideas_hpc.body.params import PhysicalParams

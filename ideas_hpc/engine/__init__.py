@@ -11,7 +11,7 @@ Campaign kinds plug in a template and a chunk function::
 * :mod:`~ideas_hpc.engine.store`: store creation and the resume check.
 * :mod:`~ideas_hpc.engine.store_meta`: names, chunk plan, config hash, attrs.
 * :mod:`~ideas_hpc.engine.chunk_write`: region writes, ``done_mask``.
-* The per-sample seed helpers are those of :mod:`ideas_hpc.seeds`, gathered here too.
+* The per-sample seed helpers are those of :mod:`ideas_hpc.base.seeds`, gathered here too.
 * :mod:`~ideas_hpc.engine.lock`: one writer per store.
 * :mod:`~ideas_hpc.engine.cluster`: LocalCluster, existing scheduler, SLURMCluster
   (settings in ``dask.config``, defaults shipped as ``engine/jobqueue.yaml``).
@@ -28,7 +28,7 @@ from ideas_hpc.engine.chunk_write import done_mask, write_chunk_region
 from ideas_hpc.engine.store import create_store
 from ideas_hpc.engine.store_meta import (CHUNK_DIM, DONE_VAR, SAMPLE_DIM, SEED_VAR, ChunkPlan,
                                         config_hash, is_store, store_attrs, store_plan)
-from ideas_hpc.seeds import sample_rng, sample_seed_sequence, seeds_for
+from ideas_hpc.base.seeds import sample_rng, sample_seed_sequence, seeds_for
 
 __all__ = [
     "CHUNK_DIM", "DONE_VAR", "SAMPLE_DIM", "SEED_VAR", "CampaignError", "ChunkPlan",

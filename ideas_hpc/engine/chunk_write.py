@@ -10,7 +10,7 @@ from typing import Mapping
 
 import numpy as np
 
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.engine.store_meta import DONE_VAR, ChunkPlan, store_attrs
 
 

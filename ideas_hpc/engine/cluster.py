@@ -26,7 +26,7 @@ import os
 from pathlib import Path
 from typing import Any, Iterator
 
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 
 #: Threads each chunk task may use, read in the task by
 #: :func:`ideas_hpc.engine.runner.limit_task_threads`.

@@ -22,7 +22,7 @@ import socket
 import time
 from pathlib import Path
 
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 
 LOCK_SUFFIX = ".ideas_hpc.lock"
 

@@ -22,14 +22,14 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.engine.cluster import TASK_THREADS_ENV, connect
 from ideas_hpc.engine.gate import gate_from_env, pass_gate
 from ideas_hpc.engine.lock import StoreLock
 from ideas_hpc.engine.chunk_write import done_mask, write_chunk_region
 from ideas_hpc.engine.store import create_store
 from ideas_hpc.engine.store_meta import ChunkPlan, store_plan
-from ideas_hpc.progress import map_chunks
+from ideas_hpc.base.progress import map_chunks
 
 ChunkFn = Callable[[int, int, int], Mapping[str, np.ndarray]]
 
@@ -217,7 +217,7 @@ class _ChunkTask:
 
 def _submit_all(client, path: Path, chunk_fn: ChunkFn, todo, summary: RunSummary,
                 progress: bool, retries: int) -> None:
-    """The not-done chunks ``todo`` through :func:`ideas_hpc.progress.map_chunks`, on
+    """The not-done chunks ``todo`` through :func:`ideas_hpc.base.progress.map_chunks`, on
     ``client``'s workers (``None``: in this process, in order), failures recorded."""
     if client is None:
         summary.n_workers = 0

@@ -19,7 +19,7 @@ from typing import Mapping
 
 import numpy as np
 
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.engine.lock import StoreLock
 from ideas_hpc.engine.chunk_write import done_mask, write_chunk_region
 from ideas_hpc.engine.store import config_problems, create_store

@@ -25,7 +25,7 @@ the module that defines it (the package :mod:`ideas_hpc.engine` gathers the publ
 
 Seeds
 -----
-The seed scheme is :mod:`ideas_hpc.seeds` (``SeedSequence(s, spawn_key=(k,))``
+The seed scheme is :mod:`ideas_hpc.base.seeds` (``SeedSequence(s, spawn_key=(k,))``
 per sample). The store keeps ``s`` in attrs and, per sample, the first four
 words of that sequence's state (``sample_seed``, (sample, seed_word) uint32)
 so any stored sample can be identified and re-run.
@@ -45,12 +45,12 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.engine.variables import describe
 from ideas_hpc.engine.store_meta import (CHUNK_DIM, DONE_VAR, ENGINE_TAG, SAMPLE_DIM, SEED_VAR,
                                         ChunkPlan, _jsonable, config_diff, config_hash,
                                         config_json, store_attrs, without_later_defaults)
-from ideas_hpc.seeds import seeds_for
+from ideas_hpc.base.seeds import seeds_for
 
 _PARTIAL = ".partial-"
 

@@ -14,7 +14,7 @@ from ideas_hpc.attitude import ideal_dcm_BT, initial_conditions, simulate_attitu
 from ideas_hpc.attitude.run_settings import InitialState, from_keywords
 from ideas_hpc.core.attitude.compose import compose_each
 from ideas_hpc.core.attitude.mrp import dcm_from_mrp, mrp_from_prv
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.flyby.encounter import track_dcms, track_reference
 from ideas_hpc.flyby.usable import blind, usable_images
 

@@ -34,7 +34,7 @@ from ideas_hpc.attitude import default_spacecraft, ideal_dcm_BT
 from ideas_hpc.core.dynamics.encounter import (dcm_BT_from_BN, dcm_NS, pointing_demand, straight_tracks_T,
                              track_dcm_BN)
 from ideas_hpc.core.attitude.maneuvers import track_reference_table
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.dynamics.trajectory import TargetingResult, propagate_swarm, target_swarm
 
 DEFAULT_SPEED_M_S = 10e3

@@ -29,7 +29,7 @@ from ideas_hpc.attitude import Gains, Maneuver, SpacecraftModel, campaign_maneuv
 from ideas_hpc.body.bodies import Body
 from ideas_hpc.flyby.encounter import Encounter
 from ideas_hpc.flyby.geometry import Geometry, geometry_of
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.flyby.camera import (camera_at_images, imaging_dcms, misaligned,
                                     misalignment_dcms)
 from ideas_hpc.mapping.coverage import CoverageResult, compute_coverage
@@ -130,7 +130,7 @@ def endpoints(setup: FlybySetup, theta) -> tuple[np.ndarray, np.ndarray]:
 def target(setup: FlybySetup, theta, *, raise_on_failure: bool = True) -> TargetingResult:
     """Target the swarm ``theta`` (rad) from its start to its arrival point.
 
-    A failure the user can fix becomes an :class:`~ideas_hpc.errors.InputError`
+    A failure the user can fix becomes an :class:`~ideas_hpc.base.errors.InputError`
     naming the setup parameter to change (:func:`targeting_input_error`; the
     campaign layer maps it to the file's key, :data:`ideas_hpc.campaign.schema.model_fields.FLYBY_FIELDS`).
     """

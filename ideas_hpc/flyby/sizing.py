@@ -22,11 +22,11 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass
 
-from ideas_hpc.errors import InputError
-from ideas_hpc.fields import number
-from ideas_hpc.instrument import (APERTURE, GROUND_RESOLUTION,  # noqa: F401 (public here too)
+from ideas_hpc.base.errors import InputError
+from ideas_hpc.base.fields import number
+from ideas_hpc.base.instrument import (APERTURE, GROUND_RESOLUTION,  # noqa: F401 (public here too)
                                   INSTRUMENT_DEFAULTS, MIN_ELEVATION, NEAR_FIELD, WAVELENGTH)
-from ideas_hpc.units import DEG, KM
+from ideas_hpc.base.units import DEG, KM
 
 
 @dataclass(frozen=True)

@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 
 TWO_PI = 2.0 * math.pi
 

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 
 #: Defaults (docs/attitude-start.md): a 10 ms exposure, one pixel of smear, 0.1 deg settled.
 EXPOSURE_MS = 10.0

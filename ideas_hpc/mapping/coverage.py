@@ -2,7 +2,7 @@
 
 Physics lives in :mod:`ideas_hpc.core.mapping.coverage` (culling, clipping, strict
 options) and :mod:`ideas_hpc.core.mapping.bvh` (occlusion structure). This module
-checks the arguments (raising :class:`~ideas_hpc.errors.InputError` that names
+checks the arguments (raising :class:`~ideas_hpc.base.errors.InputError` that names
 the argument), converts config units (deg, um, cm) to SI, builds the BVH when an
 option needs it, and chooses the kernel:
 
@@ -38,7 +38,7 @@ from ideas_hpc.core.mapping import quality_masks as _qmask
 from ideas_hpc.core.mapping import stereo_pairs as _pairs
 from ideas_hpc.core.mapping.records import Bvh, Camera, Mesh, Quality, Strict
 from ideas_hpc.mapping.options import CoverageOptions, _finite, frustum_of
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.engine.variables import QUALITY, VARS
 #: Tolerance on ``C C^T = I`` for camera DCMs.
 DCM_ORTHO_TOL = 1e-6

@@ -34,10 +34,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ideas_hpc.errors import InputError
-from ideas_hpc.fields import Field, number, validate
-from ideas_hpc.instrument import APERTURE, WAVELENGTH
-from ideas_hpc.units import CM, DEG, MM, UM
+from ideas_hpc.base.errors import InputError
+from ideas_hpc.base.fields import Field, number, validate
+from ideas_hpc.base.instrument import APERTURE, WAVELENGTH
+from ideas_hpc.base.units import CM, DEG, MM, UM
 
 _MODES = ("paper", "exact")
 _BOOLS = ("occlusion", "illumination", "quality", "require_lit", "require_stereo")

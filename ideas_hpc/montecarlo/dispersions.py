@@ -3,7 +3,7 @@
 Each entry of :data:`DISPERSIONS` says what one dispersion draws, how it turns
 into a :class:`~ideas_hpc.flyby.flight.Perturbation` of the flyby, and which store
 variables record it (name, dims, units), and which ``[monte_carlo]`` keys it
-reads (``keys``: :class:`~ideas_hpc.fields.Field` s, with its cross-check
+reads (``keys``: :class:`~ideas_hpc.base.fields.Field` s, with its cross-check
 ``check``). The campaign's ``[monte_carlo]`` table, the Monte Carlo kind's store
 layout, its per-sample draws and its perturbations are built from this list and
 nothing else, so a new dispersion is one entry here (plus, if it perturbs
@@ -11,7 +11,7 @@ something the flyby cannot perturb yet, one field of ``Perturbation``).
 
 Streams and order
 -----------------
-The seed scheme is :mod:`ideas_hpc.seeds`. Sample ``k`` of campaign seed ``s`` owns ``SeedSequence(s, spawn_key=(k,))``.
+The seed scheme is :mod:`ideas_hpc.base.seeds`. Sample ``k`` of campaign seed ``s`` owns ``SeedSequence(s, spawn_key=(k,))``.
 Entries with ``stream="sample"`` draw from that sequence itself (the attitude
 start, :func:`attitude_draw`: with ``attitude_start = "paper"`` equal to
 :func:`ideas_hpc.attitude.initial_conditions` ``(s, k, N)``); every other entry draws from the child
@@ -31,11 +31,11 @@ import numpy as np
 
 from ideas_hpc.attitude import draw_initial_conditions
 from ideas_hpc.core.attitude.mrp import mrp_from_prv
-from ideas_hpc.errors import InputError
-from ideas_hpc.fields import Field
-from ideas_hpc.seeds import sample_rng
+from ideas_hpc.base.errors import InputError
+from ideas_hpc.base.fields import Field
+from ideas_hpc.base.seeds import sample_rng
 from ideas_hpc.engine.variables import StoreVar
-from ideas_hpc.units import DEG, MM
+from ideas_hpc.base.units import DEG, MM
 
 DISPERSION_CHILD = 1  # spawn_key suffix of the child stream
 

@@ -44,7 +44,7 @@ from ideas_hpc.core.attitude.records import ControlGains, ImageViews, Initial, W
 from ideas_hpc.core.dynamics.frames import dcm_RT as _dcm_RT
 from ideas_hpc.dynamics.force_model import pack_force_model
 from ideas_hpc.dynamics.trajectory import MAX_STEPS, propagate_swarm, sample_times
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.flyby.camera import misalignment_dcms
 from ideas_hpc.flyby.usable import blind_into
 

@@ -18,7 +18,7 @@ targeted once on the nominal model and flown open loop through each scenario
 Members fly independently, so a swarm's coverage in scenario ``s`` is the union
 of its members' rows ``rows[s, members]``.
 
-Streams: :mod:`ideas_hpc.seeds` (``SCENARIO_STREAM`` for the bank,
+Streams: :mod:`ideas_hpc.base.seeds` (``SCENARIO_STREAM`` for the bank,
 ``VALIDATION_STREAM`` for :func:`fly_members`); scenario ``s`` depends only on
 ``(seed, s)``, never on the chunking or the worker count.
 """
@@ -34,9 +34,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ideas_hpc.engine.store_meta import config_hash
-from ideas_hpc.progress import map_chunks
+from ideas_hpc.base.progress import map_chunks
 from ideas_hpc.flyby.flight import FlybySetup, Perturbation, endpoints, target
-from ideas_hpc.seeds import (SCENARIO_STREAM, STREAM_ATTITUDE, STREAM_BODY, STREAM_SPACECRAFT,
+from ideas_hpc.base.seeds import (SCENARIO_STREAM, STREAM_ATTITUDE, STREAM_BODY, STREAM_SPACECRAFT,
                      VALIDATION_STREAM, stream_rng)
 from ideas_hpc.montecarlo import dispersions as _dispersions
 from ideas_hpc.montecarlo.scenario_rows import RowEngine

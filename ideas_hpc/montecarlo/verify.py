@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ideas_hpc.flyby.flight import FlybySetup, Perturbation
-from ideas_hpc.progress import map_chunks, plural
+from ideas_hpc.base.progress import map_chunks, plural
 from ideas_hpc.montecarlo.dispersions import draw_sample
 from ideas_hpc.montecarlo.sample import Nominal, design_nominal, fly_sample
 

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 
 _KINDS = ("observed", "first_seen", "fraction", "value")
 

@@ -16,7 +16,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.ticker import MaxNLocator  # noqa: E402
-from ideas_hpc.seeds import plot_rng  # noqa: E402
+from ideas_hpc.base.seeds import plot_rng  # noqa: E402
 
 RPM = 60.0 / (2.0 * np.pi)
 

@@ -1,6 +1,6 @@
 """The campaign file schema (SPEC sections 7-9), validated once at load.
 
-One mechanism (:class:`ideas_hpc.fields.Field`) validates every table once
+One mechanism (:class:`ideas_hpc.base.fields.Field`) validates every table once
 into a frozen dataclass with SI values under SI names (:class:`CampaignConfig`:
 ``c.config.instrument.aperture_m``, ``c.config.design.p_min_s``); the file
 keys keep their user units (``aperture_cm``) and errors name them with the
@@ -69,11 +69,11 @@ from typing import Any
 from ideas_hpc.attitude.maneuvers import CAMPAIGN_NAMES, campaign_maneuver
 from ideas_hpc.campaign.schema.toml_file import CampaignSource, load_campaign
 from ideas_hpc.design.pareto.objectives import check_objectives
-from ideas_hpc.errors import InputError, config_fields
+from ideas_hpc.base.errors import InputError, config_fields
 from ideas_hpc.montecarlo.dispersions import check_dispersions
-from ideas_hpc.fields import (Field, live_typed_table, schema_defaults, to_typed,
+from ideas_hpc.base.fields import (Field, live_typed_table, schema_defaults, to_typed,
                                      typed_table, validate, with_defaults)
-from ideas_hpc.units import DEG, KM, MINUTE
+from ideas_hpc.base.units import DEG, KM, MINUTE
 from ideas_hpc.campaign.schema.design_checks import (DESIGNER_FIELDS, check_stereo_design,
                                            resolve_angle_step)
 from ideas_hpc.campaign.schema.encounter_table import ENCOUNTER, check_encounter
@@ -190,7 +190,7 @@ class CampaignConfig:
 
 
 def typed_config(values: dict) -> CampaignConfig:
-    """:class:`CampaignConfig` from :func:`~ideas_hpc.fields.validate`'s output."""
+    """:class:`CampaignConfig` from :func:`~ideas_hpc.base.fields.validate`'s output."""
     tables = {k: to_typed(live_typed_table(cls, SCHEMA[k], __name__), values[k], SCHEMA[k])
               for k, cls in TABLES.items()}
     return CampaignConfig(kind=values["kind"], seed=values["seed"],
@@ -360,7 +360,7 @@ def resolved_config(c: Campaign) -> dict[str, Any]:
     """The campaign as run, with nothing implicit: what a store records and hashes.
 
     Every schema key with its value or default in the file's units
-    (:func:`ideas_hpc.fields.with_defaults`), and under ``models`` the
+    (:func:`ideas_hpc.base.fields.with_defaults`), and under ``models`` the
     resolved sub-models of ``[dynamics]``, ``[spacecraft]``, ``[controller]``
     and ``[coverage]`` (SI, every default of their modules written out, under the
     names of :data:`~ideas_hpc.campaign.schema.model_fields.STORED_NAMES`). So a

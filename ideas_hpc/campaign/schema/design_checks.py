@@ -24,8 +24,8 @@ from ideas_hpc.design.bank import grid_size
 from ideas_hpc.design.stereo import check_grid
 from ideas_hpc.campaign.schema.kinds import KINDS
 from ideas_hpc.campaign.schema.model_fields import FLYBY_FIELDS
-from ideas_hpc.errors import InputError, config_fields
-from ideas_hpc.units import DEG
+from ideas_hpc.base.errors import InputError, config_fields
+from ideas_hpc.base.units import DEG
 
 STEP_KEY = "design.angle_step_deg"
 ALIAS_KEY = "design.angle_step_rad"

@@ -13,11 +13,11 @@ from __future__ import annotations
 
 import math
 
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.montecarlo.dispersions import dispersion_keys
 from ideas_hpc.campaign.schema.kinds import KINDS
-from ideas_hpc.fields import Field, LiveTable
-from ideas_hpc.units import DEG, MINUTE
+from ideas_hpc.base.fields import Field, LiveTable
+from ideas_hpc.base.units import DEG, MINUTE
 
 #: Validation samples when ``design.verify_samples`` is not given.
 VERIFY_DEFAULT, VERIFY_DEFAULT_RELIABILITY = 64, 256

@@ -19,9 +19,9 @@ flyby time ``t0_s + before``; ``epoch_s`` sets the Sun and rotation phase as bef
 from __future__ import annotations
 
 from ideas_hpc.attitude.maneuvers import campaign_maneuver
-from ideas_hpc.errors import InputError
-from ideas_hpc.fields import Field
-from ideas_hpc.units import DEG, KM
+from ideas_hpc.base.errors import InputError
+from ideas_hpc.base.fields import Field
+from ideas_hpc.base.units import DEG, KM
 
 ENCOUNTER = {
     "geometry": Field("str", "paper", choices=("paper", "encounter"),

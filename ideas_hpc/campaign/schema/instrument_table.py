@@ -11,10 +11,10 @@ test applies to the closed loop (``attitude.mode = "simulated"``) unless
 
 from __future__ import annotations
 
-from ideas_hpc.fields import Field
-from ideas_hpc.instrument import INSTRUMENT_DEFAULTS as _CAM
+from ideas_hpc.base.fields import Field
+from ideas_hpc.base.instrument import INSTRUMENT_DEFAULTS as _CAM
 from ideas_hpc.flyby.usable import EXPOSURE_MS, SETTLE_DEG, SMEAR_PIXELS
-from ideas_hpc.units import CM, DEG, MM, UM
+from ideas_hpc.base.units import CM, DEG, MM, UM
 
 INSTRUMENT = {
     "ground_resolution_m": Field("float", _CAM["ground_resolution_m"], lo=0, lo_open=True),

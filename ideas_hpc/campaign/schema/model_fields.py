@@ -5,7 +5,7 @@ targeting asks to raise ``max_iter``, an unreachable approach names
 ``phase_angle_rad``, a bad spacecraft names ``mass_kg``. The campaign file has
 its own keys in user units (``flyby.max_iterations``, ``flyby.phase_angle_deg``,
 ``spacecraft.mass``). The maps here turn one into the other, in the field and,
-between backticks, in the message (:func:`ideas_hpc.errors.config_fields`), so
+between backticks, in the message (:func:`ideas_hpc.base.errors.config_fields`), so
 the user reads the file's key with its file and line:
 
 * :data:`FLYBY_FIELDS`: :class:`~ideas_hpc.flyby.flight.FlybySetup` and the
@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import contextlib
 
-from ideas_hpc.errors import InputError, config_fields
+from ideas_hpc.base.errors import InputError, config_fields
 
 #: The flyby layer's parameter names -> campaign keys.
 FLYBY_FIELDS = {

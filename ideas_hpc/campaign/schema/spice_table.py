@@ -32,8 +32,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ideas_hpc.fields import Field
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.fields import Field
+from ideas_hpc.base.errors import InputError
 
 SPICE_BODY = {
     "shape": Field("str", None, nullable=True, doc="mesh file replacing the named body's shape"),
@@ -74,7 +74,7 @@ class SpiceValues:
 
     def params_keys(self) -> dict:
         """The same values as ``[body.params]`` keys in the file's units."""
-        from ideas_hpc.constants import AU
+        from ideas_hpc.base.constants import AU
 
         d = math.degrees
         return {"a_au": self.orbit_a_m / AU, "e": self.orbit_e, "i_deg": d(self.orbit_i_rad),
@@ -131,8 +131,8 @@ def resolve_spice(raw: dict, body_name: str, source: Path | None = None) -> dict
 
 
 def _resolve(raw: dict, body_name: str, base: Path | None) -> SpiceValues | None:
-    from ideas_hpc.constants import MU_SUN
-    from ideas_hpc.spice import spiceypy
+    from ideas_hpc.base.constants import MU_SUN
+    from ideas_hpc.base.spice import spiceypy
 
     body = raw.get("body") or {}
     flyby = raw.get("flyby") or {}

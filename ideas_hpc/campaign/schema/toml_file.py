@@ -4,7 +4,7 @@ A campaign file is read once. ``--set dotted.key=value`` overrides are applied
 on top (the value is parsed as a TOML value, so ``--set swarm.n_max=12``,
 ``--set body.name="eros"`` and ``--set controller.k_p=[4, 0.4, 0.4]`` all work;
 a bare word that is not valid TOML is taken as a string). Every error raised
-while validating is an :class:`~ideas_hpc.errors.InputError` that names the
+while validating is an :class:`~ideas_hpc.base.errors.InputError` that names the
 dotted field and, when the value came from the file, the file and line.
 """
 
@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 
 _HEADER = re.compile(r"^\s*\[\s*([^\[\]]+?)\s*\]\s*(#.*)?$")
 _ARRAY_HEADER = re.compile(r"^\s*\[\[\s*([^\[\]]+?)\s*\]\]\s*(#.*)?$")

@@ -40,8 +40,8 @@ from typing import Callable
 import numpy as np
 
 from ideas_hpc.design.ga.settings import FovGASettings, GASearch, NadirGASettings
-from ideas_hpc.errors import InputError
-from ideas_hpc.seeds import GA_SEEDING, search_rng, search_seed
+from ideas_hpc.base.errors import InputError
+from ideas_hpc.base.seeds import GA_SEEDING, search_rng, search_seed
 
 TWO_PI = 2.0 * math.pi
 

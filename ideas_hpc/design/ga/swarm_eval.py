@@ -25,7 +25,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from ideas_hpc.core.design.union import population_coverage
-from ideas_hpc.progress import map_chunks
+from ideas_hpc.base.progress import map_chunks
 
 TWO_PI = 2.0 * math.pi
 Key = tuple  # (theta rad, period s (0: nadir), ic key int)
@@ -88,7 +88,7 @@ class MaskBank:
 
     def ensure(self, keys: Sequence[Key], desc: str | None = None) -> None:
         """Compute the masks of keys the bank does not hold yet (deterministic order);
-        ``desc`` shows a progress bar (:mod:`ideas_hpc.progress`)."""
+        ``desc`` shows a progress bar (:mod:`ideas_hpc.base.progress`)."""
         missing = sorted({k for k in keys if k not in self._index})
         if not missing:
             return

@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ideas_hpc.seeds import PARETO_SEARCH, search_rng, search_seed
+from ideas_hpc.base.seeds import PARETO_SEARCH, search_rng, search_seed
 from ideas_hpc.design.bank import CandidateBank, separation_steps
 from ideas_hpc.design.exact import greedy_swarm
 from ideas_hpc.design.pareto.objectives import OBJECTIVES, check_objectives, evaluate, minimised

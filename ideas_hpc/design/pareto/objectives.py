@@ -28,7 +28,7 @@ from typing import Callable
 import numpy as np
 
 from ideas_hpc.core.design.union import population_coverage
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.design.bank import CandidateBank
 
 #: The objectives' parameter name (the campaign maps it to ``design.objectives``).

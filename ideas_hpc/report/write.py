@@ -10,10 +10,10 @@ import numpy as np
 import xarray as xr
 
 from ideas_hpc.attitude.maneuvers import store_figure
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.plots import figures
-from ideas_hpc.units import DEG, KM
-from ideas_hpc.campaign.report_reliability import (reliability_figures, reliability_lines,
+from ideas_hpc.base.units import DEG, KM
+from ideas_hpc.report.reliability import (reliability_figures, reliability_lines,
                                                    swarm_label)
 from ideas_hpc.campaign.schema.kinds import KINDS
 from ideas_hpc.campaign.vocabulary import requirement_line, verification_verdict
@@ -253,7 +253,7 @@ def _check_complete(ds, store: Path) -> None:
 
 def write_report(store, out=None, *, html: bool = False) -> Path:
     """Write PNGs and ``summary.txt`` for a store (and ``report.html`` with ``html``,
-    :mod:`~ideas_hpc.campaign.report_html`); returns the summary path."""
+    :mod:`~ideas_hpc.report.html`); returns the summary path."""
     store = Path(store)
     if not store.exists():
         raise InputError("no such store", field="STORE", file=store)
@@ -323,7 +323,7 @@ def write_report(store, out=None, *, html: bool = False) -> Path:
     summary = out / "summary.txt"
     summary.write_text(_summary(ds, figs))
     if html:
-        from ideas_hpc.campaign.report_html import write_html
+        from ideas_hpc.report.html import write_html
 
         write_html(ds, summary.read_text(), out / "report.html")
     return summary

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 
 REQUIRED = object()
 

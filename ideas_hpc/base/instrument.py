@@ -7,7 +7,7 @@ table all read the same numbers without importing one another.
 
 from __future__ import annotations
 
-from ideas_hpc.units import CM, DEG, MM, UM
+from ideas_hpc.base.units import CM, DEG, MM, UM
 
 #: Paper Table 3 camera, in the units campaign files and the CLI use
 #: (``[instrument]`` and ``ideas-hpc size`` read them).

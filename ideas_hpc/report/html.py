@@ -12,9 +12,9 @@ so that it opens offline:
 * the coverage distribution of the dispersed samples (Monte Carlo verification
   or a Monte Carlo campaign) with the threshold;
 * a success-probability design's reliability curve and validation distribution
-  (:mod:`ideas_hpc.campaign.report_html_reliability`).
+  (:mod:`ideas_hpc.report.html_reliability`).
 
-The PNG figures of :mod:`ideas_hpc.campaign.report` stay for papers.
+The PNG figures of :mod:`ideas_hpc.report.write` stay for papers.
 """
 
 from __future__ import annotations
@@ -182,7 +182,7 @@ def distribution_figure(ds):
     fig = go.Figure(go.Scatter(x=cov, y=frac, mode="lines+markers", line_shape="hv",
                                name=f"P(coverage >= x), {m} samples"))
     thr = ds.attrs.get("verify_threshold", ds.attrs.get("threshold_coverage"))
-    from ideas_hpc.campaign.report_reliability import swarm_label
+    from ideas_hpc.report.reliability import swarm_label
 
     who = f" {swarm_label(ds)}" if name == "verify_coverage" else ""
     title = f"coverage of {m} dispersed samples{who}"
@@ -212,7 +212,7 @@ def figures_of(ds) -> list:
     if "verify_coverage" in ds or ("coverage" in ds and ds["coverage"].ndim == 1
                                    and ds["coverage"].size > 1):
         figs.append(distribution_figure(ds))
-    from ideas_hpc.campaign.report_html_reliability import reliability_html_figures
+    from ideas_hpc.report.html_reliability import reliability_html_figures
 
     figs.extend(reliability_html_figures(ds))
     return figs

@@ -6,7 +6,7 @@ that asked for it, and a missing install is one error line naming that key.
 
 from __future__ import annotations
 
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 
 
 def spiceypy(field: str):

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 
 #: Largest distance between the re-flown and the stored trajectory, m.
 REPRODUCE_TOL_M = 1e-3

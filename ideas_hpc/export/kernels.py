@@ -5,9 +5,9 @@ snapshots; the export flies the store's swarm again from its resolved config (th
 reproducibility promise) and writes at full resolution. Which flight, by store kind: a
 flyby's, a design's chosen swarm, a Monte Carlo store's nominal flight or, with
 ``--sample K``, its sample K; a store of many swarms (a Pareto front) is refused
-(:mod:`ideas_hpc.campaign.export_flight`, which also refuses a re-flown trajectory more
+(:mod:`ideas_hpc.export.flight`, which also refuses a re-flown trajectory more
 than 1 mm from the stored one). Files (SPEC section 7e,
-:mod:`ideas_hpc.campaign.spice_writers`):
+:mod:`ideas_hpc.export.writers`):
 
 * ``swarm.bsp``: SPK type 13, each spacecraft relative to the body centre in J2000;
 * ``swarm.bc`` + ``swarm.tsc``: CK type 3 of each camera frame (+z the boresight) at
@@ -37,7 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 
 EROS_ID = 2000433
 
@@ -85,11 +85,11 @@ def export_store(store, out=None, *, naif_base: int = -1000, body_id: int | None
     """Write the kernels and the CSV of a store's flight (module docstring); returns the
     folder. ``sample``: a Monte Carlo store's sample (default its nominal flight);
     ``notes``: a list that gets the lines saying which flight was written."""
-    from ideas_hpc.campaign import spice_writers as w
-    from ideas_hpc.campaign.export_flight import camera_rates_J, flight_of
+    from ideas_hpc.export import writers as w
+    from ideas_hpc.export.flight import camera_rates_J, flight_of
     from ideas_hpc.dynamics.trajectory import sun_direction_T
     from ideas_hpc.engine.store_meta import store_attrs
-    from ideas_hpc.spice import spiceypy
+    from ideas_hpc.base.spice import spiceypy
 
     sp = spiceypy("export")
     store = Path(store)

@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ideas_hpc.errors import InputError
+from ideas_hpc.base.errors import InputError
 
 #: Words of a sample's SeedSequence state kept in stores (``sample_seed``).
 SEED_WORDS = 4

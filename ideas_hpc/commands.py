@@ -18,7 +18,7 @@ def _cmd_run(args) -> int:
 
 
 def _cmd_report(args) -> int:
-    from ideas_hpc.campaign.report import write_report
+    from ideas_hpc.report.write import write_report
 
     out = write_report(args.store, args.out, html=args.html)
     print(out.read_text() if out.suffix == ".txt" else out)
@@ -44,7 +44,7 @@ def _cmd_scan_encounter(args) -> int:
 
 
 def _percent_list(text) -> list:
-    from ideas_hpc.errors import InputError
+    from ideas_hpc.base.errors import InputError
 
     try:
         out = [float(e) for e in (text or "").split(",") if e.strip()]
@@ -147,7 +147,7 @@ def add_commands(sub) -> None:
     e.set_defaults(handler=_cmd_scan_encounter)
 
     from ideas_hpc.campaign.body_report import add_body_command
-    from ideas_hpc.campaign.export import add_export_command
+    from ideas_hpc.export.kernels import add_export_command
     from ideas_hpc.campaign.validate_store import add_validate_command
     add_body_command(sub)
     add_export_command(sub)
