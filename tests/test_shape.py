@@ -5,7 +5,8 @@ import pytest
 
 from ideas_hpc.body.analytic import ellipsoid_mesh, sphere_mesh
 from ideas_hpc.base.errors import InputError
-from ideas_hpc.body.shape import build_shape, load_shape_file, read_plate_tab
+from ideas_hpc.body.formats import load_shape_file
+from ideas_hpc.body.shape import build_shape, read_plate_tab
 
 KM = 1e3
 

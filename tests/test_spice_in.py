@@ -18,7 +18,8 @@ import pytest
 sp = pytest.importorskip("spiceypy")
 
 from ideas_hpc.body.dsk import write_dsk  # noqa: E402
-from ideas_hpc.body.shape import load_shape_file, read_plate_tab  # noqa: E402
+from ideas_hpc.body.formats import load_shape_file  # noqa: E402
+from ideas_hpc.body.shape import read_plate_tab  # noqa: E402
 from ideas_hpc.campaign.setup import setup_from_campaign  # noqa: E402
 from ideas_hpc.campaign.schema.campaign_tables import load, resolved_config  # noqa: E402
 from ideas_hpc.base.constants import AU, MU_SUN  # noqa: E402

@@ -12,7 +12,10 @@ Names understood by :func:`load_body`:
 ``sphere``
     A sphere of Eros' mean radius (10.4 km) with Eros' mass and no C20/C22.
 a path
-    A ``.tab`` plate model or any mesh trimesh reads (lengths in km).
+    A shape file of a registered format (:data:`ideas_hpc.body.formats.FORMATS`: PDS
+    ``.tab``, DSK, or any mesh trimesh reads, lengths in km unless ``length_unit``).
+
+The names are the entries of :data:`ideas_hpc.body.formats.BUILTIN_BODIES`.
 """
 
 from __future__ import annotations
@@ -21,14 +24,16 @@ import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 
-from ideas_hpc.body import analytic
-from ideas_hpc.body.datapath import candidates, find_data_file, have_data_file
 from ideas_hpc.base.errors import InputError
+from ideas_hpc.body.formats import (builtin_body, builtin_names, family_of, formats_text,
+                                    load_shape_file, real_eros_names)
 from ideas_hpc.body.params import PhysicalParams, get_params
-from ideas_hpc.body.shape import Shape, load_shape_file
+from ideas_hpc.body.shape import Shape
 
-REAL_EROS = ("eros001708", "eros007790", "eros010152", "eros022540")
-BUILTIN = ("eros", "eros-ellipsoid", "ellipsoid", "sphere") + REAL_EROS
+#: The real NASA PDS Eros models, and every built-in name (from the registry,
+#: :mod:`ideas_hpc.body.formats`).
+REAL_EROS = real_eros_names()
+BUILTIN = builtin_names()
 
 
 @dataclass(frozen=True)
@@ -54,7 +59,7 @@ class Body:
 
     @property
     def is_real_eros(self) -> bool:
-        return self.shape.name in REAL_EROS
+        return self.shape.name in real_eros_names()
 
     def require_params(self) -> PhysicalParams:
         if self.params is None:
@@ -80,40 +85,22 @@ def load_body(name_or_path, *, data_path=None, resolution: int = 3,
         Length unit of a mesh file read by trimesh (``.tab`` files are km).
     """
     key = str(name_or_path)
-    low = key.lower()
     if isinstance(params, str):
         params = get_params(params)
-    if low == "eros":
-        if have_data_file("eros001708.tab", data_path):
-            shape = load_shape_file(find_data_file("eros001708.tab", data_path))
-            note = f"real NASA PDS shape model eros001708 ({shape.source})"
-        else:
-            shape = analytic.eros_ellipsoid(resolution)
-            looked = ", ".join(str(p) for p in candidates("eros001708.tab", data_path)) or \
-                "no data path (IDEAS_HPC_DATA unset)"
-            note = (f"built-in Eros-sized ellipsoid (eros001708.tab not found; looked in: "
-                    f"{looked})")
-        return Body("eros", shape, params or get_params("eros"), note)
-    if low in REAL_EROS:
-        shape = load_shape_file(find_data_file(low + ".tab", data_path))
-        return Body(low, shape, params or get_params("eros"),
-                    f"real NASA PDS shape model {low} ({shape.source})")
-    if low in ("eros-ellipsoid", "ellipsoid"):
-        shape = analytic.eros_ellipsoid(resolution)
-        return Body(low, shape, params or get_params("eros"), shape.source)
-    if low == "sphere":
-        eros = get_params("eros")
-        shape = analytic.sphere_mesh(10.4e3, resolution)
-        p = params or dataclasses.replace(eros, name="sphere", c20=0.0, c22=0.0)
-        return Body("sphere", shape, p, shape.source)
+    known = builtin_body(key)
+    if known is not None:
+        low, entry = known
+        shape, p, note = entry.load(data_path, resolution, params)
+        return Body(low, shape, p, note)
     path = Path(key).expanduser()
     if path.is_dir():
-        raise InputError(f"{key!r} is a directory, not a shape file (.tab/.obj/.ply/.stl/.off)",
+        raise InputError(f"{key!r} is a directory, not a shape file ({formats_text()})",
                          field="body")
     if path.suffix and (path.is_file() or "/" in key or "\\" in key):
         shape = load_shape_file(path, length_unit=length_unit)
-        if params is None and shape.name.lower().startswith("eros"):
-            params = get_params("eros")
+        family = family_of(shape.name)
+        if params is None and family is not None:
+            params = get_params(family.name)
         return Body(shape.name, shape, params, f"shape file {path}")
-    raise InputError(f"unknown body {key!r}; known names: {', '.join(BUILTIN)}, or a path to a "
-                     ".tab/.obj/.ply/.stl/.off file", field="body")
+    raise InputError(f"unknown body {key!r}; known names: {', '.join(builtin_names())}, or a "
+                     f"path to a {formats_text()} file", field="body")

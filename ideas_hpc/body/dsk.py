@@ -3,7 +3,7 @@
 A DSK type 2 segment holds the same data as a PDS plate ``.tab`` (vertices in km in
 the body-fixed frame, plates as 1-based vertex triples, outward by the right-hand
 rule), so :func:`read_dsk` gives the :class:`~ideas_hpc.body.shape.Shape` that the
-``.tab`` of the same model gives, array for array (``shape.load_shape_file``). :func:`write_dsk` writes one
+``.tab`` of the same model gives, array for array (``formats.load_shape_file``). :func:`write_dsk` writes one
 segment with its spatial index (``dskmi2``), as NAIF's ``mkdsk`` does, for the
 export and the tests. Both need spiceypy (imported on use).
 """
@@ -19,12 +19,11 @@ from ideas_hpc.base.errors import InputError
 from ideas_hpc.base.spice import spiceypy
 from ideas_hpc.base.units import KM
 
-DSK_SUFFIXES = (".bds", ".dsk")
 
 
 def read_dsk(path, *, field: str = "body.shape"):
     """``(vertices_T_m, faces)`` of the single type 2 segment of a DSK file: vertices
-    converted from km to m, plates to 0-based indices (``shape.load_shape_file`` builds
+    converted from km to m, plates to 0-based indices (``formats.load_shape_file`` builds
     the :class:`~ideas_hpc.body.shape.Shape`)."""
     sp = spiceypy(field)
     path = Path(path)

@@ -235,22 +235,3 @@ def read_mesh(path, *, length_unit: str = "km") -> Shape:
                            np.asarray(mesh.faces), name=path.stem, source=str(path))
     except InputError as exc:
         raise InputError(exc.message, file=path) from None
-
-
-def load_shape_file(path, *, length_unit: str = "km") -> Shape:
-    """Dispatch on the extension: ``.tab`` is PDS plate format, ``.bds``/``.dsk`` a DSK type 2
-    file (km, needs spiceypy), the rest goes to trimesh."""
-    path = Path(path)
-    if not path.is_file():
-        raise InputError("no such shape file", file=path)
-    if path.suffix.lower() == ".tab":
-        return read_plate_tab(path)
-    from ideas_hpc.body.dsk import DSK_SUFFIXES, read_dsk   # spiceypy itself only on use
-
-    if path.suffix.lower() in DSK_SUFFIXES:
-        v, f = read_dsk(path)
-        try:
-            return build_shape(v, f, name=path.stem, source=str(path))
-        except InputError as exc:
-            raise InputError(exc.message, file=path) from None
-    return read_mesh(path, length_unit=length_unit)

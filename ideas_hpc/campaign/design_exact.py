@@ -40,6 +40,10 @@ from ideas_hpc.campaign.schema.kinds import KINDS
 from ideas_hpc.campaign.vocabulary import requirement_line, verification_verdict
 from ideas_hpc.campaign.schema.design_checks import designer_errors
 from ideas_hpc.campaign.schema.design_table import verify_samples
+from ideas_hpc.design.api.methods import method_of_designer
+
+#: The stored method of a GA design (one vocabulary, :mod:`ideas_hpc.design.api.methods`).
+GA_METHOD = method_of_designer("ga-nadir").name
 
 
 def _log(msg: str) -> None:
@@ -129,7 +133,7 @@ def design_exact(c, setup, client) -> ExactDesign:
     curve.include(res.indices, res.value)
     k_eval = k if k else 1
     data = {
-        "design_method": ((), "exact"),
+        "design_method": ((), method_of_designer(res.designer).name),
         "solver_status": ((), res.status),
         "optimality_gap": ((), res.gap),
         "proven_bound": ((), res.bound),
@@ -146,7 +150,7 @@ def design_exact(c, setup, client) -> ExactDesign:
     if "worst_failure_coverage" in ds:  # the other units and names: store_schema
         ds["worst_failure_coverage"].attrs.update(
             units="1", long_name=f"lowest coverage after any {k_eval} failure(s)")
-    attrs = {"design_method": "exact", "solver_status": res.status,
+    attrs = {"design_method": method_of_designer(res.designer).name, "solver_status": res.status,
              "optimality_gap": float(res.gap), "target_coverage": float(target),
              "threshold_coverage": float(target - eps),
              "design_masks_s": float(t_masks), "design_solve_s": float(t_design - t_masks),
@@ -166,7 +170,7 @@ def ga_gap(c, setup, mask_bank, n_ga: int, target: float) -> tuple[xr.Dataset, l
     d = c.config.design
     step = d.angle_step_rad
     if step <= 0:
-        return xr.Dataset({"design_method": ((), "ga")}), [
+        return xr.Dataset({"design_method": ((), GA_METHOD)}), [
             "continuous GA angles: no exact optimum to compare with"]
     bank = build_bank(setup, step, mask_bank=mask_bank, snap=False)
     try:
@@ -175,12 +179,12 @@ def ga_gap(c, setup, mask_bank, n_ga: int, target: float) -> tuple[xr.Dataset, l
                 target=target, eps_tol=d.eps_tol_pct / 100.0, n_max=d.n_max,
                 min_separation_m=c.config.swarm.min_separation_m, time_limit_s=d.time_limit_s))
     except InputError as exc:
-        return xr.Dataset({"design_method": ((), "ga")}), [f"no exact reference: {exc.message}"]
+        return xr.Dataset({"design_method": ((), GA_METHOD)}), [f"no exact reference: {exc.message}"]
     if not ex.optimal:
-        return xr.Dataset({"design_method": ((), "ga")}), [
+        return xr.Dataset({"design_method": ((), GA_METHOD)}), [
             f"exact reference not proven in time (N = {ex.n}, gap {ex.gap:.2f})"]
     gap = (n_ga - ex.n) / n_ga
-    ds = xr.Dataset({"design_method": ((), "ga"), "solver_status": ((), "ga"),
+    ds = xr.Dataset({"design_method": ((), GA_METHOD), "solver_status": ((), GA_METHOD),
                      "optimality_gap": ((), gap), "proven_bound": ((), float(ex.n))})
     note = (f"the GA's N = {n_ga}; the certified optimum on the same {bank.n_candidates}-angle "
             f"grid is N = {ex.n} (gap {100 * gap:.1f} %)")

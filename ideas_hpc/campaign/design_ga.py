@@ -32,7 +32,7 @@ from ideas_hpc.base.progress import bar as progress_bar
 from ideas_hpc.flyby.swarm_geometry import min_separation_angle
 from ideas_hpc.campaign import datasets
 from ideas_hpc.engine.variables import with_attrs
-from ideas_hpc.campaign.design_exact import checked_setup, ga_gap
+from ideas_hpc.campaign.design_exact import GA_METHOD, checked_setup, ga_gap
 from ideas_hpc.campaign.schema.campaign_tables import Campaign
 from ideas_hpc.campaign.schema.design_checks import DESIGNER_FIELDS
 from ideas_hpc.campaign.schema.kinds import KINDS
@@ -123,14 +123,14 @@ def _stereo_ga(c: Campaign, setup, client):
                                         min_separation_m=c.config.swarm.min_separation_m,
                                         time_limit_s=d.time_limit_s))
         gap = (n - ex.bound) / n
-        res.gap_data = xr.Dataset({"design_method": ((), "ga"), "solver_status": ((), "ga"),
+        res.gap_data = xr.Dataset({"design_method": ((), GA_METHOD), "solver_status": ((), GA_METHOD),
                                    "optimality_gap": ((), gap),
                                    "proven_bound": ((), float(ex.bound))})
         res.notes.append(f"the GA's N = {n}; the exact stereo designer on the same grid: N = "
                          f"{ex.n} ({ex.status}, proven lower bound {ex.bound:g}); gap to the "
                          f"bound {100 * gap:.1f} %")
     except InputError as exc:
-        res.gap_data = xr.Dataset({"design_method": ((), "ga")})
+        res.gap_data = xr.Dataset({"design_method": ((), GA_METHOD)})
         res.notes.append(f"no exact reference: {exc.message}")
     return res, out.swarm_rad, None
 

@@ -50,6 +50,7 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
+from ideas_hpc.design.api.methods import method_of_designer
 from ideas_hpc.base.seeds import SCENARIO_STREAM, VALIDATION_STREAM
 from ideas_hpc.campaign.design_exact import ExactDesign
 from ideas_hpc.design.certificate import verdict as certificate_verdict
@@ -215,7 +216,7 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
                   combine_attrs="override")
     attrs = dict(nominal.attrs)
     attrs.update({
-        "design_method": "exact-reliability", "solver_status": res.status,
+        "design_method": method_of_designer("success-probability").name, "solver_status": res.status,
         "optimality_gap": float(res.gap), "proven_bound": float(res.bound),
         "bank_swarm_size": int(res.n), "validation_outcome": outcome,
         "demonstrate_steps": steps, "success_probability": p, "confidence": conf,

@@ -38,8 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from ideas_hpc.base.errors import InputError
-
-EROS_ID = 2000433
+from ideas_hpc.body.formats import family_of
 
 
 def add_export_command(sub) -> None:
@@ -73,8 +72,9 @@ def _body_id(sp, c, spice, body_id):
         return body_id
     if spice:
         return int(sp.bods2c(spice["spice_body"]))
-    if str(c.config.body.name).lower().startswith("eros"):
-        return EROS_ID
+    family = family_of(Path(str(c.config.body.name)).stem)
+    if family is not None and family.naif_id is not None:
+        return family.naif_id
     raise InputError(f"body {c.config.body.name!r} has no known NAIF ID; give one",
                      field="--body-id")
 

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from ideas_hpc.design.api.methods import method_of
 from ideas_hpc.attitude.maneuvers import store_figure
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.plots import figures
@@ -119,7 +120,7 @@ def _design_lines(ds) -> list[str]:
                    f"N = {int(ds['best_swarm_size'])}, proven lower bound "
                    f"{float(ds['proven_bound']):g}, optimality gap "
                    f"{100 * float(ds['optimality_gap']):.1f} %"
-                   + (f"; {_requirement(ds)}" if method == "exact" else ""))
+                   + (f"; {_requirement(ds)}" if method_of(method).proven else ""))
     if "coverage_vs_n" in ds:
         n, c = ds["n_spacecraft"].values, ds["coverage_vs_n"].values
         stop = int(np.argmax(c >= c[-1])) + 1       # the curve is flat after its maximum
@@ -149,7 +150,7 @@ def _design_lines(ds) -> list[str]:
         out.append(a.get("verify_verdict") or verification_verdict(
             float(a["verify_probability"]), c.size, float(a["verify_threshold"])))
     out.extend(reliability_lines(ds))
-    if method == "exact":
+    if method_of(method).proven:
         out.extend(f"note: {n}" for n in json.loads(a.get("notes", "[]")))
     return out
 

@@ -20,6 +20,7 @@ import dataclasses
 import math
 import warnings
 
+from ideas_hpc.design.api.methods import METHODS
 from ideas_hpc.design.bank import grid_size
 from ideas_hpc.design.stereo import check_grid
 from ideas_hpc.campaign.schema.kinds import KINDS
@@ -99,7 +100,7 @@ def check_stereo_design(config, raw_design) -> None:
                          f"{config.kind!r} cannot score; use kind {able}",
                          field="coverage.require_stereo")
     key = step_key(raw_design)
-    if d.method == "ga":
+    if METHODS[d.method].continuous_angles:
         if not d.angle_step_rad > 0:
             raise InputError(f"the GA scores stereo pairs on its angle grid: set {key} > 0",
                              field=key)

@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 
 from ideas_hpc.base.errors import InputError
+from ideas_hpc.design.api.methods import METHODS
 from ideas_hpc.montecarlo.dispersions import dispersion_keys
 from ideas_hpc.campaign.schema.kinds import KINDS
 from ideas_hpc.base.fields import Field, LiveTable
@@ -23,7 +24,8 @@ from ideas_hpc.base.units import DEG, MINUTE
 VERIFY_DEFAULT, VERIFY_DEFAULT_RELIABILITY = 64, 256
 
 DESIGN = {
-    "method": Field("str", "exact", choices=("exact", "ga"),
+    # live: a method registered later is a valid choice (ideas_hpc.design.api.methods)
+    "method": Field("str", "exact", choices=METHODS.keys(),
                     doc="design-nadir: exact integer programme or the paper's GA"),
     "angle_step_deg": Field("float", None, nullable=True, si="grid_step_rad", to_si=DEG, lo=0,
                             hi=90, doc="grid of candidate swarm angles of every designer "
@@ -96,9 +98,11 @@ def reliability_checks(c) -> None:
         able = ", ".join(repr(k.name) for k in KINDS.values() if k.success_probability)
         raise InputError(f"is for kind {able}, not {c.kind!r}",
                          field="design.success_probability")
-    if d.method != "exact":
-        raise InputError("is supported by the exact designer only (design.method = 'exact'), "
-                         f"not {d.method!r}", field="design.success_probability")
+    if not METHODS[d.method].success_probability:
+        able = [m.name for m in METHODS.values() if m.success_probability]
+        raise InputError(f"is supported by the {' or '.join(able)} designer only "
+                         f"(design.method = {', '.join(map(repr, able))}), not {d.method!r}",
+                         field="design.success_probability")
     if d.failures_tolerated:
         raise InputError("replaces design.failures_tolerated (failures enter the probability "
                          "exactly through monte_carlo.failure_probability): set it to 0",
