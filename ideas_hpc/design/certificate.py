@@ -45,6 +45,7 @@ from typing import Callable
 
 import numpy as np
 
+from ideas_hpc.design.look_plan import plan_looks
 from ideas_hpc.design.reliability_stats import lower_confidence_bound
 from ideas_hpc.design.settings import DEFAULT_LOOKS, LookPlan  # noqa: F401 (its old home)
 from ideas_hpc.base.errors import InputError
@@ -105,6 +106,7 @@ class Certificate:
     planned: int
     exact: bool
     looks: list = field(default_factory=list)
+    plan: object = None         # the look plan (:class:`~ideas_hpc.design.look_plan.Plan`)
 
     @property
     def final(self) -> Look:
@@ -124,6 +126,8 @@ class Certificate:
         how = ("one look, the full error" if self.planned == 1 else
                f"{len(self.looks)} of {self.planned} planned looks, each on fresh samples "
                f"and at alpha / {self.planned} (Bonferroni)")
+        if self.plan is not None and self.plan.predicted:
+            how += f"; {self.plan.line()}"
         cmp = ">=" if self.demonstrated else "<"
         return (f"certificate: N = {f.n} swarm {verdict(self.demonstrated)}, {100 * f.confidence:.4g} % lower "
                 f"bound {f.lower:.4f} {cmp} p = {self.p:g}"
@@ -133,7 +137,8 @@ class Certificate:
 
 
 def certify(n_bank: int, best_of: Callable, validate: Callable, plan: LookPlan | None = None,
-            *, bound: Callable = lower_confidence_bound, **keywords) -> Certificate:
+            *, bound: Callable = lower_confidence_bound, values_of: Callable | None = None,
+            rng=None, samples_max: int | None = None, **keywords) -> Certificate:
     """Run the looks of the module docstring.
 
     ``plan`` (:class:`~ideas_hpc.design.settings.LookPlan`) holds ``p``,
@@ -163,27 +168,50 @@ def certify(n_bank: int, best_of: Callable, validate: Callable, plan: LookPlan |
         One exact scenario: the mean is P itself (no bound, one look).
     bound : callable
         ``(values, confidence) -> lower bound``.
+    values_of : callable, optional
+        ``swarm -> (S,)`` its per-scenario probabilities on the bank (held-out scenarios
+        where there are some). With ``demonstrate``, the looks are then planned from them
+        (:func:`~ideas_hpc.design.look_plan.plan_looks`: the sizes that cannot clear p are
+        skipped, K is the fewest looks predicted to pass); without, every size from
+        ``n_bank`` up is a look, ``K = min(max_looks, n_max - n_bank + 1)``.
+    rng : numpy.random.Generator, optional
+        The plan's resampling (with ``values_of``).
+    samples_max : int, optional
+        With ``values_of``: the most samples one look may take (the plan doubles a look's M
+        from ``n_samples`` toward its target power, :func:`~ideas_hpc.design.look_plan.plan_looks`).
     """
     plan = plan if plan is not None else LookPlan(**keywords)
     p, confidence, n_max, n_samples = plan.p, plan.confidence, plan.n_max, plan.n_samples
     demonstrate, max_looks, exact = plan.demonstrate, plan.max_looks, plan.exact
     k = planned_looks(demonstrate, n_bank, n_max, max_looks, exact)
-    conf_look = 1.0 if exact else look_confidence(confidence, k)
-    cert = Certificate(p=float(p), confidence=float(confidence), planned=k, exact=exact)
+    schedule = None
+    if demonstrate and not exact and values_of is not None:
+        schedule = plan_looks(int(n_bank), best_of, values_of, p=p, confidence=confidence,
+                              n_max=n_max, samples=n_samples, max_looks=k,
+                              rng=rng if rng is not None else np.random.default_rng(0),
+                              bound=bound, samples_max=samples_max)
     # every swarm a look may fly is fixed before the first look: no choice waits on
     # (or times itself against) a validation flight
-    picks = [best_of(int(n_bank) + j) for j in range(k)]
-    for j, (swarm, pb) in enumerate(picks):
-        n = int(n_bank) + j
+    if schedule is not None and schedule.looks:
+        k = schedule.planned
+        picks = [(lk.n, lk.swarm, lk.bank_probability, lk.samples) for lk in schedule.looks]
+    else:
+        picks = [(int(n_bank) + j, *best_of(int(n_bank) + j), int(n_samples))
+                 for j in range(k)]
+    conf_look = 1.0 if exact else look_confidence(confidence, k)
+    cert = Certificate(p=float(p), confidence=float(confidence), planned=k, exact=exact,
+                       plan=schedule)
+    first = 0       # look j flies the samples after those of looks 0 .. j - 1: fresh data
+    for n, swarm, pb, m in picks:
         swarm = np.asarray(swarm, dtype=np.int64)
         if swarm.size != n:
             break
-        values, extra = validate(swarm, j * int(n_samples), int(n_samples))
+        values, extra = validate(swarm, first, int(m))
         values = np.asarray(values, dtype=np.float64)
         lower = float(values.mean()) if exact else float(bound(values, conf_look))
         cert.looks.append(Look(n=n, swarm=swarm, bank_probability=float(pb), values=values,
-                               first=j * int(n_samples), confidence=conf_look, lower=lower,
-                               extra=extra))
+                               first=first, confidence=conf_look, lower=lower, extra=extra))
+        first += int(m)
         if lower >= p:
             break
     if not cert.looks:

@@ -60,6 +60,34 @@ def _log_capital(x: np.ndarray, alpha: float):
     return np.minimum(lam, 0.75)
 
 
+def _bets(x: np.ndarray, alpha: float) -> np.ndarray:
+    """:func:`_log_capital`'s bets for each row of ``x`` (R, M)."""
+    r_n, m = x.shape
+    t = np.arange(1, m + 1, dtype=np.float64)
+    mu_t = (0.5 + np.cumsum(x, axis=1)) / (t + 1.0)
+    sq = np.cumsum((x - mu_t) ** 2, axis=1)
+    var = (0.25 + np.c_[np.zeros(r_n), sq[:, :-1]]) / t
+    return np.minimum(np.sqrt(2.0 * math.log(1.0 / alpha) / (var * t * np.log1p(t))), 0.75)
+
+
+def clears(x, p: float, confidence: float) -> np.ndarray:
+    """(R,) bool: the lower bound of each row of ``x`` (R, M) at ``confidence`` is >= ``p``.
+
+    The rejected means form ``[0, L]`` (:func:`lower_confidence_bound`), so ``L >= p``
+    exactly when the mean ``p`` is rejected: one pass of the capital process per row
+    instead of the bisection (the look plan's bootstrap, :mod:`ideas_hpc.design.look_plan`).
+    """
+    x = np.clip(np.atleast_2d(np.asarray(x, dtype=np.float64)), 0.0, 1.0)
+    if not (0.5 < confidence < 1.0):
+        raise InputError(f"must be in (0.5, 1), got {confidence!r}", field="confidence")
+    if x.shape[1] == 0:
+        return np.zeros(x.shape[0], dtype=bool)
+    alpha = 1.0 - confidence
+    lam = _bets(x, alpha)
+    cap = np.max(np.cumsum(np.log1p(lam * (x - float(p))), axis=1), axis=1)
+    return cap >= math.log(1.0 / alpha)
+
+
 def lower_confidence_bound(x, confidence: float) -> float:
     """One-sided lower bound ``L`` with ``P(L <= E x) >= confidence`` for i.i.d. x in [0, 1].
 
