@@ -190,3 +190,31 @@ def test_real_eros_as_the_nominal(eros1708):
                     size=SizeEstimate(None, 1.0e3))
     for k in range(5):
         _check_world(prior.draw(8, k))
+
+
+def test_world_streams_are_the_documented_seed_sequences():
+    for fam in (0, seeds.SCENARIO_STREAM):
+        got = seeds.world_rng(42, 5, seeds.WORLD_POLE, fam).random(8)
+        want = np.random.default_rng(np.random.SeedSequence(
+            42, spawn_key=(seeds.WORLD_STREAM, fam, 5, seeds.WORLD_POLE))).random(8)
+        assert np.array_equal(got, want)
+    nav = np.random.default_rng(np.random.SeedSequence(
+        42, spawn_key=(seeds.NAVIGATION_STREAM, 0, 5, 2))).random(8)
+    assert np.array_equal(seeds.navigation_rng(42, 5, 2).random(8), nav)
+    parts = [seeds.world_rng(42, 5, p).random(4) for p in range(4)]
+    assert len({tuple(p) for p in parts}) == 4
+    with pytest.raises(ValueError, match="purpose"):
+        seeds.world_rng(42, 5, 9)
+
+
+def test_gallery_figure(prior, tmp_path):
+    from ideas_hpc.plots import figures
+    from ideas_hpc.plots.prior import prior_gallery
+
+    with figures.kept() as figs:
+        path = prior_gallery([prior.draw(0, k) for k in range(3)], tmp_path / "g.png",
+                             title="t")
+    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    fig = figs["g.png"]
+    titles = [ax.get_title() for ax in fig.axes]
+    assert len(titles) == 3 and all(t.startswith(f"k = {i}:") for i, t in enumerate(titles))

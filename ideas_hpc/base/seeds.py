@@ -25,6 +25,19 @@ the initial attitude, rates and wheel speeds per spacecraft). The two stream
 words differ, so the scenario and validation families share no sequence
 (:func:`stream_seed_sequence`); stores record both words.
 
+Target worlds (issue 42)
+------------------------
+A world of the target prior and its navigation errors draw from two more families,
+keyed by four words (so never a sample's, a sample child's or a design stream's key)::
+
+    part c of world k:                  SeedSequence(seed, spawn_key=(WORLD_STREAM, family, k, c))
+    navigation draw m of world k:       SeedSequence(seed, spawn_key=(NAVIGATION_STREAM, family, k, m))
+
+``c`` is :data:`WORLD_SHAPE`, :data:`WORLD_SIZE`, :data:`WORLD_POLE` or
+:data:`WORLD_ROTATION`; ``family`` is 0, or :data:`SCENARIO_STREAM` /
+:data:`VALIDATION_STREAM` to keep the bank's worlds and fresh validation worlds apart
+(:func:`world_rng`, :func:`navigation_rng`).
+
 Stores keep ``s`` in their attrs and, per sample, the first :data:`SEED_WORDS`
 words of the sample's sequence state (:func:`seeds_for`), which identify it.
 
