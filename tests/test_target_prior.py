@@ -178,6 +178,10 @@ def test_physical_params_of_a_world(prior):
     np.testing.assert_allclose([math.cos(lat) * math.cos(lon), math.cos(lat) * math.sin(lon),
                                 math.sin(lat)], w.pole_N, atol=1e-12)
     assert p.spin_period == w.spin_period_s
+    # degree 2 of the shape at constant density: a triaxial body's (2c^2 - a^2 - b^2)/10 is < 0
+    assert p.c20 == pytest.approx(w.shape.mass_properties.c20_m2) and p.c20 < 0.0
+    kept = w.physical_params(base, 300.0, degree2_from_shape=False)
+    assert (kept.c20, kept.c22, kept.mu) == (base.c20, base.c22, base.mu)
     # W(t_tca) from the flight's t = 0 is the world's phase at TCA
     assert (p.prime_meridian + 2 * math.pi * 300.0 / p.spin_period) % (2 * math.pi) == \
         pytest.approx(w.phase_tca_rad, abs=1e-9)

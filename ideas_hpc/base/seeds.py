@@ -30,8 +30,8 @@ Target worlds (issue 42)
 A world of the target prior and its navigation errors draw from two more families,
 keyed by four words (so never a sample's, a sample child's or a design stream's key)::
 
-    part c of world k:                  SeedSequence(seed, spawn_key=(WORLD_STREAM, family, k, c))
-    navigation draw m of world k:       SeedSequence(seed, spawn_key=(NAVIGATION_STREAM, family, k, m))
+    part c of world k:        SeedSequence(seed, spawn_key=(WORLD_STREAM, family, k, c))
+    navigation m of world k:  SeedSequence(seed, spawn_key=(NAVIGATION_STREAM, family, k, m))
 
 ``c`` is :data:`WORLD_SHAPE`, :data:`WORLD_SIZE`, :data:`WORLD_POLE` or
 :data:`WORLD_ROTATION`; ``family`` is 0, or :data:`SCENARIO_STREAM` /

@@ -1,7 +1,7 @@
 """Gaussian random spheres: the shape family of the target prior (SPEC section 7f).
 
 A Gaussian random sphere (Muinonen et al., JQSRT 55, 577, 1996; Muinonen &
-Lagerros, A&A 333, 753, 1998) is the star-shaped surface
+Lagerros, A&A 333, 753, 1998) is the star-shaped surface::
 
     r(u) = a exp(s(u) - beta^2 / 2),     s(u) = sum_{l=1}^{L} sum_{m=-l}^{l} a_lm Y_lm(u),
 
@@ -34,19 +34,20 @@ estimate does) and stops at ``L``: by default the smallest degree whose dropped
 tail ``sum_{l > L} c_l`` is at most ``variance_lost`` (1e-6) of ``sum_{l >= 1} c_l``
 (``1 - c_0`` for the Gaussian law, ``1`` for the power law); a given ``l_max``
 overrides it. The kept coefficients are renormalised, so ``Var s(u) = beta^2``
-exactly, and the correlation of ``s`` is
+exactly, and the correlation of ``s`` is::
 
     C_L(gamma) = sum_{l=1}^{L} c_l P_l(cos gamma) / sum_{l=1}^{L} c_l .
 
 With the orthonormal real harmonics used here (``int Y_lm^2 dOmega = 1``, so
 ``sum_m Y_lm(u) Y_lm(u') = (2l + 1) / (4 pi) P_l(u . u')`` by the addition theorem),
-that needs
+that needs::
 
     Var(a_lm) = 4 pi beta^2 c_l / ((2l + 1) sum_{k=1}^{L} c_k),
 
 which is SPEC 7f's ``beta^2 c_l / sum c_l`` for harmonics normalised to
-``sum_m Y_lm Y_lm = P_l``. Nothing is drawn for ``l > L``; :attr:`GaussianRandomSphere.variance_kept`
-is the fraction of ``sum_{l >= 1} c_l`` kept before the renormalisation.
+``sum_m Y_lm Y_lm = P_l``. Nothing is drawn for ``l > L``;
+:attr:`GaussianRandomSphere.variance_kept` is the fraction of ``sum_{l >= 1} c_l``
+kept before the renormalisation.
 """
 
 from __future__ import annotations
@@ -138,7 +139,7 @@ def correlation(family: ShapeFamily, gamma_rad) -> np.ndarray:
 
 
 def legendre_coefficients(family: ShapeFamily, l_max: int) -> np.ndarray:
-    """``c_0 .. c_{l_max}`` of the law, with ``sum_{l>=0} c_l = 1`` over all degrees.
+    """The law's Legendre coefficients ``c_l``, ``l = 0`` to ``l_max`` (all ``l``: sum 1).
 
     Gaussian law: ``c_l = (2l + 1) / 2 int_{-1}^{1} C(x) P_l(x) dx`` by Gauss-Legendre
     quadrature on ``l_max + 96`` nodes (exact for a polynomial of degree ``2 l_max +
@@ -187,7 +188,7 @@ def choose_l_max(family: ShapeFamily) -> int:
 
 
 def degree_variances(family: ShapeFamily, l_max: int) -> np.ndarray:
-    """``Var(a_lm)`` per degree ``l = 0 .. L`` (0 at ``l = 0``), orthonormal real harmonics:
+    """``Var(a_lm)`` for each degree ``l`` from 0 to ``L`` (0 at ``l = 0``), orthonormal harmonics:
     ``4 pi beta^2 c_l / ((2l + 1) sum_{k=1}^{L} c_k)`` (module docstring)."""
     c = legendre_coefficients(family, l_max)
     c[0] = 0.0
@@ -237,7 +238,7 @@ class GaussianRandomSphere:
     """The family's log-radius field at fixed unit ``directions`` ``(V, 3)``.
 
     The harmonics matrix is built once; each draw is one ``standard_normal`` call
-    of ``(L+1)^2 - 1`` numbers (degree by degree, ``m = -l .. l``) and one product,
+    of ``(L+1)^2 - 1`` numbers (degree by degree, ``m`` from ``-l`` to ``l``) and one product,
     so the same generator state gives the same field bit for bit.
     """
 

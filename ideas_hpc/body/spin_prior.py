@@ -22,7 +22,7 @@ concentration is ``kappa = 1 / sigma^2`` (``sigma`` in rad): for small ``sigma``
 offset is a 2-D Gaussian with ``sigma`` per axis (RMS angle ``sqrt(2) sigma``).
 The angle from the centre is sampled exactly: ``w = cos(angle)`` has the CDF
 ``(exp(kappa w) - exp(-kappa)) / (2 sinh kappa)``, inverted in closed form (Wood,
-Commun. Stat. Simul. Comput. 23, 157, 1994, for ``p = 3``),
+Commun. Stat. Simul. Comput. 23, 157, 1994, for ``p = 3``)::
 
     w = 1 + ln(u + (1 - u) exp(-2 kappa)) / kappa,     u ~ U(0, 1),
 
@@ -33,7 +33,7 @@ Rotation
 The sidereal period is ``P ~ N(P0, sigma_P)``. The rotation angle at closest
 approach (TCA) is the last lightcurve epoch's angle carried over ``dt`` (epoch to
 TCA) at the drawn period, ``W_TCA = W_epoch + 2 pi dt / P`` plus the epoch's own
-error ``N(0, sigma_W_epoch)``: to first order its spread is
+error ``N(0, sigma_W_epoch)``: to first order its spread is::
 
     sigma_phi = sqrt(sigma_W_epoch^2 + (2 pi dt sigma_P / P0^2)^2).
 

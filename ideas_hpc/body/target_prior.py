@@ -113,8 +113,9 @@ def _checked(nominal: Nominal) -> Nominal:
 
 
 def ellipsoid_nominal(axes_m, resolution: int = 3, *, name: str = "ellipsoid") -> Nominal:
-    """Unit icosphere (``resolution`` subdivisions, as :func:`ideas_hpc.body.analytic.ellipsoid_mesh`)
-    stretched to the semi-axes ``axes_m`` (m) after the perturbation."""
+    """Unit icosphere (``resolution`` subdivisions, as
+    :func:`ideas_hpc.body.analytic.ellipsoid_mesh`) stretched to the semi-axes ``axes_m``
+    (m) after the perturbation."""
     axes = np.array([number(a, f"axes_m[{i}]", lo=0.0, lo_open=True)
                      for i, a in enumerate(axes_m)])
     if axes.shape != (3,):
@@ -204,7 +205,7 @@ class TargetWorld:
 
     @property
     def pole_lon_lat_rad(self) -> tuple[float, float]:
-        """Pole ``(lambda, beta)`` in N (ecliptic J2000), rad: ``PhysicalParams.pole_ra/pole_dec``."""
+        """Pole ``(lambda, beta)`` in N (ecliptic J2000), rad (``PhysicalParams.pole_ra/dec``)."""
         return angles_from_unit(self.pole_N)
 
     @property
@@ -217,18 +218,23 @@ class TargetWorld:
         return (self.phase_tca_rad - 2.0 * math.pi * t_tca_s / self.spin_period_s) % (2 * math.pi)
 
     def physical_params(self, base: PhysicalParams, t_tca_s: float, *,
-                        reference_volume_m3: float | None = None) -> PhysicalParams:
-        """``base`` with this world's spin, pole, prime meridian (for a TCA at ``t_tca_s``),
-        degree-2 field of the shape at constant density, and ``mu`` scaled by volume
-        (the same bulk density as ``base`` at ``reference_volume_m3``; unscaled if None)."""
+                        reference_volume_m3: float | None = None,
+                        degree2_from_shape: bool = True) -> PhysicalParams:
+        """``base`` with this world's spin, pole and prime meridian (for a TCA at ``t_tca_s``).
+
+        ``mu`` is scaled by volume (the same bulk density as ``base`` at
+        ``reference_volume_m3``; unscaled if None); C20 and C22 are the shape's at
+        constant density unless ``degree2_from_shape`` is False (keep ``base``'s, e.g. the
+        paper's Table 1 values for the known Eros).
+        """
         lon, lat = self.pole_lon_lat_rad
         mp = self.shape.mass_properties
         mu = base.mu if reference_volume_m3 is None else \
             base.mu * mp.volume_m3 / number(reference_volume_m3, "reference_volume_m3", lo=0.0,
                                             lo_open=True)
-        return replace(base, mu=mu, spin_period=self.spin_period_s, c20=mp.c20_m2,
-                       c22=mp.c22_m2, pole_ra=lon, pole_dec=lat,
-                       prime_meridian=self.prime_meridian_rad(t_tca_s))
+        c20, c22 = (mp.c20_m2, mp.c22_m2) if degree2_from_shape else (base.c20, base.c22)
+        return replace(base, mu=mu, spin_period=self.spin_period_s, c20=c20, c22=c22,
+                       pole_ra=lon, pole_dec=lat, prime_meridian=self.prime_meridian_rad(t_tca_s))
 
 
 @dataclass(frozen=True)
@@ -341,9 +347,12 @@ def eros_class_prior(resolution: int = 3, *, family: ShapeFamily | None = None) 
 
 def known_prior(shape: Shape, params: PhysicalParams | None = None, *,
                 t_tca_s: float = 0.0) -> TargetPrior:
-    """A known body as the prior with no spread: every world is ``shape`` bit for bit (not
-    recentred: a shape model's origin is its centre of mass by SPEC section 1), ``params``' pole (its orbit normal when it has none), period and the
-    rotation angle its prime meridian reaches at ``t_tca_s``."""
+    """A known body as the prior with no spread.
+
+    Every world is ``shape`` bit for bit (not recentred: a shape model's origin is its
+    centre of mass by SPEC section 1), with ``params``' pole (its orbit normal when it has
+    none), period and the rotation angle its prime meridian reaches at ``t_tca_s``.
+    """
     from ideas_hpc.core.dynamics.ephemeris import dcm_PN
 
     p = params or get_params("eros")

@@ -3,7 +3,7 @@
 B-plane convention
 ------------------
 With ``v_inf`` the spacecraft's velocity relative to the target and ``k`` a reference
-pole (by default ``+z`` of N, the ecliptic north pole of J2000):
+pole (by default ``+z`` of N, the ecliptic north pole of J2000)::
 
     S = v_inf / |v_inf|,     T = S x k / |S x k|,     R = S x T,
 

@@ -3,13 +3,13 @@
 At 10 km/s the body's gravity bends the track by ~1e-7 rad (SPEC 7c), so the pass
 is the straight line ``p(t) = b + v t S`` relative to the target, ``|b| = d`` the
 closest-approach distance, ``t`` from closest approach (TCA). The line of sight
-turns in the fixed plane of ``b`` and ``S`` by the angle ``theta(t) = atan(v t / d)``:
+turns in the fixed plane of ``b`` and ``S`` by the angle ``theta(t) = atan(v t / d)``::
 
     omega(t) = d theta / dt = v d / (d^2 + v^2 t^2),                  peak v / d at t = 0,
     alpha(t) = d omega / dt = -2 v^3 d t / (d^2 + v^2 t^2)^2,
 
 and ``|alpha|`` peaks where ``d/dt [t / (d^2 + v^2 t^2)^2] = 0``, i.e. ``d^2 = 3 v^2 t^2``:
-at ``t = +-d / (sqrt(3) v)``,
+at ``t = +-d / (sqrt(3) v)``::
 
     alpha_max = 2 v^3 d (d / (sqrt 3 v)) / (4 d^2 / 3)^2 = (3 sqrt(3) / 8) v^2 / d^2 .
 
@@ -115,7 +115,8 @@ class TerminalTracking:
         number(self.centroid_sigma_rad, "centroid_sigma_rad", lo=0.0)
 
     def detection_range_m(self, diameter_m: float, ifov_rad: float) -> float:
-        """Range at which a body of ``diameter_m`` spans ``detect_pixels`` pixels of ``ifov_rad``."""
+        """Range (m) at which a body of ``diameter_m`` spans ``detect_pixels`` pixels of
+        ``ifov_rad``."""
         return (number(diameter_m, "diameter_m", lo=0.0, lo_open=True)
                 / (self.detect_pixels * number(ifov_rad, "ifov_rad", lo=0.0, lo_open=True)))
 
