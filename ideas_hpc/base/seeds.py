@@ -25,6 +25,19 @@ the initial attitude, rates and wheel speeds per spacecraft). The two stream
 words differ, so the scenario and validation families share no sequence
 (:func:`stream_seed_sequence`); stores record both words.
 
+Target worlds (issue 42)
+------------------------
+A world of the target prior and its navigation errors draw from two more families,
+keyed by four words (so never a sample's, a sample child's or a design stream's key)::
+
+    part c of world k:        SeedSequence(seed, spawn_key=(WORLD_STREAM, family, k, c))
+    navigation m of world k:  SeedSequence(seed, spawn_key=(NAVIGATION_STREAM, family, k, m))
+
+``c`` is :data:`WORLD_SHAPE`, :data:`WORLD_SIZE`, :data:`WORLD_POLE` or
+:data:`WORLD_ROTATION`; ``family`` is 0, or :data:`SCENARIO_STREAM` /
+:data:`VALIDATION_STREAM` to keep the bank's worlds and fresh validation worlds apart
+(:func:`world_rng`, :func:`navigation_rng`).
+
 Stores keep ``s`` in their attrs and, per sample, the first :data:`SEED_WORDS`
 words of the sample's sequence state (:func:`seeds_for`), which identify it.
 
@@ -122,3 +135,45 @@ def search_rng(seed: int, purpose: int) -> np.random.Generator:
 def plot_rng() -> np.random.Generator:
     """The figures' jitter stream, ``default_rng(PLOT_SEED)``: fixed, so figures repeat."""
     return np.random.default_rng(PLOT_SEED)
+
+
+# ---- target worlds (issue 42) ---------------------------------------------------------------
+
+#: First spawn-key word of the target prior's world draws (issue 42).
+WORLD_STREAM = 0x3011D5ED
+#: First spawn-key word of the navigation draws of a world (issue 42).
+NAVIGATION_STREAM = 0x7A16A7E5
+#: Purposes within one world draw (fourth spawn-key word): shape, size, pole, rotation.
+WORLD_SHAPE, WORLD_SIZE, WORLD_POLE, WORLD_ROTATION = 0, 1, 2, 3
+
+
+def world_rng(campaign_seed: int, k: int, purpose: int, family: int = 0) -> np.random.Generator:
+    """Generator of world ``k``'s ``purpose`` part: ``SeedSequence(seed, spawn_key=(WORLD_STREAM,
+    family, k, purpose))``.
+
+    A world of the target prior (``ideas_hpc.body.target_prior``) draws its shape,
+    size, pole and rotation from four independent children (:data:`WORLD_SHAPE`,
+    :data:`WORLD_SIZE`, :data:`WORLD_POLE`, :data:`WORLD_ROTATION`), so that changing
+    the pole's settings leaves every shape bit-identical. Four key words keep them apart
+    from every Monte Carlo sample (one or two words) and every design stream (three).
+    ``family`` separates sets of worlds drawn from one campaign seed: 0 for a plain
+    draw, :data:`SCENARIO_STREAM` for the scenario bank's worlds and
+    :data:`VALIDATION_STREAM` for fresh validation worlds, which then share none.
+    """
+    if int(purpose) not in (WORLD_SHAPE, WORLD_SIZE, WORLD_POLE, WORLD_ROTATION):
+        raise InputError(f"unknown world purpose {purpose!r}", field="purpose")
+    return np.random.default_rng(np.random.SeedSequence(
+        int(campaign_seed), spawn_key=(WORLD_STREAM, int(family), int(k), int(purpose))))
+
+
+def navigation_rng(campaign_seed: int, k: int, m: int = 0, family: int = 0) -> np.random.Generator:
+    """Generator of navigation draw ``m`` of world ``k``: ``SeedSequence(seed,
+    spawn_key=(NAVIGATION_STREAM, family, k, m))``.
+
+    Navigation errors (``ideas_hpc.flyby.navigation``) are nested inside a world for
+    the per-target reliability (targets outer ``k``, navigation inner ``m``); a
+    design with one navigation draw per world takes ``m = 0``. ``family`` as in
+    :func:`world_rng`.
+    """
+    return np.random.default_rng(np.random.SeedSequence(
+        int(campaign_seed), spawn_key=(NAVIGATION_STREAM, int(family), int(k), int(m))))
