@@ -83,29 +83,35 @@ def _levels(best):
     return sorted(p for p in {*LEVELS, best, min(1.0, best + 1e-9)} if p > 0.0)
 
 
+def _screen_check(d, n, p, best, tally):
+    """What the designer's screen settles for n at p, against the exhaustive best."""
+    out = d.screen(n, p)
+    tally["calls"] += 1
+    bad = []
+    if out.proven_short:
+        tally["proofs"] += 1
+        tally[f"proofs n={n}"] = tally.get(f"proofs n={n}", 0) + 1
+        if not (best < p - 1e-12 and best - 1e-12 <= out.upper < p):
+            bad.append(("false proof", n, p, best, out.upper))
+    if out.swarm is not None:
+        tally["finds"] += 1
+        sw = [int(x) for x in out.swarm]
+        if not (len(set(sw)) == n and _separated(d.c_n, sw, d.m)
+                and float(d.ev([sw])[0]) >= p - 1e-12):
+            bad.append(("bad swarm", n, p, sw))
+    return bad
+
+
 def _disagreements(i, m, tally):
     """Every (n, p) at which the designer's screen settles n against the exhaustive search."""
     rows, a, need = _problem(i)
     d = _designer(rows, a, need, m)
-    c_n = rows.shape[1]
     bad = []
     for n in (2, 3, 4, 5):
-        sw_all = all_swarms(c_n, n, m)
+        sw_all = all_swarms(d.c_n, n, m)
         best = float(d.ev(sw_all).max()) if sw_all.size else 0.0
         for p in _levels(best):
-            out = d.screen(n, p)
-            tally["calls"] += 1
-            if out.proven_short:
-                tally["proofs"] += 1
-                tally[f"proofs n={n}"] = tally.get(f"proofs n={n}", 0) + 1
-                if not (best < p - 1e-12 and best - 1e-12 <= out.upper < p):
-                    bad.append(("false proof", i, m, n, p, best, out.upper))
-            if out.swarm is not None:
-                tally["finds"] += 1
-                sw = [int(x) for x in out.swarm]
-                if not (len(set(sw)) == n and _separated(c_n, sw, m)
-                        and float(d.ev([sw])[0]) >= p - 1e-12):
-                    bad.append(("bad swarm", i, m, n, p, sw))
+            bad += [(i, m, *b) for b in _screen_check(d, n, p, best, tally)]
     return bad
 
 
@@ -177,13 +183,7 @@ def test_screen_on_a_grid_of_210_candidates():
         d = _designer(rows, a, need, m)
         best = float(d.ev(all_swarms(210, 2, m)).max())
         for p in _levels(best):
-            out = d.screen(2, p)
-            tally["calls"] += 1
-            tally["proofs"] += out.proven_short
-            tally["finds"] += out.swarm is not None
-            if (out.proven_short and best >= p - 1e-12) or \
-                    (out.swarm is not None and float(d.ev([out.swarm])[0]) < p - 1e-12):
-                bad.append((need, m, p, best, out.proven_short))
+            bad += [(need, m, *b) for b in _screen_check(d, 2, p, best, tally)]
         bad += _designer_disagreements(rows, a, need, m, (0.9, 0.93, best), tally,
                                        n_exhaustive=2)
     assert not bad, f"{len(bad)} disagree: {bad}"

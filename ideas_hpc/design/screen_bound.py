@@ -190,8 +190,10 @@ def screen_size(mt, slack, ev, n: int, p: float, p_f: float, u_bar: list, m: int
     * "reaches p" means ``P >= p - P_TOL`` (the designer's comparison): the
       threshold on the subsets is computed from ``p - P_TOL`` and the relaxed
       filter keeps a further :data:`FLOAT_SLACK` below it;
-    * ``n >= 2`` (``InputError`` otherwise: the bound is on (n - 1)-subsets; the
-      caller settles n = 1 by enumerating the K candidates).
+    * ``n >= 2`` (``InputError`` otherwise: the bound is on (n - 1)-subsets;
+      :meth:`~ideas_hpc.design.reliability.ReliabilityDesigner.screen` returns None
+      for n = 1 and the designer settles it by its other routes: the level bound,
+      the enumeration of the K candidates).
 
     A proof is returned only when the list of (n - 1)-swarms is complete (no cap,
     no node limit), every extension at or above p by the relaxation was scored
@@ -225,9 +227,10 @@ def screen_size(mt, slack, ev, n: int, p: float, p_f: float, u_bar: list, m: int
         subset at full count reaches p), ``"screen"`` (proof: the complete list
         extended and scored), ``"found"`` (a swarm at p), or a search that
         settled nothing: ``"model"``, ``"no_pruning"`` (the bound on the subsets
-        excludes none), ``"screen_cap"`` / ``"screen_nodes"`` (the listing was cut
-        and found nothing to extend), ``"extend_cap"`` (too many to extend: the
-        search pool only), ``"exact_cap"``, ``"deadline"``.
+        excludes none), ``"screen_cap"`` / ``"screen_nodes"`` (the listing was cut:
+        the (n - 1)-swarms of most scenarios in it, if any, were extended and none
+        reached p), ``"extend_cap"`` (a complete list too long to extend: the same
+        search pool), ``"exact_cap"``, ``"deadline"``.
     """
     u_bar = _check_inputs(mt, slack, n, p, u_bar, m)
     k_n, _, s_n = mt.shape
