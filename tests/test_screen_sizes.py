@@ -302,3 +302,23 @@ def test_a_cut_list_says_so(size):
         assert screen_swarms(mt, slack + 1e-9, 1, 0, 1, 10 ** 6, k, 5)[2]
     with pytest.raises(ValueError):
         screen_swarms(mt, slack + 1e-9, size, 0, 1, 10, 10 ** 9, 7)    # 7 divides K = 14
+
+
+def test_the_proofs_decline_another_failure_model():
+    """The one check of the failure model every proof assumes: a single p_f (or equal
+    per-member values) passes; members that differ, a value outside [0, 1] or a non-number
+    make the level and down-set bounds fall back to the trivial 1 (true under any model)
+    and the screen to a search; ``n < n0`` stays 0 (failures only remove images)."""
+    from ideas_hpc.design.reliability_stats import failure_upper_bound, proof_failure_rate
+    from ideas_hpc.design.tolerance_bound import downset_upper
+
+    assert proof_failure_rate(0.05) == 0.05 and proof_failure_rate([0.05] * 3) == 0.05
+    for other in ([0.05, 0.1, 0.05], 1.5, -0.1, float("nan"), "0.05x", [], True):
+        assert proof_failure_rate(other) is None, other
+        assert failure_upper_bound(3, [0.0, 0.0, 0.5, 0.5], other) == 1.0
+        assert downset_upper(3, other, 2, 1) == 1.0 and downset_upper(1, other, 2, None) == 0.0
+    # the same bounds under the one p_f: the tail of a binomial, far below 1
+    assert failure_upper_bound(3, [0.0, 0.0, 0.5, 0.5], 0.05) == pytest.approx(
+        0.5 * (0.95 ** 3 + 3 * 0.05 * 0.95 ** 2))
+    with pytest.raises(InputError):
+        failure_upper_bound(3, [0.0, 0.5, 0.5], 0.05)          # U_3 missing
