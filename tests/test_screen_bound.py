@@ -5,69 +5,17 @@ with the exhaustive optimum on small rings."""
 from __future__ import annotations
 
 import itertools
-import math
 
 import numpy as np
 import pytest
 
 from ideas_hpc.core.design.ring_screen import relaxed_probabilities, screen_swarms
-from ideas_hpc.design.bank import reduce_problem
 from ideas_hpc.design.reliability import Evaluator, all_swarms, min_swarm_reliable
-from ideas_hpc.design.ring_bound import gap_matrix
-from ideas_hpc.design.screen_bound import clip_gap_matrix, screen_size, stack_gap_matrices
+from ideas_hpc.design.screen_bound import screen_size
+from ring_problems import (NoProgramme, exact_covers, mt_of, no_tolerance, relaxed_covers,
+                           ring_rows)
 
 P_F = 0.1
-
-
-def ring_rows(seed, s_n=6, c_n=14, v_n=24, two_arc=0.25):
-    """Rows on a ring: each vertex seen by an arc of candidates, some by two arcs (where the
-    relaxation is loose); arcs jitter from scenario to scenario."""
-    rng = np.random.default_rng(seed)
-    rows = np.zeros((s_n, c_n, v_n), dtype=bool)
-    for v in range(v_n):
-        lo0, wid0 = (c_n * v) // v_n, int(rng.integers(4, 8))
-        second = rng.random() < two_arc
-        for s in range(s_n):
-            lo = lo0 + int(rng.integers(-1, 2))
-            rows[s, np.arange(lo, lo + wid0 + int(rng.integers(-1, 2))) % c_n, v] = True
-            if second:
-                rows[s, np.arange(lo + c_n // 2, lo + c_n // 2 + 2) % c_n, v] = True
-    return rows, rng.uniform(0.5, 1.5, v_n)
-
-
-def relaxed_covers(rows_s, w, swarm, need):
-    """Brute force of the ring-gap relaxation, straight from the rows: a vertex is surely
-    missed when every candidate that sees it lies strictly inside one gap of the swarm."""
-    c_n = rows_s.shape[0]
-    sw = sorted(swarm)
-    missed = 0.0
-    for v in range(rows_s.shape[1]):
-        seers = set(np.flatnonzero(rows_s[:, v]))
-        if not seers:
-            continue
-        for a, b in zip(sw, sw[1:] + [sw[0] + c_n]):
-            inside = {c % c_n for c in range(a + 1, b)}
-            if seers <= inside:
-                missed += w[v]
-                break
-    reach = w[rows_s.any(axis=0)].sum()
-    return reach - missed >= need - 1e-12
-
-
-def exact_covers(rows_s, w, swarm, need):
-    return w[rows_s[list(swarm)].any(axis=0)].sum() >= need - 1e-12
-
-
-def mt_of(rows, w, need):
-    clipped, slack = [], []
-    for s in range(rows.shape[0]):
-        red = reduce_problem(rows[s], w, merge_candidates=False)
-        reach = float(red.weight.sum())
-        clipped.append(clip_gap_matrix(gap_matrix(red.cover, red.weight), reach - need))
-        slack.append(reach - need)
-    return stack_gap_matrices(clipped), np.asarray(slack)
-
-
 NEEDS = (0.9, 0.95)
 
 
@@ -147,22 +95,8 @@ def test_designer_with_the_screen_reaches_the_exhaustive_optimum(seed):
     fewest = next(n for n in range(1, 9)
                   if float(ev(all_swarms(rows.shape[1], n, 0)).max()) >= p - 1e-12)
     r = min_swarm_reliable(rows, a, p=p, p_f=P_F, need=need, n_max=8, enumerate_budget=0,
-                           bound_solver=_no_programme, tolerance_solver=_no_tolerance)
+                           bound_solver=NoProgramme(12), tolerance_solver=no_tolerance)
     assert r.probability >= p - 1e-12
     assert r.status == "optimal" and r.n == fewest
     # the level bound alone (U_m <= 1) leaves N - 1 open: the screen settled it
     assert any("by the screen over all scenarios" in note for note in r.notes)
-
-
-class _Trivial:
-    upper, status, swarm = math.inf, "skipped", None
-
-
-def _no_programme(m, seconds):
-    b = _Trivial()
-    b.upper = 12.0          # every scenario: U_m <= 1 (no information)
-    return b
-
-
-def _no_tolerance(masks, w, need, k, seconds, step):
-    return k + 1

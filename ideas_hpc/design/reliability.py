@@ -47,7 +47,7 @@ from ideas_hpc.core.design.reliability import swarm_coverages, swarm_probabiliti
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.design.bank import CandidateBank, reduce_problem
 from ideas_hpc.design.reliability_search import all_swarms, extend, improve
-from ideas_hpc.design.reliability_stats import failure_upper_bound
+from ideas_hpc.design.reliability_stats import failure_upper_bound, proof_failure_rate
 from ideas_hpc.design.ring_bound import ring_bound
 from ideas_hpc.design.scenario_mip import ScenarioMIP
 from ideas_hpc.design.screen_bound import clip_gap_matrix, screen_size, stack_gap_matrices
@@ -166,7 +166,12 @@ class ReliabilityDesigner:
 
     def screen(self, n: int, p: float):
         """Settle size n by the screen of :mod:`ideas_hpc.design.screen_bound` (None when
-        the ring-gap matrices are missing: a grid above the ring bound's, or time ran out)."""
+        the ring-gap matrices are missing: a grid above the ring bound's, or time ran out;
+        or when its proof does not apply: n < 2, a failure model that
+        :func:`~ideas_hpc.design.reliability_stats.proof_failure_rate` declines).
+        Fed ``u_bar[k] = min(cheap_ubar(k), Ubar_k)``, bounds on separated k-swarms."""
+        if n < 2 or proof_failure_rate(self.p_f) is None:
+            return None
         if self._mt is None:
             if len(self._clipped) != self.s_n or self.out_of_time():
                 return None
@@ -181,7 +186,9 @@ class ReliabilityDesigner:
                            self.m, deadline_ok=lambda: not self.out_of_time())
 
     def cheap_ubar(self, m: int) -> float:
-        """``U_m <=`` the fraction of scenarios whose ring-gap bound allows m spacecraft."""
+        """``U_m <=`` the fraction of scenarios whose ring-gap bound allows m spacecraft
+        (proven under :meth:`~ideas_hpc.design.ring_bound.RingBound.n_bound`'s conditions,
+        with the design's separation; 1 before :meth:`ring_lows`)."""
         return float(np.mean(self._lows <= m)) if self._lows is not None else 1.0
 
     def left(self):

@@ -4,6 +4,33 @@
 swarm of ``N`` from upper bounds ``U_m`` on the fraction of scenarios an
 ``m``-swarm reaches with no failure.
 
+:func:`proof_failure_rate`: the failure model every proof of the designer
+assumes, in one place (issue 41). The proofs are :func:`failure_upper_bound`,
+:func:`ideas_hpc.design.tolerance_bound.downset_upper`, the screen
+(:func:`ideas_hpc.design.screen_bound.screen_size` and the kernels of
+:mod:`ideas_hpc.core.design.ring_screen`) and the exact evaluator they are
+compared with (:mod:`ideas_hpc.core.design.reliability`). Each holds when:
+
+1. **whole-pass losses**: a spacecraft either works for the whole pass (it
+   images what its row says) or fails before it (it images nothing);
+2. **independent failures**: no common cause, each failure independent of the
+   others' and of the scenario's dispersions;
+3. **one p_f**: the same failure probability for every spacecraft and every
+   scenario, known exactly (no prior over it);
+4. **monotone coverage**: a vertex is seen when one survivor sees it, so a
+   subset of survivors never covers more;
+5. **the separation** ``m`` applied alike to the swarms bounded and the swarms
+   compared (a subset of a separated swarm is separated);
+6. **one comparison**: a swarm meets p when ``P >= p - P_TOL`` and covers when
+   ``coverage >= need - 1e-12`` (the evaluator's ``COVER_TOL``); the bounds keep
+   a margin above both.
+
+A generalised failure model (per-spacecraft ``p_f``, a common-cause beta factor,
+loss mid-pass, an uncertain ``p_f``) breaks 1-3: :func:`proof_failure_rate`
+then returns None and every proof above declines (the bounds fall back to the
+trivial 1, the screen to its search), so the designer takes the search route
+only. That function is the one place to teach a new model what still holds.
+
 :func:`lower_confidence_bound`: a one-sided lower confidence bound on the mean
 of independent values in [0, 1] (the per-sample failure-weighted success
 probabilities of the validation), by the betting martingale of Waudby-Smith &
@@ -25,6 +52,40 @@ import numpy as np
 
 from ideas_hpc.base.errors import InputError
 
+#: The designer's comparison of probabilities: a swarm meets p when ``P >= p - P_TOL``.
+P_TOL = 1e-12
+
+
+def proof_failure_rate(p_f) -> float | None:
+    """The one per-spacecraft failure probability the proofs assume, or None (module
+    docstring, assumptions 1-3).
+
+    Parameters
+    ----------
+    p_f : float or sequence of float
+        The failure model: one probability for every spacecraft, or one per member.
+
+    Returns
+    -------
+    float or None
+        ``p_f`` when it is one finite number in [0, 1] (or a sequence whose values
+        are all that number); None for anything else (members that differ, a model
+        object, a value outside [0, 1]): the proofs do not apply and their callers
+        take another route. A richer failure model hooks in here: return its one
+        ``p_f`` only while it reduces to independent whole-pass losses at one rate
+        (beta = 0, a fixed ``p_f``, no partial losses).
+    """
+    if isinstance(p_f, (bool, np.bool_)):
+        return None
+    try:
+        vals = np.asarray(p_f, dtype=np.float64).ravel()
+    except (TypeError, ValueError):
+        return None
+    if vals.size == 0 or not np.all(np.isfinite(vals)) or np.any(vals != vals[0]):
+        return None
+    v = float(vals[0])
+    return v if 0.0 <= v <= 1.0 else None
+
 
 def failure_upper_bound(n: int, u_bar, p_f: float) -> float:
     """``sum_j C(n, j) p_f^j (1 - p_f)^(n - j) U_{n-j}``, an upper bound on any n-swarm's P.
@@ -33,8 +94,23 @@ def failure_upper_bound(n: int, u_bar, p_f: float) -> float:
     which reaches at most the fraction ``U_{n-j}`` of the scenarios; averaging
     over the independent failures gives the bound. ``u_bar[m]`` bounds
     ``U_m`` (``u_bar[0] = 0``: no survivor maps nothing).
+
+    Assumptions (module docstring): whole-pass, independent failures at one
+    ``p_f`` in every scenario (1-3), so ``P(F) = p_f^j (1 - p_f)^(n-j)``; each
+    ``u_bar[m]`` bounds the best *separated* m-swarm's fraction of scenarios
+    covered at the evaluator's tolerance (5, 6; a survivor set of a separated
+    swarm is one). Where :func:`proof_failure_rate` declines ``p_f`` the bound
+    is the trivial 1 (true under any model), so no size is proven short on it.
+    ``u_bar`` needs ``n + 1`` entries, each >= 0 (``InputError`` otherwise).
     """
-    u = np.asarray(u_bar, dtype=np.float64)
+    rate = proof_failure_rate(p_f)
+    if rate is None:
+        return 1.0
+    p_f = rate
+    u = np.asarray(u_bar, dtype=np.float64).ravel()
+    if u.size < n + 1 or np.any(~(u[:n + 1] >= 0.0)):
+        raise InputError(f"needs {n + 1} bounds >= 0 (U_0 .. U_{n}), got {u_bar!r}",
+                         field="u_bar")
     total = 0.0
     for j in range(n + 1):
         total += math.comb(n, j) * p_f ** j * (1.0 - p_f) ** (n - j) * u[n - j]

@@ -59,7 +59,18 @@ class RingBound:
     reach: float
 
     def n_bound(self, need: float) -> int | None:
-        """Fewest spacecraft the bound allows to reach ``need`` (None: beyond the sizes computed)."""
+        """Fewest spacecraft the bound allows to reach ``need`` (None: beyond the sizes computed).
+
+        A proven lower bound on the fewest covering grid candidates when: the rows are
+        one ring's grid in grid order, one row per candidate (:func:`ring_bound_applies`;
+        the designer keeps the trivial bound 1 elsewhere); the swarms bounded keep the
+        separation ``m`` the bound was computed with; coverage is the union of the
+        members' rows (a group inside a gap is missed); "reaches" is ``coverage >=
+        need - 1e-12``, the success-probability evaluator's comparison (the bound's
+        float sums err far below that margin). The designer's ``U_m`` bound
+        (:meth:`ideas_hpc.design.reliability.ReliabilityDesigner.cheap_ubar`, the
+        fraction of scenarios whose ``n_bound <= m``) rests on exactly these.
+        """
         ok = np.flatnonzero(self.upper >= need - 1e-12)
         return int(ok[0]) if ok.size else None
 

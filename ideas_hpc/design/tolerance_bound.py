@@ -42,6 +42,7 @@ import numpy as np
 
 from ideas_hpc.base import progress
 from ideas_hpc.base.errors import InputError
+from ideas_hpc.design.reliability_stats import proof_failure_rate
 
 #: Most scenarios to solve before any solve has shown its pace (each is an integer
 #: programme of 5-60 s on eros001708's 720 candidates: a 256-scenario bank is out of
@@ -53,6 +54,16 @@ K_MAX = 3
 
 def downset_upper(n: int, p_f: float, n0: int, k_star: int | None) -> float:
     """``UB_s(n)`` of the module docstring.
+
+    Assumptions (those of :mod:`ideas_hpc.design.reliability_stats`): whole-pass,
+    independent failures at one ``p_f`` (1-3), so a failed set ``F`` has probability
+    ``p_f^|F| (1 - p_f)^(n - |F|)``; monotone coverage (4), so the covering failed
+    sets form a down-set; ``n0`` and ``k_star`` proven for the swarms bounded (the
+    separation of the design, 5: the ring-gap ``n0`` is computed with it, and a
+    k-tolerant minimum without it is a relaxation, so still a lower bound). Where
+    :func:`~ideas_hpc.design.reliability_stats.proof_failure_rate` declines ``p_f``
+    the bound is the trivial 1, except ``n < n0`` (0 under any failure model: fewer
+    than ``n0`` spacecraft never cover, and failures only remove images).
 
     Parameters
     ----------
@@ -67,6 +78,10 @@ def downset_upper(n: int, p_f: float, n0: int, k_star: int | None) -> float:
     """
     if n < n0 or n <= 0:
         return 0.0
+    rate = proof_failure_rate(p_f)
+    if rate is None:
+        return 1.0
+    p_f = rate
     out = 0.0
     for j in range(0, n - max(n0, 0) + 1):
         cnt = math.comb(n, j)

@@ -7,19 +7,36 @@ its gap misses sum to at most the scenario's slack::
     miss_s(p) = sum_i M_s[p_i, p_{i+1} - p_i] <= slack_s = reach_s - need
 
 with ``M_s[i, d]`` the weight of the vertex groups inside the open arc
-``(i, i + d)`` (the last gap wraps to ``p_1 + K``). The kernels here take one
-array ``Mt[i, d, s]`` for every scenario, already *clipped*: an entry above its
+``(i, i + d)`` (the last gap wraps to ``p_1 + K``; a swarm of one member has
+one gap, the whole ring but its member, ``d = K``, and ``M_s[i, K]`` is then
+exactly the weight it does not see). The kernels here take one array
+``Mt[i, d, s]`` for every scenario, already *clipped*: an entry above its
 scenario's slack is ``+inf`` (that gap alone fails there), and gaps of ``Dn``
-steps or more fail in every scenario. Entries must never exceed the true
-``M_s`` (round down), so every count is an upper bound on the true one.
+steps or more fail in every scenario (``M_s[i, d]`` grows with d, so the
+columns from the first one that fails for every i on are dropped; a single
+member that covers alone keeps ``Dn = K + 1``). Entries must never exceed the
+true ``M_s`` (round down), so every count is an upper bound on the true one.
+
+What the counts prove rests on (the assumptions of the screen's proof,
+:func:`ideas_hpc.design.screen_bound.screen_size`):
+
+* a vertex group is seen by a swarm when one member sees it (coverage is a
+  union, so it is monotone: a subset never covers more);
+* ``Mt`` is the full grid in grid order (one row per grid candidate, no merged
+  candidates), every entry rounded *down* from the true ``M_s`` and set to
+  ``+inf`` only above its scenario's slack;
+* ``slack`` already holds the comparison's tolerance (the evaluator counts
+  ``coverage >= need - 1e-12``; the caller adds more than that).
 
 * :func:`screen_swarms` lists every n-swarm (gaps > ``m``) that the relaxation
-  lets cover at least ``thr`` scenarios: a depth-first search over sorted
-  members that keeps, per level, the scenarios still alive and the partial
-  misses, and stops a branch as soon as fewer than ``thr`` are alive.
+  lets cover at least ``thr`` scenarios, for every ``n >= 1``: a depth-first
+  search over sorted members that keeps, per level, the scenarios still alive
+  and the partial misses, and stops a branch as soon as fewer than ``thr`` are
+  alive (``n = 1``: each member alone against its full-ring gap).
 * :func:`relaxed_probabilities` is the failure-weighted probability of swarms
   with every survivor set judged by the relaxation, an upper bound on the exact
-  ``P_bank`` (:mod:`ideas_hpc.core.design.reliability`).
+  ``P_bank`` (:mod:`ideas_hpc.core.design.reliability`) under the failure model
+  stated there.
 """
 
 from __future__ import annotations
@@ -37,8 +54,39 @@ def _gap_miss(Mt, i, d, s):
 
 
 @njit(cache=True)
+def _coprime(a, b):
+    """``gcd(a, b) == 1`` (Euclid; ``gcd(0, b) = b``)."""
+    a = abs(a)
+    b = abs(b)
+    while b:
+        a, b = b, a % b
+    return a == 1
+
+
+@njit(cache=True)
+def _single_count(Mt, slack, x0, k, thr):
+    """Scenarios in which the member ``x0`` alone passes the relaxation: its one gap is
+    the whole ring but itself, ``(x0, x0 + K)`` (stops counting once ``thr`` is out of
+    reach and returns what it has)."""
+    s_n = Mt.shape[2]
+    na = 0
+    for s in range(s_n):
+        if _gap_miss(Mt, x0, k, s) <= slack[s]:
+            na += 1
+        elif na + s_n - s - 1 < thr:
+            break
+    return na
+
+
+@njit(cache=True)
 def screen_swarms(Mt, slack, n, m, thr, cap, max_nodes, x0_step=1):
     """Every n-swarm whose relaxed cover count is at least ``thr`` (module docstring).
+
+    The list is complete (third return True) only when neither ``cap`` nor
+    ``max_nodes`` stopped it; it is then every n-swarm with consecutive members
+    more than ``m`` steps apart whose relaxed count reaches ``thr``, for every
+    ``n >= 1`` (a one-member swarm is judged on its full-ring gap). The counts
+    bound the true ones from above under the module docstring's assumptions.
 
     Parameters
     ----------
@@ -47,9 +95,10 @@ def screen_swarms(Mt, slack, n, m, thr, cap, max_nodes, x0_step=1):
     slack : (S,) float64
         ``reach_s - need`` plus the comparison's tolerance.
     n : int
-        Swarm size (>= 2).
+        Swarm size (>= 1; ``ValueError`` otherwise).
     m : int
-        Consecutive members must be more than ``m`` grid steps apart.
+        Consecutive members must be more than ``m`` grid steps apart (the wrap from
+        the last to the first included; a single member has no neighbour).
     thr : int
         Least number of scenarios.
     cap : int
@@ -60,7 +109,8 @@ def screen_swarms(Mt, slack, n, m, thr, cap, max_nodes, x0_step=1):
     x0_step : int
         The smallest members are taken in the order ``0, x0_step, 2 x0_step, ..`` (mod K;
         coprime with K, so every one is taken): a list cut short by ``cap`` then
-        spreads around the ring instead of starting at candidate 0.
+        spreads around the ring instead of starting at candidate 0
+        (``ValueError`` when not coprime: the list would miss members).
 
     Returns
     -------
@@ -72,6 +122,10 @@ def screen_swarms(Mt, slack, n, m, thr, cap, max_nodes, x0_step=1):
         The list holds every such swarm (neither ``cap`` nor ``max_nodes`` was hit).
     """
     k, dn, s_n = Mt.shape
+    if n < 1:
+        raise ValueError("screen_swarms: n must be at least 1")
+    if not _coprime(x0_step, k):
+        raise ValueError("screen_swarms: x0_step must be coprime with the grid size")
     out = np.empty((cap + 1, n), dtype=np.int64)
     cnt = np.empty(cap + 1, dtype=np.int64)
     found = 0
@@ -84,6 +138,18 @@ def screen_swarms(Mt, slack, n, m, thr, cap, max_nodes, x0_step=1):
     for xi in range(k):
         x0 = (xi * x0_step) % k
         sw[0] = x0
+        if n == 1:          # no second member: the one gap wraps the whole ring
+            nodes += 1
+            if nodes > max_nodes:
+                return out[:found], cnt[:found], False
+            na = _single_count(Mt, slack, x0, k, thr)
+            if na >= thr:
+                out[found, 0] = x0
+                cnt[found] = na
+                found += 1
+                if found > cap:
+                    return out[:found], cnt[:found], False
+            continue
         for j in range(s_n):
             alive[1, j] = j
             acc[1, j] = 0.0
@@ -165,7 +231,19 @@ def _subset_covers(Mt, slack, s, members, mask, k):
 @njit(parallel=True, cache=True)
 def relaxed_probabilities(Mt, slack, swarms, p_f):
     """(F,) mean over scenarios of the failure-weighted probability, each survivor set
-    judged by the relaxation (an upper bound on the exact ``P_bank``; swarms sorted)."""
+    judged by the relaxation: an upper bound on the exact ``P_bank`` (swarms sorted).
+
+    ``P_s(X) = sum_{T subset X} (1-p_f)^|T| p_f^(n-|T|) 1[T passes the relaxation in s]``,
+    the exact ``P_bank`` with each indicator replaced by one that is never smaller.
+    It is an upper bound when (the failure model of
+    :func:`ideas_hpc.design.reliability_stats.proof_failure_rate`): every spacecraft
+    fails independently of the others and of the scenario, with the same ``p_f``,
+    for the whole pass (a failed one images nothing, a working one all its pass);
+    coverage is monotone (a scenario whose full swarm fails the relaxation is
+    skipped: the full swarm does not cover there, so no subset does); and the
+    module docstring's conditions on ``Mt`` and ``slack`` hold. Survivor sets of
+    one member use their full-ring gap (``d = K``).
+    """
     k, dn, s_n = Mt.shape
     f_n, n = swarms.shape
     out = np.zeros(f_n)
