@@ -17,7 +17,7 @@ from ideas_hpc.attitude.torque_terms import torques_from_config
 from ideas_hpc.attitude.device import check_device
 from ideas_hpc.campaign.body_checks import check_body, check_grid_step, check_pointing
 from ideas_hpc.body.bodies import load_body
-from ideas_hpc.body.formats import builtin_body, length_unit_applies, load_shape_file
+from ideas_hpc.body.formats import load_shape_file
 from ideas_hpc.campaign.schema.spice_table import apply_spice
 from ideas_hpc.campaign.schema.model_fields import flyby_errors
 from ideas_hpc.dynamics.trajectory import sun_direction_T
@@ -44,7 +44,6 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
             params = params_from_mapping(params, prefix="body.params.")
         except InputError as exc:
             raise c.source.locate(exc) from None
-    _check_length_unit(c, b)
     try:
         body = load_body(b.name, data_path=b.data_path, resolution=b.resolution,
                          params=params, length_unit=b.length_unit)
@@ -145,22 +144,6 @@ def _default_degree2(body, table: dict):
     props = body.shape.mass_properties
     params = dataclasses.replace(body.params, c20=props.c20_m2, c22=props.c22_m2)
     return dataclasses.replace(body, params=params)
-
-
-def _check_length_unit(c, b) -> None:
-    """``body.length_unit`` other than km is read only for a mesh file whose format leaves
-    the unit to it (:mod:`ideas_hpc.body.formats`): elsewhere it would be ignored, so it is
-    refused (issue 41: no key silently ignored)."""
-    if b.length_unit == "km":
-        return
-    files = [f for f in (b.shape, None if builtin_body(b.name) else b.name) if f is not None]
-    if not any(length_unit_applies(f) for f in files):
-        what = (f"body.shape {b.shape!r}" if b.shape is not None else
-                f"the built-in body {b.name!r}" if builtin_body(b.name) else
-                f"body.name {b.name!r}")
-        raise c.error(f"{b.length_unit!r} is not read for {what}: its format fixes its "
-                      "lengths (km); the unit applies to mesh files such as .obj/.ply/.stl/.off",
-                      "body.length_unit")
 
 
 def _replace_shape(c, body, b):

@@ -122,7 +122,7 @@ def validate_store(store, *, samples: int = 1024, seed: int | None = None, first
     cfg = dict(attrs["config"])
     cfg.pop("models", None)
     src = Path(attrs["campaign_file"]) if attrs.get("campaign_file") else None
-    c = validate_campaign(CampaignSource(data=cfg, path=src))
+    c = validate_campaign(CampaignSource(data=cfg, path=src, resolved=True))
     seed = int(attrs["campaign_seed"]) + 1 if seed is None else int(seed)
     if seed == int(attrs["campaign_seed"]) and not same_seed:
         raise InputError(f"{seed} is the design's own seed: give another", field="--seed")

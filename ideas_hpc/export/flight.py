@@ -66,7 +66,7 @@ def _campaign(attrs: dict):
     cfg = dict(attrs["config"])
     cfg.pop("models", None)
     src = Path(attrs["campaign_file"]) if attrs.get("campaign_file") else None
-    return validate_campaign(CampaignSource(data=cfg, path=src))
+    return validate_campaign(CampaignSource(data=cfg, path=src, resolved=True))
 
 
 def store_kind(attrs: dict):

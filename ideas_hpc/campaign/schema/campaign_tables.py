@@ -82,6 +82,7 @@ from ideas_hpc.campaign.schema.instrument_table import INSTRUMENT
 from ideas_hpc.campaign.schema.model_fields import (COVERAGE_FIELDS, GAINS_FIELDS, SPACECRAFT_FIELDS,
                                            STORED_NAMES, flyby_errors, stored_fields)
 from ideas_hpc.campaign.schema.kinds import KINDS as REGISTRY
+from ideas_hpc.campaign.schema.reads import check_reads
 from ideas_hpc.campaign.schema.design_table import DESIGN, MC_SCHEMA, reliability_checks, verify_samples
 
 KINDS = REGISTRY.keys()   # live: a kind registered later is a valid choice
@@ -268,10 +269,16 @@ def _cross_checks(c: CampaignConfig) -> None:
 
 
 def validate_campaign(source: CampaignSource) -> Campaign:
-    """Validate a loaded source; every error carries the field, file and line."""
+    """Validate a loaded source; every error carries the field, file and line. A key the
+    campaign sets but its kind (under its settings) does not read is refused
+    (:mod:`~ideas_hpc.campaign.schema.reads`), unless the source is a store's resolved
+    config."""
     try:
         values = validate(source.data, SCHEMA)
-        config = resolve_angle_step(typed_config(values))
+        config = typed_config(values)
+        if not source.resolved:     # a key the run ignores is refused (reads.py)
+            check_reads(config, source.data, SCHEMA)
+        config = resolve_angle_step(config)
         with flyby_errors():   # the maneuver registry names `maneuver`
             _cross_checks(config)
         extras = build_models(source.data, config)

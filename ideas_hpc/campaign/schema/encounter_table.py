@@ -55,15 +55,9 @@ def check_encounter(fb, attitude) -> None:
         if fb.geometry != "encounter":
             raise InputError('body tracking needs flyby.geometry = "encounter"',
                              field="attitude.maneuver")
-    given = [key for si, key in _ANGLE_KEYS if getattr(fb, si) is not None]
-    if fb.geometry != "encounter":
-        extra = given + [k for k in ("v_inf_km_s", "before_km", "after_km", "before_s",
-                                     "after_s") if getattr(fb, k.replace("_km_s", "_m_s")
-                                                           .replace("_km", "_m")) is not None]
-        if extra:
-            raise InputError("is an encounter key: set flyby.geometry = \"encounter\"",
-                             field=f"flyby.{extra[0]}")
+    if fb.geometry != "encounter":   # its keys set then: refused as not read (reads.py)
         return
+    given = [key for si, key in _ANGLE_KEYS if getattr(fb, si) is not None]
     if fb.configuration != "ring":
         raise InputError("an encounter flies a ring perpendicular to v_inf: use 'ring'",
                          field="flyby.configuration")

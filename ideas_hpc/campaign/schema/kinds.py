@@ -10,6 +10,13 @@ has no import cycle. A new kind is a module with its run function and one
 entry here (plus its keys in :mod:`ideas_hpc.campaign.schema.campaign_tables` if it has any).
 A kind whose ``design.method`` picks a different entry lists it in ``methods``
 (method -> module and function), so this table alone says which function runs.
+
+Each entry also lists the keys of its own that its run reads (``reads``; a
+``methods`` entry lists those of its function): the ``[design]`` and
+``[monte_carlo]`` keys, ``run.workers``, ``run.chunk_size``. A key that some kind
+lists is refused, with one line naming it, in a file whose kind does not list it
+(:mod:`ideas_hpc.campaign.schema.reads`, which also holds the conditions on other
+settings: ``attitude.mode``, ``flyby.geometry``, ``design.success_probability``...).
 """
 
 from __future__ import annotations
@@ -21,6 +28,18 @@ from typing import Callable
 
 #: Where a kind's flown swarm comes from (:attr:`Kind.swarm`).
 SWARM_SOURCES = ("file", "file-angles", "designed")
+
+#: In :attr:`Kind.reads`: every ``[monte_carlo]`` key a dispersion declares (read live,
+#: :func:`ideas_hpc.montecarlo.dispersions.dispersion_keys`).
+DISPERSION_KEYS = "monte_carlo.<dispersions>"
+#: The angle grid: the key and its deprecated alias (``design_checks``).
+ANGLE_STEP = ("design.angle_step_deg", "design.angle_step_rad")
+#: The PyGAD search of the GAs (:class:`ideas_hpc.design.api.GASearch`).
+GA_SEARCH = ("design.population", "design.generations", "design.parents", "design.elitism",
+             "design.mutation_probability", "design.stall_generations")
+#: What every fewest-spacecraft designer of design-nadir reads (bank, N, requirement, cluster).
+COVER = ("design.method", "design.n_max", "design.eps_tol_pct", "design.time_limit_s",
+         "design.chunk_size", "run.workers", *ANGLE_STEP)
 
 
 @dataclass(frozen=True)
@@ -37,8 +56,8 @@ class Kind:
     function: str
     chunked: bool
     doc: str
-    #: ``((method, module, function), ...)``: the entry of each ``design.method``
-    #: that is not ``module.function``.
+    #: ``((method, module, function, reads), ...)``: the entry of each ``design.method``
+    #: that is not ``module.function``, with the keys of its own that it reads.
     methods: tuple = ()
     #: The maneuver (``attitude.maneuver`` name) the kind always flies, whatever
     #: the file says; ``None``: the file's.
@@ -65,6 +84,10 @@ class Kind:
     #: sweeps; the chosen swarm of a design, the nominal design of dispersed samples),
     #: which ``ideas-hpc export`` writes as SPICE kernels.
     one_swarm: bool = True
+    #: The keys of its own that ``module.function`` reads (dotted; :data:`DISPERSION_KEYS`
+    #: for every dispersion's): a key some kind lists is refused where the kind that
+    #: runs does not list it (:mod:`ideas_hpc.campaign.schema.reads`).
+    reads: tuple = ()
 
     def __post_init__(self):
         if self.swarm not in SWARM_SOURCES:
@@ -78,28 +101,53 @@ class Kind:
     def runner(self, method: str | None = None) -> Callable:
         """The run function, of ``design.method = method`` when the kind lists one."""
         module, function = self.module, self.function
-        for m, mod, fn in self.methods:
+        for m, mod, fn, *_ in self.methods:
             if m == method:
                 module, function = mod, fn
         return getattr(importlib.import_module(module), function)
 
+    def reads_of(self, method: str | None = None) -> tuple:
+        """The keys of its own that the entry of ``design.method = method`` reads."""
+        for m, _, _, *reads in self.methods:
+            if m == method:
+                return tuple(reads[0]) if reads else ()
+        return tuple(self.reads)
+
+    def entries(self) -> tuple:
+        """``((method or None, reads), ...)``: every entry that can run, ``None`` for the
+        kind's own (``module.function``: every method not listed in ``methods``)."""
+        return ((None, tuple(self.reads)),
+                *((m, tuple(r[0]) if r else ()) for m, _, _, *r in self.methods))
+
 
 KINDS: dict[str, Kind] = {k.name: k for k in (
     Kind("flyby", "ideas_hpc.campaign.flyby_kind", "run_flyby", False,
-         "one flyby of swarm.angles_rad"),
+         "one flyby of swarm.angles_rad",
+         reads=("spacecraft",)),    # the wheel-limit check of its pointing, ideal or not
     Kind("design-nadir", "ideas_hpc.campaign.design_ga", "run_design", False,
          "fewest spacecraft for the coverage target (exact integer programme or GA)",
-         methods=(("exact", "ideas_hpc.campaign.design_nadir", "run_design_exact"),),
+         methods=(("exact", "ideas_hpc.campaign.design_nadir", "run_design_exact",
+                   COVER + ("design.failures_tolerated", "design.verify_samples",
+                            DISPERSION_KEYS)),),
          swarm="designed", stereo=True, success_probability=True,
-         continuous_methods=("ga",), nadir_swarm_store=True),
+         continuous_methods=("ga",), nadir_swarm_store=True,
+         reads=COVER + GA_SEARCH),     # the GA, with its gap to the exact optimum
     Kind("design-fov", "ideas_hpc.campaign.design_ga", "run_design", False,
          "sweep periods of a swarm with half the field of view (GA)", maneuver="fov",
-         swarm="file-angles"),
+         swarm="file-angles",
+         reads=GA_SEARCH + ("design.p_max_min", "design.period_step_min", "design.nadir_store",
+                            "design.chunk_size", "run.workers")),
     Kind("design-pareto", "ideas_hpc.campaign.design_pareto", "run_design_pareto", False,
          "non-dominated swarms for two or more objectives (NSGA-II), with the exact "
-         "coverage-vs-N curve for (n, coverage)", swarm="designed", one_swarm=False),
+         "coverage-vs-N curve for (n, coverage)", swarm="designed", one_swarm=False,
+         reads=("design.objectives", "design.n_max", "design.population", "design.generations",
+                "design.parents", "design.mutation_probability", "design.time_limit_s",
+                "design.chunk_size", "run.workers", *ANGLE_STEP)),
     Kind("monte-carlo", "ideas_hpc.campaign.montecarlo", "run_monte_carlo", True,
-         "dispersed flights of a designed swarm, chunked and resumable", samples=True),
+         "dispersed flights of a designed swarm, chunked and resumable", samples=True,
+         # eps_tol_pct: the result line's threshold, 100 % - eps_tol
+         reads=("monte_carlo.samples", DISPERSION_KEYS, "design.eps_tol_pct", "run.chunk_size",
+                "run.workers")),
 )}
 
 

@@ -67,6 +67,9 @@ class CampaignSource:
     path: Path | None = None
     lines: dict[str, int] = field(default_factory=dict)
     overrides: list[str] = field(default_factory=list)
+    #: A store's resolved config (every default written out): no key of it counts as
+    #: set by a user, so the keys its kind reads are not judged.
+    resolved: bool = False
 
     def where(self, dotted: str) -> tuple[str | None, int | None]:
         """``(file, line)`` of a dotted field, or of its nearest enclosing table.

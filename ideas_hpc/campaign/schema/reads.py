@@ -1,0 +1,375 @@
+"""Which keys a campaign reads, declared once: a key its kind ignores is refused (issue 41).
+
+A campaign file may only set keys that the run it describes reads. Every key the
+file sets (present in the file or given with ``--set``; defaults are not "set") is
+judged once at load (:func:`check_reads`); a key the run would ignore stops the
+load with one :class:`~ideas_hpc.base.errors.InputError` line naming the dotted
+key, its file and line, the kind or setting that ignores it and, where there is
+one, the setting that would make it read. A store's resolved config, which writes
+every default out, is not judged (``CampaignSource.resolved``).
+
+Two declarations decide:
+
+* the kinds registry (:mod:`ideas_hpc.campaign.schema.kinds`): each entry (and each
+  ``design.method`` entry) lists the keys of its own that its run reads
+  (``Kind.reads``). A key that some entry lists is read only where the entry that
+  runs lists it: ``design.population`` is read by the GAs and NSGA-II, not by the
+  exact designer;
+* :data:`RULES` below: conditions on other settings, for any kind. A rule replaces
+  the registry's test for its key and may call it (``s.lists(key)``).
+
+Any other key is read by every kind (the body, the instrument's sizing, the flyby's
+geometry, ``[dynamics]``, ``[coverage]``...). ``tests/test_key_reads.py`` loads every
+kind with every key, and records which config fields small real runs of every kind
+read, against this declaration.
+
+``monte_carlo.failures_k`` in a success-probability design is refused while
+:data:`FAILURES_K_HONOURED` is False: that design's failure model loses each
+spacecraft independently with ``monte_carlo.failure_probability``.
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+from ideas_hpc.attitude.maneuvers import MANEUVERS
+from ideas_hpc.base.errors import InputError
+from ideas_hpc.body.formats import builtin_body, length_unit_applies
+from ideas_hpc.campaign.schema.encounter_table import ENCOUNTER
+from ideas_hpc.campaign.schema.kinds import DISPERSION_KEYS, KINDS
+from ideas_hpc.campaign.schema.read_settings import (Rule, Settings, entry_name, not_listed, owned,
+                                                     readers, set_keys)
+from ideas_hpc.design.api.methods import METHODS
+from ideas_hpc.design.pareto.objectives import check_objectives
+from ideas_hpc.montecarlo.dispersions import DISPERSIONS, dispersion_keys
+
+#: The success-probability design flies exactly ``monte_carlo.failures_k`` failures.
+#: False until its failure model does (the one switch: the rule below reads it).
+FAILURES_K_HONOURED = False
+
+
+def _dispersed(s: Settings, key: str) -> bool:
+    """The dispersion of ``monte_carlo.<name>`` is flown: the entry lists the dispersions,
+    flies samples, and the dispersion applies to this attitude mode (``Dispersion.applies``)."""
+    if not s.samples:
+        return False
+    name = key.partition(".")[2]
+    for d in DISPERSIONS:
+        if name in dict(d.keys) and d.applies is not None:
+            try:
+                return bool(d.applies(s.standin))
+            except AttributeError:      # it reads more of a setup than the attitude mode
+                return True
+    return True
+
+
+def _why_dispersed(key: str) -> Callable:
+    def why(s: Settings) -> str:
+        if not s.lists(DISPERSION_KEYS):
+            return not_listed(key)(s)
+        if not s.samples:
+            return ("is ignored: design.verify_samples = 0 turns off the Monte Carlo "
+                    "verification that flies the dispersions (set it > 0)")
+        return (f"is ignored with attitude.mode = {s.config.attitude.mode!r}: only a simulated "
+                'attitude starts from a drawn state (attitude.mode = "simulated")')
+    return why
+
+
+def _sweeping() -> str:
+    return " or ".join(f'"{m.campaign_name}"' for m in MANEUVERS.values() if m.sweeps)
+
+
+def _why_no_sweep(what: str) -> Callable:
+    def why(s: Settings) -> str:
+        return (f"is ignored: the {s.maneuver.campaign_name!r} maneuver does not sweep ({what}: "
+                f"attitude.maneuver = {_sweeping()})")
+    return why
+
+
+def _angles_read(s: Settings) -> bool:
+    return s.kind.swarm == "file" or (s.kind.swarm == "file-angles"
+                                      and s.config.design.nadir_store is None)
+
+
+def _why_angles(s: Settings) -> str:
+    if s.kind.swarm == "designed":
+        flown = " or ".join(repr(k.name) for k in KINDS.values() if k.swarm != "designed")
+        return (f"is ignored by kind {s.kind.name!r}, which designs the angles (kind {flown} "
+                "flies given angles)")
+    return "is ignored: design.nadir_store gives the swarm to sweep; drop one of the two"
+
+
+def _why_periods(s: Settings) -> str:
+    if s.kind.swarm != "file":
+        what = "angles" if s.kind.swarm == "designed" else "sweep periods"
+        return f"is ignored by kind {s.kind.name!r}, which designs the {what} it flies"
+    return _why_no_sweep("one period per spacecraft")(s)
+
+
+def _separation_read(s: Settings) -> bool:
+    return s.kind.swarm == "designed" or (s.config.flyby.configuration == "ring"
+                                          and _angles_read(s))
+
+
+def _why_separation(s: Settings) -> str:
+    if s.config.flyby.configuration != "ring":
+        return (f"is ignored with flyby.configuration = {s.config.flyby.configuration!r}: only a "
+                "ring's spacing is checked")
+    return "is ignored: the swarm of design.nadir_store is flown as designed"
+
+
+def _imaging(s: Settings) -> bool:
+    return s.simulated and s.config.monte_carlo.attitude_start != "paper"
+
+
+def _why_imaging(s: Settings) -> str:
+    if not s.simulated:
+        return ("is ignored with attitude.mode = 'ideal': every image counts (the usable-image "
+                'test judges a simulated attitude: attitude.mode = "simulated")')
+    return ("is ignored with monte_carlo.attitude_start = 'paper': the paper's start counts "
+            'every image (attitude_start = "reference" or "acquisition" applies the test)')
+
+
+def _closed_loop(what: str) -> Callable:
+    def why(s: Settings) -> str:
+        return (f"is ignored with attitude.mode = 'ideal': {what} only in a closed loop "
+                '(attitude.mode = "simulated")')
+    return why
+
+
+def _paper(s: Settings) -> bool:
+    return s.config.flyby.geometry == "paper"
+
+
+def _why_encounter_window(s: Settings) -> str:
+    return ("is ignored with flyby.geometry = 'encounter': the imaging window is "
+            "flyby.before_km / after_km (or before_s / after_s) around closest approach")
+
+
+def _kernels(s: Settings) -> bool:
+    return (s.raw.get("body") or {}).get("kernels") is not None
+
+
+def _length_unit(s: Settings) -> bool:
+    b = s.config.body
+    if b.length_unit == "km":
+        return True
+    files = [f for f in (b.shape, None if builtin_body(b.name) else b.name) if f is not None]
+    return any(length_unit_applies(f) for f in files)
+
+
+def _why_length_unit(s: Settings) -> str:
+    b = s.config.body
+    what = (f"body.shape {b.shape!r}" if b.shape is not None else
+            f"the built-in body {b.name!r}" if builtin_body(b.name) else f"body.name {b.name!r}")
+    return (f"{b.length_unit!r} is not read for {what}: its format fixes its lengths (km); the "
+            "unit applies to mesh files such as .obj/.ply/.stl/.off")
+
+
+def _resolution(s: Settings) -> bool:
+    """The analytic built-in bodies are meshed at ``body.resolution`` (Eros without its data
+    file falls back to one); a shape file has its own vertices."""
+    b = s.config.body
+    found = builtin_body(b.name)
+    return b.shape is None and found is not None and not found[1].real_eros
+
+
+def _why_resolution(s: Settings) -> str:
+    b = s.config.body
+    what = f"body.shape {b.shape!r}" if b.shape is not None else f"body.name {b.name!r}"
+    return (f"is ignored: {what} is a shape model with its own vertices (the resolution "
+            "meshes the analytic built-in bodies: ellipsoid, sphere, eros without its data)")
+
+
+def _p_key(s: Settings) -> bool:
+    return s.p
+
+
+def _why_p(s: Settings) -> str:
+    return ("needs design.success_probability (it is read by the success-probability design, "
+            f"{' or '.join(n for n in readers_p())})")
+
+
+def readers_p() -> list[str]:
+    return [entry_name(k, m) for k in KINDS.values() if k.success_probability
+            for m in METHODS if METHODS[m].success_probability]
+
+
+def _why_success_probability(s: Settings) -> str:
+    if not s.kind.success_probability:
+        able = ", ".join(repr(k.name) for k in KINDS.values() if k.success_probability)
+        return f"is for kind {able}, not {s.kind.name!r}"
+    able = [m for m in METHODS if METHODS[m].success_probability]
+    return (f"is supported by the {' or '.join(able)} designer only (design.method = "
+            f"{', '.join(map(repr, able))}), not {s.method!r}")
+
+
+def _why_exact_scenario(s: Settings) -> str:
+    if not s.p:
+        return _why_p(s)
+    return ("is ignored: every dispersion the scenarios draw is off, so the design flies one "
+            "exact scenario (turn one on in [monte_carlo])")
+
+
+def _failures_k(s: Settings) -> bool:
+    return _dispersed(s, "monte_carlo.failures_k") and (FAILURES_K_HONOURED or not s.p)
+
+
+def _why_failures_k(s: Settings) -> str:
+    if s.samples and s.p:
+        return ("is not honoured by the success-probability design (design.success_probability"
+                "): its failure model loses each spacecraft independently with "
+                "monte_carlo.failure_probability; drop it (kind 'monte-carlo' and the exact "
+                "design's verification fly exactly k failures)")
+    return _why_dispersed("monte_carlo.failures_k")(s)
+
+
+def _samples_why(s: Settings) -> str:
+    hint = (" (this design's Monte Carlo flies design.verify_samples samples)"
+            if s.lists("design.verify_samples") else "")
+    return not_listed("monte_carlo.samples")(s) + hint
+
+
+def _time_limit(s: Settings) -> bool:
+    """NSGA-II reads it only for the exact reference curve of (n, coverage)."""
+    if not s.lists("design.time_limit_s"):
+        return False
+    if s.lists("design.objectives"):
+        try:
+            return set(check_objectives(s.config.design.objectives)) == {"n", "coverage"}
+        except InputError:      # refused with its own line by the cross-checks
+            return True
+    return True
+
+
+def _why_time_limit(s: Settings) -> str:
+    if not s.lists("design.time_limit_s"):
+        return not_listed("design.time_limit_s")(s)
+    return ("is ignored: it bounds the exact coverage-vs-N reference curve, which is drawn for "
+            'design.objectives = ["n", "coverage"] only')
+
+
+def _maneuver(s: Settings) -> bool:
+    return s.kind.maneuver is None or s.config.attitude.maneuver == s.kind.maneuver
+
+
+def _simulated(s: Settings) -> bool:
+    return s.simulated
+
+
+def _always(s: Settings) -> bool:
+    return True
+
+
+def _encounter_rule(key: str) -> Rule:
+    return Rule(lambda s: not _paper(s),
+                lambda s: 'is an encounter key: set flyby.geometry = "encounter"')
+
+
+#: Conditions on other settings (module docstring); a key not here and listed by no kind
+#: entry is read by every kind.
+RULES: dict[str, Rule] = {
+    "body.length_unit": Rule(_length_unit, _why_length_unit),
+    "body.resolution": Rule(_resolution, _why_resolution),
+    "body.spice_body": Rule(_kernels, lambda s: "needs body.kernels (the SPICE kernels that "
+                                                "give the body's orbit and spin)"),
+    "body.spice_frame": Rule(_kernels, lambda s: "needs body.kernels (the SPICE kernels that "
+                                                 "give the body's orbit and spin)"),
+    "flyby.epoch_utc": Rule(_kernels, lambda s: "needs body.kernels (a leap-second kernel at "
+                                                "least)"),
+    "flyby.spice_spacecraft": Rule(
+        lambda s: _kernels(s) and not _paper(s),
+        lambda s: ("needs body.kernels (the spacecraft's SPK)" if not _kernels(s) else
+                   'needs flyby.geometry = "encounter"')),
+    "flyby.helix_rise_km": Rule(
+        lambda s: s.config.flyby.configuration == "helix" and _paper(s),
+        lambda s: ("is ignored with flyby.configuration = 'ring': it raises a helix's turns "
+                   '(flyby.configuration = "helix")' if _paper(s) else _why_encounter_window(s))),
+    **{f"flyby.{k}": Rule(_paper, _why_encounter_window) for k in ("tf_s", "z_start_km",
+                                                                   "z_stop_km")},
+    **{f"flyby.{k}": _encounter_rule(k) for k in ENCOUNTER if k != "geometry"},
+    **{f"instrument.{k}": Rule(_imaging, _why_imaging)
+       for k in ("pixels_across", "exposure_ms", "smear_pixels", "settle_deg")},
+    "swarm.angles_rad": Rule(_angles_read, _why_angles),
+    "swarm.sweep_periods_min": Rule(lambda s: s.kind.swarm == "file" and s.maneuver.sweeps,
+                                    _why_periods),
+    "swarm.min_separation_km": Rule(_separation_read, _why_separation),
+    "attitude.maneuver": Rule(_maneuver, lambda s: f"is ignored: kind {s.kind.name!r} always "
+                                                   f"flies {s.kind.maneuver!r}"),
+    "attitude.decimate": Rule(lambda s: s.kind.one_swarm,
+                              lambda s: f"is ignored by kind {s.kind.name!r}, which stores no "
+                                        "flight (no single swarm to fly)"),
+    "attitude.theta_max_deg": Rule(lambda s: s.maneuver.sweeps,
+                                   _why_no_sweep("the sweep's amplitude")),
+    "design.p_min_min": Rule(lambda s: s.maneuver.sweeps,
+                             _why_no_sweep("the shortest sweep period")),
+    "design.success_probability": Rule(
+        lambda s: s.kind.success_probability and METHODS[s.method].success_probability,
+        _why_success_probability),
+    **{f"design.{k}": Rule(_p_key, _why_p) for k in ("confidence", "demonstrate", "bank_level")},
+    "design.demonstrate_looks": Rule(
+        lambda s: s.p and s.config.design.demonstrate,
+        lambda s: (_why_p(s) if not s.p else "is ignored with design.demonstrate = false: one "
+                   "look (design.demonstrate = true steps N up over several)")),
+    "design.scenarios": Rule(lambda s: s.scenarios, _why_exact_scenario),
+    "design.verify_samples": Rule(
+        lambda s: s.lists("design.verify_samples") and (s.scenarios or not s.p),
+        lambda s: (not_listed("design.verify_samples")(s) if not s.lists("design.verify_samples")
+                   else _why_exact_scenario(s))),
+    "design.time_limit_s": Rule(_time_limit, _why_time_limit),
+    "monte_carlo.samples": Rule(lambda s: s.lists("monte_carlo.samples"), _samples_why),
+    "monte_carlo.attitude_start": Rule(_simulated, _closed_loop("a flight starts from it")),
+    "monte_carlo.failures_k": Rule(_failures_k, _why_failures_k),
+    "monte_carlo.acquisition_s": Rule(
+        lambda s: (_dispersed(s, "monte_carlo.acquisition_s")
+                   and s.config.monte_carlo.attitude_start == "acquisition"
+                   and s.config.monte_carlo.attitude_dispersion),
+        lambda s: (_why_dispersed("monte_carlo.acquisition_s")(s)
+                   if not _dispersed(s, "monte_carlo.acquisition_s") else
+                   'is ignored: it is the acquisition phase of monte_carlo.attitude_start = '
+                   '"acquisition" with attitude_dispersion = true')),
+    **{f"monte_carlo.{k}": Rule(
+        lambda s, k=k: (_dispersed(s, f"monte_carlo.{k}") and s.config.monte_carlo.attitude_dispersion
+                        and s.config.monte_carlo.attitude_start == "reference"),
+        lambda s, k=k: (_why_dispersed(f"monte_carlo.{k}")(s)
+                        if not _dispersed(s, f"monte_carlo.{k}") else
+                        'is ignored: it is the error about the reference of monte_carlo.'
+                        'attitude_start = "reference" with attitude_dispersion = true'))
+       for k in ("sigma_attitude_deg", "sigma_rate_rad_s")},
+    "run.device": Rule(_simulated, _closed_loop("the device flies the attitude")),
+    "controller": Rule(_simulated, _closed_loop("the controller's gains act")),
+    "torques": Rule(_simulated, _closed_loop("disturbance torques act")),
+    "spacecraft": Rule(lambda s: s.simulated or s.lists("spacecraft"),
+                       lambda s: _closed_loop("the spacecraft (inertia, wheels) flies")(s)
+                       + f"; {', '.join(readers('spacecraft'))} also checks its pointing "
+                       "against the wheels"),
+}
+
+
+def rule_of(key: str) -> Rule:
+    """The rule of dotted ``key``: its :data:`RULES` entry, the dispersions' (a
+    ``[monte_carlo]`` key of a dispersion: flown by an entry that lists them and flies
+    samples, where the dispersion applies), the registry's (a key some entry lists), or
+    read by every kind."""
+    if key in RULES:
+        return RULES[key]
+    if key.startswith("monte_carlo.") and key.partition(".")[2] in dispersion_keys():
+        return Rule(lambda s: _dispersed(s, key), _why_dispersed(key))
+    if key in owned():
+        return Rule(lambda s: s.lists(key), not_listed(key))
+    return Rule(_always, lambda s: "")
+
+
+def is_read(key: str, s: Settings) -> bool:
+    """Whether the campaign of settings ``s`` reads dotted ``key``."""
+    return bool(rule_of(key).when(s))
+
+
+def check_reads(config, raw: dict, schema: dict) -> None:
+    """Refuse the first key ``raw`` sets that the campaign ``config`` does not read (one
+    :class:`InputError` naming the key; the caller adds the file and line)."""
+    s = Settings(config, raw)
+    for key in set_keys(raw, schema):
+        rule = rule_of(key)
+        if not rule.when(s):
+            raise InputError(rule.why(s), field=key)
