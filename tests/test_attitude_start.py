@@ -246,7 +246,8 @@ def test_bad_keys_name_their_field(key, value, field):
 
 def test_acquisition_needs_a_duration():
     with pytest.raises(InputError) as e:
-        load(DESIGN, ['monte_carlo.attitude_start="acquisition"', "monte_carlo.acquisition_s=0"])
+        load(DESIGN, ['attitude.mode="simulated"', 'monte_carlo.attitude_start="acquisition"',
+                      "monte_carlo.acquisition_s=0"])
     assert e.value.field == "monte_carlo.acquisition_s"
 
 

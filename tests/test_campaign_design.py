@@ -15,6 +15,7 @@ from ideas_hpc.campaign.run import run_file
 from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.core.design.union import population_coverage
 from ideas_hpc.base.errors import InputError
+from campaign_copies import fitted
 from ideas_hpc.design.candidates import candidate_masks
 from ideas_hpc.flyby.flight import fly
 from ideas_hpc.campaign.setup import setup_from_campaign
@@ -42,7 +43,7 @@ def test_population_coverage_matches_numpy():
 
 def test_fig21_swarm_covers_eros_in_paper_mode(eros1708):
     """Paper Figs. 21 and 25: the 8-spacecraft NP swarm images 100 % of Eros."""
-    c = load(CAMPAIGNS / "eros-flyby.toml", ['attitude.mode="ideal"'])
+    c = load(fitted("eros-flyby.toml", ['attitude.mode="ideal"']), ['attitude.mode="ideal"'])
     setup = setup_from_campaign(c)
     out = fly(setup, FIG21)
     assert out.coverage.coverage == 1.0 and out.coverage.coverage_count == 1.0
@@ -148,19 +149,20 @@ def _cli(*args, cwd=None):
                           text=True, timeout=300, cwd=cwd)
 
 
-@pytest.mark.parametrize("sets,field", [
-    (["design.n_max=0"], "design.n_max"),
-    (["design.population=1"], "design.population"),
-    (["design.p_min_min=5.0", "design.p_max_min=2.0"], "design.p_max_min"),
-    (["design.bogus=1"], "design.bogus"),
-    (["kind=\"design-everything\""], "kind"),
-    (["attitude.mode=3"], "attitude.mode"),
-    (["controller.kp=1.0"], "controller.kp"),
-    (["dynamics.gravty=\"point_mass\""], "dynamics.gravty"),
+@pytest.mark.parametrize("campaign,sets,field", [
+    ("eros-nadir-ga.toml", ["design.n_max=0"], "design.n_max"),
+    ("eros-nadir-ga.toml", ["design.population=1"], "design.population"),
+    ("eros-fov-ga.toml", ["design.p_min_min=5.0", "design.p_max_min=2.0"], "design.p_max_min"),
+    ("eros-nadir-ga.toml", ["design.bogus=1"], "design.bogus"),
+    ("eros-nadir-ga.toml", ["kind=\"design-everything\""], "kind"),
+    ("eros-nadir-ga.toml", ["attitude.mode=3"], "attitude.mode"),
+    ("eros-nadir-ga.toml", ["attitude.mode=\"simulated\"", "controller.kp=1.0"],
+     "controller.kp"),
+    ("eros-nadir-ga.toml", ["dynamics.gravty=\"point_mass\""], "dynamics.gravty"),
 ])
-def test_bad_campaign_input_names_field(sets, field):
+def test_bad_campaign_input_names_field(campaign, sets, field):
     with pytest.raises(InputError) as ei:
-        load(CAMPAIGNS / "eros-nadir-ga.toml", sets)
+        load(CAMPAIGNS / campaign, sets)
     assert ei.value.field == field
 
 
@@ -182,7 +184,7 @@ def test_helix_configuration(tmp_path):
 
     sets = ['body.name="ellipsoid"', 'flyby.configuration="helix"', "flyby.helix_rise_km=12.0",
             'attitude.mode="ideal"', "flyby.tf_s=60", "flyby.z_start_km=-3", "flyby.z_stop_km=3"]
-    c = load(CAMPAIGNS / "eros-flyby.toml", sets)
+    c = load(fitted("eros-flyby.toml", sets), sets)
     setup = setup_from_campaign(c)
     th = np.array([0.0, np.pi / 2, np.pi, 1.5 * np.pi])
     r0, rt = endpoints(setup, th)

@@ -45,7 +45,11 @@ def _write_obj(path, v, f):
 
 
 def _campaign(tmp_path, obj, kind="flyby", extra="", sets=()):
+    from ideas_hpc.campaign.schema.kinds import KINDS
+
     toml = tmp_path / "c.toml"
+    # the angles only for a kind that flies given angles (a design refuses them)
+    angles = "" if KINDS[kind].swarm == "designed" else "angles_rad = [0.5, 2.5, 4.5]"
     toml.write_text(f"""kind = "{kind}"
 [body]
 name = "{obj}"
@@ -55,7 +59,7 @@ spin_period_h = 4.0
 a_au = 1.1
 e = 0.2
 [swarm]
-angles_rad = [0.5, 2.5, 4.5]
+{angles}
 [attitude]
 mode = "ideal"
 {extra}

@@ -49,7 +49,10 @@ def _run(tmp_path, campaign, capsys, *args) -> str:
 
 TARGETING = [("tolerance_m = 0.01", "tolerance_m = 1e-5"),
              ("max_iterations = 25", "max_iterations = 1")]
-FLYBY_EDITS = [ELLIPSOID, ('mode = "simulated"', 'mode = "ideal"'),
+#: ideal attitude: without what only a closed loop reads (the file's controller, its start)
+IDEAL = [('mode = "simulated"', 'mode = "ideal"'), ('[controller]\npreset = "np"', ''),
+         ('attitude_start = "paper"', '')]
+FLYBY_EDITS = [ELLIPSOID, *IDEAL,
                ("angles_rad = [0.2, 1.7, 2.4, 2.9, 3.3, 3.5, 5.6, 6.0]",
                 "angles_rad = [0.2, 3.3]")] + TARGETING
 FLYBY_APPEND = "\n[flyby]\ntolerance_m = 1e-5\nmax_iterations = 1\n"
@@ -67,8 +70,10 @@ def test_targeting_failure_names_the_line(tmp_path, capsys, base, edits, append,
     assert where in text and "raise flyby.max_iterations (now 1)" in text, text
 
 
+#: an encounter: its window replaces the paper pass's end time and heights
 ENCOUNTER = [ELLIPSOID, ('configuration = "ring"',
-                         'configuration = "ring"\ngeometry = "encounter"')]
+                         'configuration = "ring"\ngeometry = "encounter"'),
+             ("tf_s = 600.0\nz_start_km = -30.0\nz_stop_km = 30.0\n", "")]
 
 
 @pytest.mark.parametrize("extra,entry,key,says", [

@@ -21,10 +21,13 @@ from ideas_hpc.body.params import get_params
 from ideas_hpc.body.shape import build_shape
 from ideas_hpc.campaign.run import run_file
 
+from campaign_copies import fitted
+
 PACKAGE = Path(__file__).resolve().parents[1] / "ideas_hpc"
-FLYBY = Path(__file__).resolve().parents[1] / "campaigns" / "eros-flyby.toml"
 SHORT = ["flyby.tf_s=60", "flyby.z_start_km=-3", "flyby.z_stop_km=3", 'attitude.mode="ideal"',
          "swarm.angles_rad=[0.2, 2.4, 4.1]", 'body.params="eros"']
+#: the shipped flyby without what an ideal attitude does not read ([controller], its start)
+FLYBY = fitted("eros-flyby.toml", SHORT)
 
 
 def _read_toy(path, length_unit):

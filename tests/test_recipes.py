@@ -27,14 +27,18 @@ from ideas_hpc.montecarlo import dispersions
 from ideas_hpc.base.fields import Field
 from ideas_hpc.engine.variables import StoreVar
 
+from campaign_copies import fitted
+
 CAMPAIGNS = Path(__file__).resolve().parent.parent / "campaigns"
 FLYBY = CAMPAIGNS / "eros-flyby.toml"
 SHORT = ['body.name="ellipsoid"', "flyby.tf_s=60", "flyby.z_start_km=-3", "flyby.z_stop_km=3",
          'attitude.mode="ideal"', "swarm.angles_rad=[0.2, 2.4, 4.1]"]
 PERIODS = "swarm.sweep_periods_min=[0.5, 0.7, 0.9]"
+#: the shipped flyby without what an ideal attitude does not read ([controller], its start)
+IDEAL_FLYBY = fitted("eros-flyby.toml", SHORT)
 
 
-def _flyby(tmp_path, name, sets, path=FLYBY):
+def _flyby(tmp_path, name, sets, path=IDEAL_FLYBY):
     store = run_file(path, out=tmp_path / f"{name}.zarr", overrides=SHORT + sets, workers=0,
                      progress=False)
     return xr.open_zarr(store)
@@ -48,7 +52,7 @@ def test_recipe_maneuver(tmp_path, monkeypatch):
                              sweeps=True, fov_factor=0.5)
     monkeypatch.setitem(maneuvers.MANEUVERS, "toy", toy)
     with pytest.raises(InputError) as err:   # it declares sweep periods: the schema asks
-        load(FLYBY, SHORT + ['attitude.maneuver="toy-sweep"'])
+        load(IDEAL_FLYBY, SHORT + ['attitude.maneuver="toy-sweep"'])
     assert err.value.field == "swarm.sweep_periods_min"
     a = _flyby(tmp_path, "toy", ['attitude.maneuver="toy-sweep"', PERIODS])
     fov = _flyby(tmp_path, "fov", ['attitude.maneuver="fov"', PERIODS])
@@ -101,7 +105,9 @@ TOY_DISPERSION = dispersions.Dispersion(
     check=_toy_check, level="body", active=lambda mc, setup: mc.toy_gm_pct != 0)
 MC = ['body.name="ellipsoid"', "flyby.tf_s=60", "flyby.z_start_km=-3", "flyby.z_stop_km=3",
       'attitude.mode="ideal"', "monte_carlo.samples=3", "run.chunk_size=3",
-      "monte_carlo.attitude_dispersion=false", "monte_carlo.sigma_gm_pct=0.0"]
+      "monte_carlo.sigma_gm_pct=0.0"]
+#: the shipped Monte Carlo without what an ideal attitude does not read (its start)
+IDEAL_MC = fitted("eros-monte-carlo.toml", MC)
 
 
 def _mc(tmp_path, name, sets):
@@ -110,7 +116,7 @@ def _mc(tmp_path, name, sets):
     # threads in this process: the workers see the patched registry
     with LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
                       dashboard_address=":0") as cluster, Client(cluster):
-        store = run_file(CAMPAIGNS / "eros-monte-carlo.toml", out=tmp_path / f"{name}.zarr",
+        store = run_file(IDEAL_MC, out=tmp_path / f"{name}.zarr",
                          overrides=MC + sets, scheduler=cluster.scheduler_address,
                          progress=False)
     return xr.open_zarr(store)
@@ -119,11 +125,11 @@ def _mc(tmp_path, name, sets):
 def test_recipe_dispersion(tmp_path, monkeypatch):
     base = _mc(tmp_path, "base", [])
     with pytest.raises(InputError) as err:     # the key exists only with its entry
-        load(CAMPAIGNS / "eros-monte-carlo.toml", MC + ["monte_carlo.toy_gm_pct=5.0"])
+        load(IDEAL_MC, MC + ["monte_carlo.toy_gm_pct=5.0"])
     assert err.value.field == "monte_carlo.toy_gm_pct"
     monkeypatch.setattr(dispersions, "DISPERSIONS", dispersions.DISPERSIONS + (TOY_DISPERSION,))
     with pytest.raises(InputError) as err:     # its cross-check, named in the file's terms
-        load(CAMPAIGNS / "eros-monte-carlo.toml", MC + ["monte_carlo.toy_gm_pct=80.0"])
+        load(IDEAL_MC, MC + ["monte_carlo.toy_gm_pct=80.0"])
     assert err.value.field == "monte_carlo.toy_gm_pct"
     toy = _mc(tmp_path, "toy", ["monte_carlo.toy_gm_pct=20.0"])
     assert list(toy.attrs["dispersion_order"]) == list(base.attrs["dispersion_order"]) + ["toy_gm"]
@@ -269,12 +275,12 @@ def _angle_sum(bank, members):
 def test_recipe_objective(tmp_path, monkeypatch):
     monkeypatch.setitem(objectives.OBJECTIVES, "angle_sum", objectives.Objective(
         "angle_sum", -1, "rad", "sum of the swarm angles (toy)", _angle_sum))
-    store = run_file(CAMPAIGNS / "eros-pareto.toml", out=tmp_path / "p.zarr", workers=0,
-                     progress=False,
-                     overrides=['body.name="ellipsoid"', "flyby.tf_s=60", "flyby.z_start_km=-3",
-                                "flyby.z_stop_km=3", "design.population=8",
-                                "design.generations=3", "design.angle_step_deg=10.0",
-                                'design.objectives=["n", "angle_sum"]'])
+    sets = ['body.name="ellipsoid"', "flyby.tf_s=60", "flyby.z_start_km=-3", "flyby.z_stop_km=3",
+            "design.population=8", "design.generations=3", "design.angle_step_deg=10.0",
+            'design.objectives=["n", "angle_sum"]']
+    # without the shipped file's time_limit_s: it bounds the exact (n, coverage) curve only
+    store = run_file(fitted("eros-pareto.toml", sets), out=tmp_path / "p.zarr", workers=0,
+                     progress=False, overrides=sets)
     ds = xr.open_zarr(store)
     got = ds["pareto_angle_sum"].values
     assert ds["pareto_angle_sum"].attrs["units"] == "rad" and got.size >= 1

@@ -190,8 +190,8 @@ def test_closed_loop_rows_include_the_convergence(eros1708, start):
     from ideas_hpc.montecarlo.scenario_rows import full_rows
     from ideas_hpc.montecarlo.scenarios import grid_theta, row_engine
 
-    c = load(DESIGN, ['attitude.mode="simulated"', f'monte_carlo.attitude_start="{start}"',
-                      "monte_carlo.acquisition_s=60.0"])
+    c = load(DESIGN, ['attitude.mode="simulated"', f'monte_carlo.attitude_start="{start}"']
+             + (["monte_carlo.acquisition_s=60.0"] if start == "acquisition" else []))
     setup = setup_from_campaign(c)
     mc = c.config.monte_carlo
     theta = grid_theta(np.deg2rad(6.0))

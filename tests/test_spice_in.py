@@ -25,6 +25,7 @@ from ideas_hpc.campaign.schema.campaign_tables import load, resolved_config  # n
 from ideas_hpc.base.constants import AU, MU_SUN  # noqa: E402
 from ideas_hpc.dynamics.trajectory import sun_direction_T  # noqa: E402
 from ideas_hpc.base.errors import InputError  # noqa: E402
+from campaign_copies import fitted  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 EROS = 2000433
@@ -83,7 +84,7 @@ def test_dsk_flyby_coverage_is_bit_for_bit(eros_dsk):
              "swarm.angles_rad=[0.2, 1.7]", 'coverage.mode="exact"', "coverage.occlusion=true"]
     out = []
     for shape in (path, tab):
-        c = load(ROOT / "campaigns" / "eros-flyby.toml", short + [f'body.shape="{shape}"'])
+        c = load(fitted("eros-flyby.toml", short), short + [f'body.shape="{shape}"'])
         out.append(fly(setup_from_campaign(c), c.config.swarm.angles_rad))
     a, b = out
     assert np.array_equal(a.coverage.observed, b.coverage.observed)
@@ -164,8 +165,9 @@ def test_kernels_give_the_sun_direction_spice_gives(tmp_path):
     state0 = np.array([r * 0.6, r * 0.8, 0.05 * r, -v * 0.78, v * 0.62, 0.09 * v])
     kernels = _write_kernels(tmp_path, state0, et_guess)
     kernel_toml = "[" + ", ".join(f'"{k}"' for k in kernels) + "]"
-    c = load(ROOT / "campaigns" / "eros-flyby.toml",
-             [f"body.kernels={kernel_toml}", f'flyby.epoch_utc="{UTC}"', "attitude.mode=\"ideal\""])
+    ideal = ["attitude.mode=\"ideal\""]
+    c = load(fitted("eros-flyby.toml", ideal),
+             [f"body.kernels={kernel_toml}", f'flyby.epoch_utc="{UTC}"'] + ideal)
     val = c.extras["spice"]
     assert abs(val.epoch_et_s - et_guess) < 2e-3
     setup = setup_from_campaign(c)

@@ -13,7 +13,7 @@ from ideas_hpc.attitude.maneuvers import campaign_maneuver
 from ideas_hpc.campaign.schema.design_table import verify_samples
 from ideas_hpc.campaign.schema.kinds import DISPERSION_KEYS, KINDS
 from ideas_hpc.design.api.methods import METHODS
-from ideas_hpc.montecarlo.dispersions import dispersion_keys, scenario_dispersed
+from ideas_hpc.montecarlo.dispersions import dispersion_keys
 
 
 @dataclass(frozen=True)
@@ -72,14 +72,6 @@ class Settings:
     def standin(self):
         """What a dispersion's ``active`` / ``applies`` read of a setup (its attitude mode)."""
         return SimpleNamespace(attitude_mode=self.config.attitude.mode)
-
-    @property
-    def scenarios(self) -> bool:
-        """A success-probability design that samples scenarios (not one exact scenario)."""
-        try:
-            return self.p and scenario_dispersed(self.config.monte_carlo, self.standin)
-        except AttributeError:      # a dispersion that reads more of a setup: assume so
-            return self.p
 
 
 def expand(keys) -> frozenset:

@@ -204,13 +204,6 @@ def _why_success_probability(s: Settings) -> str:
             f"{', '.join(map(repr, able))}), not {s.method!r}")
 
 
-def _why_exact_scenario(s: Settings) -> str:
-    if not s.p:
-        return _why_p(s)
-    return ("is ignored: every dispersion the scenarios draw is off, so the design flies one "
-            "exact scenario (turn one on in [monte_carlo])")
-
-
 def _failures_k(s: Settings) -> bool:
     return _dispersed(s, "monte_carlo.failures_k") and (FAILURES_K_HONOURED or not s.p)
 
@@ -306,16 +299,12 @@ RULES: dict[str, Rule] = {
     "design.success_probability": Rule(
         lambda s: s.kind.success_probability and METHODS[s.method].success_probability,
         _why_success_probability),
-    **{f"design.{k}": Rule(_p_key, _why_p) for k in ("confidence", "demonstrate", "bank_level")},
+    **{f"design.{k}": Rule(_p_key, _why_p) for k in ("confidence", "scenarios", "demonstrate",
+                                                      "bank_level")},
     "design.demonstrate_looks": Rule(
         lambda s: s.p and s.config.design.demonstrate,
         lambda s: (_why_p(s) if not s.p else "is ignored with design.demonstrate = false: one "
                    "look (design.demonstrate = true steps N up over several)")),
-    "design.scenarios": Rule(lambda s: s.scenarios, _why_exact_scenario),
-    "design.verify_samples": Rule(
-        lambda s: s.lists("design.verify_samples") and (s.scenarios or not s.p),
-        lambda s: (not_listed("design.verify_samples")(s) if not s.lists("design.verify_samples")
-                   else _why_exact_scenario(s))),
     "design.time_limit_s": Rule(_time_limit, _why_time_limit),
     "monte_carlo.samples": Rule(lambda s: s.lists("monte_carlo.samples"), _samples_why),
     "monte_carlo.attitude_start": Rule(_simulated, _closed_loop("a flight starts from it")),
