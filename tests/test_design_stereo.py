@@ -12,8 +12,6 @@ import itertools
 import numpy as np
 import pytest
 
-from campaign_copies import fitted
-
 from ideas_hpc.core.mapping.stereo_pairs import pair_index
 from ideas_hpc.design import CandidateBank
 from ideas_hpc.design.stereo import (StereoBank, greedy_stereo, max_coverage_stereo,
@@ -112,9 +110,7 @@ def test_stereo_campaign_end_to_end_flown_coverage_meets_the_design(tmp_path, er
     # need, so optimality is asserted (the time-limited branch: tests/test_time_limits.py)
     sets = ["design.angle_step_deg=12", "design.n_max=20", "design.verify_samples=0",
             "design.eps_tol_pct=5.0", "design.time_limit_s=600", "run.workers=0"]
-    # without the shipped dispersions: verify_samples = 0 flies none of them
-    ds = xr.open_zarr(run_file(fitted("eros-stereo-design.toml", sets), out=tmp_path / "s.zarr",
-                               overrides=sets))
+    ds = xr.open_zarr(run_file(campaign, out=tmp_path / "s.zarr", overrides=sets))
     assert str(ds["design_method"].values) == "exact"
     flown = float(ds["coverage"].values.ravel()[0])
     assert flown == pytest.approx(float(ds["design_coverage"]), abs=1e-12)

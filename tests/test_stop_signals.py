@@ -17,12 +17,16 @@ import xarray as xr
 from ideas_hpc.design.reliability import min_swarm_reliable
 from ideas_hpc.design.scenario_mip import BoundResult
 
+from campaign_copies import fitted
+
 ROOT = Path(__file__).resolve().parent.parent
 DESIGN = ROOT / "campaigns" / "eros-design.toml"
 SETS = ['body.name="ellipsoid"', "flyby.tf_s=60", "flyby.z_start_km=-3", "flyby.z_stop_km=3",
         "dynamics.srp=false", "design.angle_step_deg=10", 'attitude.mode="ideal"',
         "design.time_limit_s=60", "design.success_probability=0.5",
         "design.scenarios=20", "design.verify_samples=20", "design.demonstrate=false"]
+#: the main job without its demonstrate_looks, which one look (demonstrate = false) ignores
+DESIGN = fitted("eros-design.toml", SETS)
 
 # The child blocks inside the design phase (after the scenario bank is stored) until
 # the signal arrives: the test waits on that state, not on a clock.

@@ -10,7 +10,6 @@ from types import SimpleNamespace
 from typing import Callable
 
 from ideas_hpc.attitude.maneuvers import campaign_maneuver
-from ideas_hpc.campaign.schema.design_table import verify_samples
 from ideas_hpc.campaign.schema.kinds import DISPERSION_KEYS, KINDS
 from ideas_hpc.design.api.methods import METHODS
 from ideas_hpc.montecarlo.dispersions import dispersion_keys
@@ -63,10 +62,10 @@ class Settings:
 
     @property
     def samples(self) -> bool:
-        """It flies dispersed samples: its entry lists the dispersions and flies some (a
-        Monte Carlo kind, a design's verification or validation: ``verify_samples`` > 0)."""
-        return self.lists(DISPERSION_KEYS) and (self.kind.samples
-                                                or verify_samples(self.config.design) > 0)
+        """It flies dispersed samples: its entry lists the dispersions (a Monte Carlo kind,
+        a design's verification or validation; ``design.verify_samples = 0`` turns the
+        verification off, which the run says on its result line)."""
+        return self.lists(DISPERSION_KEYS)
 
     @property
     def standin(self):

@@ -67,9 +67,6 @@ def _why_dispersed(key: str) -> Callable:
     def why(s: Settings) -> str:
         if not s.lists(DISPERSION_KEYS):
             return not_listed(key)(s)
-        if not s.samples:
-            return ("is ignored: design.verify_samples = 0 turns off the Monte Carlo "
-                    "verification that flies the dispersions (set it > 0)")
         return (f"is ignored with attitude.mode = {s.config.attitude.mode!r}: only a simulated "
                 'attitude starts from a drawn state (attitude.mode = "simulated")')
     return why
