@@ -36,7 +36,7 @@ ROOT = Path(__file__).resolve().parent.parent
 @dataclass(frozen=True)
 class Mutation:
     name: str
-    area: str           # designers, statistics, store, kernels
+    area: str           # designers, statistics, store, kernels, schema
     path: str           # relative to the repository root
     old: str            # occurs exactly once in the file
     new: str
@@ -174,6 +174,24 @@ MUTATIONS: tuple[Mutation, ...] = (
       "return start, min(start + self.chunk_size, self.n_samples)",
       "return start, min(start + self.chunk_size, self.n_samples - 1)",
       ("tests/test_engine_store.py::test_chunk_plan_partitions_samples",)),
+    # ---- schema: the keys each kind reads (issue 41)
+    M("reads_declaration_dropped", "schema", "ideas_hpc/campaign/schema/kinds.py",
+      'COVER + ("design.failures_tolerated", "design.verify_samples",',
+      'COVER + ("design.verify_samples",',
+      ("tests/test_key_reads_runs.py::test_what_a_run_reads_is_what_its_kind_declares[flyby]",)),
+    M("reads_declaration_misses_a_read_key", "schema", "ideas_hpc/campaign/schema/kinds.py",
+      'reads=("monte_carlo.samples", DISPERSION_KEYS, "design.eps_tol_pct", "run.chunk_size",',
+      'reads=("monte_carlo.samples", DISPERSION_KEYS, "run.chunk_size",',
+      ("tests/test_key_reads_runs.py::test_what_a_run_reads_is_what_its_kind_declares"
+       "[monte-carlo]",)),
+    M("failures_k_accepted_in_a_success_probability_design", "schema",
+      "ideas_hpc/campaign/schema/reads.py",
+      "and (FAILURES_K_HONOURED or not s.p)", "",
+      ("tests/test_key_reads.py::test_failures_k_in_a_success_probability_design_is_one_switch",)),
+    M("reads_judged_only_for_store_configs", "schema",
+      "ideas_hpc/campaign/schema/campaign_tables.py",
+      "if not source.resolved:", "if source.resolved:",
+      ("tests/test_key_reads.py::test_a_stores_resolved_config_is_not_judged",)),
 )
 
 

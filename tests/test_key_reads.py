@@ -230,7 +230,10 @@ def test_a_refusal_names_the_kind_the_setting_and_who_reads_it(tmp_path):
 
 
 def test_failures_k_in_a_success_probability_design_is_one_switch(monkeypatch):
+    """Refused with one line until the design's failure model flies exactly k failures;
+    then one declaration (``reads.FAILURES_K_HONOURED``) lets it through."""
     sets = ["monte_carlo.failures_k=1", 'body.name="ellipsoid"']
+    monkeypatch.setattr(reads, "FAILURES_K_HONOURED", False)
     with pytest.raises(InputError) as exc:
         load(CAMPAIGNS / "eros-design.toml", sets)
     assert exc.value.field == "monte_carlo.failures_k"
