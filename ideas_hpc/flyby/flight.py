@@ -41,6 +41,11 @@ from ideas_hpc.dynamics.trajectory import (TargetingError, TargetingResult, prop
                                            sun_direction_T)
 
 
+#: ``FlybySetup.attitude_mode`` (``attitude.mode``): the camera on its reference, or the
+#: closed loop (reaction wheels, sliding mode) flown.
+ATTITUDE_MODES = ("ideal", "simulated")
+
+
 @dataclass(frozen=True)
 class FlybySetup:
     """Everything a flyby needs, resolved to SI once (picklable, sent to workers).

@@ -82,6 +82,7 @@ from ideas_hpc.campaign.schema.instrument_table import INSTRUMENT
 from ideas_hpc.campaign.schema.model_fields import (COVERAGE_FIELDS, GAINS_FIELDS, SPACECRAFT_FIELDS,
                                            STORED_NAMES, flyby_errors, stored_fields)
 from ideas_hpc.campaign.schema.kinds import KINDS as REGISTRY
+from ideas_hpc.flyby.flight import ATTITUDE_MODES
 from ideas_hpc.campaign.schema.reads import check_reads
 from ideas_hpc.campaign.schema.design_table import DESIGN, MC_SCHEMA, reliability_checks, verify_samples
 
@@ -123,7 +124,7 @@ SWARM = {
 }
 
 ATTITUDE = {
-    "mode": Field("str", "ideal", choices=("ideal", "simulated")),
+    "mode": Field("str", "ideal", choices=ATTITUDE_MODES),
     "maneuver": Field("str", "nadir", choices=CAMPAIGN_NAMES),
     "decimate": Field("int", 10, lo=1),
     "theta_max_deg": Field("float", None, nullable=True, si="theta_max_rad",

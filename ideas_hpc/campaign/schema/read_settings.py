@@ -6,7 +6,6 @@ campaign reads (:class:`Settings`: its typed config and its kind's registry entr
 from __future__ import annotations
 
 from dataclasses import dataclass
-from types import SimpleNamespace
 from typing import Callable
 
 from ideas_hpc.attitude.maneuvers import campaign_maneuver
@@ -67,14 +66,10 @@ class Settings:
         verification off, which the run says on its result line)."""
         return self.lists(DISPERSION_KEYS)
 
-    @property
-    def standin(self):
-        """What a dispersion's ``active`` / ``applies`` read of a setup (its attitude mode)."""
-        return SimpleNamespace(attitude_mode=self.config.attitude.mode)
-
 
 def expand(keys) -> frozenset:
-    """``keys`` with :data:`DISPERSION_KEYS` replaced by every dispersion's keys (live)."""
+    """``keys`` with every dispersion's keys (live) where :data:`DISPERSION_KEYS` is among
+    them (the marker stays: ``Settings.lists(DISPERSION_KEYS)``)."""
     out = set(keys)
     if DISPERSION_KEYS in out:
         out |= {f"monte_carlo.{k}" for k in dispersion_keys()}

@@ -20,8 +20,8 @@ Two declarations decide:
 
 Any other key is read by every kind (the body, the instrument's sizing, the flyby's
 geometry, ``[dynamics]``, ``[coverage]``...). ``tests/test_key_reads.py`` loads every
-kind with every key, and records which config fields small real runs of every kind
-read, against this declaration.
+kind with every key; ``tests/test_key_reads_runs.py`` records which config fields small
+real runs of every kind read, against this declaration.
 
 ``monte_carlo.failures_k`` in a success-probability design is refused while
 :data:`FAILURES_K_HONOURED` is False: that design's failure model loses each
@@ -30,6 +30,7 @@ spacecraft independently with ``monte_carlo.failure_probability``.
 
 from __future__ import annotations
 
+from types import SimpleNamespace
 from typing import Callable
 
 from ideas_hpc.attitude.maneuvers import MANEUVERS
@@ -41,35 +42,59 @@ from ideas_hpc.campaign.schema.read_settings import (Rule, Settings, entry_name,
                                                      readers, set_keys)
 from ideas_hpc.design.api.methods import METHODS
 from ideas_hpc.design.pareto.objectives import check_objectives
-from ideas_hpc.montecarlo.dispersions import DISPERSIONS, dispersion_keys
+from ideas_hpc.flyby.flight import ATTITUDE_MODES
+from ideas_hpc.montecarlo import dispersions
+from ideas_hpc.montecarlo.dispersions import dispersion_keys
 
 #: The success-probability design flies exactly ``monte_carlo.failures_k`` failures.
 #: False until its failure model does (the one switch: the rule below reads it).
 FAILURES_K_HONOURED = False
 
 
-def _dispersed(s: Settings, key: str) -> bool:
-    """The dispersion of ``monte_carlo.<name>`` is flown: the entry lists the dispersions,
-    flies samples, and the dispersion applies to this attitude mode (``Dispersion.applies``)."""
-    if not s.samples:
-        return False
+def _applies(d, mode: str) -> bool:
+    """``Dispersion.applies`` for a flight of attitude mode ``mode`` (what it reads of a
+    setup); one that reads more of a setup is taken to apply."""
+    try:
+        return d.applies is None or bool(d.applies(SimpleNamespace(attitude_mode=mode)))
+    except AttributeError:
+        return True
+
+
+def _dispersion(key: str):
     name = key.partition(".")[2]
-    for d in DISPERSIONS:
-        if name in dict(d.keys) and d.applies is not None:
-            try:
-                return bool(d.applies(s.standin))
-            except AttributeError:      # it reads more of a setup than the attitude mode
-                return True
-    return True
+    return next(d for d in dispersions.DISPERSIONS if name in dict(d.keys))   # live
+
+
+def _dispersed(s: Settings, key: str) -> bool:
+    """The dispersion of ``monte_carlo.<name>`` is flown: the entry that runs lists the
+    dispersions and the dispersion applies to the campaign's attitude mode."""
+    return s.samples and _applies(_dispersion(key), s.config.attitude.mode)
 
 
 def _why_dispersed(key: str) -> Callable:
     def why(s: Settings) -> str:
         if not s.lists(DISPERSION_KEYS):
             return not_listed(key)(s)
-        return (f"is ignored with attitude.mode = {s.config.attitude.mode!r}: only a simulated "
-                'attitude starts from a drawn state (attitude.mode = "simulated")')
+        d = _dispersion(key)
+        modes = " or ".join(f'"{m}"' for m in ATTITUDE_MODES if _applies(d, m))
+        return (f"is ignored with attitude.mode = {s.config.attitude.mode!r}: the flights apply "
+                f"the {d.name!r} dispersion with attitude.mode = {modes} only")
     return why
+
+
+def _attitude_draw(key: str, start: str, what: str) -> Rule:
+    """A key of the attitude draw that one ``monte_carlo.attitude_start`` reads, with
+    ``attitude_dispersion = true``."""
+    def when(s: Settings) -> bool:
+        mc = s.config.monte_carlo
+        return _dispersed(s, key) and mc.attitude_dispersion and mc.attitude_start == start
+
+    def why(s: Settings) -> str:
+        if not _dispersed(s, key):
+            return _why_dispersed(key)(s)
+        return (f"is ignored: it is {what} of monte_carlo.attitude_start = \"{start}\" with "
+                "attitude_dispersion = true")
+    return Rule(when, why)
 
 
 def _sweeping() -> str:
@@ -183,13 +208,10 @@ def _p_key(s: Settings) -> bool:
 
 
 def _why_p(s: Settings) -> str:
-    return ("needs design.success_probability (it is read by the success-probability design, "
-            f"{' or '.join(n for n in readers_p())})")
-
-
-def readers_p() -> list[str]:
-    return [entry_name(k, m) for k in KINDS.values() if k.success_probability
+    able = [entry_name(k, m) for k in KINDS.values() if k.success_probability
             for m in METHODS if METHODS[m].success_probability]
+    return ("needs design.success_probability (it is read by the success-probability design, "
+            f"{' or '.join(able)})")
 
 
 def _why_success_probability(s: Settings) -> str:
@@ -251,9 +273,9 @@ def _always(s: Settings) -> bool:
     return True
 
 
-def _encounter_rule(key: str) -> Rule:
-    return Rule(lambda s: not _paper(s),
-                lambda s: 'is an encounter key: set flyby.geometry = "encounter"')
+#: A key of an encounter (:mod:`~ideas_hpc.campaign.schema.encounter_table`).
+ENCOUNTER_KEY = Rule(lambda s: not _paper(s),
+                     lambda s: 'is an encounter key: set flyby.geometry = "encounter"')
 
 
 #: Conditions on other settings (module docstring); a key not here and listed by no kind
@@ -277,7 +299,7 @@ RULES: dict[str, Rule] = {
                    '(flyby.configuration = "helix")' if _paper(s) else _why_encounter_window(s))),
     **{f"flyby.{k}": Rule(_paper, _why_encounter_window) for k in ("tf_s", "z_start_km",
                                                                    "z_stop_km")},
-    **{f"flyby.{k}": _encounter_rule(k) for k in ENCOUNTER if k != "geometry"},
+    **{f"flyby.{k}": ENCOUNTER_KEY for k in ENCOUNTER if k != "geometry"},
     **{f"instrument.{k}": Rule(_imaging, _why_imaging)
        for k in ("pixels_across", "exposure_ms", "smear_pixels", "settle_deg")},
     "swarm.angles_rad": Rule(_angles_read, _why_angles),
@@ -306,22 +328,12 @@ RULES: dict[str, Rule] = {
     "monte_carlo.samples": Rule(lambda s: s.lists("monte_carlo.samples"), _samples_why),
     "monte_carlo.attitude_start": Rule(_simulated, _closed_loop("a flight starts from it")),
     "monte_carlo.failures_k": Rule(_failures_k, _why_failures_k),
-    "monte_carlo.acquisition_s": Rule(
-        lambda s: (_dispersed(s, "monte_carlo.acquisition_s")
-                   and s.config.monte_carlo.attitude_start == "acquisition"
-                   and s.config.monte_carlo.attitude_dispersion),
-        lambda s: (_why_dispersed("monte_carlo.acquisition_s")(s)
-                   if not _dispersed(s, "monte_carlo.acquisition_s") else
-                   'is ignored: it is the acquisition phase of monte_carlo.attitude_start = '
-                   '"acquisition" with attitude_dispersion = true')),
-    **{f"monte_carlo.{k}": Rule(
-        lambda s, k=k: (_dispersed(s, f"monte_carlo.{k}") and s.config.monte_carlo.attitude_dispersion
-                        and s.config.monte_carlo.attitude_start == "reference"),
-        lambda s, k=k: (_why_dispersed(f"monte_carlo.{k}")(s)
-                        if not _dispersed(s, f"monte_carlo.{k}") else
-                        'is ignored: it is the error about the reference of monte_carlo.'
-                        'attitude_start = "reference" with attitude_dispersion = true'))
-       for k in ("sigma_attitude_deg", "sigma_rate_rad_s")},
+    "monte_carlo.acquisition_s": _attitude_draw("monte_carlo.acquisition_s", "acquisition",
+                                                "the acquisition phase"),
+    "monte_carlo.sigma_attitude_deg": _attitude_draw("monte_carlo.sigma_attitude_deg",
+                                                     "reference", "the error about the reference"),
+    "monte_carlo.sigma_rate_rad_s": _attitude_draw("monte_carlo.sigma_rate_rad_s", "reference",
+                                                   "the error about the reference"),
     "run.device": Rule(_simulated, _closed_loop("the device flies the attitude")),
     "controller": Rule(_simulated, _closed_loop("the controller's gains act")),
     "torques": Rule(_simulated, _closed_loop("disturbance torques act")),
