@@ -17,8 +17,8 @@ from ideas_hpc.montecarlo.dispersions import dispersion_keys
 @dataclass(frozen=True)
 class Rule:
     """When a key is read: ``when(s)`` (``s``: :class:`Settings`) is true; else ``why(s)``
-    is the refusal's message (after ``KEY: ``), which names the setting that ignores
-    the key and the one that would read it."""
+    is the refusal's message (after the file, line and key), which names the setting
+    that ignores the key and the one that would read it."""
 
     when: Callable
     why: Callable
