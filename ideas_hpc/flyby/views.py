@@ -218,7 +218,7 @@ def flight_views(setup, theta, periods, r0_T, v0_T, pert, *, world: World | None
 
 def _positions(flown, world, r0, v0, buffers):
     """Positions at the images (N, n_img, 3) m, into ``buffers["r"]`` when given."""
-    shape = (np.shape(r0)[0], flown.image_times.size, 3)
+    shape = (np.shape(r0)[0], _loop.image_times(flown).size, 3)
     if buffers is None:
         out = np.empty(shape)
     else:

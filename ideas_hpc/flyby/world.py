@@ -49,8 +49,9 @@ from ideas_hpc.dynamics.trajectory import sun_direction_T
 from ideas_hpc.flyby.encounter import Encounter
 
 #: Per-world statics kept per process (:func:`cached_static`); the least recently used
-#: go first.
-STATICS_KEPT = 16
+#: go first. Few: one entry can be large (720 candidates' ideal cameras at 601 images
+#: are 31 MB), and a bank's scenarios on one body share theirs.
+STATICS_KEPT = 6
 _STATICS: OrderedDict = OrderedDict()
 _LOCK = threading.Lock()
 #: ``id(shape) -> (shape, digest)``: a mesh is hashed once per process.
@@ -188,7 +189,7 @@ def shape_digest(shape) -> str:
         return got[1]
     d = hashlib.sha256(np.ascontiguousarray(shape.vertices_T).tobytes()
                        + np.ascontiguousarray(shape.faces).tobytes()).hexdigest()
-    if len(_SHAPE_DIGESTS) >= STATICS_KEPT:
+    if len(_SHAPE_DIGESTS) >= 16:
         _SHAPE_DIGESTS.pop(next(iter(_SHAPE_DIGESTS)))
     _SHAPE_DIGESTS[id(shape)] = (shape, d)
     return d
