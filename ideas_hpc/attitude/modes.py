@@ -105,21 +105,21 @@ ATTITUDE_STARTS: dict[str, AttitudeStart] = {s.name: s for s in (
 def attitude_mode(name: str) -> AttitudeMode:
     """The registered :class:`AttitudeMode` called ``name``; else an ``InputError``
     naming ``attitude_mode``."""
-    try:
-        return ATTITUDE_MODES[name]
-    except (KeyError, TypeError):
-        raise InputError(f"must be one of {', '.join(ATTITUDE_MODES)}, got {name!r}",
-                         field="attitude_mode") from None
+    return _entry(ATTITUDE_MODES, name, "attitude_mode")
 
 
 def attitude_start(name: str) -> AttitudeStart:
     """The registered :class:`AttitudeStart` called ``name``; else an ``InputError``
     naming ``attitude_start``."""
+    return _entry(ATTITUDE_STARTS, name, "attitude_start")
+
+
+def _entry(registry: dict, name, field: str):
     try:
-        return ATTITUDE_STARTS[name]
+        return registry[name]
     except (KeyError, TypeError):
-        raise InputError(f"must be one of {', '.join(ATTITUDE_STARTS)}, got {name!r}",
-                         field="attitude_start") from None
+        raise InputError(f"must be one of {', '.join(registry)}, got {name!r}",
+                         field=field) from None
 
 
 def perfect_tracking() -> str:
