@@ -31,7 +31,7 @@ from ideas_hpc.core.mapping.coverage import first_image_by_spacecraft
 from ideas_hpc.core.mapping.scenario_proofs import BC_ANY, windows, witness_proofs
 from ideas_hpc.flyby.flight import FlybySetup, Perturbation
 from ideas_hpc.flyby.views import FlightPlan, flight_views
-from ideas_hpc.flyby.world import World
+from ideas_hpc.flyby.world import World, cached_static
 from ideas_hpc.core.mapping.records import Nominal
 from ideas_hpc.mapping.coverage import camera_record, check_geometry, mesh_record, strict_records
 
@@ -97,18 +97,18 @@ class RowEngine:
         return self._cached()["flight"]
 
     def _static(self):
-        """The kernels' records of the nominal flight, validated once per process."""
+        """The kernels' records of the nominal flight, validated once per process; the
+        mesh, its BVH and the lighting are the nominal world's (kept per world)."""
         got = self._cached()
         if "records" not in got:
             setup = self.setup
             shape = setup.body.shape
             r, c, tan_eta, near, far, _ = check_geometry(shape, *got["flight"], setup.eta_rad,
                                                          setup.near_m, setup.far_m)
-            opts, bvh = strict_records(shape, setup.coverage,
-                                       setup.world.sun_at_images(setup), r.shape[1])
+            mesh, opts, bvh = world_records(setup, setup.world, r.shape[1])
             cam = camera_record(r, c, np.zeros(r.shape[1]), tan_eta, near, far,
                                 setup.coverage.mode == "exact")
-            got["records"] = (mesh_record(shape), cam, opts, bvh)
+            got["records"] = (mesh, cam, opts, bvh)
         return got["records"]
 
     def prepare(self, pilot: Perturbation | None) -> "RowEngine":
@@ -190,6 +190,17 @@ class RowEngine:
 
     def _full(self, r_img, dcm, world: World | None = None) -> np.ndarray:
         return full_rows_of(self.setup, world, r_img, dcm)
+
+
+def world_records(setup: FlybySetup, world: World, n_img: int) -> tuple:
+    """``(Mesh, Strict, Bvh)`` of ``world``'s shape and Sun at ``setup``'s images for its
+    coverage options: per-world statics (:func:`ideas_hpc.flyby.world.cached_static`)."""
+    def build():
+        opts, bvh = strict_records(world.shape, setup.coverage, world.sun_at_images(setup),
+                                   n_img)
+        return mesh_record(world.shape), opts, bvh
+    return cached_static(("mapping", setup.flight_key, world.mapping_key(setup), int(n_img)),
+                         build)
 
 
 def _down32(x: np.ndarray) -> np.ndarray:
