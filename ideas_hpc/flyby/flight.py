@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import sys
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 
@@ -133,8 +134,11 @@ class FlybySetup:
         """A digest of everything but the world (body, force model, epoch, encounter):
         the key of the per-world statics this setup prepares
         (:func:`ideas_hpc.flyby.world.cached_static`)."""
-        own = [(f.name, repr(getattr(self, f.name))) for f in dataclasses.fields(self)
-               if f.name not in _WORLD_FIELDS]
+        # every float exactly (arrays of the spacecraft, the gains): two setups that differ
+        # anywhere never share a key
+        with np.printoptions(floatmode="unique", threshold=sys.maxsize):
+            own = [(f.name, repr(getattr(self, f.name))) for f in dataclasses.fields(self)
+                   if f.name not in _WORLD_FIELDS]
         return hashlib.sha1(repr(own).encode()).hexdigest()
 
     def sun_T(self, times=None, epoch=None) -> np.ndarray:
