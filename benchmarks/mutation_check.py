@@ -75,6 +75,18 @@ MUTATIONS: tuple[Mutation, ...] = (
     M("device_not_passed_to_flights", "kernels", "ideas_hpc/flyby/camera.py",
       'device=getattr(setup, "device", "cpu")', 'device="cpu"',
       ("tests/test_bank_cuda.py::test_cuda_kernel_and_bank_rows_match_the_cpu_under_the_simulator",)),
+    # ---- the world a flight flies through (issue 40)
+    M("world_sun_ignores_its_pole", "kernels", "ideas_hpc/flyby/world.py",
+      "return sun_direction_T(self.params, self.epoch_s", "return sun_direction_T(self.body.params, self.epoch_s",
+      ("tests/test_world.py::test_the_sun_of_a_world_follows_its_pole",)),
+    M("world_statics_keyed_without_spin", "kernels", "ideas_hpc/flyby/world.py",
+      "return (self.spin_rate_rad_s, repr(self.encounter), float(self.shape.r_max))",
+      "return (repr(self.encounter), float(self.shape.r_max))",
+      ("tests/test_world.py::test_a_world_flies_what_a_body_with_its_parameters_flies",)),
+    M("rows_ignore_the_worlds_sun", "kernels", "ideas_hpc/montecarlo/scenario_rows.py",
+      "if world is not None and (world.mapping_key(self.setup)",
+      "if False and (world.mapping_key(self.setup)",
+      ("tests/test_recipes.py::test_recipe_world_dispersion_the_pole",)),
     # ---- designers
     M("ring_bound_optimistic_single", "designers", "ideas_hpc/core/design/ring_gaps.py",
       "tot[1, s] = M[s, K]", "tot[1, s] = 0.5 * M[s, K]",

@@ -30,6 +30,7 @@ from typing import Callable
 import numpy as np
 
 from ideas_hpc.attitude import draw_initial_conditions
+from ideas_hpc.attitude.modes import ATTITUDE_STARTS, attitude_start
 from ideas_hpc.core.attitude.mrp import mrp_from_prv
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.base.fields import Field
@@ -111,8 +112,8 @@ class Dispersion:
 #: Where a dispersion acts: the whole body, or each spacecraft.
 LEVELS = ("body", "spacecraft")
 
-#: ``[monte_carlo] attitude_start`` choices (docs/attitude-start.md).
-ATTITUDE_STARTS = ("reference", "acquisition", "paper")
+#: ``[monte_carlo] attitude_start`` choices (docs/attitude-start.md): the registry
+#: :data:`ideas_hpc.attitude.modes.ATTITUDE_STARTS`, read live.
 
 
 def _attitude(rng, n, mc, setup, theta):
@@ -124,10 +125,11 @@ def _attitude(rng, n, mc, setup, theta):
 def attitude_draw(rng, n: int, mc) -> dict:
     """The initial attitude of ``n`` spacecraft from ``rng`` (SPEC section 7d).
 
-    ``attitude_start = "paper"`` and ``"acquisition"``: the paper's random state
+    A start with ``random_state`` (``attitude_start = "paper"`` and ``"acquisition"``):
+    the paper's random state
     (:func:`ideas_hpc.attitude.draw_initial_conditions`: ``sigma_BN``, ``omega_BN_B``,
     wheels), flown from t0 ("paper") or for ``acquisition_s`` before the window.
-    ``"reference"``: the errors about the reference of the geometry flown, a
+    Otherwise (``"reference"``): the errors about the reference of the geometry flown, a
     rotation of normal angle ``sigma_attitude_rad`` per axis (as an MRP
     ``sigma_B/R``) and a rate error of ``sigma_rate_rad_s`` per axis
     (``omega_B/R``, B), wheels at rest. ``attitude_dispersion = false``: no draw,
@@ -136,7 +138,7 @@ def attitude_draw(rng, n: int, mc) -> dict:
     if not mc.attitude_dispersion:
         z = np.zeros((n, 3))
         return {"sigma0": z, "omega0": z.copy(), "wheel0": z.copy()}
-    if mc.attitude_start == "reference":
+    if not attitude_start(mc.attitude_start).random_state:
         prv = mc.sigma_attitude_rad * rng.standard_normal((n, 3))
         w = mc.sigma_rate_rad_s * rng.standard_normal((n, 3))
         return {"sigma0": np.stack([mrp_from_prv(np.ascontiguousarray(v)) for v in prv])
@@ -147,18 +149,27 @@ def attitude_draw(rng, n: int, mc) -> dict:
 
 def attitude_perturbation(mc, v: dict) -> dict:
     """:class:`~ideas_hpc.flyby.flight.Perturbation` keywords of an attitude draw ``v``:
-    absolute (``ics``, with ``acquisition_s``) for the random starts, relative to the
-    reference flown (``ics_reference``) otherwise."""
+    absolute (``ics``, with ``acquisition_s`` for a start with ``acquisition``) for the
+    random starts, relative to the reference flown (``ics_reference``) otherwise."""
     ics = (v["sigma0"], v["omega0"], v["wheel0"])
-    if not mc.attitude_dispersion or mc.attitude_start == "reference":
+    start = attitude_start(mc.attitude_start)
+    if not mc.attitude_dispersion or not start.random_state:
         return {"ics_reference": ics}
-    if mc.attitude_start == "acquisition":
+    if start.acquisition:
         return {"ics": ics, "acquisition_s": float(mc.acquisition_s)}
     return {"ics": ics}
 
 
+def _attitude_active(mc, setup) -> bool:
+    """A closed loop whose start draws anything: a random state, or errors about the
+    reference with a non-zero sigma."""
+    return (setup.attitude.closed_loop and mc.attitude_dispersion
+            and (attitude_start(mc.attitude_start).random_state
+                 or mc.sigma_attitude_rad != 0 or mc.sigma_rate_rad_s != 0))
+
+
 def _check_attitude(mc):
-    if mc.attitude_start == "acquisition" and mc.attitude_dispersion and \
+    if attitude_start(mc.attitude_start).acquisition and mc.attitude_dispersion and \
             not mc.acquisition_s > 0.0:
         raise InputError("must be > 0 s with `attitude_start = \"acquisition\"`",
                          field="acquisition_s")
@@ -235,11 +246,7 @@ DISPERSIONS: tuple[Dispersion, ...] = (
                      ("sigma_rate_rad_s", Field("float", 5e-5, lo=0, hi=0.1,
                                                 doc="1-sigma rate error per axis, rad/s"))),
                check=_check_attitude, level="spacecraft", reads_mc=True,
-               active=lambda mc, setup: setup.attitude_mode == "simulated"
-               and mc.attitude_dispersion and not (mc.attitude_start == "reference" and
-                                                   mc.sigma_attitude_rad == 0 and
-                                                   mc.sigma_rate_rad_s == 0),
-               applies=lambda setup: setup.attitude_mode == "simulated"),
+               active=_attitude_active, applies=lambda setup: setup.attitude.closed_loop),
     Dispersion("gravity", _gravity,
                lambda v: {"params_override": {"mu": v["mu"], "c20": v["c20"], "c22": v["c22"]}},
                (StoreVar("c20", (), np.float64, "m^2", "C20 (dispersed)"),

@@ -12,8 +12,10 @@ the whole candidate grid; each entry of
 
 Entries with ``designer="exact"`` (failures) are not drawn: the designer
 handles them exactly. Every candidate is
-targeted once on the nominal model and flown open loop through each scenario
-(:func:`ideas_hpc.flyby.flight.open_loop_views`); its row is what it sees, or with a
+targeted once on the nominal model and flown open loop through each scenario's
+world (:class:`~ideas_hpc.flyby.world.World`: the nominal one with the scenario's
+body-level draws) by the one flight path
+(:func:`ideas_hpc.flyby.views.flight_views`); its row is what it sees, or with a
 ``[coverage]`` requirement what it maps (:func:`ideas_hpc.design.candidates.rows_from_views`).
 Members fly independently, so a swarm's coverage in scenario ``s`` is the union
 of its members' rows ``rows[s, members]``.
@@ -113,7 +115,7 @@ def _rows_chunk(ks, *, engine: RowEngine, mc, seed, stream):
     out = np.empty((len(ks), engine.theta.size, setup.body.shape.n_vertices), dtype=bool)
     for i, k in enumerate(ks):
         pert = Perturbation(**draw_world(mc, setup, engine.theta, seed, stream, int(k)))
-        out[i] = engine.rows(*engine.flight(pert, reuse=True))
+        out[i] = engine.scenario_rows(pert, reuse=True)
     return out
 
 

@@ -67,6 +67,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ideas_hpc.attitude.maneuvers import CAMPAIGN_NAMES, campaign_maneuver
+from ideas_hpc.attitude.modes import ATTITUDE_MODES
 from ideas_hpc.campaign.schema.toml_file import CampaignSource, load_campaign
 from ideas_hpc.design.pareto.objectives import check_objectives
 from ideas_hpc.base.errors import InputError, config_fields
@@ -122,7 +123,7 @@ SWARM = {
 }
 
 ATTITUDE = {
-    "mode": Field("str", "ideal", choices=("ideal", "simulated")),
+    "mode": Field("str", "ideal", choices=ATTITUDE_MODES),
     "maneuver": Field("str", "nadir", choices=CAMPAIGN_NAMES),
     "decimate": Field("int", 10, lo=1),
     "theta_max_deg": Field("float", None, nullable=True, si="theta_max_rad",
