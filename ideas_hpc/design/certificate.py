@@ -138,7 +138,7 @@ class Certificate:
 
 def certify(n_bank: int, best_of: Callable, validate: Callable, plan: LookPlan | None = None,
             *, bound: Callable = lower_confidence_bound, values_of: Callable | None = None,
-            rng=None, samples_max: int | None = None, **keywords) -> Certificate:
+            rng=None, **keywords) -> Certificate:
     """Run the looks of the module docstring.
 
     ``plan`` (:class:`~ideas_hpc.design.settings.LookPlan`) holds ``p``,
@@ -178,7 +178,8 @@ def certify(n_bank: int, best_of: Callable, validate: Callable, plan: LookPlan |
         The plan's resampling (with ``values_of``).
     samples_max : int, optional
         With ``values_of``: the most samples one look may take (the plan doubles a look's M
-        from ``n_samples`` toward its target power, :func:`~ideas_hpc.design.look_plan.plan_looks`).
+        from ``n_samples`` toward its target power, :func:`~ideas_hpc.design.look_plan.plan_looks`;
+        a :class:`LookPlan` field).
     """
     plan = plan if plan is not None else LookPlan(**keywords)
     p, confidence, n_max, n_samples = plan.p, plan.confidence, plan.n_max, plan.n_samples
@@ -186,10 +187,9 @@ def certify(n_bank: int, best_of: Callable, validate: Callable, plan: LookPlan |
     k = planned_looks(demonstrate, n_bank, n_max, max_looks, exact)
     schedule = None
     if demonstrate and not exact and values_of is not None:
-        schedule = plan_looks(int(n_bank), best_of, values_of, p=p, confidence=confidence,
-                              n_max=n_max, samples=n_samples, max_looks=k,
-                              rng=rng if rng is not None else np.random.default_rng(0),
-                              bound=bound, samples_max=samples_max)
+        schedule = plan_looks(int(n_bank), best_of, values_of, plan,
+                              rng if rng is not None else np.random.default_rng(0),
+                              max_looks=k, bound=bound)
     # every swarm a look may fly is fixed before the first look: no choice waits on
     # (or times itself against) a validation flight
     if schedule is not None and schedule.looks:

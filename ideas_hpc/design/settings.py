@@ -63,7 +63,9 @@ class LookPlan:
     """The looks of :func:`~ideas_hpc.design.certificate.certify`: requirement ``p``
     and overall ``confidence``; ``n_max`` the largest swarm; ``n_samples`` (M)
     validation samples per look; ``demonstrate`` steps N up while the bound
-    misses p, in at most ``max_looks`` looks; ``exact``: one exact scenario."""
+    misses p, in at most ``max_looks`` looks; ``exact``: one exact scenario;
+    ``samples_max``: the most samples the look plan may give one look
+    (:func:`~ideas_hpc.design.look_plan.plan_looks`; None: ``n_samples`` each)."""
 
     p: float
     confidence: float
@@ -72,3 +74,4 @@ class LookPlan:
     demonstrate: bool
     max_looks: int = DEFAULT_LOOKS
     exact: bool = False
+    samples_max: int | None = None
