@@ -2,7 +2,7 @@
 
 :func:`failure_upper_bound`: the proven upper bound on the probability of any
 swarm of ``N`` from upper bounds ``U_m`` on the fraction of scenarios an
-``m``-swarm reaches with no failure.
+``m``-swarm reaches with no failure (its sum lives in :mod:`ideas_hpc.failures.sums`).
 
 :func:`lower_confidence_bound`: a one-sided lower confidence bound on the mean
 of independent values in [0, 1] (the per-sample failure-weighted success
@@ -24,21 +24,16 @@ import math
 import numpy as np
 
 from ideas_hpc.base.errors import InputError
+from ideas_hpc.failures.sums import level_bound
 
 
-def failure_upper_bound(n: int, u_bar, p_f: float) -> float:
-    """``sum_j C(n, j) p_f^j (1 - p_f)^(n - j) U_{n-j}``, an upper bound on any n-swarm's P.
-
-    With failure set ``F`` (``|F| = j``) the survivors form an ``(n - j)``-swarm,
-    which reaches at most the fraction ``U_{n-j}`` of the scenarios; averaging
-    over the independent failures gives the bound. ``u_bar[m]`` bounds
-    ``U_m`` (``u_bar[0] = 0``: no survivor maps nothing).
+def failure_upper_bound(n: int, u_bar, p_f) -> float:
+    """``sum_j P(j lost) U_{n-j}`` (``C(n, j) p_f^j (1 - p_f)^(n - j)`` for independent
+    failures), an upper bound on any n-swarm's P: :func:`ideas_hpc.failures.sums.level_bound`,
+    whose docstring has the argument. ``p_f``: a bare probability or a
+    :class:`~ideas_hpc.failures.model.FailureModel`.
     """
-    u = np.asarray(u_bar, dtype=np.float64)
-    total = 0.0
-    for j in range(n + 1):
-        total += math.comb(n, j) * p_f ** j * (1.0 - p_f) ** (n - j) * u[n - j]
-    return min(1.0, total)
+    return level_bound(int(n), np.asarray(u_bar, dtype=np.float64), p_f)
 
 
 def hoeffding_lower_bound(x, confidence: float) -> float:

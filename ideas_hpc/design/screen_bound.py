@@ -5,6 +5,11 @@ For a swarm X of n members, failures independent with probability ``p_f``,
 
     P(X) = q^n U(X) + p_f q^(n-1) sum_i U(X - x_i) + sum_{j>=2} (j failures)
 
+(any failure model, issue 41: ``q^n`` and ``p_f q^(n-1)`` become the envelope weights
+``env_n``, ``env_{n-1}`` of the upper model and the binomial sums its counts,
+:func:`ideas_hpc.failures.sums.screen_terms`; exact for an exchangeable model, and an
+upper bound set by set otherwise, so every step below holds)
+
 where ``U(T)`` is the fraction of scenarios the survivors T cover. Bound the
 first and last parts by ``Ubar_n`` and ``Ubar_{n-j}`` (the level bound of
 :mod:`ideas_hpc.design.reliability`). Then X reaches p only if
@@ -16,7 +21,7 @@ scenarios. Those (n - 1)-swarms are *screened* by the ring-gap relaxation over
 all scenarios at once (:func:`ideas_hpc.core.design.ring_screen.screen_swarms`:
 per scenario it never undercounts). Every X that could reach p is therefore
 one of them plus one member. Each such X is scored by the relaxed probability
-(:func:`~ideas_hpc.core.design.ring_screen.relaxed_probabilities`, never below
+(:func:`~ideas_hpc.core.design.ring_screen.relaxed_weighted`, never below
 the exact one), and those at or above p by the exact ``P_bank``:
 
 * an X with exact ``P_bank >= p`` is a swarm of n that meets p (the search);
@@ -43,7 +48,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ideas_hpc.core.design.ring_screen import relaxed_probabilities, screen_swarms
+from ideas_hpc.core.design.ring_screen import relaxed_weighted, screen_swarms
+from ideas_hpc.failures.sums import count_envelope, screen_terms
 
 #: Most (n - 1)-swarms the screen lists before it gives up the proof.
 SCREEN_CAP = 4000
@@ -138,8 +144,10 @@ def screen_size(mt, slack, ev, n: int, p: float, p_f: float, u_bar: list, m: int
         Exact ``P_bank``.
     n : int
         Swarm size (>= 2).
-    p, p_f : float
-        Level and failure probability.
+    p : float
+        Level.
+    p_f : float or FailureModel
+        Failure probability, or the failure model (:mod:`ideas_hpc.failures`).
     u_bar : list
         ``u_bar[k]`` proven bounds on ``U_k``, k = 0 .. n.
     m : int
@@ -148,10 +156,7 @@ def screen_size(mt, slack, ev, n: int, p: float, p_f: float, u_bar: list, m: int
         False once the design's time is up (checked between the exact batches).
     """
     k_n, _, s_n = mt.shape
-    q = 1.0 - p_f
-    rest = sum(math.comb(n, j) * p_f ** j * q ** (n - j) * u_bar[n - j] for j in range(2, n + 1))
-    base = q ** n * u_bar[n] + rest
-    one = p_f * q ** (n - 1)
+    base, one = screen_terms(n, u_bar, p_f)
     r = (p - base) / one
     none = ScreenOutcome(n=n, proven_short=False, swarm=None, probability=0.0, upper=1.0,
                          screened=0, checked=0)
@@ -174,18 +179,20 @@ def screen_size(mt, slack, ev, n: int, p: float, p_f: float, u_bar: list, m: int
         top = np.flatnonzero(counts == counts.max())
         pool = found[top[np.linspace(0, top.size - 1, min(SEARCH_POOL, top.size)).astype(int)]]
     xs = _extensions(pool, k_n, int(m))
-    relaxed = relaxed_probabilities(mt, sl, np.ascontiguousarray(xs), float(p_f)) \
+    relaxed = relaxed_weighted(mt, sl, np.ascontiguousarray(xs), count_envelope(p_f, n)) \
         if xs.shape[0] else np.zeros(0)
     order = np.argsort(-relaxed, kind="stable")
     order = order[relaxed[order] >= p - 1e-12]
     best = (None, 0.0)
+    best_up = 0.0       # largest upper-model P checked (losses in the pass as survivals)
     checked = 0
     for lo in range(0, order.size, 256):
         if checked >= EXACT_CAP or not deadline_ok():
             complete = False
             break
         idx = order[lo:lo + 256]
-        vals = ev(xs[idx])
+        vals, ups = ev.with_upper(xs[idx])
+        best_up = max(best_up, float(ups.max()))
         checked += idx.size
         i = int(np.argmax(vals))
         if vals[i] > best[1]:
@@ -194,11 +201,11 @@ def screen_size(mt, slack, ev, n: int, p: float, p_f: float, u_bar: list, m: int
             return ScreenOutcome(n=n, proven_short=False, swarm=xs[idx[i]],
                                  probability=float(vals[i]), upper=1.0,
                                  screened=found.shape[0], checked=checked)
-    if not complete:
+    if not complete or best_up >= p - 1e-12:
         return ScreenOutcome(n=n, proven_short=False, swarm=None, probability=best[1],
                              upper=1.0, screened=found.shape[0], checked=checked)
     below = relaxed[relaxed < p - 1e-12]
-    ub = max(base + one * n * (thr - 1) / s_n, best[1],
+    ub = max(base + one * n * (thr - 1) / s_n, best_up,
              float(below.max()) if below.size else 0.0)
     return ScreenOutcome(n=n, proven_short=True, swarm=None, probability=best[1], upper=ub,
                          screened=found.shape[0], checked=checked)
