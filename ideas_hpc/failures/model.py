@@ -42,7 +42,7 @@ import numpy as np
 
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.base.fields import number
-from ideas_hpc.failures.prior import Prior
+from ideas_hpc.failures.prior import Prior, probabilities
 
 
 @dataclass(frozen=True)
@@ -79,8 +79,7 @@ class FailureModel:
         p = self.p_f if isinstance(self.p_f, (tuple, list, np.ndarray)) else (self.p_f,)
         if len(p) == 0:
             raise InputError("needs at least one value", field="p_f")
-        vals = tuple(number(v, "p_f" if len(p) == 1 else f"p_f[{i}]", lo=0.0, hi=1.0)
-                     for i, v in enumerate(p))
+        vals = probabilities(p, "p_f")
         object.__setattr__(self, "p_f", vals)
         number(self.beta, "beta", lo=0.0, hi=1.0)
         number(self.in_pass_share, "in_pass_share", lo=0.0, hi=1.0)

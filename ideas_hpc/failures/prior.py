@@ -34,6 +34,19 @@ from ideas_hpc.base.fields import number
 BETA_QUANTILES = (0.05, 0.25, 0.5, 0.75, 0.95)
 
 
+def probabilities(values, field: str) -> tuple:
+    """``values`` checked as probabilities (0..1), errors naming ``field`` (and the item)."""
+    out = []
+    for i, v in enumerate(values):
+        try:
+            out.append(number(v, field, lo=0.0, hi=1.0))
+        except InputError as e:
+            if len(values) == 1:
+                raise
+            raise InputError(f"item {i} {e.message}", field=field) from None
+    return tuple(out)
+
+
 @dataclass(frozen=True)
 class Prior:
     """``p_f`` uncertain: equally likely ``values``, or ``Beta`` with ``mean`` and ``sd``.
@@ -47,9 +60,7 @@ class Prior:
 
     def __post_init__(self):
         if self.values:
-            vals = tuple(number(v, f"p_f_values[{i}]", lo=0.0, hi=1.0)
-                         for i, v in enumerate(self.values))
-            object.__setattr__(self, "values", vals)
+            object.__setattr__(self, "values", probabilities(self.values, "p_f_values"))
             return
         m = number(self.mean, "p_f", lo=0.0, hi=1.0, lo_open=True, hi_open=True)
         s = number(self.sd, "p_f_sd", lo=0.0, lo_open=True)

@@ -180,6 +180,14 @@ class RowEngine:
             return self._full(r_img, dcm)
         return rows
 
+    def first_seen(self, r_img, dcm) -> np.ndarray:
+        """(K, V) int64: the first image at which each candidate sees each vertex on this
+        flight, -1 never (seen mode; the validation's losses in the pass, issue 41)."""
+        mesh, cam0, opts, bvh = self._static()
+        cam = cam0._replace(r_T_m=np.ascontiguousarray(r_img, dtype=np.float64),
+                            dcm_BT=np.ascontiguousarray(dcm, dtype=np.float64))
+        return first_image_by_spacecraft(mesh, cam, opts, bvh)
+
     def _full(self, r_img, dcm) -> np.ndarray:
         sun = self.setup.sun_T() if self.setup.coverage.needs_sun else None
         return rows_from_views(self.setup, r_img, dcm, sun)
