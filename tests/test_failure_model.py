@@ -403,3 +403,32 @@ def test_errors_name_the_field():
     assert e.value.field == "failure_probability"
     assert FailureDraw  # the record the Monte Carlo kind and the validation share
     assert independent_weights(0.1, 3).size == 4
+
+
+def test_model_draws_shift_no_other_dispersion():
+    """A common cause and an uncertain p_f draw beside the dispersions' shared stream
+    (seeds.side_rng): the misalignment drawn after the failures keeps its numbers, and a
+    plain model keeps today's losses."""
+    import dataclasses
+
+    from ideas_hpc.campaign.schema.campaign_tables import load
+    from ideas_hpc.campaign.setup import setup_from_campaign
+    from ideas_hpc.montecarlo.dispersions import draw_sample
+
+    from test_campaign_mc import MC, SHORT
+
+    THETA = np.array([0.2, 1.7, 2.4])
+    c = load(MC, SHORT)
+    setup = setup_from_campaign(c)
+    mc = dataclasses.replace(c.config.monte_carlo, failure_probability=0.2, failures_k=0,
+                             sigma_misalignment_rad=1e-3)
+    more = dataclasses.replace(mc, common_cause_beta=0.5, failure_probability_sd=0.1)
+    for k in range(40):
+        a, _ = draw_sample(mc, 5, k, THETA, setup)
+        b, _ = draw_sample(more, 5, k, THETA, setup)
+        np.testing.assert_array_equal(a["misalignment_prv"], b["misalignment_prv"])
+        rng = sample_rng(5, k, 1)                      # today's draw, written out
+        rng.standard_normal(3), rng.uniform(0.0, 1.0)      # gravity, reflectivity
+        rng.standard_normal((THETA.size, 3)), rng.standard_normal((THETA.size, 3))  # state
+        rng.permutation(THETA.size)
+        np.testing.assert_array_equal(a["active"], rng.uniform(0.0, 1.0, THETA.size) >= 0.2)
