@@ -116,7 +116,7 @@ MUTATIONS: tuple[Mutation, ...] = (
       "by_mask = weights.size != n + 1", "by_mask = False",
       ("tests/test_failure_model.py::test_per_spacecraft_and_groups_against_brute_force",)),
     M("prior_too_few_nodes", "statistics", "ideas_hpc/failures/prior.py",
-      "g = int(degree) // 2 + 1", "g = int(degree) // 4 + 1",
+      "g = int(degree) // 2 + 1", "g = int(degree) // 6 + 1",
       ("tests/test_failure_model.py::test_beta_prior_weights_are_the_beta_function_ratio",)),
     M("common_cause_not_exclusive", "statistics", "ideas_hpc/failures/weights.py",
       "out += wt * ((1.0 - c) * g + c * (k == 0))", "out += wt * (g + c * (k == 0))",

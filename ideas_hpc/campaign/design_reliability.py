@@ -252,8 +252,10 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=Non
     tolerant = _tolerant(tolerant.result() if tolerant is not None else
                          _tolerant_designs(nominal.bank, target, eps, d, sep), rel)
     stat = None if exact else statistical_bound(rel, p, model, d.n_max, d.confidence)
+    # the levels get what the design's time limit has left, at least a tenth of it
     levels = None if model.prior is None else n_at_levels(
-        rel, level, d.n_max, model.prior.levels(), time_limit_s=left)
+        rel, level, d.n_max, model.prior.levels(),
+        time_limit_s=max(0.1 * left, left - res.solve_time))
     return reliability_dataset(c, nominal, bank, res, chosen, chosen_val, curve, tolerant,
                                BankRun(stepped=stepped, need=need, exact=exact, t_bank_s=t_bank,
                                        cert=cert, level=level, stat=stat, model=model,

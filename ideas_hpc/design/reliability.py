@@ -216,20 +216,6 @@ class ReliabilityDesigner:
         """Every n-swarm was scored and none can reach p (upper model)."""
         return n in self.exhausted and self.exhausted_upper.get(n, 0.0) < p - 1e-12
 
-    def with_model(self, model, time_limit: float | None = None) -> "ReliabilityDesigner":
-        """A designer of the same bank under another failure model (the prior's levels):
-        the bounds on ``U_m`` and the per-scenario proofs do not depend on the model and
-        are shared; the swarms found and the sizes settled are its own."""
-        other = object.__new__(type(self))
-        other.__dict__.update(self.__dict__)
-        other.ev = Evaluator(self.ev.rows, self.ev.w, self.ev.need, model)
-        other.model = as_model(model)
-        other.t0 = time.perf_counter()
-        other.deadline = None if time_limit is None else other.t0 + float(time_limit)
-        other.best, other.exhausted, other.exhausted_upper = {}, set(), {}
-        other.tol_proved, other.screen_proved, other.screen_found = set(), set(), set()
-        return other
-
     def out_of_time(self) -> bool:
         """The design's ``time_limit`` has passed."""
         return self.deadline is not None and time.perf_counter() >= self.deadline
@@ -273,7 +259,8 @@ class ReliabilityDesigner:
             sw, val = improve(self.ev, s, self.m, deadline=self.deadline)
             if val > top[1]:
                 top = (sw, val)
-        top = (top[0], max(top[1], 0.0))
+        sw = top[0] if weights_of(self.model, n).exchangeable else np.sort(top[0])
+        top = (sw, max(top[1], 0.0))       # member k: the k-th grid candidate (reliability_eval)
         self.best[n] = top
         return top
 
@@ -381,7 +368,7 @@ def settle(d: ReliabilityDesigner, p: float, n_max: int) -> ReliableResult:
                 notes.append(f"sizes {unresolved} are neither proven short of p nor met by a "
                              "swarm found")
             if not weights_of(d.model, n).exchangeable:
-                sw = np.sort(sw)    # member k: the k-th grid candidate (reliability_eval)
+                sw = np.sort(sw)
             return ReliableResult(indices=sw, n=n, probability=val,
                                   per_scenario=d.ev.per_scenario([sw])[0], status=status,
                                   bound=float(bound), gap=float(gap),

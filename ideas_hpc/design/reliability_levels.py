@@ -6,7 +6,7 @@ average over the prior. A mission also wants to know how the answer moves with p
 levels (its quantiles, or its values), each with its own proofs
 (:func:`~ideas_hpc.design.reliability.settle`). The bounds on ``U_m`` and the
 per-scenario failure-tolerance proofs do not depend on p_f and are shared
-(:meth:`~ideas_hpc.design.reliability.ReliabilityDesigner.with_model`).
+(:func:`with_model`).
 
 Why one answer covers an interval: every member's survival probability falls as p_f
 rises (``1 - (1 - beta) p_f`` and ``1 - beta p_f``), coverage is monotone, so each
@@ -18,11 +18,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import time
+
 import numpy as np
 
 from ideas_hpc.base import progress
 from ideas_hpc.base.errors import InputError
-from ideas_hpc.design.reliability import settle
+from ideas_hpc.design.reliability import ReliabilityDesigner, settle
+from ideas_hpc.design.reliability_eval import Evaluator
+from ideas_hpc.failures.model import as_model
 
 
 @dataclass(frozen=True)
@@ -39,6 +43,22 @@ class LevelAnswer:
     indices: np.ndarray
 
 
+def with_model(designer: ReliabilityDesigner, model, time_limit: float | None = None):
+    """A designer of ``designer``'s bank under another failure model: the bounds on ``U_m``
+    (programme, ring-gap bounds, screen matrices) and the per-scenario tolerance proofs do
+    not depend on the model and are shared; the swarms found and the sizes settled are its
+    own, and so is its deadline."""
+    other = object.__new__(type(designer))
+    other.__dict__.update(designer.__dict__)
+    other.ev = Evaluator(designer.ev.rows, designer.ev.w, designer.ev.need, model)
+    other.model = as_model(model)
+    other.t0 = time.perf_counter()
+    other.deadline = None if time_limit is None else other.t0 + float(time_limit)
+    other.best, other.exhausted, other.exhausted_upper = {}, set(), {}
+    other.tol_proved, other.screen_proved, other.screen_found = set(), set(), set()
+    return other
+
+
 def n_at_levels(designer, p: float, n_max: int, levels, time_limit_s: float | None = None):
     """:class:`LevelAnswer` at each ``(p_f, label)`` of ``levels`` (increasing), each design
     on ``designer``'s bank with the failure model at that p_f and its share of the time."""
@@ -46,7 +66,7 @@ def n_at_levels(designer, p: float, n_max: int, levels, time_limit_s: float | No
     share = None if time_limit_s is None else float(time_limit_s) / max(1, len(levels))
     for p_f, label in levels:
         progress.note(f"success-probability design at p_f = {p_f:.4g} ({label})")
-        d = designer.with_model(designer.model.at(p_f), time_limit=share)
+        d = with_model(designer, designer.model.at(p_f), time_limit=share)
         try:
             r = settle(d, p, n_max)
         except InputError:
