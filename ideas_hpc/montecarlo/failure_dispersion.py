@@ -108,11 +108,14 @@ def check(mc) -> None:
     failure_model(mc)
 
 
-def check_fleet(mc, n: int, what: str) -> None:
+def check_fleet(mc, n: int, what: str, swarm: bool = False) -> None:
     """Refuse a model that names fewer or more spacecraft than fly: a per-spacecraft list
-    shorter than ``n`` (``what``: ``design.n_max`` or the swarm size), or a group naming a
-    spacecraft ``>= n``."""
+    shorter than ``n`` (``what``: ``design.n_max`` or the swarm size), a group naming a
+    spacecraft ``>= n``, or (``swarm``: ``n`` is the swarm's own size) more certain losses
+    than spacecraft."""
     m = failure_model(mc)
+    if swarm and m.failures_k > n:
+        raise InputError(f"cannot exceed the swarm size {n}", field="failures_k")
     if len(m.p_f) > 1 and len(m.p_f) < n:
         raise InputError(f"has {len(m.p_f)} values for {what} = {n} spacecraft: give one per "
                          "spacecraft that may fly", field="failure_probability")

@@ -251,14 +251,11 @@ def _cross_checks(c: CampaignConfig) -> None:
         if sw.sweep_periods_s is None:
             raise InputError(f"is required for attitude.maneuver = {c.attitude.maneuver!r}",
                              field="swarm.sweep_periods_min")
-    if mc.failures_k and sw.angles_rad and mc.failures_k > len(sw.angles_rad):
-        raise InputError(f"cannot exceed the swarm size {len(sw.angles_rad)}",
-                         field="monte_carlo.failures_k")
-    fleet = (d.n_max, "design.n_max") if kind.swarm == "designed" else \
-        ((len(sw.angles_rad), "the swarm size") if sw.angles_rad else None)
-    if fleet is not None:
-        with config_fields(prefix="monte_carlo."):
-            check_fleet(mc, *fleet)
+    with config_fields(prefix="monte_carlo."):   # the failure model against the fleet
+        if kind.swarm == "designed":
+            check_fleet(mc, d.n_max, "design.n_max")
+        elif sw.angles_rad:
+            check_fleet(mc, len(sw.angles_rad), "the swarm size", swarm=True)
     with config_fields(DESIGNER_FIELDS):
         check_objectives(d.objectives)
     check_encounter(fb, c.attitude)
