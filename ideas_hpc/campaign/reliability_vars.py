@@ -36,8 +36,10 @@ validation_look_confidence          ()                      confidence of each l
 validation_look_n (_p_hat,          (validation_look,)      each look's swarm size, P-hat, bound and
 _lower_bound, _first_sample)                                first validation sample, in order
 statistical_lower_bound             ()                      lower bound on the true fewest N (docs)
-swarm_size_at_p_f (probability_,    (p_f_level,)            p_f uncertain: the fewest N with p_f
-proven_bound_)                                              known at each of the prior's levels
+swarm_size_at_p_f                   (p_f_level,)            p_f uncertain: the fewest N with p_f
+                                                            known at each of the prior's levels
+probability_at_p_f                  (p_f_level,)            its P on the bank at that p_f
+proven_bound_at_p_f                 (p_f_level,)            the proven lower bound on N there
 ==================================  ======================  =========================================
 
 Attrs ``failure_model`` (one line) and ``failure_model_record`` (the resolved

@@ -136,7 +136,7 @@ class FailureModel:
                              f"up to {n}: give one per spacecraft that may fly", field="p_f")
 
     def member_q(self, n: int, p: float | None = None) -> tuple:
-        """``Q_k`` of members ``0 .. n-1`` (``p``: the prior's drawn value)."""
+        """``Q_k`` of members 0 to n - 1 (``p``: the prior's drawn value)."""
         if p is not None or len(self.p_f) == 1:
             return (float(self.p_f[0] if p is None else p),) * int(n)
         self.check_size(n)

@@ -72,7 +72,7 @@ def draw_failures(model: FailureModel, n: int, u, rng, perm=None) -> FailureDraw
 
 def validation_failures(model: FailureModel, n: int, seed: int, first: int,
                         m: int) -> list[FailureDraw]:
-    """The losses of validation samples ``first .. first + m - 1`` (module docstring)."""
+    """The losses of validation samples ``first`` to ``first + m - 1`` (module docstring)."""
     out = []
     for k in range(int(m)):
         rng = stream_rng(seed, VALIDATION_STREAM, int(first) + k, STREAM_FAILURES)
