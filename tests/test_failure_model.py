@@ -434,3 +434,13 @@ def test_model_draws_shift_no_other_dispersion():
         rng.standard_normal((THETA.size, 3)), rng.standard_normal((THETA.size, 3))  # state
         rng.permutation(THETA.size)
         np.testing.assert_array_equal(a["active"], rng.uniform(0.0, 1.0, THETA.size) >= 0.2)
+
+
+def test_every_model_parameter_has_its_key():
+    """Errors of the model name the campaign's keys: every parameter is mapped."""
+    import dataclasses
+
+    names = {f.name for f in dataclasses.fields(FailureModel)} - {"prior"}
+    assert names | {"p_f_sd", "p_f_values"} == set(failure_dispersion.FIELDS)
+    keys = {k for k, _ in failure_dispersion.FAILURE_KEYS}
+    assert set(failure_dispersion.FIELDS.values()) <= keys
