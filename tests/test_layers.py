@@ -26,7 +26,7 @@ LAYERS = (
     ("ground", ("base", "_version.py")),
     ("kernels and engine", ("core", "core/attitude", "core/design", "core/dynamics",
                             "core/mapping", "engine")),
-    ("models", ("body", "dynamics", "attitude", "mapping", "plots")),
+    ("models", ("body", "dynamics", "attitude", "mapping", "plots", "failures")),
     ("flyby, design, montecarlo", ("flyby", "design", "design/api", "design/ga", "design/pareto",
                                    "montecarlo")),
     ("campaign", ("campaign", "campaign/schema")),

@@ -278,7 +278,7 @@ def replicated_lower_bound(optima, s_n: int, p: float, solve_p: float,
     return float(v[best_l - 1]), best_l, theta
 
 
-def group_bounds(lows, n_groups: int, level: float, p_f: float, n_max: int) -> np.ndarray:
+def group_bounds(lows, n_groups: int, level: float, p_f, n_max: int) -> np.ndarray:
     """Proven lower bounds on the optima of ``n_groups`` independent sample problems cut from
     one bank: the scenarios split in order into groups (i.i.d. draws, so the groups are
     independent sample problems), problem ``i`` asking for the fewest N with bank mean >=
@@ -287,7 +287,8 @@ def group_bounds(lows, n_groups: int, level: float, p_f: float, n_max: int) -> n
     ``lows[s]`` is a proven lower bound on the fewest spacecraft that cover scenario ``s``
     (the ring-gap bound). On group ``i`` an m-swarm reaches at most the fraction
     ``U_m = mean(lows <= m)`` of the scenarios with no failure, so any N-swarm has bank
-    mean ``<= UB(N)`` (:func:`~ideas_hpc.design.reliability_stats.failure_upper_bound`) and
+    mean ``<= UB(N)`` (:func:`~ideas_hpc.design.reliability_stats.failure_upper_bound`;
+    ``p_f`` a bare probability or the failure model, whose upper law it takes) and
     the problem's optimum is at least the first N with ``UB(N) >= level``
     (``n_max + 1`` when none). Lower bounds on the optima keep
     :func:`replicated_lower_bound` valid: a problem in which the true optimum is feasible

@@ -39,7 +39,9 @@ class ReliableSettings:
     ``enumerate_budget``: score every swarm of a size when there are at most
     this many; ``ring_prebound``: bound ``U_m`` first by the per-scenario
     ring-gap bounds; ``bound_solver`` / ``tolerance_solver``: stand-ins for
-    the programmes (tests).
+    the programmes (tests). ``p_f``: independent failures of that probability, or
+    ``failures``, the failure model (:class:`~ideas_hpc.failures.model.FailureModel`,
+    issue 41), which then wins.
     """
 
     p: float
@@ -52,6 +54,12 @@ class ReliableSettings:
     ring_prebound: bool = True
     bound_solver: Callable | None = None
     tolerance_solver: Callable | None = None
+    failures: object = None
+
+    @property
+    def model(self):
+        """The failure model: ``failures``, or a bare ``p_f``."""
+        return self.failures if self.failures is not None else self.p_f
 
 
 #: Most looks ``design.demonstrate`` plans when the file does not say.

@@ -36,6 +36,7 @@ from ideas_hpc.base.errors import InputError
 from ideas_hpc.base.fields import Field
 from ideas_hpc.base.seeds import sample_rng
 from ideas_hpc.engine.variables import StoreVar
+from ideas_hpc.montecarlo import failure_dispersion
 from ideas_hpc.base.units import DEG, MM
 
 DISPERSION_CHILD = 1  # spawn_key suffix of the child stream
@@ -201,16 +202,6 @@ def _state(rng, n, mc, setup, theta):
             "velocity_error": mc.sigma_velocity_m_s * dv}
 
 
-def _failures(rng, n, mc, setup, theta):
-    perm = rng.permutation(n)
-    bern = rng.uniform(0.0, 1.0, n)
-    active = np.ones(n, dtype=bool)
-    if mc.failures_k:
-        active[perm[:mc.failures_k]] = False
-    active &= bern >= mc.failure_probability
-    return {"active": active, "n_failed": int((~active).sum())}
-
-
 def _misalignment(rng, n, mc, setup, theta):
     axes = rng.standard_normal((n, 3))
     angles = rng.standard_normal(n)
@@ -279,15 +270,14 @@ DISPERSIONS: tuple[Dispersion, ...] = (
                                                    to_si=MM, lo=0))),
                level="spacecraft",
                active=lambda mc, setup: (mc.sigma_position_m, mc.sigma_velocity_m_s) != (0, 0)),
-    Dispersion("failures", _failures, lambda v: {"active": v["active"]},
+    # the failure model (issue 41): keys, check and draw in montecarlo/failure_dispersion.py
+    Dispersion("failures", failure_dispersion.draw, lambda v: {"active": v["active"]},
                (StoreVar("active", ("spacecraft",), bool, "1",
                          "spacecraft working (False: failed)"),
                 StoreVar("n_failed", (), np.int32, "1", "failed spacecraft")),
-               keys=(("failures_k", Field("int", 0, lo=0, doc="exactly k of N spacecraft lost")),
-                     ("failure_probability", Field("float", 0.0, lo=0, hi=1,
-                                                   doc="per-spacecraft loss probability"))),
+               keys=failure_dispersion.FAILURE_KEYS, check=failure_dispersion.check,
                level="spacecraft", designer="exact",
-               active=lambda mc, setup: mc.failures_k > 0 or mc.failure_probability > 0),
+               active=lambda mc, setup: failure_dispersion.failures_active(mc)),
     Dispersion("misalignment", _misalignment,
                lambda v: {"misalignment_prv": v["misalignment_prv"]},
                (StoreVar("misalignment_prv", SC3, np.float64, "rad",

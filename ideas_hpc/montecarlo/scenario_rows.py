@@ -188,6 +188,17 @@ class RowEngine:
             return self._full(r_img, dcm)
         return rows
 
+    def first_seen(self, r_img, dcm, world: World | None = None) -> np.ndarray:
+        """(K, V) int64: the first image at which each candidate sees each vertex on this
+        flight through ``world`` (default: the nominal one), -1 never (seen mode; the
+        validation's losses in the pass, issue 41)."""
+        _, cam0, _, _ = self._static()
+        world = self.setup.world if world is None else world
+        cam = cam0._replace(r_T_m=np.ascontiguousarray(r_img, dtype=np.float64),
+                            dcm_BT=np.ascontiguousarray(dcm, dtype=np.float64))
+        mesh, opts, bvh = world_records(self.setup, world, cam.r_T_m.shape[1])
+        return first_image_by_spacecraft(mesh, cam, opts, bvh)
+
     def _full(self, r_img, dcm, world: World | None = None) -> np.ndarray:
         return full_rows_of(self.setup, world, r_img, dcm)
 
