@@ -308,11 +308,10 @@ def statistical_bound(rel, p, p_f, n_max, confidence):
 def held_scores(held, chosen, val) -> dict:
     """The reported swarm on the held-out scenarios: its P there, the bias of the bank's
     (selection) P, and whether the validation's P-hat agrees with the held-out P within
-    the validation's 95 % interval (:func:`~ideas_hpc.design.holdout.agreement`)."""
-    ph = held.probability(chosen.indices)
-    lo, hi, inside = agreement(ph, val.per_sample)
-    return {"scenarios": held.size, "probability": ph,
-            "bias": float(chosen.probability) - ph, "interval": (lo, hi), "agrees": inside}
+    their sampling error (:func:`~ideas_hpc.design.holdout.agreement`)."""
+    a = agreement(held.values(chosen.indices), val.per_sample)
+    return {"scenarios": held.size, "probability": a["held"],
+            "bias": float(chosen.probability) - a["held"], **a}
 
 
 def _certify(c, setup, client, bank, res, rel, need, w, exact, held=None):

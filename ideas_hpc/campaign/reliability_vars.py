@@ -113,8 +113,8 @@ def _held_vars(held: dict, curve) -> xr.Dataset:
           f"{held['scenarios']} held-out scenarios (they chose nothing: unbiased)")
     _with(ds, "bank_bias", "1", "reliability_probability - holdout_probability: the "
           "optimiser's bias of the bank's P for the swarm it chose")
-    _with(ds, "bank_validation_agree", "1", "holdout_probability inside the validation's 95 % "
-          "interval of its mean (P-hat +- 1.96 s / sqrt(M))")
+    _with(ds, "bank_validation_agree", "1", "holdout_probability and validation_p_hat agree "
+          "within their 95 % sampling error (|difference| <= 1.96 sqrt(s_v^2/M + s_h^2/H))")
     _with(ds, "reliability_vs_n_holdout", "1", "P of the curve's swarms on the held-out "
           "scenarios")
     return ds
@@ -304,10 +304,14 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
                       "holdout_probability": float(h["probability"]),
                       "bank_bias": float(h["bias"]),
                       "bank_validation_agreement": (
-                          f"held-out P {h['probability']:.4f} {'inside' if h['agrees'] else 'OUTSIDE'}"
-                          f" the validation's 95 % interval [{h['interval'][0]:.4f}, "
-                          f"{h['interval'][1]:.4f}] (bank P {chosen.probability:.4f} on the "
-                          f"scenarios that chose the swarm: bias {h['bias']:+.4f})")})
+                          f"held-out P {h['probability']:.4f} and validation P-hat "
+                          f"{h['p_hat']:.4f} {'agree' if h['agrees'] else 'DISAGREE'} within "
+                          f"their sampling error (difference {h['p_hat'] - h['probability']:+.4f}"
+                          f", 95 %: +-{1.959963984540054 * h['se']:.4f}); the validation's own "
+                          f"95 % interval [{h['interval'][0]:.4f}, {h['interval'][1]:.4f}] "
+                          f"{'holds' if h['inside'] else 'misses'} the held-out P; bank P "
+                          f"{chosen.probability:.4f} on the scenarios that chose the swarm: "
+                          f"bias {h['bias']:+.4f}")})
     if stat is not None:
         attrs["statistical_lower_bound"] = (
             f"true fewest N >= {stat['bound']:g} at {100 * conf:g} % confidence: the "

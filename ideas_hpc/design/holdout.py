@@ -55,14 +55,29 @@ class HeldOut:
         return float(self.values(swarm).mean())
 
 
-def agreement(p_ref: float, values) -> tuple[float, float, bool]:
-    """``(low, high, inside)``: the 95 % normal interval of the mean of ``values`` (a
-    validation's per-sample P) and whether ``p_ref`` (a held-out or bank P) lies in it.
-    The interval is ``mean +- 1.96 s / sqrt(M)`` with the sample standard deviation ``s``
-    (0 when every value is the same: then only the same number agrees)."""
+def agreement(held_values, values) -> dict:
+    """Do a held-out P and a validation's P-hat agree within their sampling error?
+
+    Both are means of independent per-sample probabilities of one fixed swarm (the
+    held-out scenarios and the validation samples are i.i.d. draws of the same
+    dispersions), so their difference has standard error
+    ``se = sqrt(s_v^2 / M + s_h^2 / H)``; they agree when ``|P-hat - P_held| <= 1.96 se``
+    (95 %, normal). Also returned: the validation's own 95 % interval
+    ``P-hat +- 1.96 s_v / sqrt(M)`` and whether the held-out P lies in it (which ignores
+    the held-out P's own error, so it is stricter by about sqrt(1 + M s_h^2 / (H s_v^2))).
+    With every value equal (spread 0) only the same number agrees.
+    """
+    h = np.asarray(held_values, dtype=np.float64).ravel()
     v = np.asarray(values, dtype=np.float64).ravel()
-    if v.size == 0:
-        return math.nan, math.nan, False
-    half = Z95 * (float(v.std(ddof=1)) if v.size > 1 else 0.0) / math.sqrt(v.size)
-    lo, hi = float(v.mean()) - half, float(v.mean()) + half
-    return lo, hi, bool(lo - 1e-12 <= p_ref <= hi + 1e-12)
+    if h.size == 0 or v.size == 0:
+        return {"held": math.nan, "p_hat": math.nan, "se": math.nan, "agrees": False,
+                "interval": (math.nan, math.nan), "inside": False}
+    sv = float(v.std(ddof=1)) if v.size > 1 else 0.0
+    sh = float(h.std(ddof=1)) if h.size > 1 else 0.0
+    se = math.sqrt(sv ** 2 / v.size + sh ** 2 / h.size)
+    ph, pv = float(h.mean()), float(v.mean())
+    half = Z95 * sv / math.sqrt(v.size)
+    return {"held": ph, "p_hat": pv, "se": se,
+            "agrees": bool(abs(pv - ph) <= Z95 * se + 1e-12),
+            "interval": (pv - half, pv + half),
+            "inside": bool(pv - half - 1e-12 <= ph <= pv + half + 1e-12)}
