@@ -221,9 +221,13 @@ def build_scenario_bank(setup: FlybySetup, step_rad: float, mc, *, seed: int, n_
     return ScenarioBank(theta=theta, rows=rows, areas=areas, attrs=attrs)
 
 
+#: Samples per chunk task of the validation and held-out flights.
+VALIDATION_CHUNK = 8
+
+
 def fly_members(setup: FlybySetup, theta, periods, mc, *, seed: int, n_samples: int,
-                client=None, progress: bool = True, chunk_size: int = 8,
-                first: int = 0, stream: int = VALIDATION_STREAM) -> np.ndarray:
+                client=None, progress: bool = True, first: int = 0,
+                stream: int = VALIDATION_STREAM) -> np.ndarray:
     """(M, N, V) bool: per-member rows of swarm ``theta`` (rad) in ``n_samples`` fresh draws
     of the continuous dispersions (no failures), stream ``VALIDATION_STREAM`` (or
     ``stream``: the held-out scenarios' ``HOLDOUT_STREAM``), samples ``first`` to
@@ -234,7 +238,7 @@ def fly_members(setup: FlybySetup, theta, periods, mc, *, seed: int, n_samples: 
     fn = functools.partial(_rows_chunk, engine=row_engine(setup, th, mc, seed, int(stream)),
                            mc=mc, seed=int(seed), stream=int(stream))
     return _run_chunks(list(range(int(first), int(first) + int(n_samples))), fn, client,
-                       chunk_size, progress, _flights_label(stream))
+                       VALIDATION_CHUNK, progress, _flights_label(stream))
 
 
 def _flights_label(stream: int) -> str:
@@ -262,8 +266,8 @@ UNTIMED = -2
 
 
 def fly_members_seen(setup: FlybySetup, theta, mc, *, seed: int, n_samples: int,
-                     client=None, progress: bool = True, chunk_size: int = 8,
-                     first: int = 0, stream: int = VALIDATION_STREAM):
+                     client=None, progress: bool = True, first: int = 0,
+                     stream: int = VALIDATION_STREAM):
     """:func:`fly_members` with, per member and vertex, when in the pass it is first seen:
     returns ``rows`` (M, N, V) bool and ``seen`` (M, N, V) float32, the pass fraction
     ``(t - t0) / (tf - t0)`` of that first image (``inf``: not seen). Seen mode only (a
@@ -273,7 +277,7 @@ def fly_members_seen(setup: FlybySetup, theta, mc, *, seed: int, n_samples: int,
     fn = functools.partial(_seen_chunk, engine=row_engine(setup, th, mc, seed, int(stream)),
                            mc=mc, seed=int(seed), stream=int(stream))
     idx = _run_chunks(list(range(int(first), int(first) + int(n_samples))), fn, client,
-                      chunk_size, progress, _flights_label(stream))
+                      VALIDATION_CHUNK, progress, _flights_label(stream))
     frac = ((setup.image_times - setup.t0_s) / (setup.tf_s - setup.t0_s)).astype(np.float32)
     frac = np.concatenate([frac, [np.inf]]).astype(np.float32)
     seen = frac[np.where(idx >= 0, idx, frac.size - 1)]
