@@ -110,6 +110,7 @@ def validate_store(store, *, samples: int = 1024, seed: int | None = None, first
     from ideas_hpc.design.reliability_stats import lower_confidence_bound
     from ideas_hpc.engine.store_meta import store_attrs
     from ideas_hpc.base.errors import InputError
+    from ideas_hpc.mapping.requirement import meets
     from ideas_hpc.montecarlo.scenarios import fly_members
     from ideas_hpc.base.seeds import VALIDATION_STREAM, stream_rng
 
@@ -147,8 +148,8 @@ def validate_store(store, *, samples: int = 1024, seed: int | None = None, first
     for k in range(rows.shape[0]):
         alive = stream_rng(seed, VALIDATION_STREAM, int(first) + k,
                            STREAM_FAILURES).random(n) >= p_f
-        # the same tolerance as the exact enumeration (coverage >= need - 1e-12)
-        wins[k] = bool(alive.any() and w[rows[k, alive].any(axis=0)].sum() >= need - 1e-12)
+        # the same tolerance as the exact enumeration (the requirement's one comparison)
+        wins[k] = bool(alive.any() and meets(w[rows[k, alive].any(axis=0)].sum(), need))
     conf = float(attrs["confidence"])
     return StoreValidation(n=n, seed=seed, first=int(first), per_sample=per, success=wins,
                            lower=lower_confidence_bound(per, conf), confidence=conf,
