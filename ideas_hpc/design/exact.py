@@ -196,7 +196,7 @@ def min_swarm(bank: CandidateBank, *, target: float | None = None, eps_tol: floa
         if m > 0 and res.x is None and res.status == 2 and above is None:
             out = None
         else:
-            out = _min_result(bank, red, res, dt + t_ring, target, need, n_max, m, low, above)
+            out = _min_result(bank, red, res, dt + t_ring, thr, n_max, m, low, above)
     if m == 0:
         return out
     # Does the separation cost spacecraft? Solve without it (merged columns: fast).
@@ -251,10 +251,10 @@ def _ring_result(bank, idx, target, dt) -> ExactResult:
                               f"{idx.size} that do; no integer programme needed"])
 
 
-def _min_result(bank, red, res, dt, target, need, n_max, m, low=None,
-                above=None) -> ExactResult:
-    """The design from HiGHS's outcome; ``above`` is a swarm found before it (the
-    programme then looked only for smaller ones)."""
+def _min_result(bank, red, res, dt, thr, n_max, m, low=None, above=None) -> ExactResult:
+    """The design from HiGHS's outcome for the threshold ``thr``; ``above`` is a swarm
+    found before it (the programme then looked only for smaller ones)."""
+    target, need = thr.target, thr.need
     notes = []
     bound = getattr(res, "mip_dual_bound", None)
     bound = math.ceil(bound - 1e-6) if bound is not None and np.isfinite(bound) else 1

@@ -228,7 +228,7 @@ def min_swarm_stereo(sb: StereoBank, *, target: float | None = None,
     bank = sb.bank
     check_grid(bank.n_candidates)
     m = separation_steps(bank.step_rad, bank.d_sep_m, min_separation, bank.n_candidates)
-    target, need = thr.target, thr.need
+    need = thr.need
     cover, red, ends = _model(sb, m)
     k, p, g = bank.n_candidates, ends.shape[0], red.n_groups
     heur = _heuristic(sb, need, m, int(n_max))
@@ -237,7 +237,7 @@ def min_swarm_stereo(sb: StereoBank, *, target: float | None = None,
             "variable per pair (exact); " + ("no heuristic swarm" if heur is None else
                                              f"greedy + swap search: {heur.size}"))
     if top < 1:   # one spacecraft: nothing smaller to look for
-        return _stereo_result(sb, heur, target, need, heur.size, 0.0, "optimal", [note])
+        return _stereo_result(sb, heur, thr, heur.size, 0.0, "optimal", [note])
     cons, integ, n_var = _constraints(sb, cover, red, ends, m, (1, top))
     cons.append(area_constraint(thr, red.weight, k + p, n_var))
     c = np.zeros(n_var)
@@ -250,31 +250,31 @@ def min_swarm_stereo(sb: StereoBank, *, target: float | None = None,
         bound = getattr(res, "mip_dual_bound", None)
         bound = math.ceil(bound - 1e-6) if bound is not None and np.isfinite(bound) else 1
         status = "optimal" if bound >= idx.size else "time_limit"
-        return _stereo_result(sb, idx, target, need, min(bound, idx.size), dt, status, [note])
+        return _stereo_result(sb, idx, thr, min(bound, idx.size), dt, status, [note])
     if res.status == 2:         # no swarm below the heuristic's: it is optimal
         if heur is None:
             best = max_coverage_stereo(sb, int(n_max), min_separation=min_separation,
                                        time_limit=time_limit)
             raise n_max_too_small(n_max, f"maps {100 * need:.3f} % in stereo", best)
-        return _stereo_result(sb, heur, target, need, heur.size, dt, "optimal",
+        return _stereo_result(sb, heur, thr, heur.size, dt, "optimal",
                               [note + "; the integer programme proves nothing smaller works"])
     if heur is None:
         raise InputError(f"no stereo design found within the time limit ({res.message}); "
                          "raise `time_limit`", field="time_limit")
     bound = getattr(res, "mip_dual_bound", None)
     bound = math.ceil(bound - 1e-6) if bound is not None and np.isfinite(bound) else 1
-    return _stereo_result(sb, heur, target, need, min(max(bound, 1), heur.size), dt,
+    return _stereo_result(sb, heur, thr, min(max(bound, 1), heur.size), dt,
                           "time_limit", [note + f"; the integer programme reached its time "
                                          f"limit with proven lower bound {bound}"])
 
 
-def _stereo_result(sb, idx, target, need, bound, dt, status, notes) -> ExactResult:
+def _stereo_result(sb, idx, thr, bound, dt, status, notes) -> ExactResult:
     cov = float(sb.coverage([idx])[0])
-    if cov < need - FEAS_TOL:
-        raise RuntimeError(f"stereo design maps {cov!r} < {need!r}")
+    if cov < thr.need - FEAS_TOL:
+        raise RuntimeError(f"stereo design maps {cov!r} < {thr.need!r}")
     gap = (idx.size - bound) / idx.size
     return ExactResult(indices=idx, theta=sb.bank.theta[idx], n=idx.size, coverage=cov,
-                       target=target, status="optimal" if gap == 0 else status,
+                       target=thr.target, status="optimal" if gap == 0 else status,
                        bound=float(bound), gap=float(gap), solve_time=dt, notes=notes)
 
 
