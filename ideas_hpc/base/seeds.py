@@ -98,6 +98,12 @@ SCENARIO_STREAM = 0x5CE7A210
 VALIDATION_STREAM = 0x7A11DA7E
 #: Purposes within one scenario / validation sample (third spawn-key word).
 STREAM_BODY, STREAM_SPACECRAFT, STREAM_ATTITUDE = 0, 1, 2
+#: Purpose of a validation sample's failures (issue 20: the drawn-failure outcomes;
+#: issue 41: then the failure model's own draws, :mod:`ideas_hpc.failures.sampling`).
+STREAM_FAILURES = 3
+#: Last spawn-key word of the failure model's own draws beside a Monte Carlo sample's
+#: dispersion stream (:func:`side_rng`).
+FAILURE_SIDE = 0xFA11
 
 
 def stream_seed_sequence(campaign_seed: int, stream: int, k: int,
@@ -116,6 +122,20 @@ def stream_seed_sequence(campaign_seed: int, stream: int, k: int,
 def stream_rng(campaign_seed: int, stream: int, k: int, purpose: int) -> np.random.Generator:
     """Generator of :func:`stream_seed_sequence`."""
     return np.random.default_rng(stream_seed_sequence(campaign_seed, stream, k, purpose))
+
+
+def side_rng(rng: np.random.Generator) -> np.random.Generator:
+    """The failure model's own draws beside the stream of ``rng`` (issue 41).
+
+    ``SeedSequence(entropy, spawn_key=key + (FAILURE_SIDE,))`` of the sequence ``rng``
+    was made from: it consumes no number of ``rng``, so the Monte Carlo kind's
+    dispersions after the failures (drawn from one shared stream, in order) keep their
+    numbers when a common-cause event, a prior or a loss time is drawn. Sample ``k``'s
+    dispersion stream ``(k, 1)`` gives ``(k, 1, FAILURE_SIDE)``.
+    """
+    ss = rng.bit_generator.seed_seq
+    return np.random.default_rng(np.random.SeedSequence(
+        ss.entropy, spawn_key=tuple(ss.spawn_key) + (FAILURE_SIDE,)))
 
 
 def search_seed(seed: int) -> int:

@@ -38,28 +38,31 @@ from pathlib import Path
 import numpy as np
 
 from ideas_hpc.base.progress import result
-from ideas_hpc.core.design.reliability import swarm_probabilities
 from ideas_hpc.design.api import CoverSettings, ReliableSettings, ScenarioProblem, minimize
 from ideas_hpc.design.settings import LookPlan
 from ideas_hpc.design.bank import grid_size, separation_steps
 from ideas_hpc.design.certificate import (certify, group_bounds,
                                          replicated_lower_bound)
 from ideas_hpc.design.reliability import ReliabilityDesigner
+from ideas_hpc.design.reliability_levels import n_at_levels
 from ideas_hpc.design.reliability_stats import lower_confidence_bound
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.base import progress
 from ideas_hpc.engine.job_cluster import phase_client
+from ideas_hpc.failures.model import as_model
+from ideas_hpc.failures.sampling import drawn_coverage, sample_probabilities, validation_failures
 from ideas_hpc.montecarlo.dispersions import scenario_dispersed
-from ideas_hpc.montecarlo.scenarios import build_scenario_bank, fly_members
-from ideas_hpc.base.seeds import VALIDATION_STREAM, stream_rng
+from ideas_hpc.montecarlo.failure_dispersion import failure_model
+from ideas_hpc.montecarlo.scenarios import build_scenario_bank, fly_members, fly_members_seen
+from ideas_hpc.base import seeds
 from ideas_hpc.campaign.design_exact import design_exact
 from ideas_hpc.campaign.schema.design_checks import designer_errors
 from ideas_hpc.campaign.reliability_vars import BankRun, reliability_dataset
 from ideas_hpc.campaign.schema.design_table import verify_samples
 
-#: Purpose word of the validation's sampled failures (the histogram only; the
-#: probabilities enumerate failures exactly): ``(VALIDATION_STREAM, m, 3)``.
-STREAM_FAILURES = 3
+#: Purpose word of the validation's sampled failures (its old home; now
+#: :data:`ideas_hpc.base.seeds.STREAM_FAILURES`): ``(VALIDATION_STREAM, m, 3)``.
+STREAM_FAILURES = seeds.STREAM_FAILURES
 #: The curve stops at the first N whose best P on the scenarios reaches this.
 CURVE_TOP = 0.99
 #: Largest k of the k-failure-tolerant designs marked on the curve.
@@ -78,26 +81,29 @@ def continuous_off(mc, setup) -> bool:
 
 
 class Validation:
-    """The chosen swarm flown through fresh samples (module docstring, step 4)."""
+    """The chosen swarm flown through fresh samples (module docstring, step 4): per sample
+    the exact failure-weighted P and one drawn outcome (:mod:`ideas_hpc.failures.sampling`;
+    ``seen``: the first-seen times of losses in the pass, None: whole-pass)."""
 
-    def __init__(self, rows, w, need, p_f, seed: int, first: int = 0):
-        n = rows.shape[1]
+    def __init__(self, rows, w, need, model, seed: int, first: int = 0, seen=None):
+        model = as_model(model)
         self.first = int(first)
-        self.per_sample = swarm_probabilities(np.ascontiguousarray(rows),
-                                              np.arange(n, dtype=np.int64)[None, :],
-                                              w, need, p_f)[0]
+        draws = validation_failures(model, rows.shape[1], seed, self.first, rows.shape[0])
+        self.per_sample = sample_probabilities(rows, w, need, model, draws, seen)
         self.p_hat = float(self.per_sample.mean())
         # the bound at the look's share of the error is computed once, by certify(): its
         # look's value is copied here (_certify); None for flights that are no look
         self.lower = None
-        cov = np.empty(rows.shape[0])
-        failed = np.empty(rows.shape[0], dtype=np.int32)
-        for k in range(rows.shape[0]):
-            alive = stream_rng(seed, VALIDATION_STREAM, self.first + k,
-                               STREAM_FAILURES).random(n) >= p_f
-            cov[k] = float(w[rows[k, alive].any(axis=0)].sum()) if alive.any() else 0.0
-            failed[k] = n - int(alive.sum())
-        self.coverage, self.n_failed = cov, failed
+        self.coverage, self.n_failed = drawn_coverage(rows, w, draws, seen)
+
+
+def fly_validation(setup, theta, mc, model, **keywords):
+    """``(rows, seen)`` of validation flights: with losses in the pass and seen rows, when
+    each member first sees each vertex (:func:`~ideas_hpc.montecarlo.scenarios.fly_members_seen`);
+    else the rows alone and ``seen = None`` (whole-pass losses)."""
+    if model.in_pass_share > 0.0 and not setup.coverage.requirement:
+        return fly_members_seen(setup, theta, mc, **keywords)
+    return fly_members(setup, theta, None, mc, **keywords), None
 
 
 def _validate(c, setup, theta, need, w, exact, client, *, first=0):
@@ -105,9 +111,10 @@ def _validate(c, setup, theta, need, w, exact, client, *, first=0):
     and the curve compute theirs)."""
     d, mc = c.config.design, c.config.monte_carlo
     m = 1 if exact else verify_samples(d)
-    rows = fly_members(setup, theta, None, mc, seed=c.config.seed, n_samples=m, client=client,
-                       progress=progress.on(), first=first)
-    return Validation(rows, w, need, mc.failure_probability, c.config.seed, first=first)
+    model = failure_model(mc)
+    rows, seen = fly_validation(setup, theta, mc, model, seed=c.config.seed, n_samples=m,
+                                client=client, progress=progress.on(), first=first)
+    return Validation(rows, w, need, model, c.config.seed, first=first, seen=seen)
 
 
 def _tolerant_designs(nominal_bank, threshold, d, sep) -> list:
@@ -150,14 +157,11 @@ def design_reliable(c, setup, client, *, bank_store: str | None = None):
     reliability ones) and its summary lines.
     """
     d, mc = c.config.design, c.config.monte_carlo
-    p, p_f = float(d.success_probability), float(mc.failure_probability)
     if setup.coverage.require_stereo:
         raise c.error("is not supported with coverage.require_stereo (stereo pairs are not in "
                       "the scenario bank)", "design.success_probability")
-    if 1.0 - p_f ** d.n_max < p:
-        raise c.error(f"{p:g} is not reached: even a swarm of design.n_max = {d.n_max} that "
-                      f"always maps the target succeeds with at most 1 - p_f^N = "
-                      f"{1.0 - p_f ** d.n_max:.6g}", "design.success_probability")
+    # the most any swarm of n_max can reach is checked with the other cross-checks
+    # (campaign/schema/design_table.py reliability_checks)
     # design.time_limit_s bounds the searches of the phase together (issue 29): the
     # nominal design, then the bank's search gets what is left. Sampling (the bank's
     # flights, the validation) is not search: it has its own progress bars.
@@ -168,6 +172,8 @@ def design_reliable(c, setup, client, *, bank_store: str | None = None):
     client = phase_client(client)   # the job's one cluster (None: in this process)
     exact = continuous_off(mc, setup)
     s_n = 1 if exact else d.scenarios
+    # losses in the pass are drawn per validation flight: sampling, even on one scenario
+    exact = exact and failure_model(mc).in_pass_share == 0.0
     sep = c.config.swarm.min_separation_m
     # the tolerant designs (single-threaded HiGHS) on one worker while the other
     # builds the bank: their ~17 s no longer wait for it (same designs)
@@ -192,7 +198,7 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=Non
                     spent_s=0.0):
     d, mc = c.config.design, c.config.monte_carlo
     left = max(1e-3, float(d.time_limit_s) - max(0.0, spent_s))
-    p, p_f = float(d.success_probability), float(mc.failure_probability)
+    p, model = float(d.success_probability), failure_model(mc)
     need = nominal.threshold.need
     s_n = bank.rows.shape[0]
     _log(f"scenario bank: {s_n} scenarios x {bank.theta.size} candidates in {t_bank:.1f} s"
@@ -207,9 +213,10 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=Non
     try:
         with designer_errors(c):
             res = minimize(ScenarioProblem(bank.rows, bank.areas, bank.theta),
-                           ReliableSettings(p=level, p_f=p_f, threshold=nominal.threshold,
-                                            n_max=d.n_max,
-                                            sep_steps=m_sep, time_limit_s=left)).detail
+                           ReliableSettings(p=level, p_f=model.p_f[0],
+                                            threshold=nominal.threshold, n_max=d.n_max,
+                                            sep_steps=m_sep, time_limit_s=left,
+                                            failures=model)).detail
     except InputError as exc:
         if level == p or exc.field != "design.success_probability":
             raise
@@ -243,10 +250,15 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=Non
             break
     tolerant = _tolerant(tolerant.result() if tolerant is not None else
                          _tolerant_designs(nominal.bank, nominal.threshold, d, sep), rel)
-    stat = None if exact else statistical_bound(rel, p, p_f, d.n_max, d.confidence)
+    stat = None if exact else statistical_bound(rel, p, model, d.n_max, d.confidence)
+    # the levels get what the design's time limit has left, at least a tenth of it
+    levels = None if model.prior is None else n_at_levels(
+        rel, level, d.n_max, model.prior.levels(),
+        time_limit_s=max(0.1 * left, left - res.solve_time))
     return reliability_dataset(c, nominal, bank, res, chosen, chosen_val, curve, tolerant,
                                BankRun(stepped=stepped, need=need, exact=exact, t_bank_s=t_bank,
-                                       cert=cert, level=level, stat=stat))
+                                       cert=cert, level=level, stat=stat, model=model,
+                                       levels=levels))
 
 
 #: Sample problems cut from the bank for the statistical lower bound, and the fewest
@@ -259,7 +271,8 @@ def statistical_bound(rel, p, p_f, n_max, confidence):
     sec. 2; docs/certificate.md): the bank's scenarios cut into M groups, each an
     independent sample problem at the looser level ``p'' = p - sqrt(ln 10 / (2 S_g))``
     (the true optimum feasible in each with probability >= 0.9), each bounded by the
-    ring-gap bounds (:func:`~ideas_hpc.design.certificate.group_bounds`). Returns a dict,
+    ring-gap bounds (:func:`~ideas_hpc.design.certificate.group_bounds`; ``p_f`` a bare
+    probability or the failure model, whose upper law bounds P). Returns a dict,
     or None when the bank is too small or has no ring-gap bounds."""
     lows = rel._lows
     m = min(STAT_GROUPS, rel.s_n // STAT_GROUP_MIN)

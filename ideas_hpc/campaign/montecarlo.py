@@ -62,7 +62,7 @@ def mc_template(setup: FlybySetup, nom: Nominal, n_samples: int) -> xr.Dataset:
     dec = setup.decimate
     times = nom.times[::dec]
     nt = times.size
-    simulated = setup.attitude_mode == "simulated"
+    simulated = setup.attitude.closed_loop
     s = ("sample",)
     sizes = {"spacecraft": n, "axis": 3, "wheel": 3, "vertex": nv, "time": nt}
 

@@ -36,7 +36,15 @@ validation_look_confidence          ()                      confidence of each l
 validation_look_n (_p_hat,          (validation_look,)      each look's swarm size, P-hat, bound and
 _lower_bound, _first_sample)                                first validation sample, in order
 statistical_lower_bound             ()                      lower bound on the true fewest N (docs)
+swarm_size_at_p_f                   (p_f_level,)            p_f uncertain: the fewest N with p_f
+                                                            known at each of the prior's levels
+probability_at_p_f                  (p_f_level,)            its P on the bank at that p_f
+proven_bound_at_p_f                 (p_f_level,)            the proven lower bound on N there
 ==================================  ======================  =========================================
+
+Attrs ``failure_model`` (one line) and ``failure_model_record`` (the resolved
+:class:`~ideas_hpc.failures.model.FailureModel`) say which failure model P is
+for (docs/failure-model.md); ``p_f_levels`` words the levels.
 
 The certificate (:mod:`ideas_hpc.design.certificate`, docs/certificate.md) is
 ``validation_lower_bound``: the final look's bound, on its own fresh samples,
@@ -54,6 +62,7 @@ from ideas_hpc.design.api.methods import method_of_designer
 from ideas_hpc.base.seeds import SCENARIO_STREAM, VALIDATION_STREAM
 from ideas_hpc.campaign.design_exact import ExactDesign
 from ideas_hpc.design.certificate import verdict as certificate_verdict
+from ideas_hpc.design.reliability_levels import levels_line
 
 BOUND_METHOD = "Waudby-Smith & Ramdas betting (predictable plug-in), one-sided"
 
@@ -86,12 +95,29 @@ def _look_vars(cert) -> dict:
             "validation_look_first_sample": (dim, np.array([r[3] for r in rows], np.int64))}
 
 
+def _level_vars(levels) -> xr.Dataset:
+    """The designs at the prior's levels (dimension ``p_f_level``, coordinate its p_f)."""
+    dim = ("p_f_level",)
+    ds = xr.Dataset({
+        "swarm_size_at_p_f": (dim, np.array([a.n for a in levels], np.int64)),
+        "probability_at_p_f": (dim, np.array([a.probability for a in levels])),
+        "proven_bound_at_p_f": (dim, np.array([a.bound for a in levels])),
+    }, coords={"p_f_level": np.array([a.p_f for a in levels])})
+    _with(ds, "p_f_level", "1", "p_f known at the prior's levels (quantiles or values)")
+    _with(ds, "swarm_size_at_p_f", "1", "fewest N found meeting the bank's level with p_f "
+          "known at that value (0: none of at most n_max)")
+    _with(ds, "probability_at_p_f", "1", "its P on the scenario bank at that p_f")
+    _with(ds, "proven_bound_at_p_f", "1", "proven lower bound on N at that p_f")
+    return ds
+
+
 @dataclass(frozen=True)
 class BankRun:
     """How the design on the scenario bank went: ``stepped`` the looks' (N, P_bank) past
     the first, ``need`` the coverage threshold (fraction), ``exact`` one exact scenario,
     ``t_bank_s`` the bank's wall time, ``cert`` the certificate, ``level`` the level
-    the bank was solved at (None: p), ``stat`` the statistical lower bound."""
+    the bank was solved at (None: p), ``stat`` the statistical lower bound, ``model``
+    the failure model, ``levels`` the designs at the prior's levels (None: p_f known)."""
 
     stepped: list
     need: float
@@ -100,6 +126,8 @@ class BankRun:
     cert: object = None
     level: float | None = None
     stat: dict | None = None
+    model: object = None
+    levels: list | None = None
 
 
 def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, tolerant,
@@ -212,6 +240,8 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
     _with(new, "reliability_vs_n_swarm", "rad", "swarm angles of the curve's swarms (NaN: unused)")
     _with(new, "tolerant_swarm_size", "1", "spacecraft of the k-failure-tolerant design")
     _with(new, "tolerant_probability", "1", "its P on the scenario bank")
+    if run.levels:
+        new = new.merge(_level_vars(run.levels))
     ds = xr.merge([ds.drop_vars([k for k in new.data_vars if k in ds]), new],
                   combine_attrs="override")
     attrs = dict(nominal.attrs)
@@ -221,7 +251,10 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
         "bank_swarm_size": int(res.n), "validation_outcome": outcome,
         "demonstrate_steps": steps, "success_probability": p, "confidence": conf,
         "n_scenarios": int(bank.rows.shape[0]), "reliability_threshold": float(need),
-        "failure_probability": float(c.config.monte_carlo.failure_probability), "verify_samples": int(val.per_sample.size),
+        "failure_probability": (float(run.model.p_f[0]) if len(run.model.p_f) == 1
+                                else list(run.model.p_f)),
+        "failure_model": run.model.describe(), "failure_model_record": run.model.record(),
+        "verify_samples": int(val.per_sample.size),
         "scenario_stream": SCENARIO_STREAM, "validation_stream": VALIDATION_STREAM,
         "scenario_bank_hash": str(bank.attrs.get("config_hash", "")),
         "scenario_bank_s": float(t_bank), "reliability_solve_s": float(res.solve_time),
@@ -234,6 +267,8 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
     })
     if cert is not None:
         attrs["certificate"] = cert.line()
+    if run.levels:
+        attrs["p_f_levels"] = levels_line(run.levels, level)
     if stat is not None:
         attrs["statistical_lower_bound"] = (
             f"true fewest N >= {stat['bound']:g} at {100 * conf:g} % confidence: the "
@@ -249,6 +284,13 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
         notes.append(f"design.demonstrate: {steps} until the validation bound reached p = {p:g}"
                      if val.lower >= p else
                      f"design.demonstrate: {steps} (n_max) without demonstrating p")
+    if not run.model.is_plain:
+        notes.append(f"failure model: {run.model.describe()}"
+                     + ("; the bank scores a loss in the pass as a whole-pass loss (a lower "
+                        "bound on P), its proofs as a survival (an upper bound); the validation "
+                        "draws the loss times" if run.model.in_pass_share else ""))
+    if run.levels:
+        notes.append(attrs["p_f_levels"])
     if level != p:
         notes.append(f"design.bank_level: the bank solved at the stricter level p' = {level:g} "
                      f"(p = {p:g}) so that its swarm validates at the first look")

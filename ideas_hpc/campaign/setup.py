@@ -16,6 +16,7 @@ import dataclasses
 from ideas_hpc.attitude import campaign_maneuver
 from ideas_hpc.attitude.torque_terms import torques_from_config
 from ideas_hpc.attitude.device import check_device
+from ideas_hpc.attitude.modes import attitude_start
 from ideas_hpc.campaign.body_checks import check_body, check_grid_step, check_pointing
 from ideas_hpc.body.bodies import load_body
 from ideas_hpc.body.formats import builtin_body, length_unit_applies, load_shape_file
@@ -123,9 +124,9 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
 
 
 def _imaging(cfg, eta_rad: float) -> ImageUse | None:
-    """The usable-image test (SPEC 7d), or None (every image counts) for the paper's
-    start, ``monte_carlo.attitude_start = "paper"``."""
-    if cfg.monte_carlo.attitude_start == "paper":
+    """The usable-image test (SPEC 7d), or None (every image counts) for a start without
+    ``usable_images`` (the paper's, ``monte_carlo.attitude_start = "paper"``)."""
+    if not attitude_start(cfg.monte_carlo.attitude_start).usable_images:
         return None
     inst = cfg.instrument
     return ImageUse(ifov_rad(eta_rad, pixels_across=inst.pixels_across,

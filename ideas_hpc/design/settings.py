@@ -51,7 +51,9 @@ class ReliableSettings:
     ``enumerate_budget``: score every swarm of a size when there are at most
     this many; ``ring_prebound``: bound ``U_m`` first by the per-scenario
     ring-gap bounds; ``bound_solver`` / ``tolerance_solver``: stand-ins for
-    the programmes (tests).
+    the programmes (tests). ``p_f``: independent failures of that probability, or
+    ``failures``, the failure model (:class:`~ideas_hpc.failures.model.FailureModel`,
+    issue 41), which then wins.
     """
 
     p: float
@@ -65,6 +67,7 @@ class ReliableSettings:
     ring_prebound: bool = True
     bound_solver: Callable | None = None
     tolerance_solver: Callable | None = None
+    failures: object = None
     threshold: Threshold | None = None
 
     def __post_init__(self):
@@ -76,6 +79,11 @@ class ReliableSettings:
                                 f"{self.threshold.need!r}")
             object.__setattr__(self, "need", self.threshold.need)
 
+    @property
+    def model(self):
+        """The failure model: ``failures``, or a bare ``p_f``."""
+        return self.failures if self.failures is not None else self.p_f
+
 
 #: Most looks ``design.demonstrate`` plans when the file does not say.
 DEFAULT_LOOKS = 4
@@ -86,7 +94,9 @@ class LookPlan:
     """The looks of :func:`~ideas_hpc.design.certificate.certify`: requirement ``p``
     and overall ``confidence``; ``n_max`` the largest swarm; ``n_samples`` (M)
     validation samples per look; ``demonstrate`` steps N up while the bound
-    misses p, in at most ``max_looks`` looks; ``exact``: one exact scenario."""
+    misses p, in at most ``max_looks`` looks; ``exact``: one exact scenario;
+    ``samples_max``: the most samples the look plan may give one look
+    (:func:`~ideas_hpc.design.look_plan.plan_looks`; None: ``n_samples`` each)."""
 
     p: float
     confidence: float
@@ -95,3 +105,4 @@ class LookPlan:
     demonstrate: bool
     max_looks: int = DEFAULT_LOOKS
     exact: bool = False
+    samples_max: int | None = None

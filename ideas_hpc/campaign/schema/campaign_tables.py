@@ -68,10 +68,12 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ideas_hpc.attitude.maneuvers import CAMPAIGN_NAMES, campaign_maneuver
+from ideas_hpc.attitude.modes import ATTITUDE_MODES
 from ideas_hpc.campaign.schema.toml_file import CampaignSource, load_campaign
 from ideas_hpc.design.pareto.objectives import check_objectives
 from ideas_hpc.base.errors import InputError, config_fields
 from ideas_hpc.montecarlo.dispersions import check_dispersions
+from ideas_hpc.montecarlo.failure_dispersion import check_fleet
 from ideas_hpc.base.fields import (Field, live_typed_table, schema_defaults, to_typed,
                                      typed_table, validate, with_defaults)
 from ideas_hpc.base.units import DEG, KM, MINUTE
@@ -123,7 +125,7 @@ SWARM = {
 }
 
 ATTITUDE = {
-    "mode": Field("str", "ideal", choices=("ideal", "simulated")),
+    "mode": Field("str", "ideal", choices=ATTITUDE_MODES),
     "maneuver": Field("str", "nadir", choices=CAMPAIGN_NAMES),
     "decimate": Field("int", 10, lo=1),
     "theta_max_deg": Field("float", None, nullable=True, si="theta_max_rad",
@@ -251,9 +253,11 @@ def _cross_checks(c: CampaignConfig) -> None:
         if sw.sweep_periods_s is None:
             raise InputError(f"is required for attitude.maneuver = {c.attitude.maneuver!r}",
                              field="swarm.sweep_periods_min")
-    if mc.failures_k and sw.angles_rad and mc.failures_k > len(sw.angles_rad):
-        raise InputError(f"cannot exceed the swarm size {len(sw.angles_rad)}",
-                         field="monte_carlo.failures_k")
+    with config_fields(prefix="monte_carlo."):   # the failure model against the fleet
+        if kind.swarm == "designed":
+            check_fleet(mc, d.n_max, "design.n_max")
+        elif sw.angles_rad:
+            check_fleet(mc, len(sw.angles_rad), "the swarm size", swarm=True)
     with config_fields(DESIGNER_FIELDS):
         check_objectives(d.objectives)
     check_encounter(fb, c.attitude)

@@ -15,8 +15,10 @@ import math
 
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.design.api.methods import METHODS
+from ideas_hpc.failures.weights import all_lost
 from ideas_hpc.mapping.requirement import TARGET_RULES
 from ideas_hpc.montecarlo.dispersions import dispersion_keys
+from ideas_hpc.montecarlo.failure_dispersion import failure_model
 from ideas_hpc.campaign.schema.kinds import KINDS
 from ideas_hpc.base.fields import Field, LiveTable
 from ideas_hpc.base.units import DEG, MINUTE
@@ -97,6 +99,10 @@ def reliability_checks(c) -> None:
     d = c.design
     p = d.success_probability
     if p is None:
+        if c.monte_carlo.failure_in_pass_share:
+            raise InputError("is read by success-probability designs only (design."
+                             "success_probability): the Monte Carlo kind and the verification "
+                             "fly whole-pass losses", field="monte_carlo.failure_in_pass_share")
         if d.demonstrate:
             raise InputError("needs design.success_probability", field="design.demonstrate")
         if d.bank_level is not None:
@@ -115,6 +121,7 @@ def reliability_checks(c) -> None:
         raise InputError("replaces design.failures_tolerated (failures enter the probability "
                          "exactly through monte_carlo.failure_probability): set it to 0",
                          field="design.success_probability")
+    _reachable(c.monte_carlo, p, d.n_max)
     if d.bank_level is not None and d.bank_level < p:
         raise InputError(f"{d.bank_level:g} is below design.success_probability = {p:g}: the "
                          "bank's level may only be stricter", field="design.bank_level")
@@ -131,3 +138,17 @@ def reliability_checks(c) -> None:
                          f"10 / (1 - p) = {least} are needed (fewer than 10 expected misses "
                          "cannot tell P from p); lower design.success_probability for a "
                          "smaller check", field="design.verify_samples")
+
+
+def _reachable(mc, p: float, n_max: int) -> None:
+    """Refuse a p no swarm of ``n_max`` can reach under the failure model: one that always
+    maps the target still needs a survivor (losses in the pass counted as survivals), so
+    ``P <= 1 - P(none survives)`` (``1 - p_f^N`` for independent failures)."""
+    model = failure_model(mc)
+    most = 1.0 - all_lost(model, n_max)
+    if most < p:
+        how = ("1 - p_f^N" if model.is_plain else
+               "1 - P(no spacecraft survives) under the failure model")
+        raise InputError(f"{p:g} is not reached: even a swarm of design.n_max = {n_max} that "
+                         f"always maps the target succeeds with at most {how} = {most:.6g}",
+                         field="design.success_probability")
