@@ -63,6 +63,9 @@ SEED_WORDS = 4
 GA_SEEDING = 13
 #: Purpose word of the NSGA-II (design-pareto) search's own draws.
 PARETO_SEARCH = 14
+#: :func:`search_rng` purpose of the certificate's look plan (issue 41): its bootstrap of
+#: the held-out scenarios' values (:mod:`ideas_hpc.design.look_plan`).
+LOOK_PLAN = 15
 #: Seed of the figures' jitter stream.
 PLOT_SEED = 0
 
@@ -147,7 +150,8 @@ def search_rng(seed: int, purpose: int) -> np.random.Generator:
     """A designer's own stream: ``default_rng([seed mod 2**32, purpose])``.
 
     ``purpose`` is one of the module's purpose words (:data:`GA_SEEDING`,
-    :data:`PARETO_SEARCH`); distinct words give independent streams for one seed.
+    :data:`PARETO_SEARCH`, :data:`LOOK_PLAN`); distinct words give independent streams for
+    one seed.
     """
     return np.random.default_rng([search_seed(seed), int(purpose)])
 

@@ -29,6 +29,7 @@ are exact (no sampling): ``P-hat`` is the exact P and so is its bound.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import shutil
 import sys
@@ -58,7 +59,8 @@ from ideas_hpc.base import seeds
 from ideas_hpc.campaign.design_exact import design_exact
 from ideas_hpc.campaign.schema.design_checks import designer_errors
 from ideas_hpc.campaign.reliability_vars import BankRun, reliability_dataset
-from ideas_hpc.campaign.schema.design_table import verify_samples
+from ideas_hpc.campaign.schema.design_table import holdout_scenarios, verify_samples
+from ideas_hpc.design.holdout import HeldOut, agreement
 
 #: Purpose word of the validation's sampled failures (its old home; now
 #: :data:`ideas_hpc.base.seeds.STREAM_FAILURES`): ``(VALIDATION_STREAM, m, 3)``.
@@ -106,11 +108,11 @@ def fly_validation(setup, theta, mc, model, **keywords):
     return fly_members(setup, theta, None, mc, **keywords), None
 
 
-def _validate(c, setup, theta, need, w, exact, client, *, first=0):
+def _validate(c, setup, theta, need, w, exact, client, *, first=0, size=None):
     """Validation samples ``first .. first + M - 1`` of ``theta`` (no bound: :func:`_certify`
-    and the curve compute theirs)."""
+    and the curve compute theirs); M is ``size``, by default ``design.verify_samples``."""
     d, mc = c.config.design, c.config.monte_carlo
-    m = 1 if exact else verify_samples(d)
+    m = 1 if exact else (verify_samples(d) if size is None else int(size))
     model = failure_model(mc)
     rows, seen = fly_validation(setup, theta, mc, model, seed=c.config.seed, n_samples=m,
                                 client=client, progress=progress.on(), first=first)
@@ -172,6 +174,8 @@ def design_reliable(c, setup, client, *, bank_store: str | None = None):
     client = phase_client(client)   # the job's one cluster (None: in this process)
     exact = continuous_off(mc, setup)
     s_n = 1 if exact else d.scenarios
+    # held-out scenarios (issue 41): the same stream's next H draws, scoring only
+    h_n = holdout_scenarios(d, exact)
     # losses in the pass are drawn per validation flight: sampling, even on one scenario
     exact = exact and failure_model(mc).in_pass_share == 0.0
     sep = c.config.swarm.min_separation_m
@@ -182,12 +186,13 @@ def design_reliable(c, setup, client, *, bank_store: str | None = None):
                 if client is not None else None)
     t0 = time.perf_counter()
     fresh = bank_store is not None and not Path(bank_store).exists()
-    bank = build_scenario_bank(setup, d.grid_step_rad, mc, seed=c.config.seed, n_scenarios=s_n,
-                               client=client, store=bank_store, progress=progress.on())
+    bank = build_scenario_bank(setup, d.grid_step_rad, mc, seed=c.config.seed,
+                               n_scenarios=s_n + h_n, client=client, store=bank_store,
+                               progress=progress.on())
     t_bank = time.perf_counter() - t0
     try:
         return _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant,
-                               spent_s=spent)
+                               spent_s=spent, holdout=h_n)
     except InputError:
         if fresh:    # bad input leaves no store: the bank this run made goes too
             shutil.rmtree(bank_store, ignore_errors=True)
@@ -195,13 +200,18 @@ def design_reliable(c, setup, client, *, bank_store: str | None = None):
 
 
 def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=None, *,
-                    spent_s=0.0):
+                    spent_s=0.0, holdout=0):
     d, mc = c.config.design, c.config.monte_carlo
     left = max(1e-3, float(d.time_limit_s) - max(0.0, spent_s))
     p, model = float(d.success_probability), failure_model(mc)
     need = nominal.threshold.need
-    s_n = bank.rows.shape[0]
-    _log(f"scenario bank: {s_n} scenarios x {bank.theta.size} candidates in {t_bank:.1f} s"
+    # the first S scenarios select, the last H only score (design/holdout.py)
+    h_n = int(holdout)
+    s_n = bank.rows.shape[0] - h_n
+    held_rows = bank.rows[s_n:]
+    bank = dataclasses.replace(bank, rows=bank.rows[:s_n]) if h_n else bank
+    _log(f"scenario bank: {s_n} scenarios x {bank.theta.size} candidates"
+         + (f" and {h_n} held-out scenarios" if h_n else "") + f" in {t_bank:.1f} s"
          + (" (continuous dispersions off: one exact scenario)" if exact else "")
          # the markers' ~60 s of HiGHS hold a worker the bank would otherwise use
          + (" (one worker designed the failure-tolerant markers meanwhile)"
@@ -224,10 +234,13 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=Non
                       "design.bank_level") from None
     rel = res.designer
     w = rel.ev.w
-    cert = _certify(c, setup, client, bank, res, rel, need, w, exact)
+    held = HeldOut.of(held_rows, w, need, model)
+    cert = _certify(c, setup, client, bank, res, rel, need, w, exact, held)
     chosen_val = cert.final.extra
-    stepped = [(lk.n, lk.bank_probability) for lk in cert.looks[1:]]
-    if len(cert.looks) == 1:
+    # the looks past the bank's answer: stepped up (design.demonstrate), or planned past
+    # sizes that could not clear p (design/look_plan.py)
+    stepped = [(lk.n, lk.bank_probability) for lk in cert.looks if lk.n != res.n]
+    if cert.final.n == res.n:
         chosen = res
     else:       # status, bound and gap stay the optimisation's (of the bank-optimal res.n):
         sw = cert.final.swarm   # stepping up is the validation's decision (reliability_vars)
@@ -245,7 +258,8 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=Non
         # the curve reports each N alone at design.confidence (it certifies nothing)
         v = looked.get(n) or _validate(c, setup, bank.theta[sw], need, w, exact, client)
         low = v.p_hat if exact else lower_confidence_bound(v.per_sample, d.confidence)
-        curve.append((n, pb, rel.upper(n), v.p_hat, low, sw))
+        ph = held.probability(sw) if held is not None else math.nan
+        curve.append((n, pb, rel.upper(n), v.p_hat, low, sw, ph))
         if pb >= CURVE_TOP and n >= chosen.n:
             break
     tolerant = _tolerant(tolerant.result() if tolerant is not None else
@@ -258,7 +272,9 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=Non
     return reliability_dataset(c, nominal, bank, res, chosen, chosen_val, curve, tolerant,
                                BankRun(stepped=stepped, need=need, exact=exact, t_bank_s=t_bank,
                                        cert=cert, level=level, stat=stat, model=model,
-                                       levels=levels))
+                                       levels=levels,
+                                       held=None if held is None else held_scores(
+                                           held, chosen, chosen_val)))
 
 
 #: Sample problems cut from the bank for the statistical lower bound, and the fewest
@@ -288,9 +304,20 @@ def statistical_bound(rel, p, p_f, n_max, confidence):
             "theta": theta, "group_bounds": bounds}
 
 
-def _certify(c, setup, client, bank, res, rel, need, w, exact):
+def held_scores(held, chosen, val) -> dict:
+    """The reported swarm on the held-out scenarios: its P there, the bias of the bank's
+    (selection) P, and whether the validation's P-hat agrees with the held-out P within
+    their sampling error (:func:`~ideas_hpc.design.holdout.agreement`)."""
+    a = agreement(held.values(chosen.indices), val.per_sample)
+    return {"scenarios": held.size, "probability": a["held"],
+            "bias": float(chosen.probability) - a["held"], **a}
+
+
+def _certify(c, setup, client, bank, res, rel, need, w, exact, held=None):
     """The looks of :func:`ideas_hpc.design.certificate.certify` on validation flights; each
-    look's ``extra`` is its :class:`Validation` (bound at the look's share of the error)."""
+    look's ``extra`` is its :class:`Validation` (bound at the look's share of the error).
+    With held-out scenarios the looks are planned from their values
+    (:mod:`ideas_hpc.design.look_plan`: sizes that cannot clear p are skipped)."""
     d = c.config.design
     m = 1 if exact else verify_samples(d)
 
@@ -298,12 +325,15 @@ def _certify(c, setup, client, bank, res, rel, need, w, exact):
         return (res.indices, res.probability) if n == res.n else rel.best_of(n)
 
     def validate(sw, first, size):
-        v = _validate(c, setup, bank.theta[sw], need, w, exact, client, first=first)
+        v = _validate(c, setup, bank.theta[sw], need, w, exact, client, first=first, size=size)
         return v.per_sample, v
 
     cert = certify(res.n, best_of, validate, LookPlan(
         p=float(d.success_probability), confidence=d.confidence, n_max=d.n_max, n_samples=m,
-        demonstrate=d.demonstrate, max_looks=d.demonstrate_looks, exact=exact))
+        demonstrate=d.demonstrate, max_looks=d.demonstrate_looks, exact=exact,
+        samples_max=d.verify_samples_max),
+        values_of=None if held is None else held.values,
+        rng=seeds.search_rng(c.config.seed, seeds.LOOK_PLAN))
     for lk in cert.looks:       # the one bound of each look: certify's
         lk.extra.lower = lk.lower
     return cert

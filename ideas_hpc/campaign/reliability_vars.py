@@ -36,6 +36,11 @@ validation_look_confidence          ()                      confidence of each l
 validation_look_n (_p_hat,          (validation_look,)      each look's swarm size, P-hat, bound and
 _lower_bound, _first_sample)                                first validation sample, in order
 statistical_lower_bound             ()                      lower bound on the true fewest N (docs)
+holdout_probability, bank_bias      ()                      P of the reported swarm on the held-out
+                                                            scenarios; bank P minus it (issue 41)
+bank_validation_agree               ()                      held-out P inside the validation's 95 %
+                                                            interval
+reliability_vs_n_holdout            (reliability_n,)        the curve's swarms on the held-out ones
 swarm_size_at_p_f                   (p_f_level,)            p_f uncertain: the fewest N with p_f
                                                             known at each of the prior's levels
 probability_at_p_f                  (p_f_level,)            its P on the bank at that p_f
@@ -95,6 +100,26 @@ def _look_vars(cert) -> dict:
             "validation_look_first_sample": (dim, np.array([r[3] for r in rows], np.int64))}
 
 
+def _held_vars(held: dict, curve) -> xr.Dataset:
+    """The held-out scoring (issue 41): the reported swarm's P there, the bank's bias, the
+    curve's swarms there (dimension ``reliability_n``)."""
+    ds = xr.Dataset({
+        "holdout_probability": ((), float(held["probability"])),
+        "bank_bias": ((), float(held["bias"])),
+        "bank_validation_agree": ((), bool(held["agrees"])),
+        "reliability_vs_n_holdout": (("reliability_n",), np.array([r[6] for r in curve])),
+    })
+    _with(ds, "holdout_probability", "1", f"P of the reported swarm on the "
+          f"{held['scenarios']} held-out scenarios (they chose nothing: unbiased)")
+    _with(ds, "bank_bias", "1", "reliability_probability - holdout_probability: the "
+          "optimiser's bias of the bank's P for the swarm it chose")
+    _with(ds, "bank_validation_agree", "1", "holdout_probability and validation_p_hat agree "
+          "within their 95 % sampling error (|difference| <= 1.96 sqrt(s_v^2/M + s_h^2/H))")
+    _with(ds, "reliability_vs_n_holdout", "1", "P of the curve's swarms on the held-out "
+          "scenarios")
+    return ds
+
+
 def _level_vars(levels) -> xr.Dataset:
     """The designs at the prior's levels (dimension ``p_f_level``, coordinate its p_f)."""
     dim = ("p_f_level",)
@@ -117,7 +142,8 @@ class BankRun:
     the first, ``need`` the coverage threshold (fraction), ``exact`` one exact scenario,
     ``t_bank_s`` the bank's wall time, ``cert`` the certificate, ``level`` the level
     the bank was solved at (None: p), ``stat`` the statistical lower bound, ``model``
-    the failure model, ``levels`` the designs at the prior's levels (None: p_f known)."""
+    the failure model, ``levels`` the designs at the prior's levels (None: p_f known),
+    ``held`` the reported swarm on the held-out scenarios (None: none held out)."""
 
     stepped: list
     need: float
@@ -128,6 +154,7 @@ class BankRun:
     stat: dict | None = None
     model: object = None
     levels: list | None = None
+    held: dict | None = None      # the reported swarm on the held-out scenarios (held_scores)
 
 
 def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, tolerant,
@@ -242,6 +269,8 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
     _with(new, "tolerant_probability", "1", "its P on the scenario bank")
     if run.levels:
         new = new.merge(_level_vars(run.levels))
+    if run.held is not None:
+        new = new.merge(_held_vars(run.held, curve))
     ds = xr.merge([ds.drop_vars([k for k in new.data_vars if k in ds]), new],
                   combine_attrs="override")
     attrs = dict(nominal.attrs)
@@ -269,6 +298,20 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
         attrs["certificate"] = cert.line()
     if run.levels:
         attrs["p_f_levels"] = levels_line(run.levels, level)
+    if run.held is not None:
+        h = run.held
+        attrs.update({"n_holdout_scenarios": int(h["scenarios"]),
+                      "holdout_probability": float(h["probability"]),
+                      "bank_bias": float(h["bias"]),
+                      "bank_validation_agreement": (
+                          f"held-out P {h['probability']:.4f} and validation P-hat "
+                          f"{h['p_hat']:.4f} {'agree' if h['agrees'] else 'DISAGREE'} within "
+                          f"their sampling error (difference {h['p_hat'] - h['probability']:+.4f}"
+                          f", 95 %: +-{1.959963984540054 * h['se']:.4f}); the validation's own "
+                          f"95 % interval [{h['interval'][0]:.4f}, {h['interval'][1]:.4f}] "
+                          f"{'holds' if h['inside'] else 'misses'} the held-out P; bank P "
+                          f"{chosen.probability:.4f} on the scenarios that chose the swarm: "
+                          f"bias {h['bias']:+.4f}")})
     if stat is not None:
         attrs["statistical_lower_bound"] = (
             f"true fewest N >= {stat['bound']:g} at {100 * conf:g} % confidence: the "
@@ -299,7 +342,10 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
     summary = (f"success-probability design for P({thr}) >= {p:g}: N = {chosen.n}, "
                f"requirement {verdict(val, p)} by validation"
                + (f" (design.demonstrate: {steps})" if stepped else "")
-               + f"; P = {chosen.probability:.4f} on {bank.rows.shape[0]} scenarios; "
+               + f"; P = {chosen.probability:.4f} on {bank.rows.shape[0]} scenarios"
+               + ("" if run.held is None else
+                  f", {run.held['probability']:.4f} on {run.held['scenarios']} held-out "
+                  f"(bias {run.held['bias']:+.4f})") + "; "
                f"validation over {samples}: P-hat = {val.p_hat:.4f}, {100 * look_conf:.4g} % "
                f"lower bound {val.lower:.4f}; "
                f"{bank_line(res.n, res.probability, res.status, res.bound, res.gap)}; "

@@ -75,6 +75,9 @@ def reliability_lines(ds) -> list[str]:
     if "statistical_lower_bound" in a:
         out.append("statistical lower bound (beside the proof on the bank): "
                    + str(a["statistical_lower_bound"]))
+    if "bank_validation_agreement" in a:
+        out.append(f"held-out scoring ({a['n_holdout_scenarios']} scenarios that chose "
+                   f"nothing): {a['bank_validation_agreement']}")
     if "p_f_levels" in a:
         out.append(str(a["p_f_levels"]))
     if "bank_level" in ds and float(ds["bank_level"]) != p:

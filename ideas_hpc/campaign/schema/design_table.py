@@ -7,6 +7,9 @@ The success-probability designer (issue 20) reads ``design.success_probability``
 ``design.demonstrate_looks`` and ``design.bank_level`` (issue 29, docs/certificate.md);
 ``design.verify_samples`` (M) defaults to 64, or 256 with p set
 (:func:`verify_samples`). S and M must resolve p: at least ``10 / (1 - p)``.
+``design.holdout_scenarios`` (H, :func:`holdout_scenarios`) held-out scenarios score the
+swarms the bank chose (issue 41); ``design.verify_samples_max`` caps the samples the look
+plan may give one look.
 """
 
 from __future__ import annotations
@@ -53,6 +56,15 @@ DESIGN = {
     "bank_level": Field("float", None, nullable=True, lo=0, hi=1, lo_open=True, hi_open=True,
                         doc="p': solve the scenario bank at this stricter level (>= p) so that "
                             "its swarm validates at the first look (default: p)"),
+    "holdout_scenarios": Field("int", None, nullable=True, lo=0, hi=100000,
+                               doc="held-out scenarios that score the swarms the bank chose "
+                                   "(unbiased P, the optimiser's bias, the look plan; "
+                                   "docs/certificate.md): default design.scenarios when the "
+                                   "bank is sampled, 0 (none) when it is exact"),
+    "verify_samples_max": Field("int", None, nullable=True, lo=1, hi=1000000,
+                                doc="most validation samples of one look: the look plan "
+                                    "doubles a look's M from design.verify_samples toward 80 % "
+                                    "predicted power (default: design.verify_samples)"),
     "population": Field("int", 100, lo=2, doc="GA population size"),
     "generations": Field("int", 115, lo=1),
     "n_max": Field("int", 20, lo=1, hi=200),
@@ -94,6 +106,14 @@ def verify_samples(d) -> int:
     return VERIFY_DEFAULT_RELIABILITY if d.success_probability is not None else VERIFY_DEFAULT
 
 
+def holdout_scenarios(d, exact: bool) -> int:
+    """H: ``design.holdout_scenarios``, or its default: as many as the bank's scenarios when
+    the bank is sampled, none when it is exact (one scenario: nothing to hold out)."""
+    if exact:
+        return 0
+    return int(d.scenarios if d.holdout_scenarios is None else d.holdout_scenarios)
+
+
 def reliability_checks(c) -> None:
     """Cross-checks of the success-probability keys (bad inputs of issue 20)."""
     d = c.design
@@ -105,8 +125,9 @@ def reliability_checks(c) -> None:
                              "fly whole-pass losses", field="monte_carlo.failure_in_pass_share")
         if d.demonstrate:
             raise InputError("needs design.success_probability", field="design.demonstrate")
-        if d.bank_level is not None:
-            raise InputError("needs design.success_probability", field="design.bank_level")
+        for key in ("bank_level", "holdout_scenarios", "verify_samples_max"):
+            if getattr(d, key) is not None:
+                raise InputError("needs design.success_probability", field=f"design.{key}")
         return
     if not KINDS[c.kind].success_probability:
         able = ", ".join(repr(k.name) for k in KINDS.values() if k.success_probability)
@@ -133,6 +154,9 @@ def reliability_checks(c) -> None:
                          "campaigns/eros-design-quick.toml, or lower "
                          "design.success_probability", field="design.scenarios")
     m = verify_samples(d)
+    if d.verify_samples_max is not None and d.verify_samples_max < m:
+        raise InputError(f"{d.verify_samples_max} is below the {m} samples of a look "
+                         "(design.verify_samples)", field="design.verify_samples_max")
     if m < least:
         raise InputError(f"{m} validation samples cannot resolve p = {p:g}: at least "
                          f"10 / (1 - p) = {least} are needed (fewer than 10 expected misses "
