@@ -45,7 +45,7 @@ def test_held_out_evaluator_is_the_exact_one():
     rows = rng.random((5, 6, 30)) < 0.4
     w = rng.uniform(0.5, 1.5, 30)
     w /= w.sum()
-    held = HeldOut.of(rows, w, 0.7, 0.1)
+    held = HeldOut.of_rows(rows, w, 0.7, 0.1)
     sw = np.array([0, 2, 5])
     want = []
     for s in range(5):
@@ -57,4 +57,8 @@ def test_held_out_evaluator_is_the_exact_one():
                 tot += 0.9 ** len(alive) * 0.1 ** (3 - len(alive))
         want.append(tot)
     np.testing.assert_allclose(held.values(sw), want, rtol=0, atol=1e-14)
-    assert HeldOut.of(rows[:0], w, 0.7, 0.1) is None
+    assert HeldOut.of_rows(rows[:0], w, 0.7, 0.1) is None
+    calls = []
+    counted = HeldOut(lambda sw: calls.append(tuple(sw)) or np.ones(4), 4)
+    assert counted.probability([5, 2]) == counted.probability([2, 5]) == 1.0
+    assert calls == [(2, 5)]                                 # one flight per swarm

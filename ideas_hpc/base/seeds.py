@@ -99,6 +99,10 @@ def seeds_for(campaign_seed: int, n_samples: int) -> np.ndarray:
 SCENARIO_STREAM = 0x5CE7A210
 #: First spawn-key word of a reliability design's validation samples (issue 20).
 VALIDATION_STREAM = 0x7A11DA7E
+#: Stream of the held-out scenarios that score the swarms the bank chose (issue 41,
+#: :mod:`ideas_hpc.design.holdout`): draws of the same dispersions as the bank's and the
+#: validation's, disjoint from both (no selection and no certificate uses them).
+HOLDOUT_STREAM = 0x401D0B7E
 #: Purposes within one scenario / validation sample (third spawn-key word).
 STREAM_BODY, STREAM_SPACECRAFT, STREAM_ATTITUDE = 0, 1, 2
 #: Purpose of a validation sample's failures (issue 20: the drawn-failure outcomes;
@@ -113,10 +117,11 @@ def stream_seed_sequence(campaign_seed: int, stream: int, k: int,
                          purpose: int) -> np.random.SeedSequence:
     """``SeedSequence(campaign_seed, spawn_key=(stream, k, purpose))``: draw ``k`` of a design stream.
 
-    ``stream`` is :data:`SCENARIO_STREAM` or :data:`VALIDATION_STREAM`; three
-    key words keep these apart from every Monte Carlo sample (module docstring).
+    ``stream`` is :data:`SCENARIO_STREAM`, :data:`VALIDATION_STREAM` or
+    :data:`HOLDOUT_STREAM`; three key words keep these apart from every Monte Carlo sample
+    (module docstring).
     """
-    if int(stream) not in (SCENARIO_STREAM, VALIDATION_STREAM):
+    if int(stream) not in (SCENARIO_STREAM, VALIDATION_STREAM, HOLDOUT_STREAM):
         raise InputError(f"unknown design stream {stream!r}", field="stream")
     return np.random.SeedSequence(int(campaign_seed),
                                   spawn_key=(int(stream), int(k), int(purpose)))

@@ -29,7 +29,6 @@ are exact (no sampling): ``P-hat`` is the exact P and so is its bound.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import shutil
 import sys
@@ -87,10 +86,12 @@ class Validation:
     the exact failure-weighted P and one drawn outcome (:mod:`ideas_hpc.failures.sampling`;
     ``seen``: the first-seen times of losses in the pass, None: whole-pass)."""
 
-    def __init__(self, rows, w, need, model, seed: int, first: int = 0, seen=None):
+    def __init__(self, rows, w, need, model, seed: int, first: int = 0, seen=None,
+                 stream: int = seeds.VALIDATION_STREAM):
         model = as_model(model)
         self.first = int(first)
-        draws = validation_failures(model, rows.shape[1], seed, self.first, rows.shape[0])
+        draws = validation_failures(model, rows.shape[1], seed, self.first, rows.shape[0],
+                                    stream)
         self.per_sample = sample_probabilities(rows, w, need, model, draws, seen)
         self.p_hat = float(self.per_sample.mean())
         # the bound at the look's share of the error is computed once, by certify(): its
@@ -108,15 +109,19 @@ def fly_validation(setup, theta, mc, model, **keywords):
     return fly_members(setup, theta, None, mc, **keywords), None
 
 
-def _validate(c, setup, theta, need, w, exact, client, *, first=0, size=None):
+def _validate(c, setup, theta, need, w, exact, client, *, first=0, size=None,
+              stream=seeds.VALIDATION_STREAM):
     """Validation samples ``first .. first + M - 1`` of ``theta`` (no bound: :func:`_certify`
-    and the curve compute theirs); M is ``size``, by default ``design.verify_samples``."""
+    and the curve compute theirs); M is ``size``, by default ``design.verify_samples``;
+    ``stream``: the held-out scenarios' (:data:`ideas_hpc.base.seeds.HOLDOUT_STREAM`)."""
     d, mc = c.config.design, c.config.monte_carlo
     m = 1 if exact else (verify_samples(d) if size is None else int(size))
     model = failure_model(mc)
     rows, seen = fly_validation(setup, theta, mc, model, seed=c.config.seed, n_samples=m,
-                                client=client, progress=progress.on(), first=first)
-    return Validation(rows, w, need, model, c.config.seed, first=first, seen=seen)
+                                client=client, progress=progress.on(), first=first,
+                                stream=stream)
+    return Validation(rows, w, need, model, c.config.seed, first=first, seen=seen,
+                      stream=stream)
 
 
 def _tolerant_designs(nominal_bank, threshold, d, sep) -> list:
@@ -174,7 +179,8 @@ def design_reliable(c, setup, client, *, bank_store: str | None = None):
     client = phase_client(client)   # the job's one cluster (None: in this process)
     exact = continuous_off(mc, setup)
     s_n = 1 if exact else d.scenarios
-    # held-out scenarios (issue 41): the same stream's next H draws, scoring only
+    # held-out scenarios (issue 41): H draws of their own stream, flown for the swarms
+    # they score only (design/holdout.py)
     h_n = holdout_scenarios(d, exact)
     # losses in the pass are drawn per validation flight: sampling, even on one scenario
     exact = exact and failure_model(mc).in_pass_share == 0.0
@@ -187,7 +193,7 @@ def design_reliable(c, setup, client, *, bank_store: str | None = None):
     t0 = time.perf_counter()
     fresh = bank_store is not None and not Path(bank_store).exists()
     bank = build_scenario_bank(setup, d.grid_step_rad, mc, seed=c.config.seed,
-                               n_scenarios=s_n + h_n, client=client, store=bank_store,
+                               n_scenarios=s_n, client=client, store=bank_store,
                                progress=progress.on())
     t_bank = time.perf_counter() - t0
     try:
@@ -205,13 +211,9 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=Non
     left = max(1e-3, float(d.time_limit_s) - max(0.0, spent_s))
     p, model = float(d.success_probability), failure_model(mc)
     need = nominal.threshold.need
-    # the first S scenarios select, the last H only score (design/holdout.py)
     h_n = int(holdout)
-    s_n = bank.rows.shape[0] - h_n
-    held_rows = bank.rows[s_n:]
-    bank = dataclasses.replace(bank, rows=bank.rows[:s_n]) if h_n else bank
-    _log(f"scenario bank: {s_n} scenarios x {bank.theta.size} candidates"
-         + (f" and {h_n} held-out scenarios" if h_n else "") + f" in {t_bank:.1f} s"
+    s_n = bank.rows.shape[0]
+    _log(f"scenario bank: {s_n} scenarios x {bank.theta.size} candidates in {t_bank:.1f} s"
          + (" (continuous dispersions off: one exact scenario)" if exact else "")
          # the markers' ~60 s of HiGHS hold a worker the bank would otherwise use
          + (" (one worker designed the failure-tolerant markers meanwhile)"
@@ -234,7 +236,9 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=Non
                       "design.bank_level") from None
     rel = res.designer
     w = rel.ev.w
-    held = HeldOut.of(held_rows, w, need, model)
+    held = None if not h_n else HeldOut(lambda sw: _validate(
+        c, setup, bank.theta[sw], need, w, exact, client, size=h_n,
+        stream=seeds.HOLDOUT_STREAM).per_sample, h_n)
     cert = _certify(c, setup, client, bank, res, rel, need, w, exact, held)
     chosen_val = cert.final.extra
     # the looks past the bank's answer: stepped up (design.demonstrate), or planned past

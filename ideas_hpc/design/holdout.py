@@ -7,18 +7,21 @@ the failure probability alone deciding, every scenario scores the same and the b
 once the continuous uncertainties matter (every dispersion at 10x on the quick campaign:
 bank 0.952 for its N = 6, validation 0.915) it is the difference between the two.
 
-The bank is therefore drawn with ``S + H`` scenarios of one stream (scenario ``s`` depends
-only on ``(seed, s)``): the first S *select* (the designer, its proofs, its swarms per N),
-the last H only *score*. A held-out mean is unbiased for a swarm the held-out scenarios
-did not choose, so it is what the design reports as the bank's estimate of P, what the
-look plan predicts from (:mod:`ideas_hpc.design.look_plan`) and what the validation's
-P-hat is compared with; ``P_select - P_heldout`` is the measured bias.
+So the swarms the bank chose are *scored* on H held-out scenarios: draws of the same
+dispersions on their own stream (:data:`ideas_hpc.base.seeds.HOLDOUT_STREAM`), flown for
+the members of the swarms scored only (a swarm of N costs N / C of a bank scenario), each
+giving the swarm's exact failure-weighted P. A held-out mean is unbiased for a swarm those
+draws did not choose, so it is what the design reports as the bank's estimate of P, what
+the look plan predicts from (:mod:`ideas_hpc.design.look_plan`) and what the validation's
+P-hat is compared with; ``P_bank - P_heldout`` is the measured bias. The held-out draws
+choose the looks, so they are never validation data: the certificate's samples are on
+the validation stream.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -28,27 +31,38 @@ from ideas_hpc.design.reliability_eval import Evaluator
 Z95 = 1.959963984540054
 
 
-@dataclass
 class HeldOut:
-    """The held-out scenarios' exact evaluator (failures enumerated as on the bank)."""
+    """Per-swarm held-out values, computed once per swarm.
 
-    ev: Evaluator
+    Parameters
+    ----------
+    score : callable
+        ``swarm (grid indices) -> (H,)`` its exact failure-weighted P in each held-out
+        scenario (the campaign flies them; :meth:`of_rows` scores given rows).
+    size : int
+        H.
+    """
+
+    def __init__(self, score: Callable, size: int):
+        self._score, self.size = score, int(size)
+        self._cache: dict = {}
 
     @classmethod
-    def of(cls, rows, w, need: float, model) -> "HeldOut | None":
-        """None when there are no held-out rows (``rows.shape[0] == 0``)."""
+    def of_rows(cls, rows, w, need: float, model) -> "HeldOut | None":
+        """Held-out scenarios given as rows (S, C, V) of every candidate (None: no rows)."""
         rows = np.asarray(rows, dtype=bool)
         if rows.shape[0] == 0:
             return None
-        return cls(Evaluator(rows, w, need, model))
-
-    @property
-    def size(self) -> int:
-        return int(self.ev.rows.shape[0])
+        ev = Evaluator(rows, w, need, model)
+        return cls(lambda sw: ev.per_scenario([sw])[0], rows.shape[0])
 
     def values(self, swarm) -> np.ndarray:
         """(H,) exact failure-weighted P of ``swarm`` in each held-out scenario."""
-        return self.ev.per_scenario([np.asarray(swarm, dtype=np.int64)])[0]
+        sw = np.sort(np.asarray(swarm, dtype=np.int64))
+        key = tuple(int(i) for i in sw)
+        if key not in self._cache:
+            self._cache[key] = np.asarray(self._score(sw), dtype=np.float64)
+        return self._cache[key]
 
     def probability(self, swarm) -> float:
         """The held-out mean: unbiased for a swarm these scenarios did not choose."""

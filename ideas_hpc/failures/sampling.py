@@ -71,11 +71,12 @@ def draw_failures(model: FailureModel, n: int, u, rng, perm=None) -> FailureDraw
 
 
 def validation_failures(model: FailureModel, n: int, seed: int, first: int,
-                        m: int) -> list[FailureDraw]:
-    """The losses of validation samples ``first`` to ``first + m - 1`` (module docstring)."""
+                        m: int, stream: int = VALIDATION_STREAM) -> list[FailureDraw]:
+    """The losses of validation samples ``first`` to ``first + m - 1`` (module docstring);
+    ``stream`` another design stream's samples (the held-out scenarios')."""
     out = []
     for k in range(int(m)):
-        rng = stream_rng(seed, VALIDATION_STREAM, int(first) + k, STREAM_FAILURES)
+        rng = stream_rng(seed, int(stream), int(first) + k, STREAM_FAILURES)
         out.append(draw_failures(model, n, rng.random(n), rng))
     return out
 

@@ -38,8 +38,8 @@ import numpy as np
 from ideas_hpc.engine.store_meta import config_hash
 from ideas_hpc.base.progress import map_chunks
 from ideas_hpc.flyby.flight import FlybySetup, Perturbation, endpoints, target
-from ideas_hpc.base.seeds import (SCENARIO_STREAM, STREAM_ATTITUDE, STREAM_BODY, STREAM_SPACECRAFT,
-                     VALIDATION_STREAM, stream_rng)
+from ideas_hpc.base.seeds import (HOLDOUT_STREAM, SCENARIO_STREAM, STREAM_ATTITUDE,
+                                  STREAM_BODY, STREAM_SPACECRAFT, VALIDATION_STREAM, stream_rng)
 from ideas_hpc.montecarlo import dispersions as _dispersions
 from ideas_hpc.montecarlo.scenario_rows import RowEngine
 from ideas_hpc.montecarlo.scenario_store import build_into_store, chunk_task
@@ -223,17 +223,22 @@ def build_scenario_bank(setup: FlybySetup, step_rad: float, mc, *, seed: int, n_
 
 def fly_members(setup: FlybySetup, theta, periods, mc, *, seed: int, n_samples: int,
                 client=None, progress: bool = True, chunk_size: int = 8,
-                first: int = 0) -> np.ndarray:
+                first: int = 0, stream: int = VALIDATION_STREAM) -> np.ndarray:
     """(M, N, V) bool: per-member rows of swarm ``theta`` (rad) in ``n_samples`` fresh draws
-    of the continuous dispersions (no failures), stream ``VALIDATION_STREAM``, samples
-    ``first`` to ``first + n_samples - 1`` (a validation look's own draws, issue 29)."""
+    of the continuous dispersions (no failures), stream ``VALIDATION_STREAM`` (or
+    ``stream``: the held-out scenarios' ``HOLDOUT_STREAM``), samples ``first`` to
+    ``first + n_samples - 1`` (a validation look's own draws, issue 29)."""
     th = np.asarray(theta, dtype=np.float64).ravel()
     if periods is not None:
         raise NotImplementedError("fly_members: FoV sweeping periods are not supported yet")
-    fn = functools.partial(_rows_chunk, engine=row_engine(setup, th, mc, seed, VALIDATION_STREAM),
-                           mc=mc, seed=int(seed), stream=VALIDATION_STREAM)
+    fn = functools.partial(_rows_chunk, engine=row_engine(setup, th, mc, seed, int(stream)),
+                           mc=mc, seed=int(seed), stream=int(stream))
     return _run_chunks(list(range(int(first), int(first) + int(n_samples))), fn, client,
-                       chunk_size, progress, "validation flights")
+                       chunk_size, progress, _flights_label(stream))
+
+
+def _flights_label(stream: int) -> str:
+    return "held-out flights" if int(stream) == HOLDOUT_STREAM else "validation flights"
 
 
 def _seen_chunk(ks, *, engine: RowEngine, mc, seed, stream):
@@ -258,17 +263,17 @@ UNTIMED = -2
 
 def fly_members_seen(setup: FlybySetup, theta, mc, *, seed: int, n_samples: int,
                      client=None, progress: bool = True, chunk_size: int = 8,
-                     first: int = 0):
+                     first: int = 0, stream: int = VALIDATION_STREAM):
     """:func:`fly_members` with, per member and vertex, when in the pass it is first seen:
     returns ``rows`` (M, N, V) bool and ``seen`` (M, N, V) float32, the pass fraction
     ``(t - t0) / (tf - t0)`` of that first image (``inf``: not seen). Seen mode only (a
     ``[coverage]`` requirement maps, and when a vertex is mapped is not its first sight):
     what a member lost in the pass imaged before its loss (issue 41)."""
     th = np.asarray(theta, dtype=np.float64).ravel()
-    fn = functools.partial(_seen_chunk, engine=row_engine(setup, th, mc, seed, VALIDATION_STREAM),
-                           mc=mc, seed=int(seed), stream=VALIDATION_STREAM)
+    fn = functools.partial(_seen_chunk, engine=row_engine(setup, th, mc, seed, int(stream)),
+                           mc=mc, seed=int(seed), stream=int(stream))
     idx = _run_chunks(list(range(int(first), int(first) + int(n_samples))), fn, client,
-                      chunk_size, progress, "validation flights")
+                      chunk_size, progress, _flights_label(stream))
     frac = ((setup.image_times - setup.t0_s) / (setup.tf_s - setup.t0_s)).astype(np.float32)
     frac = np.concatenate([frac, [np.inf]]).astype(np.float32)
     seen = frac[np.where(idx >= 0, idx, frac.size - 1)]
