@@ -124,7 +124,7 @@ def _validate(c, setup, theta, need, w, exact, client, *, first=0, size=None,
                       stream=stream)
 
 
-def _tolerant_designs(nominal_bank, target, eps, d, sep) -> list:
+def _tolerant_designs(nominal_bank, threshold, d, sep) -> list:
     """(k, DesignResult) of the k-failure-tolerant designs on the nominal bank, k = 1..K_MARKED."""
     out = []
     for k in range(1, K_MARKED + 1):
@@ -132,7 +132,7 @@ def _tolerant_designs(nominal_bank, target, eps, d, sep) -> list:
             break
         try:
             r = minimize(nominal_bank, CoverSettings(
-                target=target, eps_tol=eps, n_max=d.n_max, min_separation_m=sep,
+                threshold=threshold, n_max=d.n_max, min_separation_m=sep,
                 time_limit_s=min(d.time_limit_s, 30.0), failures_tolerated=k))
         except InputError:
             break
@@ -184,11 +184,11 @@ def design_reliable(c, setup, client, *, bank_store: str | None = None):
     h_n = holdout_scenarios(d, exact)
     # losses in the pass are drawn per validation flight: sampling, even on one scenario
     exact = exact and failure_model(mc).in_pass_share == 0.0
-    target, eps = float(nominal.attrs["target_coverage"]), d.eps_tol_pct / 100.0
     sep = c.config.swarm.min_separation_m
     # the tolerant designs (single-threaded HiGHS) on one worker while the other
     # builds the bank: their ~17 s no longer wait for it (same designs)
-    tolerant = (client.submit(_tolerant_designs, nominal.bank, target, eps, d, sep, pure=False)
+    tolerant = (client.submit(_tolerant_designs, nominal.bank, nominal.threshold, d, sep,
+                              pure=False)
                 if client is not None else None)
     t0 = time.perf_counter()
     fresh = bank_store is not None and not Path(bank_store).exists()
@@ -210,9 +210,7 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=Non
     d, mc = c.config.design, c.config.monte_carlo
     left = max(1e-3, float(d.time_limit_s) - max(0.0, spent_s))
     p, model = float(d.success_probability), failure_model(mc)
-    eps = d.eps_tol_pct / 100.0
-    target = float(nominal.attrs["target_coverage"])
-    need = target - eps
+    need = nominal.threshold.need
     h_n = int(holdout)
     s_n = bank.rows.shape[0]
     _log(f"scenario bank: {s_n} scenarios x {bank.theta.size} candidates in {t_bank:.1f} s"
@@ -227,8 +225,9 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=Non
     try:
         with designer_errors(c):
             res = minimize(ScenarioProblem(bank.rows, bank.areas, bank.theta),
-                           ReliableSettings(p=level, p_f=model.p_f[0], need=need,
-                                            n_max=d.n_max, sep_steps=m_sep, time_limit_s=left,
+                           ReliableSettings(p=level, p_f=model.p_f[0],
+                                            threshold=nominal.threshold, n_max=d.n_max,
+                                            sep_steps=m_sep, time_limit_s=left,
                                             failures=model)).detail
     except InputError as exc:
         if level == p or exc.field != "design.success_probability":
@@ -268,7 +267,7 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=Non
         if pb >= CURVE_TOP and n >= chosen.n:
             break
     tolerant = _tolerant(tolerant.result() if tolerant is not None else
-                         _tolerant_designs(nominal.bank, target, eps, d, sep), rel)
+                         _tolerant_designs(nominal.bank, nominal.threshold, d, sep), rel)
     stat = None if exact else statistical_bound(rel, p, model, d.n_max, d.confidence)
     # the levels get what the design's time limit has left, at least a tenth of it
     levels = None if model.prior is None else n_at_levels(

@@ -1,4 +1,5 @@
-"""A campaign's flyby setup: the validated file resolved to a :class:`FlybySetup` (SI).
+"""A campaign's flyby setup: the validated file resolved to a :class:`FlybySetup` (SI),
+and its coverage requirement (:func:`requirement_from_campaign`).
 
 The campaign layer builds the setup: it loads the body, sizes the flyby, picks
 the maneuver, checks the ring spacing and, for ``flyby.geometry = "encounter"``,
@@ -28,6 +29,16 @@ from ideas_hpc.flyby.flight import FlybySetup
 from ideas_hpc.flyby.sizing import size_flyby
 from ideas_hpc.flyby.swarm_geometry import check_separation
 from ideas_hpc.flyby.usable import ImageUse, ifov_rad
+from ideas_hpc.mapping.requirement import Requirement
+
+
+def requirement_from_campaign(c) -> Requirement:
+    """The campaign's coverage :class:`~ideas_hpc.mapping.requirement.Requirement`:
+    ``design.eps_tol_pct`` (already a fraction, ``config.design.eps_tol``),
+    ``design.target_rule`` and the ``[coverage]`` options as its observation limits
+    (the very object the setup's ``coverage`` is). Every kind builds it here, once."""
+    d = c.config.design
+    return Requirement(eps_tol=d.eps_tol, limits=c.extras["coverage"], rule=d.target_rule)
 
 
 def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:

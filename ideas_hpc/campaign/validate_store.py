@@ -109,6 +109,7 @@ def validate_store(store, *, samples: int = 1024, seed: int | None = None, first
     from ideas_hpc.design.reliability_stats import lower_confidence_bound
     from ideas_hpc.engine.store_meta import store_attrs
     from ideas_hpc.base.errors import InputError
+    from ideas_hpc.mapping.requirement import meets
     from ideas_hpc.montecarlo.failure_dispersion import failure_model
 
     attrs = store_attrs(Path(store))
@@ -142,8 +143,8 @@ def validate_store(store, *, samples: int = 1024, seed: int | None = None, first
     # the design's own validation (failures.sampling): exact P and one drawn outcome each
     v = Validation(rows, w, need, model, seed, first=int(first), seen=seen)
     per = v.per_sample
-    # the same tolerance as the exact enumeration (coverage >= need - 1e-12)
-    wins = v.coverage >= need - 1e-12
+    # the same tolerance as the exact enumeration (the requirement's one comparison)
+    wins = meets(v.coverage, need)
     conf = float(attrs["confidence"])
     return StoreValidation(n=theta.size, seed=seed, first=int(first), per_sample=per,
                            success=wins,

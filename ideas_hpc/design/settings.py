@@ -9,24 +9,35 @@ are area fractions; separations in m; times in s.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import KW_ONLY, dataclass
 from typing import Callable
+
+from ideas_hpc.mapping.requirement import Threshold, as_threshold
 
 
 @dataclass(frozen=True)
 class CoverSettings:
-    """Fewest grid candidates that cover ``target - eps_tol``.
+    """Fewest grid candidates that cover the ``threshold``
+    (:class:`~ideas_hpc.mapping.requirement.Threshold`: ``need = target - eps_tol``).
 
-    ``failures_tolerated`` k > 0 asks for a swarm that keeps it after any k
-    failures; ``time_limit_s`` None: no limit.
+    The older keywords ``target`` and ``eps_tol`` build the same threshold; after
+    construction all three are set. ``failures_tolerated`` k > 0 asks for a swarm that
+    keeps it after any k failures; ``time_limit_s`` None: no limit.
     """
 
-    target: float
-    eps_tol: float
+    target: float | None = None
+    eps_tol: float | None = None
     n_max: int | None = None
     min_separation_m: float = 0.0
     time_limit_s: float | None = None
     failures_tolerated: int = 0
+    threshold: Threshold | None = None
+
+    def __post_init__(self):
+        thr = as_threshold(self.threshold, self.target, self.eps_tol)
+        object.__setattr__(self, "threshold", thr)
+        object.__setattr__(self, "target", thr.target)
+        object.__setattr__(self, "eps_tol", thr.eps_tol)
 
 
 @dataclass(frozen=True)
@@ -34,7 +45,8 @@ class ReliableSettings:
     """Fewest grid candidates with ``P_bank >= p``
     (:func:`~ideas_hpc.design.reliability.min_swarm_reliable`).
 
-    ``need``: the coverage threshold (area fraction, ``target - eps_tol``);
+    ``need``: the coverage threshold (area fraction, ``target - eps_tol``), or the
+    ``threshold`` record it comes from (then ``need`` is its ``need``);
     ``sep_steps``: candidates within this many grid steps conflict;
     ``enumerate_budget``: score every swarm of a size when there are at most
     this many; ``ring_prebound``: bound ``U_m`` first by the per-scenario
@@ -46,7 +58,8 @@ class ReliableSettings:
 
     p: float
     p_f: float
-    need: float
+    need: float | None = None
+    _: KW_ONLY
     n_max: int
     sep_steps: int = 0
     time_limit_s: float | None = None
@@ -55,6 +68,16 @@ class ReliableSettings:
     bound_solver: Callable | None = None
     tolerance_solver: Callable | None = None
     failures: object = None
+    threshold: Threshold | None = None
+
+    def __post_init__(self):
+        if self.threshold is None and self.need is None:
+            raise TypeError("ReliableSettings needs `need` or `threshold`")
+        if self.threshold is not None:
+            if self.need not in (None, self.threshold.need):
+                raise TypeError(f"need {self.need!r} disagrees with the threshold's "
+                                f"{self.threshold.need!r}")
+            object.__setattr__(self, "need", self.threshold.need)
 
     @property
     def model(self):

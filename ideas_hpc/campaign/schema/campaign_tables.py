@@ -47,8 +47,9 @@ the owning modules' ``*_from_config`` (see their docstrings).
 (exact designer); ``success_probability``, ``confidence``, ``scenarios``,
 ``demonstrate`` (the success-probability designer, issue 20; tables and checks
 in :mod:`ideas_hpc.campaign.schema.design_table`);
-(GA) ``population``, ``generations``, ``n_max``, ``eps_tol_pct``,
-``angle_step_rad``, ``p_min_min``, ``p_max_min``, ``period_step_min``,
+(every designer) ``eps_tol_pct`` and ``target_rule``, the coverage requirement
+(:func:`ideas_hpc.campaign.setup.requirement_from_campaign`, docs/requirement.md);
+(GA) ``population``, ``generations``, ``n_max``, ``angle_step_rad``, ``p_min_min``, ``p_max_min``, ``period_step_min``,
 ``parents``, ``elitism``, ``mutation_probability``, ``stall_generations``;
 (design-pareto) ``objectives`` (two or more names of
 :data:`ideas_hpc.design.pareto.objectives.OBJECTIVES`) with ``population``,

@@ -19,6 +19,7 @@ import math
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.design.api.methods import METHODS
 from ideas_hpc.failures.weights import all_lost
+from ideas_hpc.mapping.requirement import TARGET_RULES
 from ideas_hpc.montecarlo.dispersions import dispersion_keys
 from ideas_hpc.montecarlo.failure_dispersion import failure_model
 from ideas_hpc.campaign.schema.kinds import KINDS
@@ -68,7 +69,14 @@ DESIGN = {
     "population": Field("int", 100, lo=2, doc="GA population size"),
     "generations": Field("int", 115, lo=1),
     "n_max": Field("int", 20, lo=1, hi=200),
-    "eps_tol_pct": Field("float", 0.1, lo=0, hi=100),
+    # converted here only: the typed table holds the fraction, design.eps_tol
+    "eps_tol_pct": Field("float", 0.1, lo=0, hi=100, si="eps_tol", per=100.0,
+                         doc="area a swarm may leave unmapped, % of the reference area: "
+                             "threshold = target - eps_tol"),
+    # live: a rule registered later is a valid choice (ideas_hpc.mapping.requirement)
+    "target_rule": Field("str", "reach", choices=TARGET_RULES.keys(),
+                         doc="the target: 'reach' (100 %, or what the candidates reach "
+                             "together when less) or 'full' (100 %, else fail)"),
     "angle_step_rad": Field("float", None, nullable=True, lo=0, hi=1.0,
                             doc="deprecated alias of angle_step_deg, in rad"),
     "p_min_min": Field("float", 0.3, si="p_min_s", to_si=MINUTE, lo=0, lo_open=True),
