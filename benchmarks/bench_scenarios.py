@@ -17,9 +17,9 @@ identical:
 * **fast rows (pipeline flight)**: the pipeline's flight, then the same rows
   from the witness proofs
   (:class:`~ideas_hpc.montecarlo.scenario_rows.RowEngine` with ``one_pass = False``);
-* **bank**: what the bank does now: the one-pass flight
-  (:mod:`ideas_hpc.montecarlo.scenario_flight`) into reused buffers, then the
-  same fast rows.
+* **bank**: what the bank does now: the one flight path
+  (:func:`ideas_hpc.flyby.views.flight_views`), which flies the one-pass closed loop
+  (:mod:`ideas_hpc.flyby.closed_loop`) into reused buffers, then the same fast rows.
 
 The engine's one-time preparation (targeting, proofs) is reported and amortised
 over 256 scenarios. The script runs as a bank worker does: one Numba thread and

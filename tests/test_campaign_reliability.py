@@ -186,8 +186,11 @@ def test_design_must_step_n_up(free_store, tmp_path):
     one number c; p_f is chosen so that the fewest N0 covering spacecraft have c = p exactly.
     The bank then answers N0, but a bound on M values all equal to c lies below c = p: the
     first look must fail, and N0 + 1 (P well above p) must be looked at on new samples.
+    With no held-out scenarios the looks are not predicted (every size from N0 up is a
+    look: the step-up of issue 34); the planned looks are
+    :func:`test_planned_looks_skip_the_size_that_cannot_pass`.
     """
-    base = BASE20 + QUIET + ["monte_carlo.sigma_position_m=0.001"]
+    base = BASE20 + QUIET + ["monte_carlo.sigma_position_m=0.001", "design.holdout_scenarios=0"]
     c = load(DESIGN, base + ["design.success_probability=0.9"])
     setup = setup_from_campaign(c)
     bank = build_bank(setup, c.config.design.grid_step_rad)
@@ -249,3 +252,39 @@ def test_design_must_step_n_up(free_store, tmp_path):
     # the nominal design's worst failure (stored for N0 > 1) names the nominal swarm
     assert n0 > 1 and "worst_failure_coverage" in ds
     assert lines_for(text, f"^worst case.*of the nominal N = {n0} swarm")
+
+
+def test_planned_looks_skip_the_size_that_cannot_pass(free_store, tmp_path):
+    """Looks that can pass (issue 41, item 3): the setup of :func:`test_design_must_step_n_up`
+    (every scenario and sample gives N0 exactly P = p), now with held-out scenarios. The plan
+    sees from them alone that no 200 samples of N0 can give a bound >= p (the bound of
+    values all equal to p lies below p), skips N0 without spending error on it and looks
+    first at N0 + 1, which it demonstrates; the certificate line names the skipped size.
+    The held-out P of every curve swarm equals its bank P (the scenarios do not differ)."""
+    base = BASE20 + QUIET + ["monte_carlo.sigma_position_m=0.001"]
+    free = xr.open_zarr(free_store)
+    need, n0 = free.attrs["reliability_threshold"], int(free["nominal_swarm_size"])
+    c = load(DESIGN, base + ["design.success_probability=0.9"])
+    setup = setup_from_campaign(c)
+    bank = build_bank(setup, c.config.design.grid_step_rad)
+    p_f = 1.0 - 0.55 ** (1.0 / n0)
+    m_sep = separation_steps(bank.step_rad, setup.d_sep_m, c.config.swarm.min_separation_m,
+                             bank.n_candidates)
+    rel = ReliabilityDesigner(bank.masks[None], bank.areas, need=need, p_f=p_f, sep_steps=m_sep)
+    p = float(rel.best_of(n0)[1])
+    sets = base + [f"design.success_probability={p!r}", f"monte_carlo.failure_probability={p_f!r}",
+                   "design.scenarios=24", "design.holdout_scenarios=24",
+                   "design.verify_samples=200", "design.demonstrate=true", "design.n_max=12"]
+    ds = xr.open_zarr(run_file(DESIGN, out=tmp_path / "s.zarr", overrides=sets))
+    assert int(ds["bank_swarm_size"]) == n0
+    looks_n = ds["validation_look_n"].values
+    assert looks_n[0] == n0 + 1 and bool(ds["demonstrated"]) and looks_n.size == 1
+    assert int(ds["best_swarm_size"]) == n0 + 1
+    k = int(ds["validation_looks_planned"])
+    assert k == min(4, 12 - (n0 + 1) + 1)
+    assert float(ds["validation_look_confidence"]) == pytest.approx(1 - 0.05 / k)
+    assert f"N = {n0} (0.0 %)" in ds.attrs["certificate"] and "skipped" in ds.attrs["certificate"]
+    assert ds.attrs["n_holdout_scenarios"] == 24 and float(ds["bank_bias"]) == 0.0
+    np.testing.assert_allclose(ds["reliability_vs_n_holdout"].values,
+                               ds["reliability_vs_n"].values, rtol=0, atol=1e-12)
+    assert bool(ds["bank_validation_agree"])     # one value everywhere: held-out = P-hat

@@ -271,13 +271,14 @@ def test_time_limit_without_incumbent_falls_back_to_a_greedy_design():
     from types import SimpleNamespace
 
     from ideas_hpc.design.exact import _min_result, greedy_cover, greedy_swarm, prepare
+    from ideas_hpc.mapping.requirement import threshold_of
 
     bank = _toy(2)
     need = bank.reach - 0.02
     red, m = prepare(bank, 0.0)
     stopped = SimpleNamespace(x=None, status=1, message="Time limit reached",
                               mip_dual_bound=1.0)
-    res = _min_result(bank, red, stopped, 1.0, bank.reach, need, 20, m)
+    res = _min_result(bank, red, stopped, 1.0, threshold_of(bank.reach, 0.02), 20, m)
     assert res.status == "time_limit" and res.coverage >= need
     assert res.bound == 1.0 and res.gap == (res.n - 1) / res.n
     assert "greedy" in res.notes[0]

@@ -102,6 +102,9 @@ TOUCHED = {
     "design.n_max": ("the FoV GA's estimate of its work (the cluster's size)", ("design-fov",)),
     "design.demonstrate_looks": ("handed to the look plan, which plans one look without "
                                  "design.demonstrate", ("design-reliability",)),
+    "monte_carlo.failure_in_pass_share": ("the failure model is built whole; the Monte Carlo "
+                                          "draws and the verification fly whole-pass losses",
+                                          ("design-exact", "monte-carlo")),
 }
 
 

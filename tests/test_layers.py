@@ -26,7 +26,7 @@ LAYERS = (
     ("ground", ("base", "_version.py")),
     ("kernels and engine", ("core", "core/attitude", "core/design", "core/dynamics",
                             "core/mapping", "engine")),
-    ("models", ("body", "dynamics", "attitude", "mapping", "plots")),
+    ("models", ("body", "dynamics", "attitude", "mapping", "plots", "failures")),
     ("flyby, design, montecarlo", ("flyby", "design", "design/api", "design/ga", "design/pareto",
                                    "montecarlo")),
     ("campaign", ("campaign", "campaign/schema")),
@@ -199,6 +199,63 @@ def test_no_kind_name_is_compared_outside_the_kinds_registry():
             hits += [f"{f.name}:{node.lineno}" for c in consts if c.value in names
                      and c.value != "flyby" or (c.value == "flyby" and _is_kind(node))]
     assert not hits, f"kind names compared outside the registry: {hits}"
+
+
+#: Registered names that are also words of another vocabulary (the paper's geometry
+#: and coverage mode; simulate_attitude's start relative to the reference): refused
+#: only in a comparison that reads an ``attitude_start``.
+SHARED_WORDS = ("paper", "reference")
+
+
+def _registry_names() -> set:
+    from ideas_hpc.attitude.maneuvers import MANEUVERS
+    from ideas_hpc.attitude.modes import ATTITUDE_MODES, ATTITUDE_STARTS
+
+    maneuvers = {n for m in MANEUVERS.values() for n in (m.name, m.campaign_name)}
+    return set(ATTITUDE_MODES) | set(ATTITUDE_STARTS) | maneuvers
+
+
+def _registry_comparisons(roots, names, skip=("modes.py", "maneuvers.py")) -> list:
+    hits = []
+    for f in (p for r in roots for p in r.rglob("*.py")):
+        if f.name in skip and f.parent.name == "attitude":
+            continue
+        for node in ast.walk(ast.parse(f.read_text(), str(f))):
+            if not isinstance(node, ast.Compare):
+                continue
+            for c in ast.walk(node):
+                if not (isinstance(c, ast.Constant) and c.value in names):
+                    continue
+                if c.value not in SHARED_WORDS or _reads(node, "attitude_start"):
+                    hits.append(f"{f.name}:{node.lineno} ({c.value!r})")
+    return hits
+
+
+def _reads(node, name: str) -> bool:
+    return any(isinstance(n, ast.Attribute) and n.attr == name
+               or isinstance(n, ast.Name) and n.id == name for n in ast.walk(node))
+
+
+def test_no_attitude_mode_start_or_maneuver_name_is_compared_outside_its_registry():
+    """Attitude modes and starts (``attitude/modes.py``) and maneuvers
+    (``attitude/maneuvers.py``) declare capabilities (``closed_loop``, ``random_state``,
+    ``acquisition``, ``nominal_random``, ``usable_images``, ``tracks_body``, ``sweeps``);
+    code reads those, so a new entry needs no edit elsewhere (issue 40)."""
+    hits = _registry_comparisons((PACKAGE, PACKAGE.parent / "analysis"), _registry_names())
+    assert not hits, f"attitude mode, start or maneuver names compared outside: {hits}"
+
+
+def test_the_registry_scan_sees_comparisons(tmp_path):
+    """The scan itself: each way of comparing a name is found, a shared word only
+    where it reads an attitude start."""
+    (tmp_path / "m.py").write_text(
+        'a = setup.attitude_mode == "simulated"\n'
+        'b = mc.attitude_start in ("acquisition", "x")\n'
+        'c = options.mode == "paper"\n'
+        'd = cfg.attitude_start != "paper"\n'
+        'e = design == "nadir"\n')
+    hits = _registry_comparisons((tmp_path,), _registry_names())
+    assert [h.split(" ")[0] for h in hits] == ["m.py:1", "m.py:2", "m.py:4", "m.py:5"]
 
 
 def _is_kind(node) -> bool:

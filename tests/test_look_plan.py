@@ -9,6 +9,7 @@ import numpy as np
 from ideas_hpc.design.certificate import certify
 from ideas_hpc.design.look_plan import MIN_POWER, pass_power, plan_looks
 from ideas_hpc.design.reliability_stats import lower_confidence_bound
+from ideas_hpc.design.settings import LookPlan
 
 P, CONF = 0.9, 0.95
 ALPHA = 1.0 - CONF
@@ -24,8 +25,9 @@ def test_a_size_whose_every_scenario_sits_below_the_bound_is_skipped():
         assert lower_confidence_bound(np.full(256, p4), 1 - ALPHA / k) < P
     values = {4: np.full(100, p4), 5: np.full(100, 0.98), 6: np.full(100, 0.995)}
     plan = plan_looks(4, lambda n: (np.arange(n), values[n].mean()) if n in values else
-                      (np.arange(0), 0.0), lambda sw: values[sw.size], p=P, confidence=CONF,
-                      n_max=8, samples=256, max_looks=4, rng=np.random.default_rng(1))
+                      (np.arange(0), 0.0), lambda sw: values[sw.size],
+                      LookPlan(p=P, confidence=CONF, n_max=8, n_samples=256, demonstrate=True,
+                               max_looks=4), np.random.default_rng(1))
     assert [lk.n for lk in plan.looks] == [5, 6]        # 7 and 8: no swarm on the bank
     assert plan.skipped and plan.skipped[0][0] == 4 and plan.skipped[0][1] < MIN_POWER
     assert plan.looks[0].confidence == 1 - ALPHA / 2 and plan.looks[0].power == 1.0

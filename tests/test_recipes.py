@@ -192,6 +192,85 @@ def test_recipe_dispersion_reaches_the_success_probability_designer(tmp_path, mo
         assert body.uniform(-1.0, 1.0) in drawn, k
 
 
+# --- A new dispersion of the world: the target's pole, one entry and nothing else (issue 40)
+
+def _toy_pole(rng, n, mc, setup, theta):
+    ra, dec = setup.world.pole_rad       # the body's pole, or its orbit normal
+    z = rng.standard_normal(2)
+    s = mc.toy_sigma_pole_rad
+    return {"toy_pole_ra": ra + s * z[0],
+            "toy_pole_dec": float(np.clip(dec + s * z[1], -0.5 * math.pi, 0.5 * math.pi))}
+
+
+TOY_POLE = dispersions.Dispersion(
+    "toy_pole", _toy_pole,
+    lambda v: {"params_override": {"pole_ra": v["toy_pole_ra"], "pole_dec": v["toy_pole_dec"]}},
+    (StoreVar("toy_pole_ra", (), np.float64, "rad", "pole right ascension (toy dispersion)"),
+     StoreVar("toy_pole_dec", (), np.float64, "rad", "pole declination (toy dispersion)")),
+    keys=(("toy_sigma_pole_deg", Field("float", 0.0, si="toy_sigma_pole_rad", to_si=math.pi / 180,
+                                       lo=0, doc="1-sigma pole error per angle, deg")),),
+    level="body", active=lambda mc, setup: mc.toy_sigma_pole_rad != 0)
+LIT = ["coverage.illumination=true"]
+
+
+def test_recipe_world_dispersion_the_pole(tmp_path, monkeypatch):
+    """A body-level channel that perturbs the world (the pole), registered here alone:
+    the Monte Carlo kind stores its draws and flies them (lit coverage follows the
+    pole), and the scenario bank draws it per scenario from the body stream and flies
+    each scenario through its own world (its Sun), as the full recomputation does."""
+    from ideas_hpc.base.seeds import SCENARIO_STREAM, STREAM_BODY, stream_rng
+    from ideas_hpc.campaign.setup import setup_from_campaign
+    from ideas_hpc.flyby.flight import Perturbation, fly_open_loop
+    from ideas_hpc.montecarlo.dispersions import draw_sample
+    from ideas_hpc.montecarlo.sample import design_nominal
+    from ideas_hpc.montecarlo.scenario_rows import full_rows
+    from ideas_hpc.montecarlo.scenarios import (build_scenario_bank, draw_world, grid_theta,
+                                                nominal_start)
+
+    base = _mc(tmp_path, "base", LIT)
+    monkeypatch.setattr(dispersions, "DISPERSIONS", dispersions.DISPERSIONS + (TOY_POLE,))
+    sets = LIT + ["monte_carlo.toy_sigma_pole_deg=40.0"]
+    toy = _mc(tmp_path, "toy", sets)
+    assert list(toy.attrs["dispersion_order"]) == list(base.attrs["dispersion_order"]) + [
+        "toy_pole"]
+    assert toy["toy_pole_dec"].attrs["units"] == "rad"
+    for v in ("c20", "reflectivity", "position_error", "misalignment_prv"):
+        assert np.array_equal(toy[v].values, base[v].values), v
+    # the flight saw the stored pole: sample 0 re-flown with it (and nothing else of the
+    # toy) gives the stored coverage, and the pole moved the lit coverage somewhere
+    c = load(IDEAL_MC, MC + sets)
+    setup = setup_from_campaign(c)
+    theta = np.asarray(c.config.swarm.angles_rad)
+    _, pert = draw_sample(c.config.monte_carlo, c.config.seed, 0, theta, setup)
+    pole = {"pole_ra": float(toy["toy_pole_ra"].values[0]),
+            "pole_dec": float(toy["toy_pole_dec"].values[0])}
+    assert {k: pert["params_override"][k] for k in pole} == pole
+    nom = design_nominal(setup, theta, None)
+    f = fly_open_loop(setup, theta, None, nom.r0_T, nom.v0_T, Perturbation(**pert))
+    assert f.coverage.coverage == float(toy["coverage"].values[0])
+    assert not np.array_equal(toy["coverage"].values, base["coverage"].values)
+    # the bank: one draw per scenario from the body generator, after gravity and SRP
+    c = load(CAMPAIGNS / "eros-design.toml", RELIABILITY + sets)
+    setup, mc = setup_from_campaign(c), c.config.monte_carlo
+    bank = build_scenario_bank(setup, np.deg2rad(30.0), mc, seed=5, n_scenarios=3,
+                               progress=False)
+    theta = grid_theta(np.deg2rad(30.0))
+    r0, v0 = nominal_start(setup, theta)
+    differs = 0
+    for k in range(3):
+        body = stream_rng(5, SCENARIO_STREAM, k, STREAM_BODY)
+        body.standard_normal(3)          # gravity, then reflectivity: the entries before it
+        body.uniform(0.0, 1.0)
+        z = body.standard_normal(2)
+        pert = Perturbation(**draw_world(mc, setup, theta, 5, SCENARIO_STREAM, k))
+        ra, dec = setup.world.pole_rad
+        assert pert.params_override["pole_ra"] == ra + mc.toy_sigma_pole_rad * z[0]
+        np.testing.assert_array_equal(bank.rows[k], full_rows(setup, theta, None, r0, v0, pert))
+        still = dataclasses.replace(pert, params_override=None)
+        differs += not np.array_equal(bank.rows[k], full_rows(setup, theta, None, r0, v0, still))
+    assert differs > 0
+
+
 # --- A new disturbance torque: one settings class in TORQUE_TERMS
 
 @dataclasses.dataclass(frozen=True)

@@ -144,17 +144,19 @@ def test_swarm_above_the_bound_is_proven_by_the_programme():
     from types import SimpleNamespace
 
     from ideas_hpc.design.exact import _min_result, prepare
+    from ideas_hpc.mapping.requirement import threshold_of
 
     bank = _circle_bank(3, k=20, v=80)
-    need = bank.reach - 0.01
     exact = min_swarm(bank, target=bank.reach, eps_tol=0.01, n_max=10)
     red, m = prepare(bank, 0.0)
     above = exact.indices
     infeasible = SimpleNamespace(x=None, status=2, message="infeasible", mip_dual_bound=None)
-    r = _min_result(bank, red, infeasible, 0.1, bank.reach, need, 10, m, exact.n - 1, above)
+    r = _min_result(bank, red, infeasible, 0.1, threshold_of(bank.reach, 0.01), 10, m,
+                    exact.n - 1, above)
     assert r.status == "optimal" and r.n == exact.n and r.gap == 0.0
     stopped = SimpleNamespace(x=None, status=1, message="time", mip_dual_bound=exact.n - 1.5)
-    r = _min_result(bank, red, stopped, 0.1, bank.reach, need, 10, m, exact.n - 2, above)
+    r = _min_result(bank, red, stopped, 0.1, threshold_of(bank.reach, 0.01), 10, m,
+                    exact.n - 2, above)
     assert r.status == "time_limit" and r.bound == exact.n - 1 and r.n == exact.n
 
 

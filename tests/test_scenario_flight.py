@@ -1,4 +1,9 @@
-"""The bank's one-pass closed-loop flight is the flyby pipeline's flight, bit for bit (issue 31)."""
+"""The one-pass closed-loop variants fly the flyby pipeline's flight, bit for bit (issues 31, 40).
+
+Every flight goes through :func:`ideas_hpc.flyby.views.flight_views`, which picks the
+first compiled variant of the closed loop whose capabilities cover it: the 64-lane
+loop, the scalar one-pass loop, or the batched loop of ``simulate_attitude`` (the
+pipeline's, time series and all). Each is pinned here against the batched one."""
 
 from __future__ import annotations
 
@@ -10,10 +15,11 @@ import pytest
 from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.attitude.torque_terms import ConstantTorque
 from ideas_hpc.campaign.setup import setup_from_campaign
+from ideas_hpc.flyby import views
 from ideas_hpc.flyby.camera import usable_mask
 from ideas_hpc.flyby.flight import Perturbation, open_loop_views
-from ideas_hpc.montecarlo import scenario_flight
-from ideas_hpc.montecarlo.scenario_rows import RowEngine, full_rows, rows_setup
+from ideas_hpc.flyby.views import FlightPlan, closed_loop_for, flight_start, flight_views
+from ideas_hpc.montecarlo.scenario_rows import RowEngine, full_rows
 from ideas_hpc.montecarlo.scenarios import draw_world, grid_theta, nominal_start, row_engine
 from ideas_hpc.base.seeds import SCENARIO_STREAM
 
@@ -30,31 +36,37 @@ def _main(sets=()):
     return c, setup_from_campaign(c), c.config.monte_carlo
 
 
-@pytest.mark.parametrize("sets,torque", [(WIDE, None),
-                                         (WIDE + ["monte_carlo.sigma_misalignment_deg=0.0"],
-                                          None),
-                                         (WIDE, (2e-6, -1e-6, 5e-7)),
-                                         (WIDE, "no-imaging")],
-                         ids=["misaligned", "aligned", "disturbed", "every-image"])
-def test_one_pass_flight_is_the_pipeline_flight(sets, torque):
+@pytest.mark.parametrize("sets,torque,lanes", [
+    (WIDE, None, True), (WIDE, None, False),
+    (WIDE + ["monte_carlo.sigma_misalignment_deg=0.0"], None, True),
+    (WIDE, (2e-6, -1e-6, 5e-7), True), (WIDE, "no-imaging", True)],
+    ids=["misaligned", "misaligned-scalar", "aligned", "disturbed", "every-image"])
+def test_one_pass_flight_is_the_pipeline_flight(sets, torque, lanes, monkeypatch):
     c, setup, mc = _main(sets)
     if torque == "no-imaging":  # a setup without the usable-image test
         setup = setup.with_(imaging=None)
     elif torque is not None:    # a disturbance torque the controller is not told
         setup = setup.with_(torques=(ConstantTorque(torque),))
+    if not lanes:               # the scalar loop where the lanes would fly
+        monkeypatch.setattr(views, "CLOSED_LOOPS",
+                            [v for v in views.CLOSED_LOOPS if v.name != "lanes"])
     theta = grid_theta(np.deg2rad(4.0))    # 90: a full block of 64 lanes and a partial one
     r0, v0 = nominal_start(setup, theta)
-    statics = scenario_flight.flight_statics(setup, theta)
     buffers: dict = {}
     blinded = 0
+    expect = "lanes" if lanes and torque in (None, "no-imaging") else "scalar"
     for s in range(3):
         pert = Perturbation(**draw_world(mc, setup, theta, 11, SCENARIO_STREAM, s))
-        assert scenario_flight.covers(setup, pert)
-        r_ref, dcm_ref, att, _ = open_loop_views(rows_setup(setup), theta, None, r0, v0, pert)
-        r, dcm = scenario_flight.fly_views(setup, statics, r0, v0, pert, buffers)
-        assert r.tobytes() == np.ascontiguousarray(r_ref).tobytes()
-        assert dcm.tobytes() == np.ascontiguousarray(dcm_ref).tobytes()
-        ok = usable_mask(setup, att)
+        assert closed_loop_for(setup, flight_start(setup, pert, theta.size), False).name == expect
+        assert closed_loop_for(setup, flight_start(setup, pert, theta.size), True).name == "batch"
+        ref = flight_views(setup, theta, None, r0, v0, pert)                 # the pipeline's
+        one = flight_views(setup, theta, None, r0, v0, pert,
+                           plan=FlightPlan(series=False, buffers=buffers))
+        assert ref.attitude is not None and one.attitude is None and one.dcm_BT is None
+        assert one.r_img_T.tobytes() == np.ascontiguousarray(ref.r_img_T).tobytes()
+        assert one.imaging_BT.tobytes() == np.ascontiguousarray(ref.imaging_BT).tobytes()
+        assert one.imaging_BT is buffers["dcm"]
+        ok = usable_mask(setup, ref.attitude)
         if ok is None:                      # no usable-image test: every image counts
             assert buffers["usable"].all()
             continue
@@ -85,11 +97,13 @@ def test_one_pass_bank_rows_are_the_flown_rows():
 @pytest.mark.parametrize("sets", [['attitude.mode="ideal"'],
                                   ['monte_carlo.attitude_start="paper"']],
                          ids=["ideal", "paper-start"])
-def test_flights_it_does_not_cover_take_the_pipeline(sets):
+def test_flights_the_one_pass_loops_do_not_cover_take_the_batched_loop(sets):
     c, setup, mc = _main(sets)
     theta = grid_theta(np.deg2rad(30.0))
     pert = Perturbation(**draw_world(mc, setup, theta, 3, SCENARIO_STREAM, 1))
-    assert not scenario_flight.covers(setup, pert)
+    if setup.attitude.closed_loop:      # an absolute start: only the batched loop flies it
+        assert closed_loop_for(setup, flight_start(setup, pert, theta.size), False).name == \
+            "batch"
     eng = row_engine(setup, theta, mc, 3, SCENARIO_STREAM)
     np.testing.assert_array_equal(eng.rows(*eng.flight(pert, reuse=True)),
                                   full_rows(setup, theta, None, eng.r0_T, eng.v0_T, pert))

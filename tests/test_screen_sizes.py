@@ -193,7 +193,7 @@ def test_screen_on_a_grid_of_210_candidates():
 #: Return paths of ``screen_size`` that are proofs; every other one is a search.
 PROOF_ROUTES = {"level", "screen"}
 SEARCH_ROUTES = {"model", "no_pruning", "found", "screen_cap", "screen_nodes", "extend_cap",
-                 "exact_cap", "deadline"}
+                 "exact_cap", "deadline", "upper_model"}
 
 
 @functools.lru_cache(maxsize=1)
@@ -257,7 +257,8 @@ def test_a_cut_screen_gives_a_search_never_a_proof(cut, monkeypatch):
 
 def test_every_return_path_is_a_proof_or_a_search():
     """The uncut paths: proofs only on ``level`` and ``screen``; the screen refuses what
-    its proof does not cover (n < 2, bad inputs) and declines another failure model."""
+    its proof does not cover (n < 2, bad inputs) and searches under a failure model other
+    than its evaluator's."""
     rows, a, need = _problem(1)
     d = _designer(rows, a, need, 0)
     seen = {}
@@ -267,7 +268,11 @@ def test_every_return_path_is_a_proof_or_a_search():
             seen.setdefault(sc.route, []).append(sc.proven_short)
     mt, slack = mt_of(rows, a, need)
     u = [0.0] + [d.cheap_ubar(k) for k in range(1, 4)]
-    for p_f in ([0.1, 0.2, 0.1], 0.0, 1.0):   # members that differ; no single-failure term
+    from ideas_hpc.failures.model import FailureModel
+
+    # a model the evaluator was not built with (members that differ), or no single-loss
+    # term: the grouping by the number lost proves nothing, the screen searches
+    for p_f in (FailureModel(p_f=(0.1, 0.2, 0.1)), 0.0, 1.0):
         sc = screen_bound.screen_size(mt, slack, d.ev, 3, 0.9, p_f, u, 0)
         seen.setdefault(sc.route, []).append(sc.proven_short)
     assert screen_bound.screen_size(mt, slack, d.ev, 3, 0.9, 0.2, u, 0).route == "model"
@@ -304,21 +309,28 @@ def test_a_cut_list_says_so(size):
         screen_swarms(mt, slack + 1e-9, size, 0, 1, 10, 10 ** 9, 7)    # 7 divides K = 14
 
 
-def test_the_proofs_decline_another_failure_model():
-    """The one check of the failure model every proof assumes: a single p_f (or equal
-    per-member values) passes; members that differ, a value outside [0, 1] or a non-number
-    make the level and down-set bounds fall back to the trivial 1 (true under any model)
-    and the screen to a search; ``n < n0`` stays 0 (failures only remove images)."""
-    from ideas_hpc.design.reliability_stats import failure_upper_bound, proof_failure_rate
+def test_the_proofs_state_their_failure_model():
+    """The one check of the failure model every proof assumes
+    (:func:`~ideas_hpc.design.reliability_stats.proof_model`): a bare p_f in [0, 1] is
+    independent whole-pass losses; anything else that is not a failure model (a value
+    outside [0, 1], NaN, a string, a list, a bool) is refused naming ``p_f``, never
+    bounded on a law nobody stated. A richer model (per-member p_f: tests/test_failure_model.py)
+    is bounded through its envelope."""
+    from ideas_hpc.design.reliability_stats import failure_upper_bound, proof_model
     from ideas_hpc.design.tolerance_bound import downset_upper
+    from ideas_hpc.failures.model import FailureModel
 
-    assert proof_failure_rate(0.05) == 0.05 and proof_failure_rate([0.05] * 3) == 0.05
-    for other in ([0.05, 0.1, 0.05], 1.5, -0.1, float("nan"), "0.05x", [], True):
-        assert proof_failure_rate(other) is None, other
-        assert failure_upper_bound(3, [0.0, 0.0, 0.5, 0.5], other) == 1.0
-        assert downset_upper(3, other, 2, 1) == 1.0 and downset_upper(1, other, 2, None) == 0.0
-    # the same bounds under the one p_f: the tail of a binomial, far below 1
+    assert isinstance(proof_model(0.05), FailureModel)
+    for other in (1.5, -0.1, float("nan"), "0.05x", [], True, [0.05, 0.1]):
+        with pytest.raises(InputError, match="failure probability"):
+            proof_model(other)
+        with pytest.raises(InputError):
+            failure_upper_bound(3, [0.0, 0.0, 0.5, 0.5], other)
+        with pytest.raises(InputError):
+            downset_upper(3, other, 2, 1)
+    # the bounds under the one p_f: the tail of a binomial, far below 1
     assert failure_upper_bound(3, [0.0, 0.0, 0.5, 0.5], 0.05) == pytest.approx(
         0.5 * (0.95 ** 3 + 3 * 0.05 * 0.95 ** 2))
+    assert downset_upper(1, 0.05, 2, None) == 0.0          # fewer than n0 never cover
     with pytest.raises(InputError):
         failure_upper_bound(3, [0.0, 0.5, 0.5], 0.05)          # U_3 missing

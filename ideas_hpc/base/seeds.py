@@ -63,6 +63,9 @@ SEED_WORDS = 4
 GA_SEEDING = 13
 #: Purpose word of the NSGA-II (design-pareto) search's own draws.
 PARETO_SEARCH = 14
+#: :func:`search_rng` purpose of the certificate's look plan (issue 41): its bootstrap of
+#: the held-out scenarios' values (:mod:`ideas_hpc.design.look_plan`).
+LOOK_PLAN = 15
 #: Seed of the figures' jitter stream.
 PLOT_SEED = 0
 
@@ -96,18 +99,29 @@ def seeds_for(campaign_seed: int, n_samples: int) -> np.ndarray:
 SCENARIO_STREAM = 0x5CE7A210
 #: First spawn-key word of a reliability design's validation samples (issue 20).
 VALIDATION_STREAM = 0x7A11DA7E
+#: Stream of the held-out scenarios that score the swarms the bank chose (issue 41,
+#: :mod:`ideas_hpc.design.holdout`): draws of the same dispersions as the bank's and the
+#: validation's, disjoint from both (no selection and no certificate uses them).
+HOLDOUT_STREAM = 0x401D0B7E
 #: Purposes within one scenario / validation sample (third spawn-key word).
 STREAM_BODY, STREAM_SPACECRAFT, STREAM_ATTITUDE = 0, 1, 2
+#: Purpose of a validation sample's failures (issue 20: the drawn-failure outcomes;
+#: issue 41: then the failure model's own draws, :mod:`ideas_hpc.failures.sampling`).
+STREAM_FAILURES = 3
+#: Last spawn-key word of the failure model's own draws beside a Monte Carlo sample's
+#: dispersion stream (:func:`side_rng`).
+FAILURE_SIDE = 0xFA11
 
 
 def stream_seed_sequence(campaign_seed: int, stream: int, k: int,
                          purpose: int) -> np.random.SeedSequence:
     """``SeedSequence(campaign_seed, spawn_key=(stream, k, purpose))``: draw ``k`` of a design stream.
 
-    ``stream`` is :data:`SCENARIO_STREAM` or :data:`VALIDATION_STREAM`; three
-    key words keep these apart from every Monte Carlo sample (module docstring).
+    ``stream`` is :data:`SCENARIO_STREAM`, :data:`VALIDATION_STREAM` or
+    :data:`HOLDOUT_STREAM`; three key words keep these apart from every Monte Carlo sample
+    (module docstring).
     """
-    if int(stream) not in (SCENARIO_STREAM, VALIDATION_STREAM):
+    if int(stream) not in (SCENARIO_STREAM, VALIDATION_STREAM, HOLDOUT_STREAM):
         raise InputError(f"unknown design stream {stream!r}", field="stream")
     return np.random.SeedSequence(int(campaign_seed),
                                   spawn_key=(int(stream), int(k), int(purpose)))
@@ -116,6 +130,20 @@ def stream_seed_sequence(campaign_seed: int, stream: int, k: int,
 def stream_rng(campaign_seed: int, stream: int, k: int, purpose: int) -> np.random.Generator:
     """Generator of :func:`stream_seed_sequence`."""
     return np.random.default_rng(stream_seed_sequence(campaign_seed, stream, k, purpose))
+
+
+def side_rng(rng: np.random.Generator) -> np.random.Generator:
+    """The failure model's own draws beside the stream of ``rng`` (issue 41).
+
+    ``SeedSequence(entropy, spawn_key=key + (FAILURE_SIDE,))`` of the sequence ``rng``
+    was made from: it consumes no number of ``rng``, so the Monte Carlo kind's
+    dispersions after the failures (drawn from one shared stream, in order) keep their
+    numbers when a common-cause event, a prior or a loss time is drawn. Sample ``k``'s
+    dispersion stream ``(k, 1)`` gives ``(k, 1, FAILURE_SIDE)``.
+    """
+    ss = rng.bit_generator.seed_seq
+    return np.random.default_rng(np.random.SeedSequence(
+        ss.entropy, spawn_key=tuple(ss.spawn_key) + (FAILURE_SIDE,)))
 
 
 def search_seed(seed: int) -> int:
@@ -127,7 +155,8 @@ def search_rng(seed: int, purpose: int) -> np.random.Generator:
     """A designer's own stream: ``default_rng([seed mod 2**32, purpose])``.
 
     ``purpose`` is one of the module's purpose words (:data:`GA_SEEDING`,
-    :data:`PARETO_SEARCH`); distinct words give independent streams for one seed.
+    :data:`PARETO_SEARCH`, :data:`LOOK_PLAN`); distinct words give independent streams for
+    one seed.
     """
     return np.random.default_rng([search_seed(seed), int(purpose)])
 

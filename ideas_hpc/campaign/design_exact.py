@@ -32,7 +32,7 @@ from ideas_hpc.base.progress import result
 from ideas_hpc.design.candidates import candidate_masks
 from ideas_hpc.design.resolution import eps_tol_warning
 from ideas_hpc.flyby.flight import fly, target
-from ideas_hpc.campaign.setup import setup_from_campaign
+from ideas_hpc.campaign.setup import requirement_from_campaign, setup_from_campaign
 from ideas_hpc.campaign import precompile
 from ideas_hpc.montecarlo.verify import verify_swarm
 from ideas_hpc.campaign import datasets
@@ -60,24 +60,31 @@ class ExactDesign:
     notes: list = field(default_factory=list)
     summary: str = ""
     bank: object = field(default=None, repr=False)     # the nominal candidate bank
+    threshold: object = None    # the requirement's Threshold on that bank
 
 
-def _target(bank, eps_tol: float, coverage, notes: list) -> float:
-    """1, or the highest coverage any swarm of grid candidates reaches when 1 is out of reach."""
+def _threshold(bank, requirement, notes: list):
+    """The requirement's :class:`~ideas_hpc.mapping.requirement.Threshold` on the bank: its
+    target rule against the highest coverage all grid candidates reach together."""
     reach = bank.reach
     if reach <= 0.0:
         raise InputError("no grid candidate maps any vertex under the [coverage] options and "
                          "requirement: loosen them (or check flyby.epoch_s for the lighting)",
                          field="coverage")
-    if reach < 1.0 - eps_tol:
-        what = "the [coverage] requirement" if coverage.requirement else \
-            f"{coverage.mode} mode (strict options: {coverage.strict})"
+    thr = requirement.threshold(reach)
+    if thr.target == reach < 1.0:
+        lim = requirement.limits
+        what = "the [coverage] requirement" if lim.requirement else \
+            f"{lim.mode} mode (strict options: {lim.strict})"
         notes.append(f"100 % is not reachable from this ring with {what}; the highest "
                      f"reachable coverage is {100 * reach:.3f} % (all {bank.n_candidates} grid "
                      f"angles), so the target is that and the threshold "
-                     f"{100 * (reach - eps_tol):.3f} % (target - eps_tol)")
-        return reach
-    return 1.0
+                     f"{100 * thr.need:.3f} % (target - eps_tol)")
+    elif thr.target != 1.0:
+        notes.append(f"target rule {requirement.rule!r}: target {100 * thr.target:.3f} %, "
+                     f"threshold {100 * thr.need:.3f} % (the grid candidates reach "
+                     f"{100 * reach:.3f} % together)")
+    return thr
 
 
 def failure_vars(bank, swarm_idx, k: int) -> dict:
@@ -96,7 +103,7 @@ def design_exact(c, setup, client) -> ExactDesign:
     job's :class:`~ideas_hpc.engine.job_cluster.JobCluster`.
     """
     d = c.config.design
-    eps = d.eps_tol_pct / 100.0
+    requirement = requirement_from_campaign(c)
     k = d.failures_tolerated
     sep = c.config.swarm.min_separation_m
     n_grid = grid_size(d.grid_step_rad)
@@ -116,12 +123,12 @@ def design_exact(c, setup, client) -> ExactDesign:
          f"grid angles ({math.degrees(bank.step_rad):g} deg)"
          f"{' and their stereo pairs' if stereo else ''} in {t_masks:.1f} s")
     notes: list = []
-    coarse = eps_tol_warning(bank.areas, eps)
+    coarse = eps_tol_warning(bank.areas, requirement.eps_tol)
     if coarse is not None:          # it still runs: a strict requirement may be meant
         _log(coarse)
-    target = _target(scorer, eps, setup.coverage, notes)
+    thr = _threshold(scorer, requirement, notes)
     # the problem (the bank, or its stereo scorer) and the settings pick the designer
-    settings = CoverSettings(target=target, eps_tol=eps, n_max=d.n_max, min_separation_m=sep,
+    settings = CoverSettings(threshold=thr, n_max=d.n_max, min_separation_m=sep,
                              time_limit_s=d.time_limit_s, failures_tolerated=k)
     with designer_errors(c):
         res = minimize(scorer, settings)
@@ -151,22 +158,23 @@ def design_exact(c, setup, client) -> ExactDesign:
         ds["worst_failure_coverage"].attrs.update(
             units="1", long_name=f"lowest coverage after any {k_eval} failure(s)")
     attrs = {"design_method": method_of_designer(res.designer).name, "solver_status": res.status,
-             "optimality_gap": float(res.gap), "target_coverage": float(target),
-             "threshold_coverage": float(target - eps),
+             "optimality_gap": float(res.gap), "target_coverage": float(thr.target),
+             "threshold_coverage": float(thr.need),
              "design_masks_s": float(t_masks), "design_solve_s": float(t_design - t_masks),
              "coverage_curve_s": float(curve.solve_time), "failures_tolerated": int(k),
              "failures_evaluated": int(k_eval), "angle_step_rad": float(bank.step_rad),
              **({"eps_tol_warning": coarse} if coarse is not None else {})}
     summary = (f"exact design: N = {res.n} ({res.status}, gap {100 * res.gap:.1f} %, bound "
-               f"{res.bound:g}), {requirement_line(target, target - eps, res.value)}, "
+               f"{res.bound:g}), {requirement_line(thr.target, thr.need, res.value)}, "
                f"{'k = %d tolerant, ' % k if k else ''}masks {t_masks:.1f} s + solve "
                f"{t_design - t_masks:.1f} s; coverage-vs-N curve in {curve.solve_time:.1f} s")
     return ExactDesign(theta=res.swarm_rad, data=ds, attrs=attrs, notes=notes, summary=summary,
-                       bank=bank)
+                       bank=bank, threshold=thr)
 
 
-def ga_gap(c, setup, mask_bank, n_ga: int, target: float) -> tuple[xr.Dataset, list]:
-    """The GA's gap to the certified optimum on the GA's own angle grid (masks reused)."""
+def ga_gap(c, setup, mask_bank, n_ga: int, threshold) -> tuple[xr.Dataset, list]:
+    """The GA's gap to the certified optimum on the GA's own angle grid (masks reused), at
+    the GA's ``threshold``."""
     d = c.config.design
     step = d.angle_step_rad
     if step <= 0:
@@ -176,7 +184,7 @@ def ga_gap(c, setup, mask_bank, n_ga: int, target: float) -> tuple[xr.Dataset, l
     try:
         with designer_errors():   # the note quotes the file's keys
             ex = minimize(bank, CoverSettings(
-                target=target, eps_tol=d.eps_tol_pct / 100.0, n_max=d.n_max,
+                threshold=threshold, n_max=d.n_max,
                 min_separation_m=c.config.swarm.min_separation_m, time_limit_s=d.time_limit_s))
     except InputError as exc:
         return xr.Dataset({"design_method": ((), GA_METHOD)}), [f"no exact reference: {exc.message}"]

@@ -33,6 +33,8 @@ from ideas_hpc.flyby.swarm_geometry import min_separation_angle
 from ideas_hpc.campaign import datasets
 from ideas_hpc.engine.variables import with_attrs
 from ideas_hpc.campaign.design_exact import GA_METHOD, checked_setup, ga_gap
+from ideas_hpc.campaign.setup import requirement_from_campaign
+from ideas_hpc.mapping.requirement import threshold_of
 from ideas_hpc.campaign.schema.campaign_tables import Campaign
 from ideas_hpc.campaign.schema.design_checks import DESIGNER_FIELDS
 from ideas_hpc.campaign.schema.kinds import KINDS
@@ -100,8 +102,7 @@ def _stereo_ga(c: Campaign, setup, client):
     bank = build_bank(setup, step, client=client, chunk_size=d.chunk_size, snap=False,
                       quality=True, pairs=True)
     sb = scorer(bank)
-    eps = d.eps_tol_pct / 100.0
-    target = 1.0 if sb.reach >= 1.0 - eps else sb.reach
+    thr = requirement_from_campaign(c).threshold(sb.reach)
     _log(f"candidate rows and stereo pairs: {bank.n_candidates} grid angles in "
          f"{time.perf_counter() - t:.1f} s; all of them map {100 * sb.reach:.3f} % in stereo")
 
@@ -111,7 +112,8 @@ def _stereo_ga(c: Campaign, setup, client):
         return sb.coverage(idx), np.rint(genomes[:, 0]).astype(int)
 
     settings = NadirGASettings(
-        search=_search(c), n_max=d.n_max, eps_tol=eps, angle_step_rad=step, target=target,
+        search=_search(c), n_max=d.n_max, eps_tol=thr.eps_tol, angle_step_rad=step,
+        target=thr.target,
         min_separation_rad=min_separation_angle(c.config.swarm.min_separation_m, setup.d_sep_m))
     out = minimize(NadirGAProblem(evaluate), settings,
                    progress=_progress_printer(d.generations, "NP GA (stereo)"))
@@ -119,7 +121,7 @@ def _stereo_ga(c: Campaign, setup, client):
     res.notes.append("GA scoring stereo from own tracks and from pairs of spacecraft (the "
                      "exact designer's pair model); no set-cover local search")
     try:
-        ex = minimize(sb, CoverSettings(target=target, eps_tol=eps, n_max=d.n_max,
+        ex = minimize(sb, CoverSettings(threshold=thr, n_max=d.n_max,
                                         min_separation_m=c.config.swarm.min_separation_m,
                                         time_limit_s=d.time_limit_s))
         gap = (n - ex.bound) / n
@@ -141,15 +143,16 @@ def design_nadir(c: Campaign, setup, client):
     if setup.coverage.require_stereo:
         return _stereo_ga(c, setup, client)
     d = c.config.design
+    requirement = requirement_from_campaign(c)
     bank = _bank(setup, client, d)
     step = d.angle_step_rad
-    target = 1.0
+    thr = requirement.threshold()      # continuous angles: no reach known
     notes = []
     masks = None
     if step > 0:
         reach, masks = _fill_grid(bank, setup, step)
-        if reach < 1.0 - d.eps_tol_pct / 100.0:
-            target = reach
+        thr = requirement.threshold(reach)
+        if thr.target == reach < 1.0:
             notes.append(f"100 % is not reachable from this ring in {setup.coverage.mode} mode "
                          f"(strict options: {setup.coverage.strict}); the highest reachable "
                          f"coverage is {100 * reach:.3f} % (all {int(round(2 * np.pi / step))} "
@@ -161,13 +164,13 @@ def design_nadir(c: Campaign, setup, client):
         cov, _ = bank.union_coverage(keys, areas)
         return cov, np.rint(genomes[:, 0]).astype(int)
 
-    eps = d.eps_tol_pct / 100.0
     min_sep = min_separation_angle(c.config.swarm.min_separation_m, setup.d_sep_m)
     cover = None if masks is None else GridCover(
-        masks, areas, step, target, eps, d.n_max,
+        masks, areas, step, n_max=d.n_max, threshold=thr,
         min_sep_steps=math.ceil(min_sep / step - 1e-9) if min_sep > 0 else 0)
-    settings = NadirGASettings(search=_search(c), n_max=d.n_max, eps_tol=eps,
-                               angle_step_rad=step, target=target, min_separation_rad=min_sep)
+    settings = NadirGASettings(search=_search(c), n_max=d.n_max, eps_tol=thr.eps_tol,
+                               angle_step_rad=step, target=thr.target,
+                               min_separation_rad=min_sep)
     out = minimize(NadirGAProblem(evaluate, cover), settings,
                    progress=_progress_printer(d.generations, "NP GA"))
     res = out.detail
@@ -176,7 +179,7 @@ def design_nadir(c: Campaign, setup, client):
                      "(greedy seeding of 20 % of the first population; completion, removal "
                      "and 2-for-1 swaps after each generation)")
     res.notes.extend(notes)
-    res.gap_data, gap_notes = ga_gap(c, setup, bank, out.n, target)
+    res.gap_data, gap_notes = ga_gap(c, setup, bank, out.n, thr)
     res.notes.extend(gap_notes)
     return res, out.swarm_rad, None
 
@@ -241,7 +244,7 @@ def run_design(c: Campaign, out: Path, *, workers=None, scheduler=None, cluster=
                                               work=work) as job:
         res, theta, periods = design(c, setup, job.client())
     wall = time.perf_counter() - t
-    threshold = res.target_coverage - c.config.design.eps_tol_pct / 100.0
+    threshold = threshold_of(res.target_coverage, c.config.design.eps_tol).need
     result(f"GA: {res.evaluations} designs evaluated in {wall:.1f} s; best: N = "
          f"{res.best_swarm_size}, " + (requirement_line(res.target_coverage, threshold,
                                                        res.best_coverage) if nadir else

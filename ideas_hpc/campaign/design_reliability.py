@@ -38,28 +38,32 @@ from pathlib import Path
 import numpy as np
 
 from ideas_hpc.base.progress import result
-from ideas_hpc.core.design.reliability import swarm_probabilities
 from ideas_hpc.design.api import CoverSettings, ReliableSettings, ScenarioProblem, minimize
 from ideas_hpc.design.settings import LookPlan
 from ideas_hpc.design.bank import grid_size, separation_steps
 from ideas_hpc.design.certificate import (certify, group_bounds,
                                          replicated_lower_bound)
 from ideas_hpc.design.reliability import ReliabilityDesigner
+from ideas_hpc.design.reliability_levels import n_at_levels
 from ideas_hpc.design.reliability_stats import lower_confidence_bound
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.base import progress
 from ideas_hpc.engine.job_cluster import phase_client
+from ideas_hpc.failures.model import as_model
+from ideas_hpc.failures.sampling import drawn_coverage, sample_probabilities, validation_failures
 from ideas_hpc.montecarlo.dispersions import scenario_dispersed
-from ideas_hpc.montecarlo.scenarios import build_scenario_bank, fly_members
-from ideas_hpc.base.seeds import VALIDATION_STREAM, stream_rng
+from ideas_hpc.montecarlo.failure_dispersion import failure_model
+from ideas_hpc.montecarlo.scenarios import build_scenario_bank, fly_members, fly_members_seen
+from ideas_hpc.base import seeds
 from ideas_hpc.campaign.design_exact import design_exact
 from ideas_hpc.campaign.schema.design_checks import designer_errors
 from ideas_hpc.campaign.reliability_vars import BankRun, reliability_dataset
-from ideas_hpc.campaign.schema.design_table import verify_samples
+from ideas_hpc.campaign.schema.design_table import holdout_scenarios, verify_samples
+from ideas_hpc.design.holdout import HeldOut, agreement
 
-#: Purpose word of the validation's sampled failures (the histogram only; the
-#: probabilities enumerate failures exactly): ``(VALIDATION_STREAM, m, 3)``.
-STREAM_FAILURES = 3
+#: Purpose word of the validation's sampled failures (its old home; now
+#: :data:`ideas_hpc.base.seeds.STREAM_FAILURES`): ``(VALIDATION_STREAM, m, 3)``.
+STREAM_FAILURES = seeds.STREAM_FAILURES
 #: The curve stops at the first N whose best P on the scenarios reaches this.
 CURVE_TOP = 0.99
 #: Largest k of the k-failure-tolerant designs marked on the curve.
@@ -78,39 +82,49 @@ def continuous_off(mc, setup) -> bool:
 
 
 class Validation:
-    """The chosen swarm flown through fresh samples (module docstring, step 4)."""
+    """The chosen swarm flown through fresh samples (module docstring, step 4): per sample
+    the exact failure-weighted P and one drawn outcome (:mod:`ideas_hpc.failures.sampling`;
+    ``seen``: the first-seen times of losses in the pass, None: whole-pass)."""
 
-    def __init__(self, rows, w, need, p_f, seed: int, first: int = 0):
-        n = rows.shape[1]
+    def __init__(self, rows, w, need, model, seed: int, first: int = 0, seen=None,
+                 stream: int = seeds.VALIDATION_STREAM):
+        model = as_model(model)
         self.first = int(first)
-        self.per_sample = swarm_probabilities(np.ascontiguousarray(rows),
-                                              np.arange(n, dtype=np.int64)[None, :],
-                                              w, need, p_f)[0]
+        draws = validation_failures(model, rows.shape[1], seed, self.first, rows.shape[0],
+                                    stream)
+        self.per_sample = sample_probabilities(rows, w, need, model, draws, seen)
         self.p_hat = float(self.per_sample.mean())
         # the bound at the look's share of the error is computed once, by certify(): its
         # look's value is copied here (_certify); None for flights that are no look
         self.lower = None
-        cov = np.empty(rows.shape[0])
-        failed = np.empty(rows.shape[0], dtype=np.int32)
-        for k in range(rows.shape[0]):
-            alive = stream_rng(seed, VALIDATION_STREAM, self.first + k,
-                               STREAM_FAILURES).random(n) >= p_f
-            cov[k] = float(w[rows[k, alive].any(axis=0)].sum()) if alive.any() else 0.0
-            failed[k] = n - int(alive.sum())
-        self.coverage, self.n_failed = cov, failed
+        self.coverage, self.n_failed = drawn_coverage(rows, w, draws, seen)
 
 
-def _validate(c, setup, theta, need, w, exact, client, *, first=0):
+def fly_validation(setup, theta, mc, model, **keywords):
+    """``(rows, seen)`` of validation flights: with losses in the pass and seen rows, when
+    each member first sees each vertex (:func:`~ideas_hpc.montecarlo.scenarios.fly_members_seen`);
+    else the rows alone and ``seen = None`` (whole-pass losses)."""
+    if model.in_pass_share > 0.0 and not setup.coverage.requirement:
+        return fly_members_seen(setup, theta, mc, **keywords)
+    return fly_members(setup, theta, None, mc, **keywords), None
+
+
+def _validate(c, setup, theta, need, w, exact, client, *, first=0, size=None,
+              stream=seeds.VALIDATION_STREAM):
     """Validation samples ``first .. first + M - 1`` of ``theta`` (no bound: :func:`_certify`
-    and the curve compute theirs)."""
+    and the curve compute theirs); M is ``size``, by default ``design.verify_samples``;
+    ``stream``: the held-out scenarios' (:data:`ideas_hpc.base.seeds.HOLDOUT_STREAM`)."""
     d, mc = c.config.design, c.config.monte_carlo
-    m = 1 if exact else verify_samples(d)
-    rows = fly_members(setup, theta, None, mc, seed=c.config.seed, n_samples=m, client=client,
-                       progress=progress.on(), first=first)
-    return Validation(rows, w, need, mc.failure_probability, c.config.seed, first=first)
+    m = 1 if exact else (verify_samples(d) if size is None else int(size))
+    model = failure_model(mc)
+    rows, seen = fly_validation(setup, theta, mc, model, seed=c.config.seed, n_samples=m,
+                                client=client, progress=progress.on(), first=first,
+                                stream=stream)
+    return Validation(rows, w, need, model, c.config.seed, first=first, seen=seen,
+                      stream=stream)
 
 
-def _tolerant_designs(nominal_bank, target, eps, d, sep) -> list:
+def _tolerant_designs(nominal_bank, threshold, d, sep) -> list:
     """(k, DesignResult) of the k-failure-tolerant designs on the nominal bank, k = 1..K_MARKED."""
     out = []
     for k in range(1, K_MARKED + 1):
@@ -118,7 +132,7 @@ def _tolerant_designs(nominal_bank, target, eps, d, sep) -> list:
             break
         try:
             r = minimize(nominal_bank, CoverSettings(
-                target=target, eps_tol=eps, n_max=d.n_max, min_separation_m=sep,
+                threshold=threshold, n_max=d.n_max, min_separation_m=sep,
                 time_limit_s=min(d.time_limit_s, 30.0), failures_tolerated=k))
         except InputError:
             break
@@ -150,14 +164,11 @@ def design_reliable(c, setup, client, *, bank_store: str | None = None):
     reliability ones) and its summary lines.
     """
     d, mc = c.config.design, c.config.monte_carlo
-    p, p_f = float(d.success_probability), float(mc.failure_probability)
     if setup.coverage.require_stereo:
         raise c.error("is not supported with coverage.require_stereo (stereo pairs are not in "
                       "the scenario bank)", "design.success_probability")
-    if 1.0 - p_f ** d.n_max < p:
-        raise c.error(f"{p:g} is not reached: even a swarm of design.n_max = {d.n_max} that "
-                      f"always maps the target succeeds with at most 1 - p_f^N = "
-                      f"{1.0 - p_f ** d.n_max:.6g}", "design.success_probability")
+    # the most any swarm of n_max can reach is checked with the other cross-checks
+    # (campaign/schema/design_table.py reliability_checks)
     # design.time_limit_s bounds the searches of the phase together (issue 29): the
     # nominal design, then the bank's search gets what is left. Sampling (the bank's
     # flights, the validation) is not search: it has its own progress bars.
@@ -168,20 +179,26 @@ def design_reliable(c, setup, client, *, bank_store: str | None = None):
     client = phase_client(client)   # the job's one cluster (None: in this process)
     exact = continuous_off(mc, setup)
     s_n = 1 if exact else d.scenarios
-    target, eps = float(nominal.attrs["target_coverage"]), d.eps_tol_pct / 100.0
+    # held-out scenarios (issue 41): H draws of their own stream, flown for the swarms
+    # they score only (design/holdout.py)
+    h_n = holdout_scenarios(d, exact)
+    # losses in the pass are drawn per validation flight: sampling, even on one scenario
+    exact = exact and failure_model(mc).in_pass_share == 0.0
     sep = c.config.swarm.min_separation_m
     # the tolerant designs (single-threaded HiGHS) on one worker while the other
     # builds the bank: their ~17 s no longer wait for it (same designs)
-    tolerant = (client.submit(_tolerant_designs, nominal.bank, target, eps, d, sep, pure=False)
+    tolerant = (client.submit(_tolerant_designs, nominal.bank, nominal.threshold, d, sep,
+                              pure=False)
                 if client is not None else None)
     t0 = time.perf_counter()
     fresh = bank_store is not None and not Path(bank_store).exists()
-    bank = build_scenario_bank(setup, d.grid_step_rad, mc, seed=c.config.seed, n_scenarios=s_n,
-                               client=client, store=bank_store, progress=progress.on())
+    bank = build_scenario_bank(setup, d.grid_step_rad, mc, seed=c.config.seed,
+                               n_scenarios=s_n, client=client, store=bank_store,
+                               progress=progress.on())
     t_bank = time.perf_counter() - t0
     try:
         return _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant,
-                               spent_s=spent)
+                               spent_s=spent, holdout=h_n)
     except InputError:
         if fresh:    # bad input leaves no store: the bank this run made goes too
             shutil.rmtree(bank_store, ignore_errors=True)
@@ -189,13 +206,12 @@ def design_reliable(c, setup, client, *, bank_store: str | None = None):
 
 
 def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=None, *,
-                    spent_s=0.0):
+                    spent_s=0.0, holdout=0):
     d, mc = c.config.design, c.config.monte_carlo
     left = max(1e-3, float(d.time_limit_s) - max(0.0, spent_s))
-    p, p_f = float(d.success_probability), float(mc.failure_probability)
-    eps = d.eps_tol_pct / 100.0
-    target = float(nominal.attrs["target_coverage"])
-    need = target - eps
+    p, model = float(d.success_probability), failure_model(mc)
+    need = nominal.threshold.need
+    h_n = int(holdout)
     s_n = bank.rows.shape[0]
     _log(f"scenario bank: {s_n} scenarios x {bank.theta.size} candidates in {t_bank:.1f} s"
          + (" (continuous dispersions off: one exact scenario)" if exact else "")
@@ -209,8 +225,10 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=Non
     try:
         with designer_errors(c):
             res = minimize(ScenarioProblem(bank.rows, bank.areas, bank.theta),
-                           ReliableSettings(p=level, p_f=p_f, need=need, n_max=d.n_max,
-                                            sep_steps=m_sep, time_limit_s=left)).detail
+                           ReliableSettings(p=level, p_f=model.p_f[0],
+                                            threshold=nominal.threshold, n_max=d.n_max,
+                                            sep_steps=m_sep, time_limit_s=left,
+                                            failures=model)).detail
     except InputError as exc:
         if level == p or exc.field != "design.success_probability":
             raise
@@ -218,10 +236,15 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=Non
                       "design.bank_level") from None
     rel = res.designer
     w = rel.ev.w
-    cert = _certify(c, setup, client, bank, res, rel, need, w, exact)
+    held = None if not h_n else HeldOut(lambda sw: _validate(
+        c, setup, bank.theta[sw], need, w, exact, client, size=h_n,
+        stream=seeds.HOLDOUT_STREAM).per_sample, h_n)
+    cert = _certify(c, setup, client, bank, res, rel, need, w, exact, held)
     chosen_val = cert.final.extra
-    stepped = [(lk.n, lk.bank_probability) for lk in cert.looks[1:]]
-    if len(cert.looks) == 1:
+    # the looks past the bank's answer: stepped up (design.demonstrate), or planned past
+    # sizes that could not clear p (design/look_plan.py)
+    stepped = [(lk.n, lk.bank_probability) for lk in cert.looks if lk.n != res.n]
+    if cert.final.n == res.n:
         chosen = res
     else:       # status, bound and gap stay the optimisation's (of the bank-optimal res.n):
         sw = cert.final.swarm   # stepping up is the validation's decision (reliability_vars)
@@ -239,15 +262,23 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=Non
         # the curve reports each N alone at design.confidence (it certifies nothing)
         v = looked.get(n) or _validate(c, setup, bank.theta[sw], need, w, exact, client)
         low = v.p_hat if exact else lower_confidence_bound(v.per_sample, d.confidence)
-        curve.append((n, pb, rel.upper(n), v.p_hat, low, sw))
+        ph = held.probability(sw) if held is not None else math.nan
+        curve.append((n, pb, rel.upper(n), v.p_hat, low, sw, ph))
         if pb >= CURVE_TOP and n >= chosen.n:
             break
     tolerant = _tolerant(tolerant.result() if tolerant is not None else
-                         _tolerant_designs(nominal.bank, target, eps, d, sep), rel)
-    stat = None if exact else statistical_bound(rel, p, p_f, d.n_max, d.confidence)
+                         _tolerant_designs(nominal.bank, nominal.threshold, d, sep), rel)
+    stat = None if exact else statistical_bound(rel, p, model, d.n_max, d.confidence)
+    # the levels get what the design's time limit has left, at least a tenth of it
+    levels = None if model.prior is None else n_at_levels(
+        rel, level, d.n_max, model.prior.levels(),
+        time_limit_s=max(0.1 * left, left - res.solve_time))
     return reliability_dataset(c, nominal, bank, res, chosen, chosen_val, curve, tolerant,
                                BankRun(stepped=stepped, need=need, exact=exact, t_bank_s=t_bank,
-                                       cert=cert, level=level, stat=stat))
+                                       cert=cert, level=level, stat=stat, model=model,
+                                       levels=levels,
+                                       held=None if held is None else held_scores(
+                                           held, chosen, chosen_val)))
 
 
 #: Sample problems cut from the bank for the statistical lower bound, and the fewest
@@ -260,7 +291,8 @@ def statistical_bound(rel, p, p_f, n_max, confidence):
     sec. 2; docs/certificate.md): the bank's scenarios cut into M groups, each an
     independent sample problem at the looser level ``p'' = p - sqrt(ln 10 / (2 S_g))``
     (the true optimum feasible in each with probability >= 0.9), each bounded by the
-    ring-gap bounds (:func:`~ideas_hpc.design.certificate.group_bounds`). Returns a dict,
+    ring-gap bounds (:func:`~ideas_hpc.design.certificate.group_bounds`; ``p_f`` a bare
+    probability or the failure model, whose upper law bounds P). Returns a dict,
     or None when the bank is too small or has no ring-gap bounds."""
     lows = rel._lows
     m = min(STAT_GROUPS, rel.s_n // STAT_GROUP_MIN)
@@ -276,9 +308,20 @@ def statistical_bound(rel, p, p_f, n_max, confidence):
             "theta": theta, "group_bounds": bounds}
 
 
-def _certify(c, setup, client, bank, res, rel, need, w, exact):
+def held_scores(held, chosen, val) -> dict:
+    """The reported swarm on the held-out scenarios: its P there, the bias of the bank's
+    (selection) P, and whether the validation's P-hat agrees with the held-out P within
+    their sampling error (:func:`~ideas_hpc.design.holdout.agreement`)."""
+    a = agreement(held.values(chosen.indices), val.per_sample)
+    return {"scenarios": held.size, "probability": a["held"],
+            "bias": float(chosen.probability) - a["held"], **a}
+
+
+def _certify(c, setup, client, bank, res, rel, need, w, exact, held=None):
     """The looks of :func:`ideas_hpc.design.certificate.certify` on validation flights; each
-    look's ``extra`` is its :class:`Validation` (bound at the look's share of the error)."""
+    look's ``extra`` is its :class:`Validation` (bound at the look's share of the error).
+    With held-out scenarios the looks are planned from their values
+    (:mod:`ideas_hpc.design.look_plan`: sizes that cannot clear p are skipped)."""
     d = c.config.design
     m = 1 if exact else verify_samples(d)
 
@@ -286,12 +329,15 @@ def _certify(c, setup, client, bank, res, rel, need, w, exact):
         return (res.indices, res.probability) if n == res.n else rel.best_of(n)
 
     def validate(sw, first, size):
-        v = _validate(c, setup, bank.theta[sw], need, w, exact, client, first=first)
+        v = _validate(c, setup, bank.theta[sw], need, w, exact, client, first=first, size=size)
         return v.per_sample, v
 
     cert = certify(res.n, best_of, validate, LookPlan(
         p=float(d.success_probability), confidence=d.confidence, n_max=d.n_max, n_samples=m,
-        demonstrate=d.demonstrate, max_looks=d.demonstrate_looks, exact=exact))
+        demonstrate=d.demonstrate, max_looks=d.demonstrate_looks, exact=exact,
+        samples_max=d.verify_samples_max),
+        values_of=None if held is None else held.values,
+        rng=seeds.search_rng(c.config.seed, seeds.LOOK_PLAN))
     for lk in cert.looks:       # the one bound of each look: certify's
         lk.extra.lower = lk.lower
     return cert

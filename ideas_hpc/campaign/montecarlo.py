@@ -28,7 +28,8 @@ from ideas_hpc.engine.job_cluster import JobCluster, visibility_tests
 from ideas_hpc.engine.runner import run_campaign
 from ideas_hpc.base.progress import plural, result
 from ideas_hpc.flyby.flight import FlybySetup, Perturbation
-from ideas_hpc.campaign.setup import setup_from_campaign
+from ideas_hpc.campaign.setup import requirement_from_campaign, setup_from_campaign
+from ideas_hpc.mapping.requirement import meets
 from ideas_hpc.montecarlo.dispersions import dispersion_order, dispersion_vars, draw_sample
 from ideas_hpc.montecarlo.sample import Nominal, design_nominal, fly_sample
 from ideas_hpc.engine.variables import ATTITUDE_SERIES, DISCARDS, PER_SAMPLE, QUALITY, VARS, with_attrs
@@ -61,7 +62,7 @@ def mc_template(setup: FlybySetup, nom: Nominal, n_samples: int) -> xr.Dataset:
     dec = setup.decimate
     times = nom.times[::dec]
     nt = times.size
-    simulated = setup.attitude_mode == "simulated"
+    simulated = setup.attitude.closed_loop
     s = ("sample",)
     sizes = {"spacecraft": n, "axis": 3, "wheel": 3, "vertex": nv, "time": nt}
 
@@ -136,7 +137,8 @@ def run_monte_carlo(c: Campaign, out, *, workers=None, scheduler=None, resume=Fa
     with xr.open_zarr(out) as ds:
         coverage = np.asarray(ds["coverage"].values, dtype=float)
         n_failed = np.asarray(ds["n_failed"].values) if "n_failed" in ds else None
-    result(coverage_result(coverage, n_failed, 1.0 - c.config.design.eps_tol_pct / 100.0))
+    # the swarm is given: no reach, so the rule's target for an unknown one (100 %)
+    result(coverage_result(coverage, n_failed, requirement_from_campaign(c).threshold().need))
     return summary
 
 
@@ -150,7 +152,8 @@ def coverage_result(coverage, n_failed, threshold: float) -> str:
     if not c.size:
         return "Monte Carlo result: no finished sample"
     line = (f"Monte Carlo result: P(coverage >= {100 * threshold:.2f} %) = "
-            f"{100 * np.mean(cov[ok] >= threshold):.1f} % over {plural(int(c.size), 'sample')} "
+            f"{100 * np.mean(meets(cov[ok], threshold)):.1f} % over "
+            f"{plural(int(c.size), 'sample')} "
             f"(threshold: 100 % - design.eps_tol_pct); coverage min {c.min():.2f} %, "
             f"5th percentile {np.percentile(c, 5):.2f} %, median {np.median(c):.2f} %, "
             f"max {c.max():.2f} %")

@@ -36,7 +36,20 @@ validation_look_confidence          ()                      confidence of each l
 validation_look_n (_p_hat,          (validation_look,)      each look's swarm size, P-hat, bound and
 _lower_bound, _first_sample)                                first validation sample, in order
 statistical_lower_bound             ()                      lower bound on the true fewest N (docs)
+holdout_probability, bank_bias      ()                      P of the reported swarm on the held-out
+                                                            scenarios; bank P minus it (issue 41)
+bank_validation_agree               ()                      held-out P inside the validation's 95 %
+                                                            interval
+reliability_vs_n_holdout            (reliability_n,)        the curve's swarms on the held-out ones
+swarm_size_at_p_f                   (p_f_level,)            p_f uncertain: the fewest N with p_f
+                                                            known at each of the prior's levels
+probability_at_p_f                  (p_f_level,)            its P on the bank at that p_f
+proven_bound_at_p_f                 (p_f_level,)            the proven lower bound on N there
 ==================================  ======================  =========================================
+
+Attrs ``failure_model`` (one line) and ``failure_model_record`` (the resolved
+:class:`~ideas_hpc.failures.model.FailureModel`) say which failure model P is
+for (docs/failure-model.md); ``p_f_levels`` words the levels.
 
 The certificate (:mod:`ideas_hpc.design.certificate`, docs/certificate.md) is
 ``validation_lower_bound``: the final look's bound, on its own fresh samples,
@@ -54,6 +67,7 @@ from ideas_hpc.design.api.methods import method_of_designer
 from ideas_hpc.base.seeds import SCENARIO_STREAM, VALIDATION_STREAM
 from ideas_hpc.campaign.design_exact import ExactDesign
 from ideas_hpc.design.certificate import verdict as certificate_verdict
+from ideas_hpc.design.reliability_levels import levels_line
 
 BOUND_METHOD = "Waudby-Smith & Ramdas betting (predictable plug-in), one-sided"
 
@@ -86,12 +100,50 @@ def _look_vars(cert) -> dict:
             "validation_look_first_sample": (dim, np.array([r[3] for r in rows], np.int64))}
 
 
+def _held_vars(held: dict, curve) -> xr.Dataset:
+    """The held-out scoring (issue 41): the reported swarm's P there, the bank's bias, the
+    curve's swarms there (dimension ``reliability_n``)."""
+    ds = xr.Dataset({
+        "holdout_probability": ((), float(held["probability"])),
+        "bank_bias": ((), float(held["bias"])),
+        "bank_validation_agree": ((), bool(held["agrees"])),
+        "reliability_vs_n_holdout": (("reliability_n",), np.array([r[6] for r in curve])),
+    })
+    _with(ds, "holdout_probability", "1", f"P of the reported swarm on the "
+          f"{held['scenarios']} held-out scenarios (they chose nothing: unbiased)")
+    _with(ds, "bank_bias", "1", "reliability_probability - holdout_probability: the "
+          "optimiser's bias of the bank's P for the swarm it chose")
+    _with(ds, "bank_validation_agree", "1", "holdout_probability and validation_p_hat agree "
+          "within their 95 % sampling error (|difference| <= 1.96 sqrt(s_v^2/M + s_h^2/H))")
+    _with(ds, "reliability_vs_n_holdout", "1", "P of the curve's swarms on the held-out "
+          "scenarios")
+    return ds
+
+
+def _level_vars(levels) -> xr.Dataset:
+    """The designs at the prior's levels (dimension ``p_f_level``, coordinate its p_f)."""
+    dim = ("p_f_level",)
+    ds = xr.Dataset({
+        "swarm_size_at_p_f": (dim, np.array([a.n for a in levels], np.int64)),
+        "probability_at_p_f": (dim, np.array([a.probability for a in levels])),
+        "proven_bound_at_p_f": (dim, np.array([a.bound for a in levels])),
+    }, coords={"p_f_level": np.array([a.p_f for a in levels])})
+    _with(ds, "p_f_level", "1", "p_f known at the prior's levels (quantiles or values)")
+    _with(ds, "swarm_size_at_p_f", "1", "fewest N found meeting the bank's level with p_f "
+          "known at that value (0: none of at most n_max)")
+    _with(ds, "probability_at_p_f", "1", "its P on the scenario bank at that p_f")
+    _with(ds, "proven_bound_at_p_f", "1", "proven lower bound on N at that p_f")
+    return ds
+
+
 @dataclass(frozen=True)
 class BankRun:
     """How the design on the scenario bank went: ``stepped`` the looks' (N, P_bank) past
     the first, ``need`` the coverage threshold (fraction), ``exact`` one exact scenario,
     ``t_bank_s`` the bank's wall time, ``cert`` the certificate, ``level`` the level
-    the bank was solved at (None: p), ``stat`` the statistical lower bound."""
+    the bank was solved at (None: p), ``stat`` the statistical lower bound, ``model``
+    the failure model, ``levels`` the designs at the prior's levels (None: p_f known),
+    ``held`` the reported swarm on the held-out scenarios (None: none held out)."""
 
     stepped: list
     need: float
@@ -100,6 +152,9 @@ class BankRun:
     cert: object = None
     level: float | None = None
     stat: dict | None = None
+    model: object = None
+    levels: list | None = None
+    held: dict | None = None      # the reported swarm on the held-out scenarios (held_scores)
 
 
 def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, tolerant,
@@ -212,6 +267,10 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
     _with(new, "reliability_vs_n_swarm", "rad", "swarm angles of the curve's swarms (NaN: unused)")
     _with(new, "tolerant_swarm_size", "1", "spacecraft of the k-failure-tolerant design")
     _with(new, "tolerant_probability", "1", "its P on the scenario bank")
+    if run.levels:
+        new = new.merge(_level_vars(run.levels))
+    if run.held is not None:
+        new = new.merge(_held_vars(run.held, curve))
     ds = xr.merge([ds.drop_vars([k for k in new.data_vars if k in ds]), new],
                   combine_attrs="override")
     attrs = dict(nominal.attrs)
@@ -221,7 +280,10 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
         "bank_swarm_size": int(res.n), "validation_outcome": outcome,
         "demonstrate_steps": steps, "success_probability": p, "confidence": conf,
         "n_scenarios": int(bank.rows.shape[0]), "reliability_threshold": float(need),
-        "failure_probability": float(c.config.monte_carlo.failure_probability), "verify_samples": int(val.per_sample.size),
+        "failure_probability": (float(run.model.p_f[0]) if len(run.model.p_f) == 1
+                                else list(run.model.p_f)),
+        "failure_model": run.model.describe(), "failure_model_record": run.model.record(),
+        "verify_samples": int(val.per_sample.size),
         "scenario_stream": SCENARIO_STREAM, "validation_stream": VALIDATION_STREAM,
         "scenario_bank_hash": str(bank.attrs.get("config_hash", "")),
         "scenario_bank_s": float(t_bank), "reliability_solve_s": float(res.solve_time),
@@ -234,6 +296,22 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
     })
     if cert is not None:
         attrs["certificate"] = cert.line()
+    if run.levels:
+        attrs["p_f_levels"] = levels_line(run.levels, level)
+    if run.held is not None:
+        h = run.held
+        attrs.update({"n_holdout_scenarios": int(h["scenarios"]),
+                      "holdout_probability": float(h["probability"]),
+                      "bank_bias": float(h["bias"]),
+                      "bank_validation_agreement": (
+                          f"held-out P {h['probability']:.4f} and validation P-hat "
+                          f"{h['p_hat']:.4f} {'agree' if h['agrees'] else 'DISAGREE'} within "
+                          f"their sampling error (difference {h['p_hat'] - h['probability']:+.4f}"
+                          f", 95 %: +-{1.959963984540054 * h['se']:.4f}); the validation's own "
+                          f"95 % interval [{h['interval'][0]:.4f}, {h['interval'][1]:.4f}] "
+                          f"{'holds' if h['inside'] else 'misses'} the held-out P; bank P "
+                          f"{chosen.probability:.4f} on the scenarios that chose the swarm: "
+                          f"bias {h['bias']:+.4f}")})
     if stat is not None:
         attrs["statistical_lower_bound"] = (
             f"true fewest N >= {stat['bound']:g} at {100 * conf:g} % confidence: the "
@@ -249,6 +327,13 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
         notes.append(f"design.demonstrate: {steps} until the validation bound reached p = {p:g}"
                      if val.lower >= p else
                      f"design.demonstrate: {steps} (n_max) without demonstrating p")
+    if not run.model.is_plain:
+        notes.append(f"failure model: {run.model.describe()}"
+                     + ("; the bank scores a loss in the pass as a whole-pass loss (a lower "
+                        "bound on P), its proofs as a survival (an upper bound); the validation "
+                        "draws the loss times" if run.model.in_pass_share else ""))
+    if run.levels:
+        notes.append(attrs["p_f_levels"])
     if level != p:
         notes.append(f"design.bank_level: the bank solved at the stricter level p' = {level:g} "
                      f"(p = {p:g}) so that its swarm validates at the first look")
@@ -257,7 +342,10 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
     summary = (f"success-probability design for P({thr}) >= {p:g}: N = {chosen.n}, "
                f"requirement {verdict(val, p)} by validation"
                + (f" (design.demonstrate: {steps})" if stepped else "")
-               + f"; P = {chosen.probability:.4f} on {bank.rows.shape[0]} scenarios; "
+               + f"; P = {chosen.probability:.4f} on {bank.rows.shape[0]} scenarios"
+               + ("" if run.held is None else
+                  f", {run.held['probability']:.4f} on {run.held['scenarios']} held-out "
+                  f"(bias {run.held['bias']:+.4f})") + "; "
                f"validation over {samples}: P-hat = {val.p_hat:.4f}, {100 * look_conf:.4g} % "
                f"lower bound {val.lower:.4f}; "
                f"{bank_line(res.n, res.probability, res.status, res.bound, res.gap)}; "

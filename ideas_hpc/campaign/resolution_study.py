@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from ideas_hpc.base.errors import InputError
+from ideas_hpc.mapping.requirement import threshold_of
 
 #: The four NASA PDS models of Eros, coarse to fine (plates).
 EROS_MODELS = ("eros001708", "eros007790", "eros010152", "eros022540")
@@ -72,7 +73,7 @@ def n_from_curve(ds, target: float, eps: float) -> str:
     n = np.asarray(ds["n_spacecraft"].values)
     cov = np.asarray(ds["coverage_vs_n"].values, dtype=float)
     status = np.array([str(x) for x in np.asarray(ds["coverage_vs_n_status"].values)])
-    ok = np.flatnonzero(cov >= target - eps - 1e-12)
+    ok = np.flatnonzero(threshold_of(target, eps).meets(cov))
     if ok.size == 0:
         return "-"
     i = int(ok[0])

@@ -25,7 +25,8 @@ from ideas_hpc.design.candidates import candidate_masks
 from ideas_hpc.flyby.encounter import Encounter, approach_angles
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.flyby.flight import fly
-from ideas_hpc.campaign.setup import setup_from_campaign
+from ideas_hpc.campaign.setup import requirement_from_campaign, setup_from_campaign
+from ideas_hpc.mapping.requirement import threshold_of
 from ideas_hpc.campaign.schema.model_fields import flyby_errors
 from ideas_hpc.base.units import DEG
 
@@ -78,7 +79,8 @@ def encounter_scan(setup, fb, decs_rad, phases_rad, *, step_rad: float = 10 * DE
             rows = candidate_masks(s, keys)
             ring = float(a @ rows.any(axis=0) / a.sum())
             out["ring_coverage"][i, j] = ring
-            out["n_greedy"][i, j] = _greedy_n(rows, a / a.sum(), ring - eps)
+            # within eps_tol of the ring's own reach (an upper bound on the fewest)
+            out["n_greedy"][i, j] = _greedy_n(rows, a / a.sum(), threshold_of(ring, eps).need)
             out["approach_ra"][i, j] = ra
             if theta is not None:
                 out["swarm_coverage"][i, j] = fly(s, theta, counts=False).coverage.coverage
@@ -110,7 +112,7 @@ def scan_encounter_file(path, overrides=None, *, decs_deg=None, phases_deg=None,
     theta = c.config.swarm.angles_rad
     ds = encounter_scan(setup, c.config.flyby, np.radians(decs), np.radians(phases),
                         step_rad=math.radians(step_deg), theta=theta,
-                        eps=c.config.design.eps_tol_pct / 100)
+                        eps=requirement_from_campaign(c).eps_tol)
     what = "ring coverage % [greedy N]" + (" (swarm %)" if theta else "")
     print(f"{what} by approach declination (rows, deg) and phase angle (columns, deg), "
           f"{setup.encounter.speed_m_s / 1e3:g} km/s, d_sep {setup.d_sep_m / 1e3:.4g} km")

@@ -1,4 +1,5 @@
-"""A campaign's flyby setup: the validated file resolved to a :class:`FlybySetup` (SI).
+"""A campaign's flyby setup: the validated file resolved to a :class:`FlybySetup` (SI),
+and its coverage requirement (:func:`requirement_from_campaign`).
 
 The campaign layer builds the setup: it loads the body, sizes the flyby, picks
 the maneuver, checks the ring spacing and, for ``flyby.geometry = "encounter"``,
@@ -15,6 +16,7 @@ import dataclasses
 from ideas_hpc.attitude import campaign_maneuver
 from ideas_hpc.attitude.torque_terms import torques_from_config
 from ideas_hpc.attitude.device import check_device
+from ideas_hpc.attitude.modes import attitude_start
 from ideas_hpc.campaign.body_checks import check_body, check_grid_step, check_pointing
 from ideas_hpc.body.bodies import load_body
 from ideas_hpc.body.formats import load_shape_file
@@ -27,6 +29,16 @@ from ideas_hpc.flyby.flight import FlybySetup
 from ideas_hpc.flyby.sizing import size_flyby
 from ideas_hpc.flyby.swarm_geometry import check_separation
 from ideas_hpc.flyby.usable import ImageUse, ifov_rad
+from ideas_hpc.mapping.requirement import Requirement
+
+
+def requirement_from_campaign(c) -> Requirement:
+    """The campaign's coverage :class:`~ideas_hpc.mapping.requirement.Requirement`:
+    ``design.eps_tol_pct`` (already a fraction, ``config.design.eps_tol``),
+    ``design.target_rule`` and the ``[coverage]`` options as its observation limits
+    (the very object the setup's ``coverage`` is). Every kind builds it here, once."""
+    d = c.config.design
+    return Requirement(eps_tol=d.eps_tol, limits=c.extras["coverage"], rule=d.target_rule)
 
 
 def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
@@ -111,9 +123,9 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
 
 
 def _imaging(cfg, eta_rad: float) -> ImageUse | None:
-    """The usable-image test (SPEC 7d), or None (every image counts) for the paper's
-    start, ``monte_carlo.attitude_start = "paper"``."""
-    if cfg.monte_carlo.attitude_start == "paper":
+    """The usable-image test (SPEC 7d), or None (every image counts) for a start without
+    ``usable_images`` (the paper's, ``monte_carlo.attitude_start = "paper"``)."""
+    if not attitude_start(cfg.monte_carlo.attitude_start).usable_images:
         return None
     inst = cfg.instrument
     return ImageUse(ifov_rad(eta_rad, pixels_across=inst.pixels_across,

@@ -12,7 +12,7 @@ gives
   lower bound (:func:`~ideas_hpc.design.reliability_stats.lower_confidence_bound`);
 * one Bernoulli outcome, the same sample with its failures drawn
   (``(VALIDATION_STREAM, m, STREAM_FAILURES)`` of the new seed, as the design's
-  validation draws them): the success count and its
+  validation draws them, :mod:`ideas_hpc.failures.sampling`): the success count and its
   two-sided Wilson score interval (:func:`wilson_interval`), the figure a reader
   can check by hand.
 
@@ -104,14 +104,13 @@ def validate_store(store, *, samples: int = 1024, seed: int | None = None, first
 
     from ideas_hpc.campaign.schema.campaign_tables import validate_campaign
     from ideas_hpc.campaign.schema.toml_file import CampaignSource
-    from ideas_hpc.campaign.design_reliability import STREAM_FAILURES
+    from ideas_hpc.campaign.design_reliability import Validation, fly_validation
     from ideas_hpc.campaign.setup import setup_from_campaign
-    from ideas_hpc.core.design.reliability import swarm_probabilities
     from ideas_hpc.design.reliability_stats import lower_confidence_bound
     from ideas_hpc.engine.store_meta import store_attrs
     from ideas_hpc.base.errors import InputError
-    from ideas_hpc.montecarlo.scenarios import fly_members
-    from ideas_hpc.base.seeds import VALIDATION_STREAM, stream_rng
+    from ideas_hpc.mapping.requirement import meets
+    from ideas_hpc.montecarlo.failure_dispersion import failure_model
 
     attrs = store_attrs(Path(store))
     if "reliability_threshold" not in attrs:
@@ -133,24 +132,22 @@ def validate_store(store, *, samples: int = 1024, seed: int | None = None, first
     setup = setup_from_campaign(c)
     mc = c.config.monte_carlo
     t0 = time.perf_counter()
-    rows = fly_members(setup, theta, None, mc, seed=seed, n_samples=int(samples),
-                       progress=progress, first=int(first))
+    model = failure_model(mc)
+    rows, seen = fly_validation(setup, theta, mc, model, seed=seed, n_samples=int(samples),
+                                progress=progress, first=int(first))
     if rows.shape[2] != w.size:
         raise InputError(f"the body flown now has {rows.shape[2]} vertices, the store's "
                          f"{w.size} ({attrs.get('body', '?')}): set IDEAS_HPC_DATA as the "
                          "design run had it", field="store")
-    need, p_f = float(attrs["reliability_threshold"]), float(mc.failure_probability)
-    n = theta.size
-    per = swarm_probabilities(np.ascontiguousarray(rows), np.arange(n, dtype=np.int64)[None, :],
-                              w, need, p_f)[0]
-    wins = np.zeros(rows.shape[0], dtype=bool)
-    for k in range(rows.shape[0]):
-        alive = stream_rng(seed, VALIDATION_STREAM, int(first) + k,
-                           STREAM_FAILURES).random(n) >= p_f
-        # the same tolerance as the exact enumeration (coverage >= need - 1e-12)
-        wins[k] = bool(alive.any() and w[rows[k, alive].any(axis=0)].sum() >= need - 1e-12)
+    need = float(attrs["reliability_threshold"])
+    # the design's own validation (failures.sampling): exact P and one drawn outcome each
+    v = Validation(rows, w, need, model, seed, first=int(first), seen=seen)
+    per = v.per_sample
+    # the same tolerance as the exact enumeration (the requirement's one comparison)
+    wins = meets(v.coverage, need)
     conf = float(attrs["confidence"])
-    return StoreValidation(n=n, seed=seed, first=int(first), per_sample=per, success=wins,
+    return StoreValidation(n=theta.size, seed=seed, first=int(first), per_sample=per,
+                           success=wins,
                            lower=lower_confidence_bound(per, conf), confidence=conf,
                            p=float(attrs["success_probability"]),
                            wall_s=time.perf_counter() - t0)

@@ -15,6 +15,8 @@ from __future__ import annotations
 
 import math
 
+from ideas_hpc.mapping.requirement import meets
+
 
 def pct(x: float, digits: int = 3) -> str:
     return f"{100 * float(x):.{digits}f} %"
@@ -25,7 +27,7 @@ def requirement_line(target: float, threshold: float, reached: float | None = No
     s = f"target {pct(target)}, threshold {pct(threshold)} (target - eps_tol)"
     if reached is not None and math.isfinite(reached):
         s += f", reached {pct(reached)}"
-        if reached < threshold - 1e-12:
+        if not meets(reached, threshold):
             s += " (below the threshold)"
     return s
 

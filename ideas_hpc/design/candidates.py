@@ -20,9 +20,8 @@ from __future__ import annotations
 import numpy as np
 
 from ideas_hpc.attitude import initial_conditions
-from ideas_hpc.attitude.run_settings import InitialState
-from ideas_hpc.flyby.flight import FlybySetup, target
-from ideas_hpc.flyby.camera import camera_dcms, imaging_dcms
+from ideas_hpc.flyby.flight import FlybySetup, target, undrawn_perturbation
+from ideas_hpc.flyby.views import FlightPlan, flight_views
 from ideas_hpc.mapping.coverage import observed_per_spacecraft, quality_per_spacecraft, stereo_pair_table
 
 
@@ -30,26 +29,17 @@ def _views(setup: FlybySetup, keys):
     th = np.array([k[0] for k in keys], dtype=np.float64)
     per = np.array([k[1] for k in keys], dtype=np.float64)
     tgt = target(setup, th)
-    r_img = np.ascontiguousarray(tgt.position_T[:, ::setup.image_every])
     periods = per if setup.maneuver.sweeps else None
-    if setup.attitude_mode == "simulated":
-        if setup.attitude_start == "paper":
-            draws = [initial_conditions(setup.seed, int(k[2]), 1) for k in keys]
-            s0, w0, W0 = (np.ascontiguousarray(np.concatenate([d[j] for d in draws]))
-                          for j in range(3))
-        else:       # the nominal flight: exactly on the reference (SPEC 7d)
-            s0, w0, W0 = (np.zeros((th.size, 3)) for _ in range(3))
-        dcm, att = camera_dcms(setup.with_(decimate=max(1, int(round((setup.tf_s - setup.t0_s)
-                                                                      / setup.dt_s)))),
-                               th, periods, state0=InitialState(s0, w0, W0),
-                               track_T=(tgt.position_T, tgt.velocity_T),
-                               start="absolute" if setup.attitude_start == "paper"
-                               else "reference")
-        dcm = imaging_dcms(setup, dcm, att, r_img)
-    else:
-        dcm, _ = camera_dcms(setup, th, periods, r_img_T=r_img)
-    sun = setup.sun_T() if setup.coverage.needs_sun else None
-    return r_img, dcm, sun
+
+    def random_state():     # each candidate's own sample: initial_conditions(seed, ic key, 1)
+        draws = [initial_conditions(setup.seed, int(k[2]), 1) for k in keys]
+        return tuple(np.ascontiguousarray(np.concatenate([d[j] for d in draws]))
+                     for j in range(3))
+
+    v = flight_views(setup, th, periods, None, None,
+                     undrawn_perturbation(setup, th.size, random_state),
+                     plan=FlightPlan(series=False, trajectory=(tgt.position_T, tgt.velocity_T)))
+    return v.r_img_T, v.imaging_BT, setup.world.sun_at_images(setup)
 
 
 def candidate_masks(setup: FlybySetup, keys) -> np.ndarray:

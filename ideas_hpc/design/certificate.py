@@ -138,7 +138,7 @@ class Certificate:
 
 def certify(n_bank: int, best_of: Callable, validate: Callable, plan: LookPlan | None = None,
             *, bound: Callable = lower_confidence_bound, values_of: Callable | None = None,
-            rng=None, samples_max: int | None = None, **keywords) -> Certificate:
+            rng=None, **keywords) -> Certificate:
     """Run the looks of the module docstring.
 
     ``plan`` (:class:`~ideas_hpc.design.settings.LookPlan`) holds ``p``,
@@ -178,7 +178,8 @@ def certify(n_bank: int, best_of: Callable, validate: Callable, plan: LookPlan |
         The plan's resampling (with ``values_of``).
     samples_max : int, optional
         With ``values_of``: the most samples one look may take (the plan doubles a look's M
-        from ``n_samples`` toward its target power, :func:`~ideas_hpc.design.look_plan.plan_looks`).
+        from ``n_samples`` toward its target power, :func:`~ideas_hpc.design.look_plan.plan_looks`;
+        a :class:`LookPlan` field).
     """
     plan = plan if plan is not None else LookPlan(**keywords)
     p, confidence, n_max, n_samples = plan.p, plan.confidence, plan.n_max, plan.n_samples
@@ -186,10 +187,9 @@ def certify(n_bank: int, best_of: Callable, validate: Callable, plan: LookPlan |
     k = planned_looks(demonstrate, n_bank, n_max, max_looks, exact)
     schedule = None
     if demonstrate and not exact and values_of is not None:
-        schedule = plan_looks(int(n_bank), best_of, values_of, p=p, confidence=confidence,
-                              n_max=n_max, samples=n_samples, max_looks=k,
-                              rng=rng if rng is not None else np.random.default_rng(0),
-                              bound=bound, samples_max=samples_max)
+        schedule = plan_looks(int(n_bank), best_of, values_of, plan,
+                              rng if rng is not None else np.random.default_rng(0),
+                              max_looks=k, bound=bound)
     # every swarm a look may fly is fixed before the first look: no choice waits on
     # (or times itself against) a validation flight
     if schedule is not None and schedule.looks:
@@ -278,7 +278,7 @@ def replicated_lower_bound(optima, s_n: int, p: float, solve_p: float,
     return float(v[best_l - 1]), best_l, theta
 
 
-def group_bounds(lows, n_groups: int, level: float, p_f: float, n_max: int) -> np.ndarray:
+def group_bounds(lows, n_groups: int, level: float, p_f, n_max: int) -> np.ndarray:
     """Proven lower bounds on the optima of ``n_groups`` independent sample problems cut from
     one bank: the scenarios split in order into groups (i.i.d. draws, so the groups are
     independent sample problems), problem ``i`` asking for the fewest N with bank mean >=
@@ -287,7 +287,8 @@ def group_bounds(lows, n_groups: int, level: float, p_f: float, n_max: int) -> n
     ``lows[s]`` is a proven lower bound on the fewest spacecraft that cover scenario ``s``
     (the ring-gap bound). On group ``i`` an m-swarm reaches at most the fraction
     ``U_m = mean(lows <= m)`` of the scenarios with no failure, so any N-swarm has bank
-    mean ``<= UB(N)`` (:func:`~ideas_hpc.design.reliability_stats.failure_upper_bound`) and
+    mean ``<= UB(N)`` (:func:`~ideas_hpc.design.reliability_stats.failure_upper_bound`;
+    ``p_f`` a bare probability or the failure model, whose upper law it takes) and
     the problem's optimum is at least the first N with ``UB(N) >= level``
     (``n_max + 1`` when none). Lower bounds on the optima keep
     :func:`replicated_lower_bound` valid: a problem in which the true optimum is feasible

@@ -6,7 +6,8 @@ candidate grid is the integer programme::
 
     minimise    sum_c x_c                                          (N)
     subject to  y_g <= sum_{c sees g} x_c           for every group g
-                sum_g w_g y_g >= A_target - eps_tol               (area fractions)
+                sum_g w_g y_g >= need = A_target - eps_tol        (area fractions,
+                                                                  design/area.py)
                 sum_{c in W} x_c <= 1               for every separation window W
 
 ``y`` need not be integer: ``y_g <= 1`` and ``y_g <= 0`` when no chosen
@@ -50,12 +51,11 @@ from ideas_hpc.design.highs import run_milp
 
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.base.progress import plural
+from ideas_hpc.design.area import FEAS_TOL, area_constraint
 from ideas_hpc.design.bank import CandidateBank, Reduced, conflict_windows, reduce_problem, separation_steps
 from ideas_hpc.design.ring_bound import redundancy_polish, ring_bound, swap_search
+from ideas_hpc.mapping.requirement import Threshold, as_threshold, meets
 
-#: Coverage tolerance of the solver's constraints (fractions); the true union
-#: coverage of every returned swarm is recomputed from the masks.
-FEAS_TOL = 1e-9
 #: Relative gaps below this are float noise of the solver's bound (max coverage).
 GAP_ZERO = 1e-9
 
@@ -153,9 +153,11 @@ def n_max_too_small(n_max: int, what: str, top) -> InputError:
                       field="n_max")
 
 
-def min_swarm(bank: CandidateBank, *, target: float, eps_tol: float, n_max: int | None = None,
-              min_separation: float = 0.0, time_limit: float | None = None) -> ExactResult:
-    """The fewest grid candidates whose union covers ``target - eps_tol`` (fractions).
+def min_swarm(bank: CandidateBank, *, target: float | None = None, eps_tol: float | None = None,
+              n_max: int | None = None, min_separation: float = 0.0,
+              time_limit: float | None = None, threshold: Threshold | None = None) -> ExactResult:
+    """The fewest grid candidates whose union covers ``threshold.need`` (fractions), or
+    ``target - eps_tol`` (the older keywords).
 
     Raises
     ------
@@ -167,8 +169,9 @@ def min_swarm(bank: CandidateBank, *, target: float, eps_tol: float, n_max: int 
         file keys, :data:`ideas_hpc.campaign.schema.design_checks.DESIGNER_FIELDS`).
     """
     time_limit = check_time_limit(time_limit)
+    thr = as_threshold(threshold, target, eps_tol)
     red, m = prepare(bank, min_separation)
-    need = target - eps_tol
+    target, need = thr.target, thr.need
     reach = bank.reach
     if need > reach + FEAS_TOL:
         raise InputError(f"target {100 * target:.3f} % (minus eps_tol) is not reachable: the "
@@ -180,8 +183,7 @@ def min_swarm(bank: CandidateBank, *, target: float, eps_tol: float, n_max: int 
     else:
         nc, g = red.rep.size, red.n_groups
         cons = [LinearConstraint(_cover_rows(red, nc), -np.inf, 0.0),
-                LinearConstraint(np.r_[np.zeros(nc), red.weight][None, :], need + FEAS_TOL,
-                                 np.inf)]
+                area_constraint(thr, red.weight, nc, nc + g)]
         sep = _separation_rows(red, m, bank.n_candidates, nc + g)
         if sep is not None:
             cons.append(sep)
@@ -194,11 +196,11 @@ def min_swarm(bank: CandidateBank, *, target: float, eps_tol: float, n_max: int 
         if m > 0 and res.x is None and res.status == 2 and above is None:
             out = None
         else:
-            out = _min_result(bank, red, res, dt + t_ring, target, need, n_max, m, low, above)
+            out = _min_result(bank, red, res, dt + t_ring, thr, n_max, m, low, above)
     if m == 0:
         return out
     # Does the separation cost spacecraft? Solve without it (merged columns: fast).
-    free = min_swarm(bank, target=target, eps_tol=eps_tol, n_max=n_max, time_limit=time_limit)
+    free = min_swarm(bank, threshold=thr, n_max=n_max, time_limit=time_limit)
     sep_km = min_separation / 1e3
     if out is None:
         raise InputError(f"no swarm{'' if n_max is None else f' of at most {n_max}'} with "
@@ -249,10 +251,10 @@ def _ring_result(bank, idx, target, dt) -> ExactResult:
                               f"{idx.size} that do; no integer programme needed"])
 
 
-def _min_result(bank, red, res, dt, target, need, n_max, m, low=None,
-                above=None) -> ExactResult:
-    """The design from HiGHS's outcome; ``above`` is a swarm found before it (the
-    programme then looked only for smaller ones)."""
+def _min_result(bank, red, res, dt, thr, n_max, m, low=None, above=None) -> ExactResult:
+    """The design from HiGHS's outcome for the threshold ``thr``; ``above`` is a swarm
+    found before it (the programme then looked only for smaller ones)."""
+    target, need = thr.target, thr.need
     notes = []
     bound = getattr(res, "mip_dual_bound", None)
     bound = math.ceil(bound - 1e-6) if bound is not None and np.isfinite(bound) else 1
@@ -295,7 +297,7 @@ def _min_result(bank, red, res, dt, target, need, n_max, m, low=None,
     gap = (n - bound) / n
     status = "optimal" if gap == 0 else ("time_limit" if res_status == 1 else "feasible")
     cov = float(bank.coverage([idx])[0])
-    if cov < need - 1e-9:  # the solver's tolerances never hide a shortfall
+    if cov < need - FEAS_TOL:  # the solver's tolerances never hide a shortfall
         raise RuntimeError(f"exact design covers {cov!r} < {need!r}")
     return ExactResult(indices=idx, theta=bank.theta[idx], n=n, coverage=cov, target=target,
                        status=status, bound=float(bound), gap=float(gap), solve_time=dt,
@@ -311,7 +313,7 @@ def greedy_cover(bank: CandidateBank, need: float, m: int, n_max: int | None):
     indices, or None when it cannot reach ``need``.
     """
     idx, covered = greedy_swarm(bank, m, n_max, need)
-    return idx if covered >= need - 1e-12 else None
+    return idx if meets(covered, need) else None
 
 
 def greedy_swarm(bank: CandidateBank, m: int, n_max: int | None,
@@ -324,7 +326,7 @@ def greedy_swarm(bank: CandidateBank, m: int, n_max: int | None,
     allowed = np.ones(bank.n_candidates, dtype=bool)
     chosen: list[int] = []
     covered = 0.0
-    while covered < need - 1e-12 and (n_max is None or len(chosen) < n_max):
+    while not meets(covered, need) and (n_max is None or len(chosen) < n_max):
         gain = (bank.masks & left) @ w
         gain[~allowed] = -1.0
         j = int(np.argmax(gain))

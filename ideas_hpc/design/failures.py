@@ -39,9 +39,11 @@ from scipy import sparse
 from scipy.optimize import LinearConstraint
 
 from ideas_hpc.base.errors import InputError
+from ideas_hpc.design.area import FEAS_TOL, area_floor, area_row
 from ideas_hpc.design.bank import CandidateBank
-from ideas_hpc.design.exact import (FEAS_TOL, ExactResult, _separation_rows, check_time_limit, heavy_groups,
+from ideas_hpc.design.exact import (ExactResult, _separation_rows, check_time_limit, heavy_groups,
                     min_swarm, prepare, solve)
+from ideas_hpc.mapping.requirement import Threshold, as_threshold, meets
 
 #: Grid shifts of each violated failure set added with it (valid rows, fewer rounds).
 SHIFTS = (-2, -1, 1, 2)
@@ -68,10 +70,12 @@ def worst_failure(bank: CandidateBank, swarm, k: int):
     return float(cov[i]), s[fails[i]], cov, s[fails]
 
 
-def failure_tolerant(bank: CandidateBank, k: int, *, target: float, eps_tol: float,
-                     n_max: int, min_separation: float = 0.0,
-                     time_limit: float | None = None) -> ExactResult:
-    """Fewest spacecraft keeping ``target - eps_tol`` after any ``k`` failures (module docstring).
+def failure_tolerant(bank: CandidateBank, k: int, *, target: float | None = None,
+                     eps_tol: float | None = None, n_max: int, min_separation: float = 0.0,
+                     time_limit: float | None = None,
+                     threshold: Threshold | None = None) -> ExactResult:
+    """Fewest spacecraft keeping ``threshold.need`` (or ``target - eps_tol``) after any ``k``
+    failures (module docstring).
 
     Three steps: the proven lower bound ``N_0 + k`` (removing k spacecraft from a
     tolerant swarm leaves a plain design); for ``k >= 2`` a feasible swarm from
@@ -81,6 +85,7 @@ def failure_tolerant(bank: CandidateBank, k: int, *, target: float, eps_tol: flo
     ``time_limit``. ``status`` is ``"optimal"`` only when the bounds meet.
     """
     time_limit = check_time_limit(time_limit)
+    thr = as_threshold(threshold, target, eps_tol)
     if k < 0:
         raise InputError(f"must be >= 0, got {k}", field="k")
     if k >= n_max:
@@ -88,11 +93,11 @@ def failure_tolerant(bank: CandidateBank, k: int, *, target: float, eps_tol: flo
                          field="k")
     t0 = time.perf_counter()
     deadline = None if time_limit is None else t0 + time_limit
-    plain = min_swarm(bank, target=target, eps_tol=eps_tol, n_max=n_max,
-                      min_separation=min_separation, time_limit=time_limit)
+    plain = min_swarm(bank, threshold=thr, n_max=n_max, min_separation=min_separation,
+                      time_limit=time_limit)
     bound = plain.n + k if plain.optimal else int(plain.bound) + k
     red, m = prepare(bank, min_separation, redundancy=True)
-    need = target - eps_tol
+    need = thr.need
     nc = red.rep.size
     lower = _heavy_lower(red, k, need, nc + (k + 1) * red.n_groups)
     best = None
@@ -103,7 +108,7 @@ def failure_tolerant(bank: CandidateBank, k: int, *, target: float, eps_tol: flo
     if k == 1 and plain.n != 2:
         notes = [f"lower bound {bound} = plain optimum {plain.n} + {k} failure"]
     else:
-        c, cons, integ = _master(red, [], k, need, (k + 1, n_max), m, bank.n_candidates,
+        c, cons, integ = _master(red, [], k, thr, (k + 1, n_max), m, bank.n_candidates,
                                  fold=True)
         res, _ = solve(c, cons, integ, _left(deadline), lower)
         if res.x is not None:
@@ -131,7 +136,7 @@ def failure_tolerant(bank: CandidateBank, k: int, *, target: float, eps_tol: flo
             break
         rounds += 1
         top = n_max if best is None else best.size - 1
-        c, cons, integ = _master(red, scen, k, need, (bound, top), m, bank.n_candidates)
+        c, cons, integ = _master(red, scen, k, thr, (bound, top), m, bank.n_candidates)
         res, _ = solve(c, cons, integ, left, lower)
         if res.status == 2:          # no swarm of bound..top survives: best is optimal
             if best is None:
@@ -146,7 +151,7 @@ def failure_tolerant(bank: CandidateBank, k: int, *, target: float, eps_tol: flo
         if res.status == 0:
             bound = max(bound, s.size)   # optimum of a relaxation
         _, _, covs, subsets = worst_failure(bank, s, k)
-        bad = subsets[covs < need - 1e-12]
+        bad = subsets[~meets(covs, need)]
         if bad.size == 0:
             best = s
             break
@@ -173,10 +178,10 @@ def failure_tolerant(bank: CandidateBank, k: int, *, target: float, eps_tol: flo
     status = "optimal" if gap == 0 else ("time_limit" if deadline is not None
                                          and time.perf_counter() >= deadline else "feasible")
     worst, failed, _, _ = worst_failure(bank, best, k)
-    if worst < need - 1e-9:
+    if worst < need - FEAS_TOL:
         raise RuntimeError(f"failure-tolerant swarm keeps only {worst!r} < {need!r}")
     r = ExactResult(indices=best, theta=bank.theta[best], n=n,
-                    coverage=float(bank.coverage([best])[0]), target=target, status=status,
+                    coverage=float(bank.coverage([best])[0]), target=thr.target, status=status,
                     bound=float(bound), gap=float(gap), solve_time=time.perf_counter() - t0,
                     notes=notes)
     r.worst_failure_coverage = worst
@@ -195,7 +200,7 @@ def pair_clique(bank: CandidateBank, size: int, need: float, m: int, budget: int
     """
     u = (~bank.masks).astype(np.float64)
     w = bank.areas / bank.areas.sum()
-    adj = 1.0 - (u * w) @ u.T >= need - 1e-12
+    adj = meets(1.0 - (u * w) @ u.T, need)
     n = adj.shape[0]
     np.fill_diagonal(adj, False)
     if m:
@@ -222,7 +227,7 @@ def pair_clique(bank: CandidateBank, size: int, need: float, m: int, budget: int
     if got is None:
         return None, count[0] <= budget
     s = np.array(sorted(got), dtype=np.int64)
-    return (s, True) if worst_failure(bank, s, size - 2)[0] >= need - 1e-12 else (None, False)
+    return (s, True) if meets(worst_failure(bank, s, size - 2)[0], need) else (None, False)
 
 
 def _heavy_lower(red, k, need, n_var):
@@ -239,7 +244,7 @@ def _left(deadline):
     return None if deadline is None else deadline - time.perf_counter()
 
 
-def _master(red, scen, k, need, card, m, n_grid, fold=False):
+def _master(red, scen, k, thr, card, m, n_grid, fold=False):
     """Objective, constraints and integrality of the relaxation with scenarios ``scen``.
 
     Variables ``[x (K), v^1 (G), ..., v^{k+1} (G)]``; ``v^t_g`` is 1 only if at least
@@ -249,7 +254,8 @@ def _master(red, scen, k, need, card, m, n_grid, fold=False):
     stays seen iff ``count_S(g) >= |F seen-by g| + 1``, so the scenario row is
     ``sum_g w_g v_g^{1 + |F sees g|} >= need (sum_{j in F} x_j - (k - 1))``.
     ``fold=True`` asks instead ``sum_g w_g v_g^{k+1} >= need`` (sufficient only).
-    ``card`` = (lowest, highest) swarm size.
+    ``need`` is the area floor of the threshold ``thr``
+    (:func:`~ideas_hpc.design.area.area_floor`); ``card`` = (lowest, highest) swarm size.
     """
     nc, g = red.rep.size, red.n_groups
     n_var = nc + (k + 1) * g
@@ -261,19 +267,19 @@ def _master(red, scen, k, need, card, m, n_grid, fold=False):
                                    sparse.csr_matrix((g, (k + 1 - t) * g))]).tocsr())
         lo.append(np.full(g, -np.inf))
         hi.append(np.zeros(g))
-    w0 = np.zeros(n_var)
-    w0[nc + (k * g if fold else 0):nc + (k * g if fold else 0) + g] = red.weight
-    rows.append(sparse.csr_matrix(w0[None, :]))
-    lo.append([need + FEAS_TOL])
+    floor = area_floor(thr)
+    rows.append(sparse.csr_matrix(area_row(red.weight, nc + (k * g if fold else 0),
+                                           n_var)[None, :]))
+    lo.append([floor])
     hi.append([np.inf])
     cov_i = red.cover.astype(np.int64)
     for f in scen:
         hits = cov_i[list(f)].sum(axis=0)                        # |F sees g|, 0..k
         w = np.zeros(n_var)
         w[nc + hits * g + np.arange(g)] = red.weight
-        w[list(f)] -= need + FEAS_TOL
+        w[list(f)] -= floor
         rows.append(sparse.csr_matrix(w[None, :]))
-        lo.append([-(need + FEAS_TOL) * (k - 1)])
+        lo.append([-floor * (k - 1)])
         hi.append([np.inf])
     ones = np.zeros(n_var)
     ones[:nc] = 1.0
@@ -296,10 +302,10 @@ def _greedy_complete(bank, start, k, need, n_max):
     """Add the candidate that most raises the worst-case coverage until it reaches ``need``."""
     s = [int(i) for i in start]
     while len(s) < n_max:
-        if len(s) > k and worst_failure(bank, s, k)[0] >= need - 1e-12:
+        if len(s) > k and meets(worst_failure(bank, s, k)[0], need):
             return np.sort(np.array(s, dtype=np.int64))
         scores = [worst_failure(bank, s + [j], k)[0] if j not in s else -1.0
                   for j in range(bank.n_candidates)]
         s.append(int(np.argmax(scores)))
-    ok = len(s) > k and worst_failure(bank, s, k)[0] >= need - 1e-12
+    ok = len(s) > k and meets(worst_failure(bank, s, k)[0], need)
     return np.sort(np.array(s, dtype=np.int64)) if ok else None

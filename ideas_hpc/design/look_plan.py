@@ -33,6 +33,7 @@ from typing import Callable
 import numpy as np
 
 from ideas_hpc.design.reliability_stats import clears, lower_confidence_bound
+from ideas_hpc.design.settings import LookPlan
 
 #: A look predicted to clear p less often than this is not planned (its share of the error
 #: would be spent on a near-certain failure).
@@ -99,9 +100,9 @@ def pass_power(values, p: float, samples: int, confidence: float, rng, *,
     return float(np.mean([bound(row, confidence) >= p for row in x]))
 
 
-def plan_looks(n_bank: int, best_of: Callable, values_of: Callable, *, p: float,
-               confidence: float, n_max: int, samples: int, max_looks: int, rng,
-               bound: Callable = lower_confidence_bound, samples_max: int | None = None) -> Plan:
+def plan_looks(n_bank: int, best_of: Callable, values_of: Callable, plan: LookPlan, rng,
+               *, max_looks: int | None = None,
+               bound: Callable = lower_confidence_bound) -> Plan:
     """The looks of the module docstring.
 
     Parameters
@@ -113,17 +114,21 @@ def plan_looks(n_bank: int, best_of: Callable, values_of: Callable, *, p: float,
     values_of : callable
         ``swarm -> (S,)`` per-scenario success probabilities of the swarm on the bank
         (held-out scenarios where there are some).
-    p, confidence : float
-        Requirement and overall confidence (``alpha = 1 - confidence``).
-    n_max, samples, max_looks : int
-        Largest swarm, fresh samples per look, most looks.
-    samples_max : int, optional
-        Most fresh samples of one look: a look's M is doubled from ``samples`` while its
-        predicted power is below :data:`TARGET_POWER` and M stays within this (the
-        power to demonstrate a swarm just above p grows with M; so does the cost).
+    plan : LookPlan
+        ``p`` and ``confidence`` (``alpha = 1 - confidence``), ``n_max`` the largest
+        swarm, ``n_samples`` fresh samples per look, ``max_looks`` the most looks and
+        ``samples_max`` the most fresh samples of one look: a look's M is doubled from
+        ``n_samples`` while its predicted power is below :data:`TARGET_POWER` and M
+        stays within it (the power to demonstrate a swarm just above p grows with M; so
+        does the cost).
     rng : numpy.random.Generator
         The prediction's resampling (:func:`ideas_hpc.base.seeds.search_rng`).
+    max_looks : int, optional
+        In place of ``plan.max_looks`` (the certificate's K, capped by ``n_max``).
     """
+    p, confidence, n_max = plan.p, plan.confidence, plan.n_max
+    samples, samples_max = plan.n_samples, plan.samples_max
+    max_looks = plan.max_looks if max_looks is None else max_looks
     alpha = 1.0 - float(confidence)
     sizes = []
     for n in range(int(n_bank), int(n_max) + 1):

@@ -3,10 +3,17 @@
 On a scenario bank (``rows[s, c, v]``: vertex v seen or mapped by grid
 candidate c in scenario s, S draws of the continuous dispersions), the
 probability of a swarm is the scenario mean of its exact failure-weighted
-success probability (:mod:`ideas_hpc.core.design.reliability`: independent
-Bernoulli(p_f) failures are enumerated, not sampled)::
+success probability (:mod:`ideas_hpc.core.design.reliability`: the survivor
+sets T are enumerated, not sampled, each weighted by ``pi(T)`` of the failure
+model, :mod:`ideas_hpc.failures`; independent failures:
+``pi(T) = (1-p_f)^|T| p_f^(N-|T|)``)::
 
-    P_bank(swarm) = (1/S) sum_s sum_{T subset swarm} (1-p_f)^|T| p_f^(N-|T|) 1[cov_s(T) >= need]
+    P_bank(swarm) = (1/S) sum_s sum_{T subset swarm} pi(T) 1[cov_s(T) >= need]
+
+With losses in the pass the bank scores them as whole-pass losses (a lower bound,
+:mod:`ideas_hpc.design.reliability_eval`) and every proof below takes the upper
+model (those losses counted as survivals), so "proven short of p" holds for the
+true P.
 
 :func:`min_swarm_reliable` proves the fewest N with ``P_bank >= p``:
 
@@ -16,8 +23,9 @@ Bernoulli(p_f) failures are enumerated, not sampled)::
   the fraction of scenarios whose ring-gap bound allows m (the only one on
   banks above :data:`MIP_MAX_CELLS`). The
   survivors of any N-swarm after j failures are an (N-j)-swarm, so every
-  N-swarm has ``P <= UB(N) = sum_j C(N,j) p_f^j (1-p_f)^(N-j) Ubar_{N-j}``
-  (:func:`~ideas_hpc.design.reliability_stats.failure_upper_bound`); N is
+  N-swarm has ``P <= UB(N) = sum_j P(j lost) Ubar_{N-j}``
+  (:func:`~ideas_hpc.failures.sums.level_bound`; ``C(N,j) p_f^j (1-p_f)^(N-j)`` for
+  independent failures); N is
   infeasible when ``UB(N) < p``. The per-scenario failure-tolerance bound
   (:mod:`ideas_hpc.design.tolerance_bound`: no N-swarm survives every k-failure when
   the k-tolerant minimum exceeds N) tightens ``UB(N)`` on banks of few scenarios.
@@ -43,19 +51,18 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ideas_hpc.base import progress
-from ideas_hpc.core.design.reliability import swarm_coverages, swarm_probabilities
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.design.bank import CandidateBank, reduce_problem
+from ideas_hpc.design.reliability_eval import N_ENUM_MAX, Evaluator  # noqa: F401 (their old home)
 from ideas_hpc.design.reliability_search import all_swarms, extend, improve
-from ideas_hpc.design.reliability_stats import failure_upper_bound, proof_failure_rate
+from ideas_hpc.failures.model import as_model
+from ideas_hpc.failures.sums import level_bound, weights_of
 from ideas_hpc.design.ring_bound import ring_bound
 from ideas_hpc.design.scenario_mip import ScenarioMIP
 from ideas_hpc.design.screen_bound import clip_gap_matrix, screen_size, stack_gap_matrices
 from ideas_hpc.design.tolerance_bound import ToleranceBound
 from ideas_hpc.design.settings import ReliableSettings
 
-#: Largest swarm whose 2^N failure subsets are enumerated.
-N_ENUM_MAX = 24
 #: Largest bank (scenarios x candidates) given to the scenario programme: above it
 #: HiGHS does not return within its time limit (eros001708, 5 scenarios x 720
 #: candidates: no incumbent, 100 s for a 20 s limit), and ``Ubar_m`` comes from the
@@ -82,37 +89,10 @@ class ReliableResult:
     designer: object = field(default=None, repr=False, compare=False)
 
 
-class Evaluator:
-    """Exact ``P_bank`` of swarms on one bank (compiled, batched)."""
-
-    def __init__(self, rows, w, need: float, p_f: float):
-        self.rows = np.ascontiguousarray(rows, dtype=np.bool_)
-        self.w = np.ascontiguousarray(w, dtype=np.float64)
-        self.need, self.p_f = float(need), float(p_f)
-
-    def per_scenario(self, swarms) -> np.ndarray:
-        sw = np.ascontiguousarray(np.atleast_2d(np.asarray(swarms, dtype=np.int64)))
-        if sw.shape[1] > N_ENUM_MAX:
-            raise InputError(f"swarms above {N_ENUM_MAX} spacecraft are out of reach of the "
-                             "exact failure enumeration", field="n_max")
-        return swarm_probabilities(self.rows, sw, self.w, self.need, self.p_f)
-
-    def __call__(self, swarms) -> np.ndarray:
-        return self.per_scenario(swarms).mean(axis=1)
-
-    def scored(self, swarms) -> np.ndarray:
-        """(K,) order keys: ``P_bank``, ties (e.g. P = 0 below the threshold) broken by
-        the mean coverage, so searches move on the plateaus too."""
-        sw = np.ascontiguousarray(np.atleast_2d(np.asarray(swarms, dtype=np.int64)))
-        p = self(sw)
-        cov = swarm_coverages(self.rows, sw, self.w).mean(axis=1)
-        return np.round(p, 12) + 1e-6 * cov
-
-
 class ReliabilityDesigner:
     """Shared state of one design: the evaluator, the programme and the bounds found so far."""
 
-    def __init__(self, rows, areas, *, need: float, p_f: float, sep_steps: int = 0,
+    def __init__(self, rows, areas, *, need: float, p_f, sep_steps: int = 0,
                  time_limit: float | None = None, enumerate_budget: int = 20000,
                  bound_solver=None, tolerance_solver=None):
         rows = np.asarray(rows, dtype=bool)
@@ -120,7 +100,7 @@ class ReliabilityDesigner:
         w = w / w.sum()
         self.ev = Evaluator(rows, w, need, p_f)
         self.s_n, self.c_n = rows.shape[0], rows.shape[1]
-        self.m, self.p_f = int(sep_steps), float(p_f)
+        self.m, self.model = int(sep_steps), as_model(p_f)
         self.t0 = time.perf_counter()
         self.deadline = None if time_limit is None else self.t0 + float(time_limit)
         self.budget = int(enumerate_budget)
@@ -131,6 +111,7 @@ class ReliabilityDesigner:
         self.mip_swarm: dict = {}
         self.best: dict = {}
         self.exhausted: set = set()
+        self.exhausted_upper: dict = {}   # n -> largest upper-model P of every n-swarm
         self._lows = None
         self._tol = None
         self.tol_proved: set = set()
@@ -167,10 +148,9 @@ class ReliabilityDesigner:
     def screen(self, n: int, p: float):
         """Settle size n by the screen of :mod:`ideas_hpc.design.screen_bound` (None when
         the ring-gap matrices are missing: a grid above the ring bound's, or time ran out;
-        or when its proof does not apply: n < 2, a failure model that
-        :func:`~ideas_hpc.design.reliability_stats.proof_failure_rate` declines).
+        or when its proof does not apply: n < 2).
         Fed ``u_bar[k] = min(cheap_ubar(k), Ubar_k)``, bounds on separated k-swarms."""
-        if n < 2 or proof_failure_rate(self.p_f) is None:
+        if n < 2:
             return None
         if self._mt is None:
             if len(self._clipped) != self.s_n or self.out_of_time():
@@ -182,7 +162,7 @@ class ReliabilityDesigner:
         u = [0.0] + [min(self.cheap_ubar(k), self.u_bar.get(k, 1.0)) for k in range(1, n + 1)]
         progress.note(f"screen, N = {n}: every {n - 1}-swarm the ring-gap relaxation lets "
                       f"cover enough of the {self.s_n} scenarios, plus one member")
-        return screen_size(self._mt, np.asarray(self._slack), self.ev, n, p, self.p_f, u,
+        return screen_size(self._mt, np.asarray(self._slack), self.ev, n, p, self.model, u,
                            self.m, deadline_ok=lambda: not self.out_of_time())
 
     def cheap_ubar(self, m: int) -> float:
@@ -224,10 +204,10 @@ class ReliabilityDesigner:
         per-scenario failure-tolerance bound; the programme refines ``Ubar_m`` from
         ``m = n`` down only while ``UB(n) >= p``."""
         u = [0.0] + [min(self.cheap_ubar(k), self.u_bar.get(k, 1.0)) for k in range(1, n + 1)]
-        ub = failure_upper_bound(n, u, self.p_f)
+        ub = level_bound(n, u, self.model)
         if ub >= (p if p is not None else 0.0) - 1e-12:
             # with p: solve what could prove n short of p; without: what is known
-            tol = self.tolerance().upper(n, self.p_f, self.deadline, p, solve=p is not None)
+            tol = self.tolerance().upper(n, self.model, self.deadline, p, solve=p is not None)
             if p is not None and tol < p - 1e-12 <= ub - 1e-12:
                 self.tol_proved.add(n)
             ub = min(ub, tol)
@@ -235,8 +215,12 @@ class ReliabilityDesigner:
             if (p is not None and ub < p - 1e-12) or u[k] == 0.0 or self.out_of_time():
                 break
             u[k] = min(u[k], self.ubar(k))
-            ub = min(ub, failure_upper_bound(n, u, self.p_f))
+            ub = min(ub, level_bound(n, u, self.model))
         return ub
+
+    def enumerated_short(self, n: int, p: float) -> bool:
+        """Every n-swarm was scored and none can reach p (upper model)."""
+        return n in self.exhausted and self.exhausted_upper.get(n, 0.0) < p - 1e-12
 
     def out_of_time(self) -> bool:
         """The design's ``time_limit`` has passed."""
@@ -255,6 +239,9 @@ class ReliabilityDesigner:
                 vals = self.ev(sw)
                 i = int(np.argmax(vals))
                 self.best[n] = (sw[i], float(vals[i]))
+                # the enumeration proves n short only for the upper model's P
+                self.exhausted_upper[n] = float(vals[i]) if self.model.in_pass_share == 0 \
+                    else float(self.ev.upper(sw).max())
             self.exhausted.add(n)
             return self.best[n]
         starts = []
@@ -278,7 +265,8 @@ class ReliabilityDesigner:
             sw, val = improve(self.ev, s, self.m, deadline=self.deadline)
             if val > top[1]:
                 top = (sw, val)
-        top = (top[0], max(top[1], 0.0))
+        sw = top[0] if weights_of(self.model, n).exchangeable else np.sort(top[0])
+        top = (sw, max(top[1], 0.0))       # member k: the k-th grid candidate (reliability_eval)
         self.best[n] = top
         return top
 
@@ -308,8 +296,9 @@ def min_swarm_reliable(rows, areas, settings: ReliableSettings | None = None,
         The search (:mod:`ideas_hpc.design.settings`), or the keywords below.
     p : float
         Required success probability, 0 < p < 1.
-    p_f : float
-        Per-spacecraft failure probability.
+    p_f : float or FailureModel
+        Per-spacecraft failure probability, or the failure model
+        (:class:`~ideas_hpc.failures.model.FailureModel`; also ``failures``).
     need : float
         Coverage threshold (area fraction, ``target - eps_tol``).
     n_max : int
@@ -334,15 +323,19 @@ def min_swarm_reliable(rows, areas, settings: ReliableSettings | None = None,
         reaches ``p`` on the bank (the message gives the best P found).
     """
     s = settings or ReliableSettings(time_limit_s=keywords.pop("time_limit", None), **keywords)
-    p, p_f, need, n_max, sep_steps = s.p, s.p_f, s.need, s.n_max, s.sep_steps
-    time_limit, ring_prebound = s.time_limit_s, s.ring_prebound
-    d = ReliabilityDesigner(rows, areas, need=need, p_f=p_f, sep_steps=sep_steps,
-                            time_limit=time_limit, enumerate_budget=s.enumerate_budget,
+    d = ReliabilityDesigner(rows, areas, need=s.need, p_f=s.model, sep_steps=s.sep_steps,
+                            time_limit=s.time_limit_s, enumerate_budget=s.enumerate_budget,
                             bound_solver=s.bound_solver, tolerance_solver=s.tolerance_solver)
+    if s.ring_prebound:
+        d.ring_lows(s.n_max)
+    return settle(d, s.p, s.n_max)
+
+
+def settle(d: ReliabilityDesigner, p: float, n_max: int) -> ReliableResult:
+    """The fewest N with ``P_bank >= p`` on designer ``d`` (module docstring; raises
+    ``InputError`` on ``p`` as :func:`min_swarm_reliable`)."""
     upper: dict = {}
     unresolved: list = []
-    if ring_prebound:
-        d.ring_lows(n_max)
     for n in progress.steps(range(1, int(n_max) + 1), "success-probability design",
                             unit="size"):
         upper[n] = d.upper(n, p)
@@ -380,13 +373,15 @@ def min_swarm_reliable(rows, areas, settings: ReliableSettings | None = None,
             if unresolved:
                 notes.append(f"sizes {unresolved} are neither proven short of p nor met by a "
                              "swarm found")
+            if not weights_of(d.model, n).exchangeable:
+                sw = np.sort(sw)
             return ReliableResult(indices=sw, n=n, probability=val,
                                   per_scenario=d.ev.per_scenario([sw])[0], status=status,
                                   bound=float(bound), gap=float(gap),
                                   solve_time=time.perf_counter() - d.t0, upper=upper,
                                   best=dict(d.best), u_bar=dict(d.u_bar), notes=notes,
                                   designer=d)
-        if n not in d.exhausted:
+        if not d.enumerated_short(n, p):
             unresolved.append(n)
     best_p = max((v for _, v in d.best.values()), default=0.0)
     what = ("no swarm" if not unresolved else

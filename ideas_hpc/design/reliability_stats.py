@@ -2,21 +2,28 @@
 
 :func:`failure_upper_bound`: the proven upper bound on the probability of any
 swarm of ``N`` from upper bounds ``U_m`` on the fraction of scenarios an
-``m``-swarm reaches with no failure.
+``m``-swarm reaches with no failure (its sum lives in :mod:`ideas_hpc.failures.sums`).
 
-:func:`proof_failure_rate`: the failure model every proof of the designer
-assumes, in one place (issue 41). The proofs are :func:`failure_upper_bound`,
+:func:`proof_model`: the failure model every proof of the designer assumes, in one
+place (issue 41). The proofs are :func:`failure_upper_bound`,
 :func:`ideas_hpc.design.tolerance_bound.downset_upper`, the screen
 (:func:`ideas_hpc.design.screen_bound.screen_size` and the kernels of
 :mod:`ideas_hpc.core.design.ring_screen`) and the exact evaluator they are
 compared with (:mod:`ideas_hpc.core.design.reliability`). Each holds when:
 
-1. **whole-pass losses**: a spacecraft either works for the whole pass (it
-   images what its row says) or fails before it (it images nothing);
-2. **independent failures**: no common cause, each failure independent of the
-   others' and of the scenario's dispersions;
-3. **one p_f**: the same failure probability for every spacecraft and every
-   scenario, known exactly (no prior over it);
+1. **losses bounded by the upper model**: a spacecraft either images its whole row
+   or nothing; a loss *in* the pass (which images part of the row) is counted as a
+   survival by the proofs' weights (the upper model of
+   :mod:`ideas_hpc.failures.weights`), so ``P_true <= P_up``;
+2. **the failure law of the model**: the weight of each survivor set is the model's
+   (:class:`~ideas_hpc.failures.model.FailureModel`: per-spacecraft ``p_f``, common
+   cause, an uncertain ``p_f``, exactly-k); a bound that depends on the size of
+   the survivor set only uses the exact law of that size, a bound that picks
+   *which* sets uses the heaviest set of each size (the envelope of
+   :mod:`ideas_hpc.failures.sums`), exact for an exchangeable model and an upper
+   envelope otherwise;
+3. **no dependence on the scenario**: the failure law is the same in every
+   scenario (the model has no scenario term);
 4. **monotone coverage**: a vertex is seen when one survivor sees it, so a
    subset of survivors never covers more;
 5. **the separation** ``m`` applied alike to the swarms bounded and the swarms
@@ -25,11 +32,9 @@ compared with (:mod:`ideas_hpc.core.design.reliability`). Each holds when:
    ``coverage >= need - 1e-12`` (the evaluator's ``COVER_TOL``); the bounds keep
    a margin above both.
 
-A generalised failure model (per-spacecraft ``p_f``, a common-cause beta factor,
-loss mid-pass, an uncertain ``p_f``) breaks 1-3: :func:`proof_failure_rate`
-then returns None and every proof above declines (the bounds fall back to the
-trivial 1, the screen to its search), so the designer takes the search route
-only. That function is the one place to teach a new model what still holds.
+:func:`proof_model` checks a model once (a bare ``p_f`` outside [0, 1] or not a
+number is refused, naming ``p_f``); with today's model (one ``p_f``, independent,
+whole-pass) the sums are the papers' binomial sums, the same floats as before.
 
 :func:`lower_confidence_bound`: a one-sided lower confidence bound on the mean
 of independent values in [0, 1] (the per-sample failure-weighted success
@@ -51,70 +56,49 @@ import math
 import numpy as np
 
 from ideas_hpc.base.errors import InputError
+from ideas_hpc.failures.model import FailureModel, as_model
+from ideas_hpc.failures.sums import level_bound
 
 #: The designer's comparison of probabilities: a swarm meets p when ``P >= p - P_TOL``.
 P_TOL = 1e-12
 
 
-def proof_failure_rate(p_f) -> float | None:
-    """The one per-spacecraft failure probability the proofs assume, or None (module
-    docstring, assumptions 1-3).
+def proof_model(p_f):
+    """The :class:`~ideas_hpc.failures.model.FailureModel` the proofs use (module docstring):
+    a model as given, or a bare ``p_f`` in [0, 1] as independent whole-pass losses.
 
-    Parameters
-    ----------
-    p_f : float or sequence of float
-        The failure model: one probability for every spacecraft, or one per member.
-
-    Returns
-    -------
-    float or None
-        ``p_f`` when it is one finite number in [0, 1] (or a sequence whose values
-        are all that number); None for anything else (members that differ, a model
-        object, a value outside [0, 1]): the proofs do not apply and their callers
-        take another route. A richer failure model hooks in here: return its one
-        ``p_f`` only while it reduces to independent whole-pass losses at one rate
-        (beta = 0, a fixed ``p_f``, no partial losses).
+    Raises
+    ------
+    InputError
+        ``p_f`` when a bare value is not a number in [0, 1] (a proof never runs on a
+        failure law it cannot state).
     """
-    if isinstance(p_f, (bool, np.bool_)):
-        return None
-    try:
-        vals = np.asarray(p_f, dtype=np.float64).ravel()
-    except (TypeError, ValueError):
-        return None
-    if vals.size == 0 or not np.all(np.isfinite(vals)) or np.any(vals != vals[0]):
-        return None
-    v = float(vals[0])
-    return v if 0.0 <= v <= 1.0 else None
+    if isinstance(p_f, FailureModel):
+        return p_f
+    if isinstance(p_f, (bool, np.bool_)) or not isinstance(p_f, (int, float, np.number)) \
+            or not math.isfinite(float(p_f)) or not 0.0 <= float(p_f) <= 1.0:
+        raise InputError(f"needs a failure probability in [0, 1] or a failure model, got "
+                         f"{p_f!r}", field="p_f")
+    return as_model(float(p_f))
 
 
-def failure_upper_bound(n: int, u_bar, p_f: float) -> float:
-    """``sum_j C(n, j) p_f^j (1 - p_f)^(n - j) U_{n-j}``, an upper bound on any n-swarm's P.
+def failure_upper_bound(n: int, u_bar, p_f) -> float:
+    """``sum_j P(j lost) U_{n-j}`` (``C(n, j) p_f^j (1 - p_f)^(n - j)`` for independent
+    failures), an upper bound on any n-swarm's P: :func:`ideas_hpc.failures.sums.level_bound`,
+    whose docstring has the argument. ``p_f``: a bare probability or a
+    :class:`~ideas_hpc.failures.model.FailureModel` (:func:`proof_model`).
 
-    With failure set ``F`` (``|F| = j``) the survivors form an ``(n - j)``-swarm,
-    which reaches at most the fraction ``U_{n-j}`` of the scenarios; averaging
-    over the independent failures gives the bound. ``u_bar[m]`` bounds
-    ``U_m`` (``u_bar[0] = 0``: no survivor maps nothing).
-
-    Assumptions (module docstring): whole-pass, independent failures at one
-    ``p_f`` in every scenario (1-3), so ``P(F) = p_f^j (1 - p_f)^(n-j)``; each
-    ``u_bar[m]`` bounds the best *separated* m-swarm's fraction of scenarios
-    covered at the evaluator's tolerance (5, 6; a survivor set of a separated
-    swarm is one). Where :func:`proof_failure_rate` declines ``p_f`` the bound
-    is the trivial 1 (true under any model), so no size is proven short on it.
-    ``u_bar`` needs ``n + 1`` entries, each >= 0 (``InputError`` otherwise).
+    Assumptions (module docstring): the model's law of the number lost, in-pass losses
+    counted as survivals (1-3); each ``u_bar[m]`` bounds the best *separated* m-swarm's
+    fraction of scenarios covered at the evaluator's tolerance (5, 6; a survivor set of
+    a separated swarm is one). ``u_bar`` needs ``n + 1`` entries, each >= 0
+    (``InputError`` otherwise).
     """
-    rate = proof_failure_rate(p_f)
-    if rate is None:
-        return 1.0
-    p_f = rate
     u = np.asarray(u_bar, dtype=np.float64).ravel()
     if u.size < n + 1 or np.any(~(u[:n + 1] >= 0.0)):
         raise InputError(f"needs {n + 1} bounds >= 0 (U_0 .. U_{n}), got {u_bar!r}",
                          field="u_bar")
-    total = 0.0
-    for j in range(n + 1):
-        total += math.comb(n, j) * p_f ** j * (1.0 - p_f) ** (n - j) * u[n - j]
-    return min(1.0, total)
+    return level_bound(int(n), u, proof_model(p_f))
 
 
 def hoeffding_lower_bound(x, confidence: float) -> float:

@@ -32,6 +32,7 @@ import numpy as np
 
 from ideas_hpc.core.design.ring_gaps import gap_matrix_of, ring_gap_bound, ring_gap_swarm
 from ideas_hpc.design.bank import CandidateBank, Reduced
+from ideas_hpc.mapping.requirement import meets
 
 #: Largest grid on which the O(N K^3) bound is computed (0.25 deg).
 MAX_GRID = 1440
@@ -65,13 +66,14 @@ class RingBound:
         one ring's grid in grid order, one row per candidate (:func:`ring_bound_applies`;
         the designer keeps the trivial bound 1 elsewhere); the swarms bounded keep the
         separation ``m`` the bound was computed with; coverage is the union of the
-        members' rows (a group inside a gap is missed); "reaches" is ``coverage >=
-        need - 1e-12``, the success-probability evaluator's comparison (the bound's
-        float sums err far below that margin). The designer's ``U_m`` bound
+        members' rows (a group inside a gap is missed); "reaches" is
+        :func:`~ideas_hpc.mapping.requirement.meets`, the success-probability
+        evaluator's comparison (the bound's float sums err far below its margin). The
+        designer's ``U_m`` bound
         (:meth:`ideas_hpc.design.reliability.ReliabilityDesigner.cheap_ubar`, the
         fraction of scenarios whose ``n_bound <= m``) rests on exactly these.
         """
-        ok = np.flatnonzero(self.upper >= need - 1e-12)
+        ok = np.flatnonzero(meets(self.upper, need))
         return int(ok[0]) if ok.size else None
 
     def swarm(self, n: int) -> np.ndarray:

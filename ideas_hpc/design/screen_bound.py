@@ -5,6 +5,11 @@ For a swarm X of n members, failures independent with probability ``p_f``,
 
     P(X) = q^n U(X) + p_f q^(n-1) sum_i U(X - x_i) + sum_{j>=2} (j failures)
 
+(any failure model, issue 41: ``q^n`` and ``p_f q^(n-1)`` become the envelope weights
+``env_n``, ``env_{n-1}`` of the upper model and the binomial sums its counts,
+:func:`ideas_hpc.failures.sums.screen_terms`; exact for an exchangeable model, and an
+upper bound set by set otherwise, so every step below holds)
+
 where ``U(T)`` is the fraction of scenarios the survivors T cover. Bound the
 first and last parts by ``Ubar_n`` and ``Ubar_{n-j}`` (the level bound of
 :mod:`ideas_hpc.design.reliability`). Then X reaches p only if
@@ -17,7 +22,7 @@ all scenarios at once (:func:`ideas_hpc.core.design.ring_screen.screen_swarms`:
 per scenario it never undercounts; for n = 2 the subsets are single members,
 each judged on its one gap, the whole ring but itself). Every X that could reach p is therefore
 one of them plus one member. Each such X is scored by the relaxed probability
-(:func:`~ideas_hpc.core.design.ring_screen.relaxed_probabilities`, never below
+(:func:`~ideas_hpc.core.design.ring_screen.relaxed_weighted`, never below
 the exact one), and those at or above p by the exact ``P_bank``:
 
 * an X with exact ``P_bank >= p`` is a swarm of n that meets p (the search);
@@ -52,8 +57,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ideas_hpc.base.errors import InputError
-from ideas_hpc.core.design.ring_screen import relaxed_probabilities, screen_swarms
-from ideas_hpc.design.reliability_stats import P_TOL, proof_failure_rate
+from ideas_hpc.core.design.ring_screen import relaxed_weighted, screen_swarms
+from ideas_hpc.design.reliability_stats import P_TOL, proof_model
+from ideas_hpc.failures.sums import count_envelope, screen_terms
 
 #: Most (n - 1)-swarms the screen lists before it gives up the proof.
 SCREEN_CAP = 4000
@@ -171,12 +177,13 @@ def screen_size(mt, slack, ev, n: int, p: float, p_f: float, u_bar: list, m: int
 
     Assumptions of the proof (``proven_short``), each enforced or stated:
 
-    * the failure model of :mod:`ideas_hpc.design.reliability_stats` (whole-pass,
-      independent failures at one ``p_f`` for every member and scenario): the
-      grouping by the number of failures needs it. Checked by
-      :func:`~ideas_hpc.design.reliability_stats.proof_failure_rate`; a model it
-      declines, or ``p_f`` of 0 or 1 (no single-failure term to bound), gives the
-      search only (``route="model"``), as does a ``ev`` whose own ``p_f`` differs;
+    * the failure model of :mod:`ideas_hpc.design.reliability_stats` (checked by
+      :func:`~ideas_hpc.design.reliability_stats.proof_model`): the grouping by the
+      number lost uses the model's heaviest set of each size (exact for an exchangeable
+      model) and its upper model (an in-pass loss counted as a survival); a model with
+      no single-loss weight (``p_f`` of 0 or 1) gives the search only
+      (``route="model"``), as does an ``ev`` of another model; a size whose best
+      upper-model P checked reaches p gives the search (``route="upper_model"``);
     * ``u_bar[k]`` bounds ``U_k``, the best fraction of scenarios a *separated*
       k-swarm covers (at the evaluator's tolerance), for k = 0 .. n; ``m`` is the
       same separation (``InputError`` when ``u_bar`` is short or negative);
@@ -210,8 +217,10 @@ def screen_size(mt, slack, ev, n: int, p: float, p_f: float, u_bar: list, m: int
         Exact ``P_bank``.
     n : int
         Swarm size (>= 2).
-    p, p_f : float
-        Level and failure probability.
+    p : float
+        Level.
+    p_f : float or FailureModel
+        Failure probability, or the failure model (:mod:`ideas_hpc.failures`).
     u_bar : list
         ``u_bar[k]`` proven bounds on ``U_k``, k = 0 .. n.
     m : int
@@ -230,18 +239,17 @@ def screen_size(mt, slack, ev, n: int, p: float, p_f: float, u_bar: list, m: int
         excludes none), ``"screen_cap"`` / ``"screen_nodes"`` (the listing was cut:
         the (n - 1)-swarms of most scenarios in it, if any, were extended and none
         reached p), ``"extend_cap"`` (a complete list too long to extend: the same
-        search pool), ``"exact_cap"``, ``"deadline"``.
+        search pool), ``"exact_cap"``, ``"deadline"``, ``"upper_model"``.
     """
     u_bar = _check_inputs(mt, slack, n, p, u_bar, m)
     k_n, _, s_n = mt.shape
-    rate = proof_failure_rate(p_f)
-    if rate is None or not 0.0 < rate < 1.0 or getattr(ev, "p_f", rate) != rate:
+    model = proof_model(p_f)
+    ev_model = getattr(ev, "model", model)
+    base, one = screen_terms(n, u_bar, model)
+    # no single-loss term to bound (p_f of 0 or 1), or an evaluator of another model:
+    # the grouping by the number lost proves nothing here
+    if not one > 0.0 or ev_model != model:
         return _search(n, "model")
-    p_f = rate
-    q = 1.0 - p_f
-    rest = sum(math.comb(n, j) * p_f ** j * q ** (n - j) * u_bar[n - j] for j in range(2, n + 1))
-    base = q ** n * u_bar[n] + rest
-    one = p_f * q ** (n - 1)
     # X meets p when P(X) >= p - P_TOL: the subsets' threshold keeps every such X
     r = (p - P_TOL - base) / one
     if r <= 0.0:
@@ -267,13 +275,14 @@ def screen_size(mt, slack, ev, n: int, p: float, p_f: float, u_bar: list, m: int
         pool = found[top[np.linspace(0, top.size - 1, min(SEARCH_POOL, top.size)).astype(int)]]
     why = "extend_cap" if listed else cut
     xs = _extensions(pool, k_n, int(m))
-    relaxed = relaxed_probabilities(mt, sl, np.ascontiguousarray(xs), float(p_f)) \
+    relaxed = relaxed_weighted(mt, sl, np.ascontiguousarray(xs), count_envelope(p_f, n)) \
         if xs.shape[0] else np.zeros(0)
     # the relaxed and exact sums round differently: keep a float margin below the level
     level = p - P_TOL - FLOAT_SLACK
     order = np.argsort(-relaxed, kind="stable")
     order = order[relaxed[order] >= level]
     best = (None, 0.0)
+    best_up = 0.0       # largest upper-model P checked (losses in the pass as survivals)
     checked = 0
     for lo in range(0, order.size, 256):
         if checked >= EXACT_CAP or not deadline_ok():
@@ -281,7 +290,8 @@ def screen_size(mt, slack, ev, n: int, p: float, p_f: float, u_bar: list, m: int
             complete = False
             break
         idx = order[lo:lo + 256]
-        vals = ev(xs[idx])
+        vals, ups = ev.with_upper(xs[idx])
+        best_up = max(best_up, float(ups.max()))
         checked += idx.size
         i = int(np.argmax(vals))
         if vals[i] > best[1]:
@@ -292,8 +302,10 @@ def screen_size(mt, slack, ev, n: int, p: float, p_f: float, u_bar: list, m: int
                                  screened=found.shape[0], checked=checked, route="found")
     if not complete:
         return _search(n, why, found.shape[0], checked, best)
+    if best_up >= p - P_TOL:    # an in-pass loss counted as survival would reach p
+        return _search(n, "upper_model", found.shape[0], checked, best)
     below = relaxed[relaxed < level]
-    ub = max(base + one * n * (thr - 1) / s_n, best[1],
+    ub = max(base + one * n * (thr - 1) / s_n, best_up,
              float(below.max()) if below.size else 0.0)
     return ScreenOutcome(n=n, proven_short=True, swarm=None, probability=best[1], upper=ub,
                          screened=found.shape[0], checked=checked, route="screen")

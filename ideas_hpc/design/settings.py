@@ -9,24 +9,35 @@ are area fractions; separations in m; times in s.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import KW_ONLY, dataclass
 from typing import Callable
+
+from ideas_hpc.mapping.requirement import Threshold, as_threshold
 
 
 @dataclass(frozen=True)
 class CoverSettings:
-    """Fewest grid candidates that cover ``target - eps_tol``.
+    """Fewest grid candidates that cover the ``threshold``
+    (:class:`~ideas_hpc.mapping.requirement.Threshold`: ``need = target - eps_tol``).
 
-    ``failures_tolerated`` k > 0 asks for a swarm that keeps it after any k
-    failures; ``time_limit_s`` None: no limit.
+    The older keywords ``target`` and ``eps_tol`` build the same threshold; after
+    construction all three are set. ``failures_tolerated`` k > 0 asks for a swarm that
+    keeps it after any k failures; ``time_limit_s`` None: no limit.
     """
 
-    target: float
-    eps_tol: float
+    target: float | None = None
+    eps_tol: float | None = None
     n_max: int | None = None
     min_separation_m: float = 0.0
     time_limit_s: float | None = None
     failures_tolerated: int = 0
+    threshold: Threshold | None = None
+
+    def __post_init__(self):
+        thr = as_threshold(self.threshold, self.target, self.eps_tol)
+        object.__setattr__(self, "threshold", thr)
+        object.__setattr__(self, "target", thr.target)
+        object.__setattr__(self, "eps_tol", thr.eps_tol)
 
 
 @dataclass(frozen=True)
@@ -34,17 +45,21 @@ class ReliableSettings:
     """Fewest grid candidates with ``P_bank >= p``
     (:func:`~ideas_hpc.design.reliability.min_swarm_reliable`).
 
-    ``need``: the coverage threshold (area fraction, ``target - eps_tol``);
+    ``need``: the coverage threshold (area fraction, ``target - eps_tol``), or the
+    ``threshold`` record it comes from (then ``need`` is its ``need``);
     ``sep_steps``: candidates within this many grid steps conflict;
     ``enumerate_budget``: score every swarm of a size when there are at most
     this many; ``ring_prebound``: bound ``U_m`` first by the per-scenario
     ring-gap bounds; ``bound_solver`` / ``tolerance_solver``: stand-ins for
-    the programmes (tests).
+    the programmes (tests). ``p_f``: independent failures of that probability, or
+    ``failures``, the failure model (:class:`~ideas_hpc.failures.model.FailureModel`,
+    issue 41), which then wins.
     """
 
     p: float
     p_f: float
-    need: float
+    need: float | None = None
+    _: KW_ONLY
     n_max: int
     sep_steps: int = 0
     time_limit_s: float | None = None
@@ -52,6 +67,22 @@ class ReliableSettings:
     ring_prebound: bool = True
     bound_solver: Callable | None = None
     tolerance_solver: Callable | None = None
+    failures: object = None
+    threshold: Threshold | None = None
+
+    def __post_init__(self):
+        if self.threshold is None and self.need is None:
+            raise TypeError("ReliableSettings needs `need` or `threshold`")
+        if self.threshold is not None:
+            if self.need not in (None, self.threshold.need):
+                raise TypeError(f"need {self.need!r} disagrees with the threshold's "
+                                f"{self.threshold.need!r}")
+            object.__setattr__(self, "need", self.threshold.need)
+
+    @property
+    def model(self):
+        """The failure model: ``failures``, or a bare ``p_f``."""
+        return self.failures if self.failures is not None else self.p_f
 
 
 #: Most looks ``design.demonstrate`` plans when the file does not say.
@@ -63,7 +94,9 @@ class LookPlan:
     """The looks of :func:`~ideas_hpc.design.certificate.certify`: requirement ``p``
     and overall ``confidence``; ``n_max`` the largest swarm; ``n_samples`` (M)
     validation samples per look; ``demonstrate`` steps N up while the bound
-    misses p, in at most ``max_looks`` looks; ``exact``: one exact scenario."""
+    misses p, in at most ``max_looks`` looks; ``exact``: one exact scenario;
+    ``samples_max``: the most samples the look plan may give one look
+    (:func:`~ideas_hpc.design.look_plan.plan_looks`; None: ``n_samples`` each)."""
 
     p: float
     confidence: float
@@ -72,3 +105,4 @@ class LookPlan:
     demonstrate: bool
     max_looks: int = DEFAULT_LOOKS
     exact: bool = False
+    samples_max: int | None = None

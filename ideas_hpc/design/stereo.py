@@ -11,7 +11,7 @@ fly) and ``y_g`` in [0, 1] (group g counted as mapped)::
     minimise    sum_a x_a
     subject to  z_ab <= x_a,  z_ab <= x_b                      for every useful pair
                 y_g <= sum_{a: own sees g} x_a + sum_{ab sees g} z_ab
-                sum_g w_g y_g >= A_target - eps_tol
+                sum_g w_g y_g >= need = A_target - eps_tol     (design/area.py)
                 separation windows and swarm size as in :mod:`ideas_hpc.design.exact`
 
 For integer ``x`` the largest feasible ``z_ab`` is ``x_a x_b``, so this is
@@ -39,9 +39,11 @@ from ideas_hpc.base.errors import InputError
 from ideas_hpc.base.progress import steps
 from ideas_hpc.design.bank import (CandidateBank, conflict_windows, reduce_problem,
                    separation_steps)
-from ideas_hpc.design.exact import (FEAS_TOL, ExactResult, check_time_limit, coverage_result, heavy_groups,
+from ideas_hpc.design.area import FEAS_TOL, area_constraint
+from ideas_hpc.design.exact import (ExactResult, check_time_limit, coverage_result, heavy_groups,
                     n_max_too_small, solve)
 from ideas_hpc.design.ring_bound import swap_search
+from ideas_hpc.mapping.requirement import Threshold, as_threshold
 
 #: Largest candidate grid of the pair formulation (K (K - 1) / 2 pair rows).
 MAX_CANDIDATES = 180
@@ -216,14 +218,17 @@ def _heuristic(sb: StereoBank, need: float, m: int, n_max: int):
     return best
 
 
-def min_swarm_stereo(sb: StereoBank, *, target: float, eps_tol: float, n_max: int,
-                     min_separation: float = 0.0, time_limit=None) -> ExactResult:
-    """The fewest grid candidates whose stereo-mapped area reaches ``target - eps_tol``."""
+def min_swarm_stereo(sb: StereoBank, *, target: float | None = None,
+                     eps_tol: float | None = None, n_max: int, min_separation: float = 0.0,
+                     time_limit=None, threshold: Threshold | None = None) -> ExactResult:
+    """The fewest grid candidates whose stereo-mapped area reaches ``threshold.need`` (or
+    ``target - eps_tol``)."""
     time_limit = check_time_limit(time_limit)
+    thr = as_threshold(threshold, target, eps_tol)
     bank = sb.bank
     check_grid(bank.n_candidates)
     m = separation_steps(bank.step_rad, bank.d_sep_m, min_separation, bank.n_candidates)
-    need = target - eps_tol
+    need = thr.need
     cover, red, ends = _model(sb, m)
     k, p, g = bank.n_candidates, ends.shape[0], red.n_groups
     heur = _heuristic(sb, need, m, int(n_max))
@@ -232,11 +237,9 @@ def min_swarm_stereo(sb: StereoBank, *, target: float, eps_tol: float, n_max: in
             "variable per pair (exact); " + ("no heuristic swarm" if heur is None else
                                              f"greedy + swap search: {heur.size}"))
     if top < 1:   # one spacecraft: nothing smaller to look for
-        return _stereo_result(sb, heur, target, need, heur.size, 0.0, "optimal", [note])
+        return _stereo_result(sb, heur, thr, heur.size, 0.0, "optimal", [note])
     cons, integ, n_var = _constraints(sb, cover, red, ends, m, (1, top))
-    w = np.zeros(n_var)
-    w[k + p:] = red.weight
-    cons.append(LinearConstraint(w[None, :], need + FEAS_TOL, np.inf))
+    cons.append(area_constraint(thr, red.weight, k + p, n_var))
     c = np.zeros(n_var)
     c[:k] = 1.0
     lower = np.zeros(n_var)
@@ -247,31 +250,31 @@ def min_swarm_stereo(sb: StereoBank, *, target: float, eps_tol: float, n_max: in
         bound = getattr(res, "mip_dual_bound", None)
         bound = math.ceil(bound - 1e-6) if bound is not None and np.isfinite(bound) else 1
         status = "optimal" if bound >= idx.size else "time_limit"
-        return _stereo_result(sb, idx, target, need, min(bound, idx.size), dt, status, [note])
+        return _stereo_result(sb, idx, thr, min(bound, idx.size), dt, status, [note])
     if res.status == 2:         # no swarm below the heuristic's: it is optimal
         if heur is None:
             best = max_coverage_stereo(sb, int(n_max), min_separation=min_separation,
                                        time_limit=time_limit)
             raise n_max_too_small(n_max, f"maps {100 * need:.3f} % in stereo", best)
-        return _stereo_result(sb, heur, target, need, heur.size, dt, "optimal",
+        return _stereo_result(sb, heur, thr, heur.size, dt, "optimal",
                               [note + "; the integer programme proves nothing smaller works"])
     if heur is None:
         raise InputError(f"no stereo design found within the time limit ({res.message}); "
                          "raise `time_limit`", field="time_limit")
     bound = getattr(res, "mip_dual_bound", None)
     bound = math.ceil(bound - 1e-6) if bound is not None and np.isfinite(bound) else 1
-    return _stereo_result(sb, heur, target, need, min(max(bound, 1), heur.size), dt,
+    return _stereo_result(sb, heur, thr, min(max(bound, 1), heur.size), dt,
                           "time_limit", [note + f"; the integer programme reached its time "
                                          f"limit with proven lower bound {bound}"])
 
 
-def _stereo_result(sb, idx, target, need, bound, dt, status, notes) -> ExactResult:
+def _stereo_result(sb, idx, thr, bound, dt, status, notes) -> ExactResult:
     cov = float(sb.coverage([idx])[0])
-    if cov < need - 1e-9:
-        raise RuntimeError(f"stereo design maps {cov!r} < {need!r}")
+    if cov < thr.need - FEAS_TOL:
+        raise RuntimeError(f"stereo design maps {cov!r} < {thr.need!r}")
     gap = (idx.size - bound) / idx.size
     return ExactResult(indices=idx, theta=sb.bank.theta[idx], n=idx.size, coverage=cov,
-                       target=target, status="optimal" if gap == 0 else status,
+                       target=thr.target, status="optimal" if gap == 0 else status,
                        bound=float(bound), gap=float(gap), solve_time=dt, notes=notes)
 
 

@@ -6,6 +6,11 @@ Coverage is monotone, so ``A`` is closed under subsets (a *down-set*), and::
 
     P_s(X) = sum_{F in A} p_f^|F| (1 - p_f)^(N - |F|)
 
+(independent failures; any failure model: ``sum_{F in A} pi(X \\ F)``, bounded
+set by set by the envelope ``env_{N-|F|}`` of :mod:`ideas_hpc.failures.sums`, which
+for an exchangeable model is the weight itself: the argument below holds with
+``p_f^j (1 - p_f)^(N-j)`` replaced by ``env_{N-j}``).
+
 Two facts about one scenario restrict ``A`` for *every* N-swarm:
 
 * fewer than ``N0_s`` spacecraft never cover (``N0_s`` the plain minimum),
@@ -42,7 +47,8 @@ import numpy as np
 
 from ideas_hpc.base import progress
 from ideas_hpc.base.errors import InputError
-from ideas_hpc.design.reliability_stats import proof_failure_rate
+from ideas_hpc.design.reliability_stats import proof_model
+from ideas_hpc.failures.sums import downset_bound
 
 #: Most scenarios to solve before any solve has shown its pace (each is an integer
 #: programme of 5-60 s on eros001708's 720 candidates: a 256-scenario bank is out of
@@ -52,43 +58,32 @@ FIRST_MAX_SCENARIOS = 8
 K_MAX = 3
 
 
-def downset_upper(n: int, p_f: float, n0: int, k_star: int | None) -> float:
-    """``UB_s(n)`` of the module docstring.
+def downset_upper(n: int, p_f, n0: int, k_star: int | None) -> float:
+    """``UB_s(n)`` of the module docstring (:func:`ideas_hpc.failures.sums.downset_bound`).
 
-    Assumptions (those of :mod:`ideas_hpc.design.reliability_stats`): whole-pass,
-    independent failures at one ``p_f`` (1-3), so a failed set ``F`` has probability
-    ``p_f^|F| (1 - p_f)^(n - |F|)``; monotone coverage (4), so the covering failed
-    sets form a down-set; ``n0`` and ``k_star`` proven for the swarms bounded (the
-    separation of the design, 5: the ring-gap ``n0`` is computed with it, and a
-    k-tolerant minimum without it is a relaxation, so still a lower bound). Where
-    :func:`~ideas_hpc.design.reliability_stats.proof_failure_rate` declines ``p_f``
-    the bound is the trivial 1, except ``n < n0`` (0 under any failure model: fewer
-    than ``n0`` spacecraft never cover, and failures only remove images).
+    Assumptions (those of :mod:`ideas_hpc.design.reliability_stats`): the model's
+    weights with in-pass losses counted as survivals (1-3), each failed set ``F``
+    weighing at most the envelope of its size (exactly ``p_f^|F| (1 - p_f)^(n - |F|)``
+    for independent failures at one ``p_f``); monotone coverage (4), so the covering
+    failed sets form a down-set; ``n0`` and ``k_star`` proven for the swarms bounded
+    (the separation of the design, 5: the ring-gap ``n0`` is computed with it, and a
+    k-tolerant minimum without it is a relaxation, so still a lower bound). ``n < n0``
+    gives 0 under any failure model: fewer than ``n0`` spacecraft never cover, and
+    failures only remove images.
 
     Parameters
     ----------
     n : int
         Swarm size.
-    p_f : float
-        Per-spacecraft failure probability.
+    p_f : float or FailureModel
+        Per-spacecraft failure probability, or the failure model (its envelope weights
+        replace ``p_f^j (1 - p_f)^(n - j)``).
     n0 : int
         Lower bound on the scenario's plain minimum (fewer never cover).
     k_star : int or None
         Smallest k known to have no k-tolerant n-swarm (None: none known).
     """
-    if n < n0 or n <= 0:
-        return 0.0
-    rate = proof_failure_rate(p_f)
-    if rate is None:
-        return 1.0
-    p_f = rate
-    out = 0.0
-    for j in range(0, n - max(n0, 0) + 1):
-        cnt = math.comb(n, j)
-        if k_star is not None and 1 <= k_star <= j:
-            cnt -= math.comb(n - k_star, j - k_star)
-        out += p_f ** j * (1.0 - p_f) ** (n - j) * cnt
-    return min(1.0, out)
+    return downset_bound(n, proof_model(p_f), n0, k_star)
 
 
 def k_star(n: int, lows_k: dict) -> int | None:
@@ -136,13 +131,13 @@ class ToleranceBound:
                 return k
         return None
 
-    def _optimistic(self, s: int, n: int, p_f: float) -> float:
+    def _optimistic(self, s: int, n: int, p_f) -> float:
         """The lowest ``UB_s(n)`` any solve could still give (unknown ``N_k`` taken > n)."""
         low = self.lows[s]
         ks = [k for k in range(1, min(K_MAX, n) + 1) if k not in low or low[k] > n]
         return downset_upper(n, p_f, low[0], min(ks) if ks else None)
 
-    def upper(self, n: int, p_f: float, deadline: float | None, p: float | None = None,
+    def upper(self, n: int, p_f, deadline: float | None, p: float | None = None,
               solve: bool = True) -> float:
         """``mean_s UB_s(n)``, solving missing ``N_{k,s}`` while time is left (``solve``).
 
@@ -175,7 +170,7 @@ class ToleranceBound:
                     self.lows[s][k] = max(int(got), self.lows[s][0] + k)
         return self._mean(n, p_f)
 
-    def _mean(self, n: int, p_f: float) -> float:
+    def _mean(self, n: int, p_f) -> float:
         ub = [downset_upper(n, p_f, low[0], k_star(n, low)) for low in self.lows]
         return float(np.mean(ub))
 

@@ -141,35 +141,57 @@ def force_model_from_config(table: dict | None, prefix: str = "dynamics.") -> Fo
 # -------------------------------------------------------------- Monte Carlo overrides
 
 
-_OVERRIDE_KEYS = ("mu", "c20", "c22", "reflectivity")
+#: The force model's own parameter a world may set (besides the body's).
+_FORCE_MODEL_KEYS = ("reflectivity",)
 
 
-def _apply_override(params: PhysicalParams, fm: ForceModel, override):
-    """(params, reflectivity, changed-keys) after a Monte Carlo override."""
+def world_parameters() -> tuple[str, ...]:
+    """Every parameter a world (:class:`ideas_hpc.flyby.world.World`) or a Monte Carlo
+    override may set, SI: each numeric field of
+    :class:`~ideas_hpc.body.params.PhysicalParams` (``mu``, ``c20``, ``c22``, the spin
+    period, the pole ``pole_ra`` / ``pole_dec``, the rotation phase ``prime_meridian``,
+    the heliocentric elements) and the force model's ``reflectivity``. The one list."""
+    body = tuple(f.name for f in dataclasses.fields(PhysicalParams) if f.name != "name")
+    return body + _FORCE_MODEL_KEYS
+
+
+#: Parameters that must stay > 0.
+_POSITIVE = ("mu", "spin_period", "orbit_a")
+
+
+def apply_override(params: PhysicalParams, fm: ForceModel, override):
+    """(params, reflectivity, changed-keys) after a world's parameters or a Monte Carlo
+    override (``{name: SI value}`` of :func:`world_parameters`, or a whole
+    :class:`PhysicalParams`); errors name ``params_override.<name>``."""
     if override is None:
         return params, fm.reflectivity, set()
     if isinstance(override, PhysicalParams):
         return override, fm.reflectivity, {"mu", "c20", "c22"}
     if not isinstance(override, dict):
         raise InputError("must be a dict or PhysicalParams", field="params_override")
+    keys = world_parameters()
     refl = fm.reflectivity
     rep = {}
     for k, v in override.items():
-        if k not in _OVERRIDE_KEYS:
-            raise InputError(f"unknown key {k!r}; allowed: {', '.join(_OVERRIDE_KEYS)}",
+        if k not in keys:
+            raise InputError(f"unknown key {k!r}; allowed: {', '.join(keys)}",
                              field=f"params_override.{k}")
         if isinstance(v, bool) or not isinstance(v, (int, float, np.floating)) \
                 or not math.isfinite(v):
             raise InputError(f"must be a finite number, got {v!r}", field=f"params_override.{k}")
-        if k == "mu" and v <= 0:
-            raise InputError("must be > 0", field="params_override.mu")
+        if k in _POSITIVE and v <= 0:
+            raise InputError("must be > 0", field=f"params_override.{k}")
         if k == "reflectivity":
             if not 0.0 <= v <= 1.0:
                 raise InputError("must be in [0, 1]", field="params_override.reflectivity")
             refl = float(v)
         else:
             rep[k] = float(v)
-    return dataclasses.replace(params, **rep), refl, set(rep)
+    out = dataclasses.replace(params, **rep)
+    if (out.pole_ra is None) != (out.pole_dec is None):
+        raise InputError("give pole_ra and pole_dec together (the body has no pole of its "
+                         "own)", field="params_override.pole_ra")
+    return out, refl, set(rep)
 
 
 def pack_force_model(body, force_model: ForceModel = ForceModel(),
@@ -181,11 +203,12 @@ def pack_force_model(body, force_model: ForceModel = ForceModel(),
     ``mu``, ``c20``, ``c22`` or the reflectivity costs only the packing (and,
     for spherical harmonics, one O(N^2) derivative-table build).
 
-    ``params_override``: dict with SI keys ``mu`` (m^3/s^2), ``c20``, ``c22``
-    (m^2), ``reflectivity``, or a whole :class:`PhysicalParams`.
+    ``params_override``: dict with SI keys of :func:`world_parameters` (``mu``
+    m^3/s^2, ``c20``, ``c22`` m^2, ``reflectivity``, the pole ``pole_ra``, ``pole_dec``
+    rad, ...), or a whole :class:`PhysicalParams`.
     """
     nominal = body.require_params()
-    params, refl, changed = _apply_override(nominal, force_model, params_override)
+    params, refl, changed = apply_override(nominal, force_model, params_override)
     sh_kw = {"gm_scale": params.mu / nominal.mu if "mu" in changed else 1.0,
              "c20": params.c20 if "c20" in changed else None,
              "c22": params.c22 if "c22" in changed else None}

@@ -87,7 +87,6 @@ def export_store(store, out=None, *, naif_base: int = -1000, body_id: int | None
     ``notes``: a list that gets the lines saying which flight was written."""
     from ideas_hpc.export import writers as w
     from ideas_hpc.export.flight import camera_rates_J, flight_of
-    from ideas_hpc.dynamics.trajectory import sun_direction_T
     from ideas_hpc.engine.store_meta import store_attrs
     from ideas_hpc.base.spice import spiceypy
 
@@ -149,7 +148,7 @@ def export_store(store, out=None, *, naif_base: int = -1000, body_id: int | None
     if not lsk:
         print("ideas-hpc: warning: --lsk: no leap-second kernel, the CSV's utc column is empty",
               file=sys.stderr, flush=True)
-    sun_J = np.einsum("tji,tj->ti", tj_img, sun_direction_T(params, setup.epoch_s + t_img))
+    sun_J = np.einsum("tji,tj->ti", tj_img, setup.world.sun_T(t_img))
     r_img_J = np.einsum("tji,ktj->kti", tj_img, fl.r_img_T)
     _write_csv(out / "images.csv", sp, sc_ids, t_img, et_img, utc, r_img_J, dcm_CJ, sun_J,
                usable_images(fl))

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ideas_hpc.attitude import ideal_dcm_BT, initial_conditions, simulate_attitude
+from ideas_hpc.attitude.modes import undrawn_start
 from ideas_hpc.attitude.run_settings import InitialState, from_keywords
 from ideas_hpc.core.attitude.compose import compose_each
 from ideas_hpc.core.attitude.mrp import dcm_from_mrp, mrp_from_prv
@@ -44,7 +45,8 @@ def camera_dcms(setup, theta, periods=None, *, state0: InitialState | None = Non
     """
     sigma0, omega0, wheel0 = from_keywords(None, None, None, None, state0, initial)[3].arrays()
     th = np.asarray(theta, dtype=np.float64)
-    if setup.maneuver.tracks_body and setup.attitude_mode == "ideal":
+    closed = setup.attitude.closed_loop
+    if setup.maneuver.tracks_body and not closed:
         return track_dcms(setup, r_img_T)[0], None
     ws = setup.body.params.spin_rate if spin_rate is None else spin_rate
     duration = setup.tf_s - setup.t0_s
@@ -56,12 +58,11 @@ def camera_dcms(setup, theta, periods=None, *, state0: InitialState | None = Non
             raise InputError("body tracking with simulated attitude needs the flown positions "
                              "and velocities at every step", field="track_T")
         sim_kw = dict(sim_kw, ref_table=track_reference(setup, *track_T))
-    if sigma0 is None and setup.attitude_mode == "simulated":
-        # no initial state given: the setup's own start (SPEC 7d), as flight.fly() does
-        if setup.attitude_start == "paper":
-            sigma0, omega0, wheel0 = initial_conditions(setup.seed, 0, th.size)
-        else:
-            sigma0, omega0, wheel0 = (np.zeros((th.size, 3)) for _ in range(3))
+    if sigma0 is None and closed:
+        # no initial state given: the setup's own start (SPEC 7d), sample 0
+        (sigma0, omega0, wheel0), word = undrawn_start(
+            setup.attitude_start, th.size, lambda: initial_conditions(setup.seed, 0, th.size))
+        if word == "reference":
             sim_kw = dict(sim_kw, start="reference")
     # the geometry's ring frames (with the body, or fixed in N) and its turn into T
     return setup.geometry.camera(

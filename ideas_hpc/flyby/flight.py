@@ -21,29 +21,29 @@ independent spacecraft (which the GA relies on).
 
 from __future__ import annotations
 
+import dataclasses
+import hashlib
+import sys
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 import numpy as np
 
 from ideas_hpc.attitude import Gains, Maneuver, SpacecraftModel, campaign_maneuver, initial_conditions
+from ideas_hpc.attitude.modes import AttitudeMode, AttitudeStart, attitude_mode, attitude_start, \
+    undrawn_start
 from ideas_hpc.body.bodies import Body
 from ideas_hpc.flyby.encounter import Encounter
 from ideas_hpc.flyby.geometry import Geometry, geometry_of
 from ideas_hpc.base.errors import InputError
-from ideas_hpc.flyby.camera import (camera_at_images, imaging_dcms, misaligned,
-                                    misalignment_dcms)
+from ideas_hpc.flyby.views import FlightPlan, flight_views
+from ideas_hpc.flyby.world import World
 from ideas_hpc.mapping.coverage import CoverageResult, compute_coverage
 from ideas_hpc.mapping.options import CoverageOptions
 from ideas_hpc.flyby.sizing import Sizing
 from ideas_hpc.flyby.usable import ImageUse
 from ideas_hpc.dynamics.force_model import ForceModel
-from ideas_hpc.dynamics.trajectory import (TargetingError, TargetingResult, propagate_swarm,
-                                           sun_direction_T)
-
-
-#: ``FlybySetup.attitude_mode`` (``attitude.mode``): the camera on its reference, or the
-#: closed loop (reaction wheels, sliding mode) flown.
-ATTITUDE_MODES = ("ideal", "simulated")
+from ideas_hpc.dynamics.trajectory import TargetingError, TargetingResult
 
 
 @dataclass(frozen=True)
@@ -113,17 +113,49 @@ class FlybySetup:
         n = int(round((self.tf_s - self.t0_s) / self.image_dt_s))
         return self.t0_s + self.image_dt_s * np.arange(n + 1)
 
+    @property
+    def world(self) -> World:
+        """The nominal world this setup flies (:class:`~ideas_hpc.flyby.world.World`): its
+        body, force model, arrival epoch and encounter."""
+        return World(self.body, self.force_model, self.epoch_s, self.encounter)
+
+    @property
+    def attitude(self) -> AttitudeMode:
+        """The registry entry of ``attitude_mode`` (:mod:`ideas_hpc.attitude.modes`)."""
+        return attitude_mode(self.attitude_mode)
+
+    @property
+    def start(self) -> AttitudeStart:
+        """The registry entry of ``attitude_start`` (:mod:`ideas_hpc.attitude.modes`)."""
+        return attitude_start(self.attitude_start)
+
+    @cached_property
+    def flight_key(self) -> str:
+        """A digest of everything but the world (body, force model, epoch, encounter):
+        the key of the per-world statics this setup prepares
+        (:func:`ideas_hpc.flyby.world.cached_static`)."""
+        # every float exactly (arrays of the spacecraft, the gains): two setups that differ
+        # anywhere never share a key
+        with np.printoptions(floatmode="unique", threshold=sys.maxsize):
+            own = [(f.name, repr(getattr(self, f.name))) for f in dataclasses.fields(self)
+                   if f.name not in _WORLD_FIELDS]
+        return hashlib.sha1(repr(own).encode()).hexdigest()
+
     def sun_T(self, times=None, epoch=None) -> np.ndarray:
         """Unit body -> Sun directions (n, 3) in T at flyby ``times`` (default: the
         image times), from the ephemeris at ``epoch + times`` (arrival epoch, s)."""
         t = self.image_times if times is None else np.asarray(times, dtype=np.float64)
-        e = self.epoch_s if epoch is None else float(epoch)
-        return sun_direction_T(self.body.params, e + t)
+        w = self.world if epoch is None else replace(self.world, epoch_s=float(epoch))
+        return w.sun_T(t)
 
     def with_(self, **kw) -> "FlybySetup":
         if isinstance(kw.get("maneuver"), str):      # a campaign name
             kw["maneuver"] = campaign_maneuver(kw["maneuver"])
         return replace(self, **kw)
+
+
+#: The fields of :class:`FlybySetup` that make its :class:`~ideas_hpc.flyby.world.World`.
+_WORLD_FIELDS = ("body", "force_model", "epoch_s", "encounter")
 
 
 def endpoints(setup: FlybySetup, theta) -> tuple[np.ndarray, np.ndarray]:
@@ -205,7 +237,9 @@ class Perturbation:
     # replaces ``ics``
     ics_reference: tuple | None = None
     acquisition_s: float = 0.0                # closed loop from ``ics`` before the window, s
-    params_override: dict | None = None       # mu, c20, c22, reflectivity
+    # the scenario's world parameters (World.perturbed; any of
+    # dynamics.force_model.world_parameters: mu, c20, c22, reflectivity, pole_ra, ...)
+    params_override: dict | None = None
     position_error_T: np.ndarray | None = None  # (N, 3) m
     velocity_error_T: np.ndarray | None = None  # (N, 3) m/s
     active: np.ndarray | None = None          # (N,) bool, False: failed
@@ -242,8 +276,8 @@ def fly(setup: FlybySetup, theta, periods=None, *, sample: int = 0, ics=None,
     periods : (N,) s, optional
         Sweep periods (FoV sweeping).
     sample : int
-        Sample index whose seeded initial attitude is used (``simulated`` with
-        ``setup.attitude_start = "paper"``; otherwise the loop starts on the reference).
+        Sample index whose seeded initial attitude is used (a closed loop whose
+        ``setup.start`` has ``nominal_random``; otherwise the loop starts on the reference).
     ics : tuple of (N, 3) arrays, optional
         Explicit ``(sigma0, omega0, wheel0)``.
     counts : bool
@@ -253,18 +287,25 @@ def fly(setup: FlybySetup, theta, periods=None, *, sample: int = 0, ics=None,
     if th.size == 0:
         raise InputError("needs at least one spacecraft", field="theta")
     tgt = target(setup, th, raise_on_failure=raise_on_failure)
-    r_img = np.ascontiguousarray(tgt.position_T[:, ::setup.image_every])
-    start = "absolute"
-    if ics is None and setup.attitude_mode == "simulated":
-        if setup.attitude_start == "paper":
-            ics = initial_conditions(setup.seed, sample, th.size)
-        else:
-            ics, start = tuple(np.zeros((th.size, 3)) for _ in range(3)), "reference"
-    dcm, att, cov = _image(setup, th, periods, r_img, ics, None, None, counts,
-                           (tgt.position_T, tgt.velocity_T), start)
+    pert = Perturbation(ics=ics) if ics is not None else undrawn_perturbation(
+        setup, th.size, lambda: initial_conditions(setup.seed, sample, th.size))
+    v = flight_views(setup, th, periods, None, None, pert,
+                     plan=FlightPlan(trajectory=(tgt.position_T, tgt.velocity_T)))
     return FlybyOutcome(theta=th, periods=None if periods is None else np.asarray(periods),
-                        targeting=tgt, image_times=setup.image_times, r_img_T=r_img, dcm_BT=dcm,
-                        coverage=cov, attitude=att)
+                        targeting=tgt, image_times=setup.image_times, r_img_T=v.r_img_T,
+                        dcm_BT=v.dcm_BT, coverage=_coverage(setup, setup.world, v, None, counts),
+                        attitude=v.attitude)
+
+
+def undrawn_perturbation(setup: FlybySetup, n: int, random_state) -> "Perturbation":
+    """The :class:`Perturbation` of a flight of ``n`` spacecraft without drawn errors:
+    nothing, and for a closed loop the setup's own start
+    (:func:`ideas_hpc.attitude.modes.undrawn_start`; ``random_state()`` returns the
+    seeded random state of the flight's samples)."""
+    if not setup.attitude.closed_loop:
+        return Perturbation()
+    state, word = undrawn_start(setup.attitude_start, n, random_state)
+    return Perturbation(ics_reference=state) if word == "reference" else Perturbation(ics=state)
 
 
 def fly_open_loop(setup: FlybySetup, theta, periods, r0_T, v0_T,
@@ -274,18 +315,20 @@ def fly_open_loop(setup: FlybySetup, theta, periods, r0_T, v0_T,
 
     The Monte Carlo sample: the start states ``r0_T``, ``v0_T`` (N, 3; m, m/s)
     targeted on the nominal model, plus the perturbation's state errors, are
-    propagated through its gravity and SRP, its attitude initial conditions
+    propagated through its world (:class:`~ideas_hpc.flyby.world.World`: gravity,
+    SRP, pole, Sun), its attitude initial conditions
     are flown, its camera misalignments applied and its failed spacecraft left
     out of the coverage. ``counts=False`` skips the per-vertex image counts
     (``times_seen`` is then 0/1; the coverage and first-seen times are the same).
     """
     th = np.asarray(theta, dtype=np.float64).ravel()
-    r_img, dcm, att, pos, vel = _views(setup, th, periods, r0_T, v0_T, perturbation)
-    cov = _coverage(setup, r_img, imaging_dcms(setup, dcm, att, r_img), perturbation.active,
-                    counts)
+    world = setup.world.perturbed(perturbation.params_override)
+    v = flight_views(setup, th, periods, r0_T, v0_T, perturbation, world=world)
+    cov = _coverage(setup, world, v, perturbation.active, counts)
     return FlybyOutcome(theta=th, periods=None if periods is None else np.asarray(periods),
-                        targeting=None, image_times=setup.image_times, r_img_T=r_img,
-                        dcm_BT=dcm, coverage=cov, attitude=att, position_T=pos, velocity_T=vel)
+                        targeting=None, image_times=setup.image_times, r_img_T=v.r_img_T,
+                        dcm_BT=v.dcm_BT, coverage=cov, attitude=v.attitude,
+                        position_T=v.position_T, velocity_T=v.velocity_T)
 
 
 def open_loop_views(setup: FlybySetup, theta, periods, r0_T, v0_T,
@@ -294,53 +337,15 @@ def open_loop_views(setup: FlybySetup, theta, periods, r0_T, v0_T,
     camera DCMs (N, n_img, 3, 3) at the image times (misalignment applied), the
     attitude result (simulated) and the trajectory (N, T, 3) m. Failures are not applied;
     unusable images are blinded (:func:`ideas_hpc.flyby.camera.imaging_dcms`).
-    ``ideal_dcm_BT``: the ideal camera DCMs of these spacecraft when already computed
-    (``attitude_mode = "ideal"`` and not body tracking: they do not depend on the
-    perturbation then)."""
-    r_img, dcm, att, pos, _ = _views(setup, theta, periods, r0_T, v0_T, perturbation,
-                                     ideal_dcm_BT=ideal_dcm_BT)
-    return r_img, imaging_dcms(setup, dcm, att, r_img), att, pos
+    ``ideal_dcm_BT``: no longer read (perfect tracking's cameras are kept per world by
+    :func:`ideas_hpc.flyby.views.flight_views`); accepted for older callers."""
+    v = flight_views(setup, theta, periods, r0_T, v0_T, perturbation)
+    return v.r_img_T, v.imaging_BT, v.attitude, v.position_T
 
 
-def _views(setup, theta, periods, r0_T, v0_T, perturbation, *, ideal_dcm_BT=None):
-    """:func:`open_loop_views` with the camera DCMs as flown (nothing blinded), and the
-    velocities (N, T, 3) m/s after the trajectory."""
-    th = np.asarray(theta, dtype=np.float64).ravel()
-    p = perturbation
-    r0 = r0_T if p.position_error_T is None else r0_T + p.position_error_T
-    v0 = v0_T if p.velocity_error_T is None else v0_T + p.velocity_error_T
-    _, pos, vel = propagate_swarm(setup.body, r0, v0, setup.t0_s, setup.tf_s,
-                                force_model=setup.force_model, dt_sample=setup.dt_s,
-                                params_override=p.params_override, views=True)
-    r_img = np.ascontiguousarray(pos[:, ::setup.image_every])
-    mis = None if p.misalignment_prv is None else misalignment_dcms(p.misalignment_prv)
-    # body tracking points at the flown positions, so its DCMs move with the perturbation
-    if ideal_dcm_BT is not None and setup.attitude_mode == "ideal" and not setup.maneuver.tracks_body:
-        dcm, att = misaligned(ideal_dcm_BT, mis), None
-    elif p.ics_reference is not None:
-        dcm, att = camera_at_images(setup, th, periods, p.ics_reference, mis, r_img, (pos, vel),
-                                    start="reference")
-    else:
-        dcm, att = camera_at_images(setup, th, periods, p.ics, mis, r_img, (pos, vel),
-                                    acquisition_s=p.acquisition_s)
-    return r_img, dcm, att, pos, vel
-
-
-def _image(setup: FlybySetup, th, periods, r_img, ics, misalignment, active, counts,
-           track_T=None, start="absolute"):
-    """Attitude at the images, camera misalignment, Sun, coverage: the common tail of a flyby.
-    ``track_T``: positions and velocities at every step (body tracking, simulated)."""
-    dcm, att = camera_at_images(setup, th, periods, ics, misalignment, r_img, track_T,
-                                start=start)
-    return dcm, att, _coverage(setup, r_img, imaging_dcms(setup, dcm, att, r_img), active,
-                               counts)
-
-
-def _coverage(setup: FlybySetup, r_img, dcm, active, counts):
-    img_t = setup.image_times
-    sun = None
-    if setup.coverage.needs_sun:
-        sun = setup.sun_T(img_t)
-    return compute_coverage(setup.body.shape, r_img, dcm, img_t, setup.eta_rad, setup.near_m,
-                            setup.far_m, options=setup.coverage, sun_T=sun, active=active,
-                            counts=counts)
+def _coverage(setup: FlybySetup, world: World, views, active, counts):
+    flown = world.flown(setup)
+    return compute_coverage(flown.body.shape, views.r_img_T, views.imaging_BT,
+                            setup.image_times, setup.eta_rad, setup.near_m, setup.far_m,
+                            options=setup.coverage, sun_T=world.sun_at_images(setup),
+                            active=active, counts=counts)

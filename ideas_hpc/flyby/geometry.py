@@ -41,6 +41,9 @@ class Geometry:
     #: :func:`ideas_hpc.attitude.ideal_omega_BN_B` gives (an encounter's ring frames are
     #: fixed in N, its reference is not that function)
     analytic_reference_rate = True
+    #: whether the ring frames are fixed in T and turn with the body (``[T S] = I``, the
+    #: paper's): the one-pass closed loops (:mod:`ideas_hpc.flyby.closed_loop`) fly only those
+    rings_turn_with_body = True
 
     def endpoints(self, setup, theta) -> tuple[np.ndarray, np.ndarray]:
         """Start and target positions (N, 3), m, frame T."""
@@ -71,10 +74,10 @@ class Geometry:
         ``simulate(spin, dcm_TS)`` (by ``setup.attitude_mode``) in the maneuver frame,
         turned into T."""
         w, ts = self.maneuver_frame(setup, spin_rad_s)
-        if setup.attitude_mode == "ideal":
-            dcm, att = ideal(w, ts), None
-        else:
+        if setup.attitude.closed_loop:
             dcm, att = simulate(w, ts)
+        else:
+            dcm, att = ideal(w, ts), None
         return self.to_T(setup, dcm), att
 
 
@@ -124,6 +127,7 @@ class EncounterGeometry(Geometry):
     encounter: Encounter
     name = "encounter"
     analytic_reference_rate = False
+    rings_turn_with_body = False
 
     def endpoints(self, setup, theta):
         return endpoints_encounter(setup, np.asarray(theta, dtype=np.float64).ravel())

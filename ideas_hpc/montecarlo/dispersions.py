@@ -30,11 +30,13 @@ from typing import Callable
 import numpy as np
 
 from ideas_hpc.attitude import draw_initial_conditions
+from ideas_hpc.attitude.modes import ATTITUDE_STARTS, attitude_start
 from ideas_hpc.core.attitude.mrp import mrp_from_prv
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.base.fields import Field
 from ideas_hpc.base.seeds import sample_rng
 from ideas_hpc.engine.variables import StoreVar
+from ideas_hpc.montecarlo import failure_dispersion
 from ideas_hpc.base.units import DEG, MM
 
 DISPERSION_CHILD = 1  # spawn_key suffix of the child stream
@@ -111,8 +113,8 @@ class Dispersion:
 #: Where a dispersion acts: the whole body, or each spacecraft.
 LEVELS = ("body", "spacecraft")
 
-#: ``[monte_carlo] attitude_start`` choices (docs/attitude-start.md).
-ATTITUDE_STARTS = ("reference", "acquisition", "paper")
+#: ``[monte_carlo] attitude_start`` choices (docs/attitude-start.md): the registry
+#: :data:`ideas_hpc.attitude.modes.ATTITUDE_STARTS`, read live.
 
 
 def _attitude(rng, n, mc, setup, theta):
@@ -124,10 +126,11 @@ def _attitude(rng, n, mc, setup, theta):
 def attitude_draw(rng, n: int, mc) -> dict:
     """The initial attitude of ``n`` spacecraft from ``rng`` (SPEC section 7d).
 
-    ``attitude_start = "paper"`` and ``"acquisition"``: the paper's random state
+    A start with ``random_state`` (``attitude_start = "paper"`` and ``"acquisition"``):
+    the paper's random state
     (:func:`ideas_hpc.attitude.draw_initial_conditions`: ``sigma_BN``, ``omega_BN_B``,
     wheels), flown from t0 ("paper") or for ``acquisition_s`` before the window.
-    ``"reference"``: the errors about the reference of the geometry flown, a
+    Otherwise (``"reference"``): the errors about the reference of the geometry flown, a
     rotation of normal angle ``sigma_attitude_rad`` per axis (as an MRP
     ``sigma_B/R``) and a rate error of ``sigma_rate_rad_s`` per axis
     (``omega_B/R``, B), wheels at rest. ``attitude_dispersion = false``: no draw,
@@ -136,7 +139,7 @@ def attitude_draw(rng, n: int, mc) -> dict:
     if not mc.attitude_dispersion:
         z = np.zeros((n, 3))
         return {"sigma0": z, "omega0": z.copy(), "wheel0": z.copy()}
-    if mc.attitude_start == "reference":
+    if not attitude_start(mc.attitude_start).random_state:
         prv = mc.sigma_attitude_rad * rng.standard_normal((n, 3))
         w = mc.sigma_rate_rad_s * rng.standard_normal((n, 3))
         return {"sigma0": np.stack([mrp_from_prv(np.ascontiguousarray(v)) for v in prv])
@@ -147,18 +150,27 @@ def attitude_draw(rng, n: int, mc) -> dict:
 
 def attitude_perturbation(mc, v: dict) -> dict:
     """:class:`~ideas_hpc.flyby.flight.Perturbation` keywords of an attitude draw ``v``:
-    absolute (``ics``, with ``acquisition_s``) for the random starts, relative to the
-    reference flown (``ics_reference``) otherwise."""
+    absolute (``ics``, with ``acquisition_s`` for a start with ``acquisition``) for the
+    random starts, relative to the reference flown (``ics_reference``) otherwise."""
     ics = (v["sigma0"], v["omega0"], v["wheel0"])
-    if not mc.attitude_dispersion or mc.attitude_start == "reference":
+    start = attitude_start(mc.attitude_start)
+    if not mc.attitude_dispersion or not start.random_state:
         return {"ics_reference": ics}
-    if mc.attitude_start == "acquisition":
+    if start.acquisition:
         return {"ics": ics, "acquisition_s": float(mc.acquisition_s)}
     return {"ics": ics}
 
 
+def _attitude_active(mc, setup) -> bool:
+    """A closed loop whose start draws anything: a random state, or errors about the
+    reference with a non-zero sigma."""
+    return (setup.attitude.closed_loop and mc.attitude_dispersion
+            and (attitude_start(mc.attitude_start).random_state
+                 or mc.sigma_attitude_rad != 0 or mc.sigma_rate_rad_s != 0))
+
+
 def _check_attitude(mc):
-    if mc.attitude_start == "acquisition" and mc.attitude_dispersion and \
+    if attitude_start(mc.attitude_start).acquisition and mc.attitude_dispersion and \
             not mc.acquisition_s > 0.0:
         raise InputError("must be > 0 s with `attitude_start = \"acquisition\"`",
                          field="acquisition_s")
@@ -188,16 +200,6 @@ def _state(rng, n, mc, setup, theta):
     dv = rng.standard_normal((n, 3))
     return {"position_error": mc.sigma_position_m * dr,
             "velocity_error": mc.sigma_velocity_m_s * dv}
-
-
-def _failures(rng, n, mc, setup, theta):
-    perm = rng.permutation(n)
-    bern = rng.uniform(0.0, 1.0, n)
-    active = np.ones(n, dtype=bool)
-    if mc.failures_k:
-        active[perm[:mc.failures_k]] = False
-    active &= bern >= mc.failure_probability
-    return {"active": active, "n_failed": int((~active).sum())}
 
 
 def _misalignment(rng, n, mc, setup, theta):
@@ -235,11 +237,7 @@ DISPERSIONS: tuple[Dispersion, ...] = (
                      ("sigma_rate_rad_s", Field("float", 5e-5, lo=0, hi=0.1,
                                                 doc="1-sigma rate error per axis, rad/s"))),
                check=_check_attitude, level="spacecraft", reads_mc=True,
-               active=lambda mc, setup: setup.attitude_mode == "simulated"
-               and mc.attitude_dispersion and not (mc.attitude_start == "reference" and
-                                                   mc.sigma_attitude_rad == 0 and
-                                                   mc.sigma_rate_rad_s == 0),
-               applies=lambda setup: setup.attitude_mode == "simulated"),
+               active=_attitude_active, applies=lambda setup: setup.attitude.closed_loop),
     Dispersion("gravity", _gravity,
                lambda v: {"params_override": {"mu": v["mu"], "c20": v["c20"], "c22": v["c22"]}},
                (StoreVar("c20", (), np.float64, "m^2", "C20 (dispersed)"),
@@ -272,15 +270,14 @@ DISPERSIONS: tuple[Dispersion, ...] = (
                                                    to_si=MM, lo=0))),
                level="spacecraft",
                active=lambda mc, setup: (mc.sigma_position_m, mc.sigma_velocity_m_s) != (0, 0)),
-    Dispersion("failures", _failures, lambda v: {"active": v["active"]},
+    # the failure model (issue 41): keys, check and draw in montecarlo/failure_dispersion.py
+    Dispersion("failures", failure_dispersion.draw, lambda v: {"active": v["active"]},
                (StoreVar("active", ("spacecraft",), bool, "1",
                          "spacecraft working (False: failed)"),
                 StoreVar("n_failed", (), np.int32, "1", "failed spacecraft")),
-               keys=(("failures_k", Field("int", 0, lo=0, doc="exactly k of N spacecraft lost")),
-                     ("failure_probability", Field("float", 0.0, lo=0, hi=1,
-                                                   doc="per-spacecraft loss probability"))),
+               keys=failure_dispersion.FAILURE_KEYS, check=failure_dispersion.check,
                level="spacecraft", designer="exact",
-               active=lambda mc, setup: mc.failures_k > 0 or mc.failure_probability > 0),
+               active=lambda mc, setup: failure_dispersion.failures_active(mc)),
     Dispersion("misalignment", _misalignment,
                lambda v: {"misalignment_prv": v["misalignment_prv"]},
                (StoreVar("misalignment_prv", SC3, np.float64, "rad",

@@ -8,9 +8,12 @@ deviation *budget* could see it, and then turns any perturbed flight
 :func:`ideas_hpc.design.candidates.rows_from_views` on that flight. The budget only
 decides speed, never the rows; it is taken from a pilot scenario (the
 deviations of scenario 0, with head room). Rows with a ``[coverage]``
-requirement (quality masks) take the full recomputation. A closed-loop
-scenario started on its reference is flown in one pass
-(:mod:`ideas_hpc.montecarlo.scenario_flight`: the pipeline's flight, same bits).
+requirement (quality masks) take the full recomputation, and so does a scenario
+whose world differs from the nominal one in what the rows read besides the flight
+(its shape, or its Sun under a lighting requirement:
+:meth:`~ideas_hpc.flyby.world.World.mapping_key`). Every scenario is flown by the one
+flight path (:func:`ideas_hpc.flyby.views.flight_views`), which picks the one-pass
+closed loop (the pipeline's flight, same bits) when it covers the scenario.
 """
 
 from __future__ import annotations
@@ -21,20 +24,22 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ideas_hpc.attitude.modes import perfect_tracking
 from ideas_hpc.design.candidates import rows_from_views
-from ideas_hpc.montecarlo import scenario_flight as _flight
 from ideas_hpc.core.mapping import scenario_rows as _k
 from ideas_hpc.core.mapping.coverage import first_image_by_spacecraft
 from ideas_hpc.core.mapping.scenario_proofs import BC_ANY, windows, witness_proofs
-from ideas_hpc.flyby.camera import camera_at_images, imaging_dcms
-from ideas_hpc.flyby.flight import FlybySetup, Perturbation, open_loop_views
+from ideas_hpc.flyby.flight import FlybySetup, Perturbation
+from ideas_hpc.flyby.views import FlightPlan, flight_views
+from ideas_hpc.flyby.world import World, cached_static
 from ideas_hpc.core.mapping.records import Nominal
 from ideas_hpc.mapping.coverage import camera_record, check_geometry, mesh_record, strict_records
 
 #: Head room on the pilot's deviations (speed only).
 HEADROOM = 1.5
-#: Per process: engine token -> its nominal flight and that flight's kernel records
-#: (RowEngine._cached).
+#: Per process: engine token -> its nominal flight, that flight's kernel records and
+#: the engine's flight buffers per thread (RowEngine._cached); what a flight prepares
+#: per world is kept by :func:`ideas_hpc.flyby.world.cached_static`.
 _NOMINAL: dict = {}
 #: Largest ``||C C^T - I||_F`` accepted for the perturbed DCMs (the kernels assume
 #: ``||C||_2 <= 1 + 1e-9``); anything worse takes the full recomputation.
@@ -55,8 +60,9 @@ class RowEngine:
     window: np.ndarray | None = None       # (K, V, 2) int32
     unseen_any: np.ndarray | None = None   # (K, V) int32
     budget: tuple = (0.0, 0.0)             # (Frobenius, m)
-    #: Fly a closed-loop scenario in one pass (:mod:`~ideas_hpc.montecarlo.scenario_flight`,
-    #: same bits); False flies the flyby pipeline (the benchmark's baseline).
+    #: Fly only what the rows read (the one-pass closed loop when it covers the scenario,
+    #: same bits); False flies the flyby pipeline's whole flight, time series and all
+    #: (the benchmark's baseline).
     one_pass: bool = True
 
     @property
@@ -78,38 +84,31 @@ class RowEngine:
         return got
 
     def _nominal_flight(self):
-        """:func:`~ideas_hpc.flyby.flight.open_loop_views` with ideal attitude, the same bits:
-        without body tracking (which points at every step's position) only the
-        positions at the images are integrated (0.03 against 0.13 s for 720
-        candidates, in every worker)."""
-        ideal = self.setup.with_(attitude_mode="ideal")
-        if ideal.maneuver.tracks_body or ideal.encounter is not None:
-            r_img, dcm, _, _ = open_loop_views(ideal, self.theta, None, self.r0_T, self.v0_T,
-                                               Perturbation())
-            return r_img, dcm
-        t_img = _flight.image_times(ideal)
-        r_img = _flight.positions_into(ideal, t_img, self.r0_T, self.v0_T, None,
-                                       np.empty((len(self.r0_T), t_img.size, 3)))
-        dcm, att = camera_at_images(ideal, self.theta, None, None, None, r_img)
-        return r_img, imaging_dcms(ideal, dcm, att, r_img)
+        """The nominal world's flight with perfect tracking, at the images (the one flight
+        path: only the positions at the images are integrated unless the camera
+        follows the track, 0.03 against 0.13 s for 720 candidates, in every worker)."""
+        ideal = self.setup.with_(attitude_mode=perfect_tracking())
+        v = flight_views(ideal, self.theta, None, self.r0_T, self.v0_T, Perturbation(),
+                         plan=FlightPlan(series=False))
+        return v.r_img_T, v.imaging_BT
 
     def nominal(self):
         """Positions and ideal camera DCMs of the nominal flight at the images."""
         return self._cached()["flight"]
 
     def _static(self):
-        """The kernels' records of the nominal flight, validated once per process."""
+        """The kernels' records of the nominal flight, validated once per process; the
+        mesh, its BVH and the lighting are the nominal world's (kept per world)."""
         got = self._cached()
         if "records" not in got:
             setup = self.setup
             shape = setup.body.shape
             r, c, tan_eta, near, far, _ = check_geometry(shape, *got["flight"], setup.eta_rad,
                                                          setup.near_m, setup.far_m)
-            sun = setup.sun_T() if setup.coverage.needs_sun else None
-            opts, bvh = strict_records(shape, setup.coverage, sun, r.shape[1])
+            mesh, opts, bvh = world_records(setup, setup.world, r.shape[1])
             cam = camera_record(r, c, np.zeros(r.shape[1]), tan_eta, near, far,
                                 setup.coverage.mode == "exact")
-            got["records"] = (mesh_record(shape), cam, opts, bvh)
+            got["records"] = (mesh, cam, opts, bvh)
         return got["records"]
 
     def prepare(self, pilot: Perturbation | None) -> "RowEngine":
@@ -139,27 +138,36 @@ class RowEngine:
             .astype(np.int32)
         return self
 
-    def flight(self, pert: Perturbation, reuse: bool = False):
-        """Positions and camera DCMs at the images of the perturbed flight.
+    def world(self, pert: Perturbation) -> World:
+        """The world of a scenario with draws ``pert`` (its ``params_override``)."""
+        return self.setup.world.perturbed(pert.params_override)
+
+    def flight(self, pert: Perturbation, reuse: bool = False, world: World | None = None):
+        """Positions and imaging camera DCMs at the images of the perturbed flight, through
+        ``world`` (default: :meth:`world` of ``pert``).
 
         ``reuse``: the positions and DCMs may live in this thread's buffers of the
         engine, valid until its next ``flight(..., reuse=True)`` (the bank's chunks)."""
-        if self.one_pass and _flight.covers(self.setup, pert):
-            got = self._cached()
-            if "statics" not in got:
-                got["statics"] = _flight.flight_statics(self.setup, self.theta)
-            # one buffer per thread: a worker may run chunks of one engine in threads
-            buffers = (got.setdefault("buffers", {}).setdefault(threading.get_ident(), {})
-                       if reuse else {})
-            return _flight.fly_views(self.setup, got["statics"], self.r0_T, self.v0_T, pert,
-                                     buffers)
-        ideal = self.nominal()[1] if self.fast else None
-        r_img, dcm, _, _ = open_loop_views(rows_setup(self.setup), self.theta, None, self.r0_T,
-                                           self.v0_T, pert, ideal_dcm_BT=ideal)
-        return r_img, dcm
+        buffers = None
+        if reuse:   # one buffer per thread: a worker may run chunks of one engine in threads
+            buffers = (self._cached().setdefault("buffers", {})
+                       .setdefault(threading.get_ident(), {}))
+        v = flight_views(self.setup, self.theta, None, self.r0_T, self.v0_T, pert, world=world,
+                         plan=FlightPlan(series=not self.one_pass, buffers=buffers))
+        return v.r_img_T, v.imaging_BT
 
-    def rows(self, r_img, dcm) -> np.ndarray:
-        """(K, V) bool rows of a perturbed flight, identical to the full recomputation."""
+    def scenario_rows(self, pert: Perturbation, reuse: bool = False) -> np.ndarray:
+        """(K, V) bool rows of the scenario with draws ``pert``: its world, its flight,
+        its rows."""
+        world = self.world(pert)
+        return self.rows(*self.flight(pert, reuse, world), world=world)
+
+    def rows(self, r_img, dcm, world: World | None = None) -> np.ndarray:
+        """(K, V) bool rows of a perturbed flight through ``world`` (default: the nominal
+        one), identical to the full recomputation."""
+        if world is not None and (world.mapping_key(self.setup)
+                                  != self.setup.world.mapping_key(self.setup)):
+            return self._full(r_img, dcm, world)     # another shape or Sun: no proofs
         if not self.fast:
             return self._full(r_img, dcm)
         r = np.ascontiguousarray(r_img, dtype=np.float64)
@@ -180,9 +188,30 @@ class RowEngine:
             return self._full(r_img, dcm)
         return rows
 
-    def _full(self, r_img, dcm) -> np.ndarray:
-        sun = self.setup.sun_T() if self.setup.coverage.needs_sun else None
-        return rows_from_views(self.setup, r_img, dcm, sun)
+    def first_seen(self, r_img, dcm, world: World | None = None) -> np.ndarray:
+        """(K, V) int64: the first image at which each candidate sees each vertex on this
+        flight through ``world`` (default: the nominal one), -1 never (seen mode; the
+        validation's losses in the pass, issue 41)."""
+        _, cam0, _, _ = self._static()
+        world = self.setup.world if world is None else world
+        cam = cam0._replace(r_T_m=np.ascontiguousarray(r_img, dtype=np.float64),
+                            dcm_BT=np.ascontiguousarray(dcm, dtype=np.float64))
+        mesh, opts, bvh = world_records(self.setup, world, cam.r_T_m.shape[1])
+        return first_image_by_spacecraft(mesh, cam, opts, bvh)
+
+    def _full(self, r_img, dcm, world: World | None = None) -> np.ndarray:
+        return full_rows_of(self.setup, world, r_img, dcm)
+
+
+def world_records(setup: FlybySetup, world: World, n_img: int) -> tuple:
+    """``(Mesh, Strict, Bvh)`` of ``world``'s shape and Sun at ``setup``'s images for its
+    coverage options: per-world statics (:func:`ideas_hpc.flyby.world.cached_static`)."""
+    def build():
+        opts, bvh = strict_records(world.shape, setup.coverage, world.sun_at_images(setup),
+                                   n_img)
+        return mesh_record(world.shape), opts, bvh
+    return cached_static(("mapping", setup.flight_key, world.mapping_key(setup), int(n_img)),
+                         build)
 
 
 def _down32(x: np.ndarray) -> np.ndarray:
@@ -195,13 +224,21 @@ def _down32(x: np.ndarray) -> np.ndarray:
 
 def rows_setup(setup: FlybySetup) -> FlybySetup:
     """The setup the rows are flown with: closed-loop time series not kept (one sample)."""
-    if setup.attitude_mode != "simulated":
+    if not setup.attitude.closed_loop:
         return setup
     return setup.with_(decimate=max(1, int(round((setup.tf_s - setup.t0_s) / setup.dt_s))))
 
 
+def full_rows_of(setup: FlybySetup, world: World | None, r_img, dcm) -> np.ndarray:
+    """(K, V) bool rows of a flight through ``world`` (default: ``setup``'s) by full
+    recomputation: its shape, its Sun."""
+    world = setup.world if world is None else world
+    return rows_from_views(world.flown(setup), r_img, dcm, world.sun_at_images(setup))
+
+
 def full_rows(setup: FlybySetup, theta, periods, r0_T, v0_T, pert: Perturbation) -> np.ndarray:
-    """(K, V) bool rows by full recomputation: the flyby pipeline on the perturbed flight."""
-    r_img, dcm, _, _ = open_loop_views(rows_setup(setup), theta, periods, r0_T, v0_T, pert)
-    sun = setup.sun_T() if setup.coverage.needs_sun else None
-    return rows_from_views(setup, r_img, dcm, sun)
+    """(K, V) bool rows by full recomputation: the flyby pipeline's whole flight (time
+    series and trajectory) through the scenario's world."""
+    world = setup.world.perturbed(pert.params_override)
+    v = flight_views(rows_setup(setup), theta, periods, r0_T, v0_T, pert, world=world)
+    return full_rows_of(setup, world, v.r_img_T, v.imaging_BT)

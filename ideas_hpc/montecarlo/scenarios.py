@@ -12,8 +12,10 @@ the whole candidate grid; each entry of
 
 Entries with ``designer="exact"`` (failures) are not drawn: the designer
 handles them exactly. Every candidate is
-targeted once on the nominal model and flown open loop through each scenario
-(:func:`ideas_hpc.flyby.flight.open_loop_views`); its row is what it sees, or with a
+targeted once on the nominal model and flown open loop through each scenario's
+world (:class:`~ideas_hpc.flyby.world.World`: the nominal one with the scenario's
+body-level draws) by the one flight path
+(:func:`ideas_hpc.flyby.views.flight_views`); its row is what it sees, or with a
 ``[coverage]`` requirement what it maps (:func:`ideas_hpc.design.candidates.rows_from_views`).
 Members fly independently, so a swarm's coverage in scenario ``s`` is the union
 of its members' rows ``rows[s, members]``.
@@ -36,8 +38,8 @@ import numpy as np
 from ideas_hpc.engine.store_meta import config_hash
 from ideas_hpc.base.progress import map_chunks
 from ideas_hpc.flyby.flight import FlybySetup, Perturbation, endpoints, target
-from ideas_hpc.base.seeds import (SCENARIO_STREAM, STREAM_ATTITUDE, STREAM_BODY, STREAM_SPACECRAFT,
-                     VALIDATION_STREAM, stream_rng)
+from ideas_hpc.base.seeds import (HOLDOUT_STREAM, SCENARIO_STREAM, STREAM_ATTITUDE,
+                                  STREAM_BODY, STREAM_SPACECRAFT, VALIDATION_STREAM, stream_rng)
 from ideas_hpc.montecarlo import dispersions as _dispersions
 from ideas_hpc.montecarlo.scenario_rows import RowEngine
 from ideas_hpc.montecarlo.scenario_store import build_into_store, chunk_task
@@ -113,7 +115,7 @@ def _rows_chunk(ks, *, engine: RowEngine, mc, seed, stream):
     out = np.empty((len(ks), engine.theta.size, setup.body.shape.n_vertices), dtype=bool)
     for i, k in enumerate(ks):
         pert = Perturbation(**draw_world(mc, setup, engine.theta, seed, stream, int(k)))
-        out[i] = engine.rows(*engine.flight(pert, reuse=True))
+        out[i] = engine.scenario_rows(pert, reuse=True)
     return out
 
 
@@ -148,7 +150,9 @@ def nominal_start(setup: FlybySetup, theta) -> tuple[np.ndarray, np.ndarray]:
 def shaping_config(setup: FlybySetup, mc, step_rad: float, seed: int, n: int) -> dict:
     """What shapes a scenario bank (its hash decides reuse): the flyby, the body,
     the continuous dispersions, the grid, the seed and the number of scenarios."""
-    skip = {"samples", "failure_probability", "failures_k"}
+    # failures are enumerated by the designer, never flown: their keys shape no bank
+    skip = {"samples"} | {f.si_name(k) for d in _dispersions.DISPERSIONS
+                          if d.designer == "exact" for k, f in d.keys}
     mc_d = {f.name: getattr(mc, f.name) for f in dataclasses.fields(mc) if f.name not in skip}
     sh = setup.body.shape
     fs = {f.name: repr(getattr(setup, f.name)) for f in dataclasses.fields(setup)
@@ -217,16 +221,64 @@ def build_scenario_bank(setup: FlybySetup, step_rad: float, mc, *, seed: int, n_
     return ScenarioBank(theta=theta, rows=rows, areas=areas, attrs=attrs)
 
 
+#: Samples per chunk task of the validation and held-out flights.
+VALIDATION_CHUNK = 8
+
+
 def fly_members(setup: FlybySetup, theta, periods, mc, *, seed: int, n_samples: int,
-                client=None, progress: bool = True, chunk_size: int = 8,
-                first: int = 0) -> np.ndarray:
+                client=None, progress: bool = True, first: int = 0,
+                stream: int = VALIDATION_STREAM) -> np.ndarray:
     """(M, N, V) bool: per-member rows of swarm ``theta`` (rad) in ``n_samples`` fresh draws
-    of the continuous dispersions (no failures), stream ``VALIDATION_STREAM``, samples
-    ``first`` to ``first + n_samples - 1`` (a validation look's own draws, issue 29)."""
+    of the continuous dispersions (no failures), stream ``VALIDATION_STREAM`` (or
+    ``stream``: the held-out scenarios' ``HOLDOUT_STREAM``), samples ``first`` to
+    ``first + n_samples - 1`` (a validation look's own draws, issue 29)."""
     th = np.asarray(theta, dtype=np.float64).ravel()
     if periods is not None:
         raise NotImplementedError("fly_members: FoV sweeping periods are not supported yet")
-    fn = functools.partial(_rows_chunk, engine=row_engine(setup, th, mc, seed, VALIDATION_STREAM),
-                           mc=mc, seed=int(seed), stream=VALIDATION_STREAM)
+    fn = functools.partial(_rows_chunk, engine=row_engine(setup, th, mc, seed, int(stream)),
+                           mc=mc, seed=int(seed), stream=int(stream))
     return _run_chunks(list(range(int(first), int(first) + int(n_samples))), fn, client,
-                       chunk_size, progress, "validation flights")
+                       VALIDATION_CHUNK, progress, _flights_label(stream))
+
+
+def _flights_label(stream: int) -> str:
+    return "held-out flights" if int(stream) == HOLDOUT_STREAM else "validation flights"
+
+
+def _seen_chunk(ks, *, engine: RowEngine, mc, seed, stream):
+    """(len(ks), K, V) int32 of each flight: the first image at which a member sees a vertex
+    of its row, ``UNTIMED`` for one of its row without a first image (never on one flight;
+    counted as seen only at the end), -1 outside its row."""
+    setup = engine.setup
+    out = np.empty((len(ks), engine.theta.size, setup.body.shape.n_vertices), dtype=np.int32)
+    for i, k in enumerate(ks):
+        pert = Perturbation(**draw_world(mc, setup, engine.theta, seed, stream, int(k)))
+        world = engine.world(pert)
+        r_img, dcm = engine.flight(pert, True, world)
+        rows = engine.rows(r_img, dcm, world=world)
+        first = engine.first_seen(r_img, dcm, world)
+        out[i] = np.where(rows, np.where(first >= 0, first, UNTIMED), -1)
+    return out
+
+
+#: :func:`fly_members_seen`'s mark of a vertex in a member's row without a first image.
+UNTIMED = -2
+
+
+def fly_members_seen(setup: FlybySetup, theta, mc, *, seed: int, n_samples: int,
+                     client=None, progress: bool = True, first: int = 0,
+                     stream: int = VALIDATION_STREAM):
+    """:func:`fly_members` with, per member and vertex, when in the pass it is first seen:
+    returns ``rows`` (M, N, V) bool and ``seen`` (M, N, V) float32, the pass fraction
+    ``(t - t0) / (tf - t0)`` of that first image (``inf``: not seen). Seen mode only (a
+    ``[coverage]`` requirement maps, and when a vertex is mapped is not its first sight):
+    what a member lost in the pass imaged before its loss (issue 41)."""
+    th = np.asarray(theta, dtype=np.float64).ravel()
+    fn = functools.partial(_seen_chunk, engine=row_engine(setup, th, mc, seed, int(stream)),
+                           mc=mc, seed=int(seed), stream=int(stream))
+    idx = _run_chunks(list(range(int(first), int(first) + int(n_samples))), fn, client,
+                      VALIDATION_CHUNK, progress, _flights_label(stream))
+    frac = ((setup.image_times - setup.t0_s) / (setup.tf_s - setup.t0_s)).astype(np.float32)
+    frac = np.concatenate([frac, [np.inf]]).astype(np.float32)
+    seen = frac[np.where(idx >= 0, idx, frac.size - 1)]
+    return idx != -1, seen

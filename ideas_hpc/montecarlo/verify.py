@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ideas_hpc.flyby.flight import FlybySetup, Perturbation
+from ideas_hpc.mapping.requirement import meets
 from ideas_hpc.base.progress import map_chunks, plural
 from ideas_hpc.montecarlo.dispersions import draw_sample
 from ideas_hpc.montecarlo.sample import Nominal, design_nominal, fly_sample
@@ -34,8 +35,9 @@ class Verification:
 
     @property
     def probability(self) -> float:
-        """Fraction of samples with ``coverage >= threshold``."""
-        return float(np.mean(self.coverage >= self.threshold)) if self.coverage.size else \
+        """Fraction of samples that meet the threshold
+        (:func:`~ideas_hpc.mapping.requirement.meets`: the designers' comparison)."""
+        return float(np.mean(meets(self.coverage, self.threshold))) if self.coverage.size else \
             float("nan")
 
     def summary(self) -> str:

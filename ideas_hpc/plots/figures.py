@@ -94,10 +94,11 @@ def ga_fitness(ds, path, *, title="GA fitness") -> Path:
     return save_png(fig, path, body=body_name(ds))
 
 
-def population_histogram(ds, path, *, design: str) -> Path:
-    """Final population: swarm sizes (NP, Fig. 20) or coverage (FoV, Fig. 31)."""
+def population_histogram(ds, path, *, sizes: bool) -> Path:
+    """Final population: swarm sizes (``sizes``: a GA that designs N, NP Fig. 20) or
+    coverage (a GA of given N, FoV Fig. 31)."""
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
-    if design == "nadir":
+    if sizes:
         n = np.rint(ds["population"].values[:, 0]).astype(int)
         bins = np.arange(n.min() - 0.5, n.max() + 1.5)
         ax.hist(n, bins=bins, color="tab:blue", edgecolor="k")

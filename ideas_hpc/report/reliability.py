@@ -55,9 +55,10 @@ def reliability_lines(ds) -> list[str]:
     ok = bool(ds["demonstrated"])
     n = int(ds["best_swarm_size"])
     n_bank, p_bank, status, bound, gap, steps = bank_answer(ds)
+    failures = (a["failure_model"] if "failure_model" in a else   # stores before issue 41
+                f"p_f = {float(a.get('failure_probability', float('nan'))):g} each")
     out = [f"requirement: P(coverage >= {thr:.3f} %) >= {p:g} at {conf:g} % confidence, "
-           f"failures (p_f = {float(a.get('failure_probability', float('nan'))):g} each) "
-           f"enumerated exactly; {a['n_scenarios']} scenarios, "
+           f"failures ({failures}) enumerated exactly; {a['n_scenarios']} scenarios, "
            f"{a['verify_samples']} validation samples ({a['continuous_dispersions']})",
            bank_line(n_bank, p_bank, status, bound, gap),
            f"validation of the N = {n} swarm: P-hat = {float(ds['validation_p_hat']):.4f}, "
@@ -74,6 +75,11 @@ def reliability_lines(ds) -> list[str]:
     if "statistical_lower_bound" in a:
         out.append("statistical lower bound (beside the proof on the bank): "
                    + str(a["statistical_lower_bound"]))
+    if "bank_validation_agreement" in a:
+        out.append(f"held-out scoring ({a['n_holdout_scenarios']} scenarios that chose "
+                   f"nothing): {a['bank_validation_agreement']}")
+    if "p_f_levels" in a:
+        out.append(str(a["p_f_levels"]))
     if "bank_level" in ds and float(ds["bank_level"]) != p:
         out.append(f"bank solved at the stricter level p' = {float(ds['bank_level']):g} "
                    f"(p = {p:g}; docs/certificate.md)")

@@ -268,13 +268,15 @@ def write_report(store, out=None, *, html: bool = False) -> Path:
     figs: list[Path] = []
     kind = ds.attrs.get("kind", "")
     if "best_fitness" in ds:
-        design = "nadir" if getattr(KINDS.get(kind), "swarm", "") == "designed" else "fov"
-        n = "19" if design == "nadir" else "30"
+        # a GA that designs N (the paper's NP design, Figs. 19-20) or one of given N
+        # (its FoV design, Figs. 30-31): the kind's declared swarm capability
+        sizes = getattr(KINDS.get(kind), "swarm", "") == "designed"
+        n = "19" if sizes else "30"
         figs.append(figures.ga_fitness(ds, out / f"fig{n}_ga_fitness.png",
                                        title=f"{kind}: best and mean fitness"))
-        n = "20" if design == "nadir" else "31"
+        n = "20" if sizes else "31"
         figs.append(figures.population_histogram(ds, out / f"fig{n}_final_population.png",
-                                                 design=design))
+                                                 sizes=sizes))
     figs.extend(_design_figures(ds, out))
     shape = _shape(ds) if "vertex_position" in ds else None
     if "position" in ds:

@@ -47,8 +47,9 @@ the owning modules' ``*_from_config`` (see their docstrings).
 (exact designer); ``success_probability``, ``confidence``, ``scenarios``,
 ``demonstrate`` (the success-probability designer, issue 20; tables and checks
 in :mod:`ideas_hpc.campaign.schema.design_table`);
-(GA) ``population``, ``generations``, ``n_max``, ``eps_tol_pct``,
-``angle_step_rad``, ``p_min_min``, ``p_max_min``, ``period_step_min``,
+(every designer) ``eps_tol_pct`` and ``target_rule``, the coverage requirement
+(:func:`ideas_hpc.campaign.setup.requirement_from_campaign`, docs/requirement.md);
+(GA) ``population``, ``generations``, ``n_max``, ``angle_step_rad``, ``p_min_min``, ``p_max_min``, ``period_step_min``,
 ``parents``, ``elitism``, ``mutation_probability``, ``stall_generations``;
 (design-pareto) ``objectives`` (two or more names of
 :data:`ideas_hpc.design.pareto.objectives.OBJECTIVES`) with ``population``,
@@ -67,10 +68,12 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from ideas_hpc.attitude.maneuvers import CAMPAIGN_NAMES, campaign_maneuver
+from ideas_hpc.attitude.modes import ATTITUDE_MODES
 from ideas_hpc.campaign.schema.toml_file import CampaignSource, load_campaign
 from ideas_hpc.design.pareto.objectives import check_objectives
 from ideas_hpc.base.errors import InputError, config_fields
 from ideas_hpc.montecarlo.dispersions import check_dispersions
+from ideas_hpc.montecarlo.failure_dispersion import check_fleet
 from ideas_hpc.base.fields import (Field, live_typed_table, schema_defaults, to_typed,
                                      typed_table, validate, with_defaults)
 from ideas_hpc.base.units import DEG, KM, MINUTE
@@ -82,7 +85,6 @@ from ideas_hpc.campaign.schema.instrument_table import INSTRUMENT
 from ideas_hpc.campaign.schema.model_fields import (COVERAGE_FIELDS, GAINS_FIELDS, SPACECRAFT_FIELDS,
                                            STORED_NAMES, flyby_errors, stored_fields)
 from ideas_hpc.campaign.schema.kinds import KINDS as REGISTRY
-from ideas_hpc.flyby.flight import ATTITUDE_MODES
 from ideas_hpc.campaign.schema.reads import check_reads
 from ideas_hpc.campaign.schema.design_table import DESIGN, MC_SCHEMA, reliability_checks, verify_samples
 
@@ -252,9 +254,11 @@ def _cross_checks(c: CampaignConfig) -> None:
         if sw.sweep_periods_s is None:
             raise InputError(f"is required for attitude.maneuver = {c.attitude.maneuver!r}",
                              field="swarm.sweep_periods_min")
-    if mc.failures_k and sw.angles_rad and mc.failures_k > len(sw.angles_rad):
-        raise InputError(f"cannot exceed the swarm size {len(sw.angles_rad)}",
-                         field="monte_carlo.failures_k")
+    with config_fields(prefix="monte_carlo."):   # the failure model against the fleet
+        if kind.swarm == "designed":
+            check_fleet(mc, d.n_max, "design.n_max")
+        elif sw.angles_rad:
+            check_fleet(mc, len(sw.angles_rad), "the swarm size", swarm=True)
     with config_fields(DESIGNER_FIELDS):
         check_objectives(d.objectives)
     check_encounter(fb, c.attitude)

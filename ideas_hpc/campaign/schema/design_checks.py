@@ -36,6 +36,7 @@ DESIGNER_FIELDS = {
     "k": "design.failures_tolerated", "p": "design.success_probability",
     "confidence": "design.confidence", "objectives": "design.objectives", "step": STEP_KEY,
     "min_separation": "swarm.min_separation_km", "require_stereo": "coverage.require_stereo",
+    "rule": "design.target_rule",
 }
 EXACT_STEP_RAD = 0.5 * DEG   #: exact designer and design-pareto default grid, rad
 GA_STEP_RAD = 0.01           #: the paper GA's default gene grid, rad

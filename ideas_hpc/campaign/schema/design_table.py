@@ -7,6 +7,9 @@ The success-probability designer (issue 20) reads ``design.success_probability``
 ``design.demonstrate_looks`` and ``design.bank_level`` (issue 29, docs/certificate.md);
 ``design.verify_samples`` (M) defaults to 64, or 256 with p set
 (:func:`verify_samples`). S and M must resolve p: at least ``10 / (1 - p)``.
+``design.holdout_scenarios`` (H, :func:`holdout_scenarios`) held-out scenarios score the
+swarms the bank chose (issue 41); ``design.verify_samples_max`` caps the samples the look
+plan may give one look.
 """
 
 from __future__ import annotations
@@ -15,7 +18,10 @@ import math
 
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.design.api.methods import METHODS
+from ideas_hpc.failures.weights import all_lost
+from ideas_hpc.mapping.requirement import TARGET_RULES
 from ideas_hpc.montecarlo.dispersions import dispersion_keys
+from ideas_hpc.montecarlo.failure_dispersion import failure_model
 from ideas_hpc.campaign.schema.kinds import KINDS
 from ideas_hpc.base.fields import Field, LiveTable
 from ideas_hpc.base.units import DEG, MINUTE
@@ -50,10 +56,27 @@ DESIGN = {
     "bank_level": Field("float", None, nullable=True, lo=0, hi=1, lo_open=True, hi_open=True,
                         doc="p': solve the scenario bank at this stricter level (>= p) so that "
                             "its swarm validates at the first look (default: p)"),
+    "holdout_scenarios": Field("int", None, nullable=True, lo=0, hi=1000000,
+                               doc="held-out scenarios that score the swarms the bank chose "
+                                   "(unbiased P, the optimiser's bias, the look plan; "
+                                   "docs/certificate.md), flown for those swarms only: "
+                                   "default 4 x design.verify_samples when the bank is "
+                                   "sampled, 0 (none) when it is exact"),
+    "verify_samples_max": Field("int", None, nullable=True, lo=1, hi=1000000,
+                                doc="most validation samples of one look: the look plan "
+                                    "doubles a look's M from design.verify_samples toward 80 % "
+                                    "predicted power (default: design.verify_samples)"),
     "population": Field("int", 100, lo=2, doc="GA population size"),
     "generations": Field("int", 115, lo=1),
     "n_max": Field("int", 20, lo=1, hi=200),
-    "eps_tol_pct": Field("float", 0.1, lo=0, hi=100),
+    # converted here only: the typed table holds the fraction, design.eps_tol
+    "eps_tol_pct": Field("float", 0.1, lo=0, hi=100, si="eps_tol", per=100.0,
+                         doc="area a swarm may leave unmapped, % of the reference area: "
+                             "threshold = target - eps_tol"),
+    # live: a rule registered later is a valid choice (ideas_hpc.mapping.requirement)
+    "target_rule": Field("str", "reach", choices=TARGET_RULES.keys(),
+                         doc="the target: 'reach' (100 %, or what the candidates reach "
+                             "together when less) or 'full' (100 %, else fail)"),
     "angle_step_rad": Field("float", None, nullable=True, lo=0, hi=1.0,
                             doc="deprecated alias of angle_step_deg, in rad"),
     "p_min_min": Field("float", 0.3, si="p_min_s", to_si=MINUTE, lo=0, lo_open=True),
@@ -84,6 +107,22 @@ def verify_samples(d) -> int:
     return VERIFY_DEFAULT_RELIABILITY if d.success_probability is not None else VERIFY_DEFAULT
 
 
+#: Held-out scenarios per validation sample by default: their mean's error is half the
+#: validation's, so a validation P-hat lands within its own 95 % interval of the held-out P
+#: about 92 % of the time when both estimate the same P.
+HOLDOUT_PER_SAMPLE = 4
+
+
+def holdout_scenarios(d, exact: bool) -> int:
+    """H: ``design.holdout_scenarios``, or its default: 4 x ``design.verify_samples`` when the
+    bank is sampled, none when it is exact (one scenario: nothing to hold out)."""
+    if exact:
+        return 0
+    if d.holdout_scenarios is not None:
+        return int(d.holdout_scenarios)
+    return HOLDOUT_PER_SAMPLE * verify_samples(d)
+
+
 def reliability_checks(c) -> None:
     """Cross-checks of the success-probability keys (bad inputs of issue 20)."""
     d = c.design
@@ -97,6 +136,7 @@ def reliability_checks(c) -> None:
         raise InputError("must be 0 with design.success_probability, which replaces it "
                          "(failures enter the probability exactly through "
                          "monte_carlo.failure_probability)", field="design.failures_tolerated")
+    _reachable(c.monte_carlo, p, d.n_max)
     if d.bank_level is not None and d.bank_level < p:
         raise InputError(f"{d.bank_level:g} is below design.success_probability = {p:g}: the "
                          "bank's level may only be stricter", field="design.bank_level")
@@ -108,8 +148,25 @@ def reliability_checks(c) -> None:
                          "campaigns/eros-design-quick.toml, or lower "
                          "design.success_probability", field="design.scenarios")
     m = verify_samples(d)
+    if d.verify_samples_max is not None and d.verify_samples_max < m:
+        raise InputError(f"{d.verify_samples_max} is below the {m} samples of a look "
+                         "(design.verify_samples)", field="design.verify_samples_max")
     if m < least:
         raise InputError(f"{m} validation samples cannot resolve p = {p:g}: at least "
                          f"10 / (1 - p) = {least} are needed (fewer than 10 expected misses "
                          "cannot tell P from p); lower design.success_probability for a "
                          "smaller check", field="design.verify_samples")
+
+
+def _reachable(mc, p: float, n_max: int) -> None:
+    """Refuse a p no swarm of ``n_max`` can reach under the failure model: one that always
+    maps the target still needs a survivor (losses in the pass counted as survivals), so
+    ``P <= 1 - P(none survives)`` (``1 - p_f^N`` for independent failures)."""
+    model = failure_model(mc)
+    most = 1.0 - all_lost(model, n_max)
+    if most < p:
+        how = ("1 - p_f^N" if model.is_plain else
+               "1 - P(no spacecraft survives) under the failure model")
+        raise InputError(f"{p:g} is not reached: even a swarm of design.n_max = {n_max} that "
+                         f"always maps the target succeeds with at most {how} = {most:.6g}",
+                         field="design.success_probability")

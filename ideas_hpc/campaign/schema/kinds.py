@@ -38,8 +38,8 @@ ANGLE_STEP = ("design.angle_step_deg", "design.angle_step_rad")
 GA_SEARCH = ("design.population", "design.generations", "design.parents", "design.elitism",
              "design.mutation_probability", "design.stall_generations")
 #: What every fewest-spacecraft designer of design-nadir reads (bank, N, requirement, cluster).
-COVER = ("design.method", "design.n_max", "design.eps_tol_pct", "design.time_limit_s",
-         "design.chunk_size", "run.workers", *ANGLE_STEP)
+COVER = ("design.method", "design.n_max", "design.eps_tol_pct", "design.target_rule",
+         "design.time_limit_s", "design.chunk_size", "run.workers", *ANGLE_STEP)
 
 
 @dataclass(frozen=True)
@@ -145,9 +145,9 @@ KINDS: dict[str, Kind] = {k.name: k for k in (
                 "design.chunk_size", "run.workers", *ANGLE_STEP)),
     Kind("monte-carlo", "ideas_hpc.campaign.montecarlo", "run_monte_carlo", True,
          "dispersed flights of a designed swarm, chunked and resumable", samples=True,
-         # eps_tol_pct: the result line's threshold, 100 % - eps_tol
-         reads=("monte_carlo.samples", DISPERSION_KEYS, "design.eps_tol_pct", "run.chunk_size",
-                "run.workers")),
+         # eps_tol_pct, target_rule: the result line's threshold
+         reads=("monte_carlo.samples", DISPERSION_KEYS, "design.eps_tol_pct",
+                "design.target_rule", "run.chunk_size", "run.workers")),
 )}
 
 

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 from ideas_hpc.attitude.maneuvers import campaign_maneuver
+from ideas_hpc.attitude.modes import attitude_mode, attitude_start
 from ideas_hpc.campaign.schema.kinds import DISPERSION_KEYS, KINDS
 from ideas_hpc.design.api.methods import METHODS
 from ideas_hpc.montecarlo.dispersions import dispersion_keys
@@ -49,8 +50,19 @@ class Settings:
         return campaign_maneuver(self.kind.maneuver or self.config.attitude.maneuver)
 
     @property
+    def attitude(self):
+        """The registry entry of ``attitude.mode`` (:mod:`ideas_hpc.attitude.modes`)."""
+        return attitude_mode(self.config.attitude.mode)
+
+    @property
+    def start(self):
+        """The registry entry of ``monte_carlo.attitude_start``."""
+        return attitude_start(self.config.monte_carlo.attitude_start)
+
+    @property
     def simulated(self) -> bool:
-        return self.config.attitude.mode == "simulated"
+        """The attitude flies a closed loop (``AttitudeMode.closed_loop``)."""
+        return self.attitude.closed_loop
 
     @property
     def p(self) -> bool:

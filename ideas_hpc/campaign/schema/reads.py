@@ -34,6 +34,7 @@ from types import SimpleNamespace
 from typing import Callable
 
 from ideas_hpc.attitude.maneuvers import MANEUVERS
+from ideas_hpc.attitude.modes import ATTITUDE_MODES, ATTITUDE_STARTS
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.body.formats import builtin_body, length_unit_applies
 from ideas_hpc.campaign.schema.encounter_table import ENCOUNTER
@@ -42,22 +43,32 @@ from ideas_hpc.campaign.schema.read_settings import (Rule, Settings, entry_name,
                                                      readers, set_keys)
 from ideas_hpc.design.api.methods import METHODS
 from ideas_hpc.design.pareto.objectives import check_objectives
-from ideas_hpc.flyby.flight import ATTITUDE_MODES
 from ideas_hpc.montecarlo import dispersions
 from ideas_hpc.montecarlo.dispersions import dispersion_keys
 
-#: The success-probability design flies exactly ``monte_carlo.failures_k`` failures.
-#: False until its failure model does (the one switch: the rule below reads it).
-FAILURES_K_HONOURED = False
+#: The success-probability design flies exactly ``monte_carlo.failures_k`` failures (its
+#: failure model, :mod:`ideas_hpc.failures`, does since issue 41): the one switch; False
+#: refuses the key there with one line.
+FAILURES_K_HONOURED = True
 
 
 def _applies(d, mode: str) -> bool:
-    """``Dispersion.applies`` for a flight of attitude mode ``mode`` (what it reads of a
-    setup); one that reads more of a setup is taken to apply."""
+    """``Dispersion.applies`` for a flight of attitude mode ``mode`` (a stand-in setup with
+    the mode's name and entry); one that reads more of a setup is taken to apply."""
+    setup = SimpleNamespace(attitude_mode=mode, attitude=ATTITUDE_MODES[mode])
     try:
-        return d.applies is None or bool(d.applies(SimpleNamespace(attitude_mode=mode)))
+        return d.applies is None or bool(d.applies(setup))
     except AttributeError:
         return True
+
+
+def _names(registry: dict, capability) -> str:
+    """``"a" or "b"``: the registry's names whose entry has ``capability(entry)``."""
+    return " or ".join(f'"{n}"' for n, e in registry.items() if capability(e))
+
+
+def _closed_loop_modes() -> str:
+    return _names(ATTITUDE_MODES, lambda m: m.closed_loop)
 
 
 def _dispersion(key: str):
@@ -76,24 +87,24 @@ def _why_dispersed(key: str) -> Callable:
         if not s.lists(DISPERSION_KEYS):
             return not_listed(key)(s)
         d = _dispersion(key)
-        modes = " or ".join(f'"{m}"' for m in ATTITUDE_MODES if _applies(d, m))
+        modes = " or ".join(f'"{m}"' for m in ATTITUDE_MODES if _applies(d, m))   # live
         return (f"is ignored with attitude.mode = {s.config.attitude.mode!r}: the flights apply "
                 f"the {d.name!r} dispersion with attitude.mode = {modes} only")
     return why
 
 
-def _attitude_draw(key: str, start: str, what: str) -> Rule:
-    """A key of the attitude draw that one ``monte_carlo.attitude_start`` reads, with
+def _attitude_draw(key: str, start: Callable, what: str) -> Rule:
+    """A key of the attitude draw that the starts with ``start(entry)`` read, with
     ``attitude_dispersion = true``."""
     def when(s: Settings) -> bool:
-        mc = s.config.monte_carlo
-        return _dispersed(s, key) and mc.attitude_dispersion and mc.attitude_start == start
+        return (_dispersed(s, key) and s.config.monte_carlo.attitude_dispersion
+                and start(s.start))
 
     def why(s: Settings) -> str:
         if not _dispersed(s, key):
             return _why_dispersed(key)(s)
-        return (f"is ignored: it is {what} of monte_carlo.attitude_start = \"{start}\" with "
-                "attitude_dispersion = true")
+        return (f"is ignored: it is {what} of monte_carlo.attitude_start = "
+                f"{_names(ATTITUDE_STARTS, start)} with attitude_dispersion = true")
     return Rule(when, why)
 
 
@@ -141,21 +152,23 @@ def _why_separation(s: Settings) -> str:
 
 
 def _imaging(s: Settings) -> bool:
-    return s.simulated and s.config.monte_carlo.attitude_start != "paper"
+    return s.simulated and s.start.usable_images
 
 
 def _why_imaging(s: Settings) -> str:
     if not s.simulated:
-        return ("is ignored with attitude.mode = 'ideal': every image counts (the usable-image "
-                'test judges a simulated attitude: attitude.mode = "simulated")')
-    return ("is ignored with monte_carlo.attitude_start = 'paper': the paper's start counts "
-            'every image (attitude_start = "reference" or "acquisition" applies the test)')
+        return (f"is ignored with attitude.mode = {s.attitude.name!r}: every image counts (the "
+                "usable-image test judges a closed loop: attitude.mode = "
+                f"{_closed_loop_modes()})")
+    return (f"is ignored with monte_carlo.attitude_start = {s.start.name!r}: every image counts "
+            f"(attitude_start = {_names(ATTITUDE_STARTS, lambda t: t.usable_images)} applies "
+            "the test)")
 
 
 def _closed_loop(what: str) -> Callable:
     def why(s: Settings) -> str:
-        return (f"is ignored with attitude.mode = 'ideal': {what} only in a closed loop "
-                '(attitude.mode = "simulated")')
+        return (f"is ignored with attitude.mode = {s.attitude.name!r}: {what} only in a closed "
+                f"loop (attitude.mode = {_closed_loop_modes()})")
     return why
 
 
@@ -319,7 +332,8 @@ RULES: dict[str, Rule] = {
         lambda s: s.kind.success_probability and METHODS[s.method].success_probability,
         _why_success_probability),
     **{f"design.{k}": Rule(_p_key, _why_p) for k in ("confidence", "scenarios", "demonstrate",
-                                                      "bank_level")},
+                                                      "bank_level", "holdout_scenarios",
+                                                      "verify_samples_max")},
     "design.demonstrate_looks": Rule(
         lambda s: s.p and s.config.design.demonstrate,
         lambda s: (_why_p(s) if not s.p else "is ignored with design.demonstrate = false: one "
@@ -328,12 +342,16 @@ RULES: dict[str, Rule] = {
     "monte_carlo.samples": Rule(lambda s: s.lists("monte_carlo.samples"), _samples_why),
     "monte_carlo.attitude_start": Rule(_simulated, _closed_loop("a flight starts from it")),
     "monte_carlo.failures_k": Rule(_failures_k, _why_failures_k),
-    "monte_carlo.acquisition_s": _attitude_draw("monte_carlo.acquisition_s", "acquisition",
-                                                "the acquisition phase"),
-    "monte_carlo.sigma_attitude_deg": _attitude_draw("monte_carlo.sigma_attitude_deg",
-                                                     "reference", "the error about the reference"),
-    "monte_carlo.sigma_rate_rad_s": _attitude_draw("monte_carlo.sigma_rate_rad_s", "reference",
-                                                   "the error about the reference"),
+    "monte_carlo.failure_in_pass_share": Rule(
+        lambda s: _dispersed(s, "monte_carlo.failure_in_pass_share") and s.p,
+        lambda s: ("is read by success-probability designs only (design.success_probability): "
+                   "the Monte Carlo kind and the verification fly whole-pass losses"
+                   if s.samples else _why_dispersed("monte_carlo.failure_in_pass_share")(s))),
+    "monte_carlo.acquisition_s": _attitude_draw("monte_carlo.acquisition_s",
+                                                lambda t: t.acquisition, "the acquisition phase"),
+    **{f"monte_carlo.{k}": _attitude_draw(f"monte_carlo.{k}", lambda t: not t.random_state,
+                                          "the error about the reference")
+       for k in ("sigma_attitude_deg", "sigma_rate_rad_s")},
     "run.device": Rule(_simulated, _closed_loop("the device flies the attitude")),
     "controller": Rule(_simulated, _closed_loop("the controller's gains act")),
     "torques": Rule(_simulated, _closed_loop("disturbance torques act")),

@@ -35,6 +35,8 @@ from ideas_hpc.core.attitude.control import sliding_mode_into
 from ideas_hpc.core.attitude.maneuvers import (FOV_MODE, NP_MODE, TRACK_MODE,
                                                fov_reference_into, nadir_reference_into)
 from ideas_hpc.core.attitude.mrp import mrp_from_dcm
+from ideas_hpc.core.attitude.records import (Initial, LoopSteps, Recorded, StepTables,
+                                             SwarmReference)
 from ideas_hpc.core.attitude.rigid_body import rk4_step_into
 
 #: Threads per block (one job each), for few and for many jobs: a scenario's 720 jobs
@@ -66,17 +68,37 @@ _control = cuda.jit(device=True)(sliding_mode_into.py_func)
 
 
 @cuda.jit
-def _flights(mode, dcm_RT_all, sigma_RT_all, spin_rate, periods, theta_max, gains, wheels,
-             dt, n_steps, decimate, img_every, sigma0, omega0, wheel0, ref_table,
-             torque_table, disturbed, sig_err, om_err, wheel, torque, dcm_BT, img_omega,
-             img_err, max_u, max_h):
-    """One thread per job ``smp * N + i``: the body of ``simulate_batch``'s ``prange``."""
+def _flights(swarm, gains, wheels, loop, initial, tables, out):
+    """One thread per job ``smp * N + i``: the body of ``simulate_batch``'s ``prange``.
+    Records (:mod:`~ideas_hpc.core.attitude.records`): ``swarm`` a
+    :class:`SwarmReference`, ``loop`` a :class:`LoopSteps`, ``initial`` an
+    :class:`Initial`, ``tables`` :class:`StepTables`, ``out`` a :class:`Recorded`."""
+    sigma0 = initial.sigma_BN
+    omega0 = initial.omega_BN_B
+    wheel0 = initial.wheel_rad_s
     n_sc = sigma0.shape[1]
     job = cuda.grid(1)
     if job >= sigma0.shape[0] * n_sc:
         return
     smp = job // n_sc
     i = job % n_sc
+    mode = swarm.mode
+    spin_rate = swarm.spin_rate
+    theta_max = swarm.theta_max
+    dt = loop.dt_s
+    n_steps = loop.n_steps
+    decimate = loop.decimate
+    img_every = loop.img_every
+    disturbed = loop.disturbed
+    ref_table = tables.reference
+    torque_table = tables.torque_B_N_m
+    sig_err = out.sigma_error
+    om_err = out.omega_error
+    wheel = out.wheel_speed
+    torque = out.wheel_torque
+    dcm_BT = out.dcm_BT
+    img_omega = out.image_omega
+    img_err = out.image_error
     int_limit = gains.int_limit
     I_rw = wheels.I_rw_kgm2
     J_s = wheels.J_s_kgm2
@@ -92,9 +114,9 @@ def _flights(mode, dcm_RT_all, sigma_RT_all, spin_rate, periods, theta_max, gain
         z[j] = 0.0
         L_ext[j] = 0.0
         L_known[j] = 0.0
-    sigma_RT = sigma_RT_all[i]
-    dcm_RT = dcm_RT_all[i]
-    period = periods[i]
+    sigma_RT = swarm.sigma_RT[i]
+    dcm_RT = swarm.dcm_RT[i]
+    period = swarm.periods_s[i]
     for j in range(3):
         x[j] = sigma0[smp, i, j]
         x[3 + j] = omega0[smp, i, j]
@@ -159,8 +181,8 @@ def _flights(mode, dcm_RT_all, sigma_RT_all, spin_rate, periods, theta_max, gain
         c_rec += 1
         if c_rec == decimate:
             c_rec = 0
-    max_u[smp, i] = mu
-    max_h[smp, i] = mh
+    out.max_torque[smp, i] = mu
+    out.max_momentum[smp, i] = mh
 
 
 def _table(table: np.ndarray, width: int) -> tuple[np.ndarray, bool]:
@@ -199,20 +221,19 @@ def simulate_batch_cuda(mode, dcm_RT_all, spin_rate, periods, theta_max, gains, 
     w = type(wheels)(dev(np.ascontiguousarray(wheels.I_rw_kgm2, dtype=np.float64)),
                      dev(np.ascontiguousarray(wheels.J_s_kgm2, dtype=np.float64)),
                      float(wheels.u_max_Nm), float(wheels.h_max_Nms))
-    out = [cuda.device_array((n_s, n_sc, n_rec, 3)) for _ in range(4)]
-    out.append(cuda.device_array((n_s, n_sc, n_img, 3, 3)))
-    out.append(cuda.device_array((n_s, n_sc, n_img, 3)))
-    out.append(cuda.device_array((n_s, n_sc, n_img)))
-    out += [cuda.device_array((n_s, n_sc)) for _ in range(2)]
-    sig, om, wh, tq, dcm, i_omega, i_err, mu, mh = out
+    rec = [cuda.device_array((n_s, n_sc, n_rec, 3)) for _ in range(4)]
+    out = Recorded(*rec, cuda.device_array((n_s, n_sc, n_img, 3, 3)),
+                   cuda.device_array((n_s, n_sc, n_img, 3)), cuda.device_array((n_s, n_sc, n_img)),
+                   cuda.device_array((n_s, n_sc)), cuda.device_array((n_s, n_sc)))
+    swarm = SwarmReference(int(mode), dev(rings), dev(sigma_RT), float(spin_rate),
+                           dev(np.ascontiguousarray(periods, dtype=np.float64)), float(theta_max))
+    loop = LoopSteps(float(dt), n_steps, decimate, img_every, bool(disturbed))
     n_jobs = n_s * n_sc
     threads = THREADS_FEW if n_jobs < MANY_JOBS else THREADS_MANY
     blocks = max(1, -(-n_jobs // threads))
-    _flights[blocks, threads](int(mode), dev(rings), dev(sigma_RT), float(spin_rate),
-                              dev(np.ascontiguousarray(periods, dtype=np.float64)),
-                              float(theta_max), g, w, float(dt), n_steps, decimate, img_every,
-                              dev(sigma0), dev(omega0), dev(wheel0), dev(ref_table),
-                              dev(torque_table), disturbed, sig, om, wh, tq, dcm, i_omega,
-                              i_err, mu, mh)
+    _flights[blocks, threads](swarm, g, w, loop, Initial(dev(sigma0), dev(omega0), dev(wheel0)),
+                              StepTables(dev(ref_table), dev(torque_table)), out)
     cuda.synchronize()
-    return tuple(a.copy_to_host() for a in (sig, om, wh, tq, dcm, mu, mh, i_omega, i_err))
+    return tuple(a.copy_to_host() for a in (out.sigma_error, out.omega_error, out.wheel_speed,
+                                            out.wheel_torque, out.dcm_BT, out.max_torque,
+                                            out.max_momentum, out.image_omega, out.image_error))

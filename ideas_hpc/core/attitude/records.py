@@ -102,3 +102,57 @@ class ImageViews(NamedTuple):
     #: (N, n_img) bool, receives the usable-image flags.
     usable_out: np.ndarray
 
+
+
+class SwarmReference(NamedTuple):
+    """The references of ``N`` spacecraft for the CUDA kernel
+    (:mod:`~ideas_hpc.core.attitude.batch_cuda`): the arrays of :class:`Ring`, one row
+    per spacecraft."""
+
+    #: Maneuver code (``core.attitude.maneuvers``).
+    mode: int
+    #: (N, 3, 3) float64, ring frames ``[R_i T]``.
+    dcm_RT: np.ndarray
+    #: (N, 3) float64, their MRPs.
+    sigma_RT: np.ndarray
+    #: Target spin rate, rad/s.
+    spin_rate: float
+    #: (N,) float64, FoV sweep periods, s.
+    periods_s: np.ndarray
+    #: FoV sweep amplitude, rad.
+    theta_max: float
+
+
+class LoopSteps(NamedTuple):
+    """The closed loop's steps: ``dt_s`` (s), ``n_steps``, a record every ``decimate``-th
+    step and an image every ``img_every``-th; ``disturbed``: the torque table is read."""
+
+    dt_s: float
+    n_steps: int
+    decimate: int
+    img_every: int
+    disturbed: bool
+
+
+class Recorded(NamedTuple):
+    """What the CUDA kernel writes for ``S x N`` jobs (``R`` records, ``n_img`` images):
+    the outputs of :func:`~ideas_hpc.core.attitude.batch.simulate_batch`, units as there."""
+
+    #: (S, N, R, 3) ``sigma_B/R``.
+    sigma_error: np.ndarray
+    #: (S, N, R, 3) ``omega_B/R`` in B, rad/s.
+    omega_error: np.ndarray
+    #: (S, N, R, 3) wheel speeds, rad/s.
+    wheel_speed: np.ndarray
+    #: (S, N, R, 3) wheel torques, N m.
+    wheel_torque: np.ndarray
+    #: (S, N, n_img, 3, 3) camera ``[B T]`` at the images.
+    dcm_BT: np.ndarray
+    #: (S, N, n_img, 3) ``omega_BN`` in B at the images, rad/s.
+    image_omega: np.ndarray
+    #: (S, N, n_img) attitude error angle at the images, rad.
+    image_error: np.ndarray
+    #: (S, N) largest ``|u|``, N m.
+    max_torque: np.ndarray
+    #: (S, N) largest wheel momentum, N m s.
+    max_momentum: np.ndarray

@@ -1,11 +1,13 @@
-"""Exact failure-weighted success probability of a swarm (issue 20).
+"""Exact failure-weighted success probability of a swarm (issues 20 and 41).
 
-Spacecraft fail independently with probability ``p_f``. In one scenario (one
-draw of the continuous dispersions) the swarm of ``N`` members reaches the
-threshold with probability::
+In one scenario (one draw of the continuous dispersions) the swarm of ``N``
+members reaches the threshold with probability::
 
-    P_s = sum_{T subset of swarm} (1 - p_f)^|T| p_f^(N - |T|) 1[cov_s(T) >= need]
+    P_s = sum_{T subset of swarm} pi(T) 1[cov_s(T) >= need]
 
+with ``pi(T)`` the probability that exactly the members T survive
+(:mod:`ideas_hpc.failures.weights`; independent failures of probability ``p_f``:
+``pi(T) = (1 - p_f)^|T| p_f^(N - |T|)``),
 where ``T`` is the set of survivors and ``cov_s(T)`` the area fraction seen
 (or mapped) by the union of their rows. Exact evaluation without a loop over
 vertices per subset: group the vertices by the bitmask ``b_v`` of members that
@@ -26,8 +28,29 @@ COVER_TOL = 1e-12
 
 
 @njit(cache=True)
-def scenario_probability(rows, s, members, w, need, p_f):
-    """Probability that the swarm ``members`` reaches ``need`` in scenario ``s``.
+def independent_weights(p_f, n):
+    """(n + 1,) weight of one survivor set of k members under independent failures,
+    ``(1 - p_f)^k p_f^(n - k)``, computed as the kernel always has (``q ** k * p_f ** (n - k)``
+    with integer powers), so sums over it are the same floats as before issue 41.
+
+    Parameters
+    ----------
+    p_f : float
+        Per-spacecraft failure probability, 0..1.
+    n : int
+        Swarm size.
+    """
+    q = 1.0 - p_f
+    out = np.empty(n + 1)
+    for k in range(n + 1):
+        out[k] = q ** k * p_f ** (n - k)
+    return out
+
+
+@njit(cache=True)
+def weighted_probability(rows, s, members, w, need, weights):
+    """Probability that the swarm ``members`` reaches ``need`` in scenario ``s``, its
+    survivor sets weighted by ``weights`` (module docstring, ``pi(T)`` for ``p_f``).
 
     Parameters
     ----------
@@ -36,18 +59,20 @@ def scenario_probability(rows, s, members, w, need, p_f):
     s : int
         Scenario index.
     members : (N,) int64
-        Candidate indices of the swarm (N <= 30).
+        Candidate indices of the swarm (N <= 30); bit i of a survivor mask is member i.
     w : (V,) float64
         Vertex area fractions (sum 1).
     need : float
         Threshold coverage, area fraction.
-    p_f : float
-        Independent per-spacecraft failure probability, 0..1.
+    weights : (N + 1,) or (2^N,) float64
+        ``pi(T)``: by survivor count (an exchangeable failure model: the weight of one
+        set of k survivors) or per survivor mask
+        (:func:`ideas_hpc.failures.weights.survivor_weights`). For N = 1 both read the same.
 
     Returns
     -------
     float
-        The failure-weighted probability (module docstring), 0..1.
+        ``sum_T pi(T) 1[cov_s(T) >= need]``, 0..1.
     """
     n = members.size
     full = (1 << n) - 1
@@ -66,22 +91,25 @@ def scenario_probability(rows, s, members, w, need, p_f):
         for m in range(1 << n):
             if m & bit:
                 f[m] += f[m ^ bit]
-    q = 1.0 - p_f
+    by_mask = weights.size != n + 1
     out = 0.0
     for t in range(1 << n):
         if total - f[full ^ t] >= need - COVER_TOL:
-            k = 0
-            x = t
-            while x:
-                x &= x - 1
-                k += 1
-            out += q ** k * p_f ** (n - k)
+            if by_mask:
+                out += weights[t]
+            else:
+                k = 0
+                x = t
+                while x:
+                    x &= x - 1
+                    k += 1
+                out += weights[k]
     return out
 
 
 @njit(cache=True, parallel=True)
-def swarm_probabilities(rows, swarms, w, need, p_f):
-    """Per-scenario probabilities of many swarms of one size.
+def weighted_probabilities(rows, swarms, w, need, weights):
+    """(K, S) :func:`weighted_probability` of many swarms of one size in every scenario.
 
     Parameters
     ----------
@@ -92,14 +120,8 @@ def swarm_probabilities(rows, swarms, w, need, p_f):
         Vertex area fractions.
     need : float
         Threshold coverage, area fraction.
-    p_f : float
-        Per-spacecraft failure probability.
-
-    Returns
-    -------
-    (K, S) float64
-        ``P_s`` of every swarm in every scenario; the bank's probability of a
-        swarm is its row mean.
+    weights : (N + 1,) or (2^N,) float64
+        Survivor weights (:func:`weighted_probability`).
     """
     k_n = swarms.shape[0]
     s_n = rows.shape[0]
@@ -107,8 +129,24 @@ def swarm_probabilities(rows, swarms, w, need, p_f):
     for j in prange(k_n * s_n):
         k = j // s_n
         s = j - k * s_n
-        out[k, s] = scenario_probability(rows, s, swarms[k], w, need, p_f)
+        out[k, s] = weighted_probability(rows, s, swarms[k], w, need, weights)
     return out
+
+
+@njit(cache=True)
+def scenario_probability(rows, s, members, w, need, p_f):
+    """:func:`weighted_probability` under independent failures of probability ``p_f``
+    (:func:`independent_weights`): the module docstring's ``P_s``."""
+    return weighted_probability(rows, s, members, w, need,
+                                independent_weights(p_f, members.size))
+
+
+@njit(cache=True)
+def swarm_probabilities(rows, swarms, w, need, p_f):
+    """(K, S) :func:`weighted_probabilities` under independent failures of probability
+    ``p_f``; the bank's probability of a swarm is its row mean."""
+    return weighted_probabilities(rows, swarms, w, need,
+                                  independent_weights(p_f, swarms.shape[1]))
 
 
 @njit(cache=True)

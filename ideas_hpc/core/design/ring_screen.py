@@ -44,6 +44,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from ideas_hpc.core.design.reliability import independent_weights
+
 
 @njit(cache=True)
 def _gap_miss(Mt, i, d, s):
@@ -228,10 +230,11 @@ def _subset_covers(Mt, slack, s, members, mask, k):
     return tot <= slack[s]
 
 
-@njit(parallel=True, cache=True)
+@njit(cache=True)
 def relaxed_probabilities(Mt, slack, swarms, p_f):
     """(F,) mean over scenarios of the failure-weighted probability, each survivor set
-    judged by the relaxation: an upper bound on the exact ``P_bank`` (swarms sorted).
+    judged by the relaxation: an upper bound on the exact ``P_bank`` (swarms sorted),
+    under independent failures of probability ``p_f`` (:func:`relaxed_weighted`).
 
     ``P_s(X) = sum_{T subset X} (1-p_f)^|T| p_f^(n-|T|) 1[T passes the relaxation in s]``,
     the exact ``P_bank`` with each indicator replaced by one that is never smaller.
@@ -244,6 +247,15 @@ def relaxed_probabilities(Mt, slack, swarms, p_f):
     module docstring's conditions on ``Mt`` and ``slack`` hold. Survivor sets of
     one member use their full-ring gap (``d = K``).
     """
+    return relaxed_weighted(Mt, slack, swarms, independent_weights(p_f, swarms.shape[1]))
+
+
+@njit(parallel=True, cache=True)
+def relaxed_weighted(Mt, slack, swarms, weights):
+    """:func:`relaxed_probabilities` with survivor sets weighted by ``weights`` (N + 1,), the
+    weight of one survivor set by its size (issue 41: any failure model through
+    :func:`ideas_hpc.failures.sums.count_envelope`, never below the set's own weight, so the
+    result stays an upper bound on the exact ``P_bank`` of that model)."""
     k, dn, s_n = Mt.shape
     f_n, n = swarms.shape
     out = np.zeros(f_n)
@@ -259,6 +271,6 @@ def relaxed_probabilities(Mt, slack, swarms, p_f):
                     alive = 0
                     for i in range(n):
                         alive += mask >> i & 1
-                    tot += (1.0 - p_f) ** alive * p_f ** (n - alive)
+                    tot += weights[alive]
         out[f] = tot / s_n
     return out

@@ -77,10 +77,10 @@ def _from_exact(name: str, r) -> DesignResult:
 
 
 def _cover(fn, name, tolerant=False):
-    """``fn(problem[, k], target=..., ...)``; only a ``tolerant`` designer reads k (the
+    """``fn(problem[, k], threshold=..., ...)``; only a ``tolerant`` designer reads k (the
     stereo designer scores pairs of a whole swarm)."""
     def solve(problem, s: CoverSettings, progress):
-        kw = dict(target=s.target, eps_tol=s.eps_tol, n_max=s.n_max,
+        kw = dict(threshold=s.threshold, n_max=s.n_max,
                   min_separation=s.min_separation_m, time_limit=s.time_limit_s)
         if tolerant:
             return _from_exact(name, fn(problem, s.failures_tolerated, **kw))

@@ -30,8 +30,9 @@ import math
 
 import numpy as np
 
+from ideas_hpc.mapping.requirement import as_threshold
+
 TWO_PI = 2.0 * math.pi
-_TOL = 1e-12
 
 
 class GridCover:
@@ -46,14 +47,17 @@ class GridCover:
     step : float
         Grid step, rad.
     target, eps_tol : float
-        Coverage fraction to reach and allowed shortfall (fractions).
+        Coverage fraction to reach and allowed shortfall (fractions); or
+    threshold : ideas_hpc.mapping.requirement.Threshold
+        The threshold they make (a swarm is feasible when it meets it).
     n_max : int
         Largest swarm.
     min_sep_steps : int
         Smallest separation between two members, in grid steps (0: none).
     """
 
-    def __init__(self, masks, areas, step, target, eps_tol, n_max, min_sep_steps=0):
+    def __init__(self, masks, areas, step, target=None, eps_tol=None, n_max=None,
+                 min_sep_steps=0, *, threshold=None):
         a = np.asarray(areas, dtype=np.float64)
         self.w = a / a.sum()
         self.m = np.ascontiguousarray(np.asarray(masks, dtype=np.float64))
@@ -63,7 +67,8 @@ class GridCover:
         self.m32 = np.ascontiguousarray(self.m, dtype=np.float32)
         self.w32 = self.w.astype(np.float32)
         self.step = float(step)
-        self.need = float(target) - float(eps_tol) - _TOL  # feasible: A(S) >= need
+        # feasible: A(S) >= need, the least coverage that meets the threshold
+        self.need = as_threshold(threshold, target, eps_tol).floor
         self.n_max = int(n_max)
         self.sep = int(min_sep_steps)
         self._memo: dict[frozenset, list[int]] = {}  # set -> its local optimum
