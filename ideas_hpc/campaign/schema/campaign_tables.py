@@ -77,13 +77,12 @@ from ideas_hpc.montecarlo.failure_dispersion import check_fleet
 from ideas_hpc.base.fields import (Field, live_typed_table, schema_defaults, to_typed,
                                      typed_table, validate, with_defaults)
 from ideas_hpc.base.units import DEG, KM, MINUTE
-from ideas_hpc.campaign.schema.design_checks import (DESIGNER_FIELDS, check_stereo_design,
-                                           resolve_angle_step)
+from ideas_hpc.campaign.schema.design_checks import DESIGNER_FIELDS, resolve_angle_step
 from ideas_hpc.campaign.schema.encounter_table import ENCOUNTER, check_encounter
 from ideas_hpc.campaign.schema.spice_table import SPICE_BODY, SPICE_FLYBY, resolve_spice
 from ideas_hpc.campaign.schema.instrument_table import INSTRUMENT
-from ideas_hpc.campaign.schema.model_fields import (COVERAGE_FIELDS, GAINS_FIELDS, SPACECRAFT_FIELDS,
-                                           STORED_NAMES, flyby_errors, stored_fields)
+from ideas_hpc.campaign.schema.model_fields import STORED_NAMES, flyby_errors, stored_fields
+from ideas_hpc.campaign.schema.model_tables import build_models
 from ideas_hpc.campaign.schema.kinds import KINDS as REGISTRY
 from ideas_hpc.campaign.schema.reads import check_reads
 from ideas_hpc.campaign.schema.design_table import DESIGN, MC_SCHEMA, reliability_checks, verify_samples
@@ -218,15 +217,6 @@ class Campaign:
         return self.source.error(message, dotted)
 
 
-def _sub_table(cfg: dict, key: str) -> dict:
-    v = cfg.get(key)
-    if v is None:
-        return {}
-    if not isinstance(v, dict):
-        raise InputError(f"must be a table, got {v!r}", field=key)
-    return v
-
-
 def _cross_checks(c: CampaignConfig) -> None:
     fb, d, mc, sw = c.flyby, c.design, c.monte_carlo, c.swarm
     if fb.tf_s <= fb.t0_s:
@@ -291,43 +281,6 @@ def validate_campaign(source: CampaignSource) -> Campaign:
     except InputError as exc:
         raise source.locate(exc) from None
     return Campaign(config=config, raw=source.data, source=source, extras=extras)
-
-
-def build_models(raw: dict, config: CampaignConfig) -> dict:
-    """Build the sub-models whose schemas live with their modules.
-
-    The ``[dynamics]``, ``[spacecraft]``, ``[controller]``, ``[coverage]`` and
-    ``[torques]`` tables are validated by the modules that own them, so a field is checked
-    in one place only. They are read in the file's units, as written.
-    """
-    from ideas_hpc.attitude import gains_from_config, spacecraft_from_config
-    from ideas_hpc.attitude.torque_terms import torques_from_config
-    from ideas_hpc.mapping.options import coverage_options_from_config
-    from ideas_hpc.dynamics.force_model import force_model_from_config
-
-    cov = dict(_sub_table(raw, "coverage"))
-    # The ground-resolution test and the quality pass use the instrument's camera
-    # unless the coverage table says otherwise (one source of truth for the camera).
-    inst = with_defaults(raw.get("instrument"), INSTRUMENT)
-    for key in ("wavelength_um", "aperture_cm", "pixel_pitch_um", "focal_length_mm"):
-        if inst.get(key) is not None:
-            cov.setdefault(key, inst[key])
-    ctrl = _sub_table(raw, "controller")
-    if not ctrl:
-        ctrl = {"preset": campaign_maneuver(config.attitude.maneuver).gains}
-    with config_fields(COVERAGE_FIELDS):   # the models' field names -> the file's keys
-        coverage = coverage_options_from_config(cov, prefix="coverage.")
-    if coverage.require_stereo and REGISTRY[config.kind].designs:
-        check_stereo_design(config, raw.get("design"))
-    with config_fields(SPACECRAFT_FIELDS):
-        sc = spacecraft_from_config(_sub_table(raw, "spacecraft"), prefix="spacecraft.")
-    with config_fields(GAINS_FIELDS):
-        gains = gains_from_config(ctrl, prefix="controller.")
-    # checked here (errors name torques.<term>.<parameter>); the setup builds the
-    # terms from the file's table, which the resolved config already records
-    torques_from_config(_sub_table(raw, "torques"), prefix="torques.")
-    return {"force_model": force_model_from_config(_sub_table(raw, "dynamics"), prefix="dynamics."),
-            "spacecraft": sc, "gains": gains, "coverage": coverage}
 
 
 def load(path, overrides: list[str] | None = None) -> Campaign:

@@ -15,7 +15,7 @@ the user reads the file's key with its file and line:
   fields of :class:`~ideas_hpc.mapping.options.CoverageOptions`,
   :class:`~ideas_hpc.attitude.spacecraft.SpacecraftModel` and
   :class:`~ideas_hpc.attitude.gains.Gains` -> ``[coverage]``, ``[spacecraft]``,
-  ``[controller]`` keys (used by :func:`ideas_hpc.campaign.schema.campaign_tables.build_models`);
+  ``[controller]`` keys (used by :func:`ideas_hpc.campaign.schema.model_tables.build_models`);
 * :data:`STORED_NAMES`: the names under which a store's resolved config records
   those three models (``models.coverage.min_elevation``, ...). They are the
   names the fields had before they carried units, kept so that the config hash of
