@@ -241,8 +241,8 @@ MUTATIONS: tuple[Mutation, ...] = (
       'COVER + ("design.verify_samples",',
       ("tests/test_key_reads_runs.py::test_what_a_run_reads_is_what_its_kind_declares[flyby]",)),
     M("reads_declaration_misses_a_read_key", "schema", "ideas_hpc/campaign/schema/kinds.py",
-      'reads=("monte_carlo.samples", DISPERSION_KEYS, "design.eps_tol_pct", "run.chunk_size",',
-      'reads=("monte_carlo.samples", DISPERSION_KEYS, "run.chunk_size",',
+      'reads=("monte_carlo.samples", DISPERSION_KEYS, "design.eps_tol_pct",\n',
+      'reads=("monte_carlo.samples", DISPERSION_KEYS,\n',
       ("tests/test_key_reads_runs.py::test_what_a_run_reads_is_what_its_kind_declares"
        "[monte-carlo]",)),
     M("failures_k_accepted_in_a_success_probability_design", "schema",
