@@ -16,6 +16,7 @@ from ideas_hpc.core.attitude.lanes_control import (_CB, _CT, _D, _NROW, _OR, _RA
                                                    _X, _Z, LANES, _control_lanes)
 from ideas_hpc.core.attitude.mrp import mrp_from_dcm
 from ideas_hpc.core.attitude.rigid_body import _eom_s
+from ideas_hpc.core.attitude.smear import camera_rate_xy_s, smear_rate_s
 
 @njit(cache=True, parallel=True, error_model="numpy")
 def fly_cameras_lanes_into(dcm_RT_all, spin_rate, gains, wheels, dt, n_steps, initial,
@@ -30,8 +31,9 @@ def fly_cameras_lanes_into(dcm_RT_all, spin_rate, gains, wheels, dt, n_steps, in
     Arguments as :func:`fly_cameras_into` (no mode, periods, amplitude or torque table).
     """
     sigma0, omega0, wheel0 = initial
-    img_every, cs_img, dcm_CB, use, out, usable = views
+    img_every, cs_img, dcm_CB, use, r_T, v_T, radius, out, usable = views
     n = sigma0.shape[0]
+    smear_tested = v_T.shape[0] > 0
     misaligned = dcm_CB.shape[0] > 0
     exposure = use[0]
     smear_lim = use[1]
@@ -80,12 +82,12 @@ def fly_cameras_lanes_into(dcm_RT_all, spin_rate, gains, wheels, dt, n_steps, in
                 for lane in range(m):
                     for j in range(9):
                         out[i0 + lane, n_img_done, j // 3, j % 3] = S[(_CT + j) * B + lane]
-                    w1 = S[(_X + 3) * B + lane]
-                    w2 = S[(_X + 4) * B + lane]
-                    w3 = S[(_X + 5) * B + lane]
                     # the rate before the step's torque, as fly_cameras_into
-                    usable[i0 + lane, n_img_done] = np.sqrt(w1 * w1 + w2 * w2 + w3 * w3) \
-                        * exposure > smear_lim
+                    rate = 0.0
+                    if smear_tested:
+                        rate = _smear_rate_lane(S, lane, misaligned, r_T, v_T, i0 + lane,
+                                                n_img_done, spin_rate, radius)
+                    usable[i0 + lane, n_img_done] = rate * exposure > smear_lim
             c_img += 1
             if c_img == img_every:
                 c_img = 0
@@ -108,6 +110,24 @@ def fly_cameras_lanes_into(dcm_RT_all, spin_rate, gains, wheels, dt, n_steps, in
                 n_img_done += 1
             if k < n_steps:
                 _rk4_lanes(S, wheels.I_rw_kgm2, wheels.J_s_kgm2, dt, gains.int_limit)
+
+
+@njit(cache=True, error_model="numpy")
+def _smear_rate_lane(S, lane, misaligned, r_T, v_T, i, n, spin_rate, radius):
+    """:func:`~ideas_hpc.core.attitude.smear.image_smear_rate` of ``lane`` (spacecraft
+    ``i``) at image ``n`` from its ``_X`` (rate), ``_CB`` and ``_CT`` rows: the same
+    operands, so the same bits."""
+    B = LANES
+    wx, wy = camera_rate_xy_s(S[(_X + 3) * B + lane], S[(_X + 4) * B + lane],
+                              S[(_X + 5) * B + lane], S[_CB * B + lane],
+                              S[(_CB + 1) * B + lane], S[(_CB + 2) * B + lane],
+                              S[(_CB + 3) * B + lane], S[(_CB + 4) * B + lane],
+                              S[(_CB + 5) * B + lane], misaligned)
+    ct = (S[_CT * B + lane], S[(_CT + 1) * B + lane], S[(_CT + 2) * B + lane],
+          S[(_CT + 3) * B + lane], S[(_CT + 4) * B + lane], S[(_CT + 5) * B + lane],
+          S[(_CT + 6) * B + lane], S[(_CT + 7) * B + lane], S[(_CT + 8) * B + lane])
+    return smear_rate_s(wx, wy, ct, (r_T[i, n, 0], r_T[i, n, 1], r_T[i, n, 2]),
+                        (v_T[i, n, 0], v_T[i, n, 1], v_T[i, n, 2]), spin_rate, radius)
 
 
 @njit(cache=True, error_model="numpy")
