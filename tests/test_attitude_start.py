@@ -225,7 +225,7 @@ def test_short_acquisition_discards_the_slewing_images():
     f = fly_open_loop(setup, THETA, None, nom.r0_T, nom.v0_T, Perturbation(**pert))
     found = discarded_images(setup, f.attitude)
     np.testing.assert_array_equal(found[0], smear)
-    rate = f.attitude.image_rate[0]
+    rate = f.attitude.image_smear_rate[0]      # the scene's image rate (SPEC 7d)
     assert np.all(rate[:, 0] * setup.imaging.exposure_s
                   > setup.imaging.smear_pixels * setup.imaging.ifov_rad)
 

@@ -29,7 +29,7 @@ about the boresight and sit at other ranges; the real surface lies between
 ``R_min`` and ``R_max``, so at a given pointing the centre's smear scales by
 ``rho(R) / rho(surface)``. On the paper's geometry (0.1 km/s past Eros at
 ``d_sep`` = 155.9 km, 10 ms, IFOV 6.875 microrad) the footprint centre smears
-by ``v t_exp / (rho IFOV)`` = 0.93 pixel away from closest approach and 0.99
+by ``v t_exp / (rho IFOV)`` = 0.92-0.93 pixel away from closest approach and 0.99
 pixel at it (``rho`` = 147.5 km): the paper's camera is sized so that ``v t_exp``
 (1 m) is its ground sample at the altitude ``h`` = 145.5 km, so a point at
 ``R_av`` (10.4 km) is smeared by exactly one pixel.
@@ -38,7 +38,7 @@ Only the closed loop (``attitude.mode = "simulated"``) has a rate and an error
 to test. Perfect tracking (``attitude.mode = "ideal"``) counts every image, as
 the paper's ideal mode did: its camera would turn at the reference's rate, which
 for the paper's Nadir Pointing is the body's own, so the smear above applies to
-it too (0.93-0.99 pixel, usable); an encounter's swarm-frame pointing is fixed
+it too (0.92-0.99 pixel, usable); an encounter's swarm-frame pointing is fixed
 in inertial space and smears by ``v t_exp / (rho IFOV)`` (tens of pixels at
 10 km/s), which ideal attitude does not count: fly the closed loop to see it.
 An unusable image is

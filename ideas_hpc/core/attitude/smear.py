@@ -39,7 +39,7 @@ intersection in front of the camera; from inside the sphere, the one in front;
 when the boresight misses the sphere (or it lies behind), ``rho`` is the range
 of the sphere's limb, ``sqrt(|r|^2 - R^2)``, which equals the hit range at
 grazing incidence, so ``rho`` is continuous where the boresight leaves the
-sphere (:func:`scene_range_s`).
+sphere (:func:`scene_inverse_range_s`).
 
 Every closed loop that tests its images calls :func:`smear_rate_s` with the same
 operands (the one-pass kernels at the images, :func:`smear_rates` for the
@@ -55,23 +55,28 @@ from ideas_hpc.core.attitude.compose import dot3_fma
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def scene_range_s(r0, r1, r2, u0, u1, u2, radius):
-    """Range (m) from the camera at ``r`` (m, T) along the unit boresight ``u`` to the
-    imaged point on the sphere of ``radius`` (m) about the body centre (module docstring).
+def scene_inverse_range_s(r0, r1, r2, u0, u1, u2, radius):
+    """``1 / rho`` (1/m): ``rho`` the range from the camera at ``r`` (m, T) along the unit
+    boresight ``u`` to the imaged point on the sphere of ``radius`` (m) about the body
+    centre (module docstring).
 
     With ``b = u . r`` and ``q = |r|^2 - R^2`` the ranges solve ``s^2 + 2 b s + q = 0``:
-    inside the sphere (``q <= 0``) the root in front, ``-b + sqrt(b^2 - q)``; outside
-    with the sphere ahead (``b < 0``, ``b^2 >= q``) the nearer root, written
-    ``q / (-b + sqrt(b^2 - q))`` (no cancellation); otherwise the limb's range
-    ``sqrt(q)``."""
+    inside the sphere (``q <= 0``) the root in front, ``rho = -b + sqrt(b^2 - q)``;
+    outside with the sphere ahead (``b < 0``, ``b^2 >= q``) the nearer root,
+    ``rho = q / (-b + sqrt(b^2 - q))`` (no cancellation), so ``1 / rho = (-b + sqrt(b^2
+    - q)) / q``; otherwise the limb's range ``rho = sqrt(q)``. One square root and one
+    division, selected without a branch, so that a loop over spacecraft side by side
+    vectorises (:func:`~ideas_hpc.core.attitude.camera_lanes.fly_cameras_lanes_into`)."""
     b = u0 * r0 + u1 * r1 + u2 * r2
     q = r0 * r0 + r1 * r1 + r2 * r2 - radius * radius
     disc = b * b - q
-    if q <= 0.0:
-        return -b + np.sqrt(disc)
-    if b < 0.0 and disc >= 0.0:
-        return q / (-b + np.sqrt(disc))
-    return np.sqrt(q)
+    inside = q <= 0.0
+    ahead = (b < 0.0) & (disc >= 0.0) & (q > 0.0)
+    s = np.sqrt(disc if ahead | inside else q)
+    far = -b + s
+    num = far if ahead else 1.0
+    den = q if ahead else (far if inside else s)
+    return num / den
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -110,14 +115,14 @@ def smear_rate_s(wx, wy, ct, r, v, spin, radius):
     spin : float
         ``w_s``, rad/s: ``omega_TN = w_s z_T``.
     radius : float
-        The sphere the footprint centre lies on, m (:func:`scene_range_s`).
+        The sphere the footprint centre lies on, m (:func:`scene_inverse_range_s`).
     """
     c00, c01, c02, c10, c11, c12, c20, c21, c22 = ct
-    rho = scene_range_s(r[0], r[1], r[2], c20, c21, c22, radius)
+    inv = scene_inverse_range_s(r[0], r[1], r[2], c20, c21, c22, radius)
     vx = c00 * v[0] + c01 * v[1] + c02 * v[2]
     vy = c10 * v[0] + c11 * v[1] + c12 * v[2]
-    ox = wx - c02 * spin - vy / rho
-    oy = wy - c12 * spin + vx / rho
+    ox = wx - c02 * spin - vy * inv
+    oy = wy - c12 * spin + vx * inv
     return np.sqrt(ox * ox + oy * oy)
 
 
