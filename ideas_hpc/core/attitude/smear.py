@@ -14,13 +14,13 @@ relative to T at ``omega_LOS/T = u x (du/dt|_T) = -u x v / rho`` (the part of
 ``(u x v_rel) / rho`` with ``v_rel = omega_TN x r_P - (v + omega_TN x r)`` the
 point's inertial velocity relative to the camera, up to a component along
 ``u``, which turns the image about P without moving P. The image of P moves on
-the detector at the camera's rate relative to that line of sight,
+the detector at the camera's rate relative to that line of sight::
 
     omega_img = omega_CN - omega_LOS = (omega_CN - omega_TN) + u x v / rho,
 
 and P is smeared by the part across the line of sight, ``|omega_img x u| t_exp``.
 At the footprint centre ``u = z_C``; in C components, with ``z_C x v =
-(-v_y, v_x, 0)``,
+(-v_y, v_x, 0)``::
 
     |omega_img x z_C| = sqrt((w_x - wT_x - v_y / rho)^2 + (w_y - wT_y + v_x / rho)^2),
 
