@@ -71,9 +71,15 @@ class AttitudeResult:
     dcm_BT : (S, N, n_img, 3, 3) camera DCM, body <- target frame
     max_torque : (S, N) max ``|u_s|`` over the run, N m
     max_momentum : (S, N) max ``|J_s Omega|`` over the run, N m s
-    image_rate : (S, N, n_img) ``|omega_BN|`` at the images, rad/s
+    image_rate : (S, N, n_img) ``|omega_BN|`` at the images, rad/s (the camera's
+        inertial rate; not the smear rate, which needs the trajectory)
     image_omega : (S, N, n_img, 3) ``omega_BN`` in B at the images, rad/s
     image_error : (S, N, n_img) principal angle of ``sigma_B/R`` at the images, rad
+    image_smear_rate : (S, N, n_img) or None
+        The footprint centre's image rate across the line of sight at the images,
+        rad/s (SPEC 7d, :mod:`ideas_hpc.core.attitude.smear`): set by the flyby, which
+        knows the trajectory and the camera misalignment
+        (:func:`ideas_hpc.flyby.camera.smear_rates_of`); None here.
     """
 
     times: np.ndarray
@@ -89,6 +95,7 @@ class AttitudeResult:
     image_rate: np.ndarray | None = None
     image_error: np.ndarray | None = None
     image_omega: np.ndarray | None = None
+    image_smear_rate: np.ndarray | None = None
 
     def to_dataset(self):
         """``xarray.Dataset`` with the SPEC section 9 names and dims."""

@@ -51,8 +51,8 @@ _VARS = (
     StoreVar("wheel_speed", T + ("wheel",), units="rad/s", long_name="reaction wheel speed Omega"),
     StoreVar("wheel_torque", T + ("wheel",), units="N m", long_name="reaction wheel torque u_s"),
     StoreVar("images_discarded_smear", SC, np.int32, units="1",
-             long_name="images not used: camera rate smears them over more than "
-             "smear_pixels during the exposure"),
+             long_name="images not used: the scene's image at the footprint centre moves "
+             "more than smear_pixels during the exposure"),
     StoreVar("images_discarded_settle", SC, np.int32, units="1",
              long_name="images not used: attitude error above settle_deg"),
     StoreVar("camera_dcm_BT", SC + ("snapshot", "row", "col"),

@@ -15,9 +15,10 @@ from ideas_hpc.attitude.modes import undrawn_start
 from ideas_hpc.attitude.run_settings import InitialState, from_keywords
 from ideas_hpc.core.attitude.compose import compose_each
 from ideas_hpc.core.attitude.mrp import dcm_from_mrp, mrp_from_prv
+from ideas_hpc.core.attitude.smear import smear_rates
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.flyby.encounter import track_dcms, track_reference
-from ideas_hpc.flyby.usable import blind, usable_images
+from ideas_hpc.flyby.usable import blind, scene_radius_m, usable_images
 
 
 def misalignment_dcms(prv) -> np.ndarray:
@@ -89,14 +90,43 @@ def camera_at_images(setup, th, periods, ics, misalignment, r_img, track_T=None,
     return misaligned(dcm, misalignment), att
 
 
+def smear_rates_of(setup, att, dcm_CB, dcm_CT, r_img, v_img) -> np.ndarray:
+    """(N, n_img) rad/s: the footprint centre's image rate across the line of sight
+    (:func:`ideas_hpc.core.attitude.smear.smear_rates`, the one-pass loops' operands) of
+    the closed loop ``att`` (sample 0) flown with cameras ``dcm_CT`` (N, n_img, 3, 3),
+    misaligned by ``dcm_CB`` (N, 3, 3) or None, along positions ``r_img`` (m) and
+    velocities relative to T ``v_img`` (m/s), (N, n_img, 3), in ``setup``'s world (its
+    body's spin and :func:`~ideas_hpc.flyby.usable.scene_radius_m`)."""
+    f8 = np.float64
+    return smear_rates(np.ascontiguousarray(att.image_omega[0], dtype=f8),
+                       np.empty((0, 3, 3)) if dcm_CB is None
+                       else np.ascontiguousarray(dcm_CB, dtype=f8),
+                       np.ascontiguousarray(dcm_CT, dtype=f8),
+                       np.ascontiguousarray(r_img, dtype=f8),
+                       np.ascontiguousarray(v_img, dtype=f8),
+                       float(setup.body.params.spin_rate), scene_radius_m(setup.body.shape))
+
+
+def _tested(setup, att):
+    """``(use, smear rate (N, n_img))`` of a flight the usable-image test applies to, else
+    None (ideal attitude or no ``setup.imaging``)."""
+    use = getattr(setup, "imaging", None)
+    if use is None or att is None or att.image_error is None:
+        return None
+    if att.image_smear_rate is None:
+        raise ValueError("the usable-image test needs the smear rate at the images: fly the "
+                         "closed loop through ideas_hpc.flyby.views.flight_views")
+    return use, att.image_smear_rate[0]
+
+
 def usable_mask(setup, att) -> np.ndarray | None:
     """(N, n_img) bool: the images that pass the usable-image test (smear and settle,
     :mod:`ideas_hpc.flyby.usable`), or None when every image counts (ideal attitude or
     no ``setup.imaging``)."""
-    use = getattr(setup, "imaging", None)
-    if use is None or att is None or att.image_rate is None:
+    got = _tested(setup, att)
+    if got is None:
         return None
-    return usable_images(use, att.image_rate[0], att.image_error[0])[0]
+    return usable_images(got[0], got[1], att.image_error[0])[0]
 
 
 def imaging_dcms(setup, dcm, att, r_img):
@@ -109,10 +139,10 @@ def imaging_dcms(setup, dcm, att, r_img):
 def discarded_images(setup, att) -> tuple[np.ndarray, np.ndarray] | None:
     """``(smeared (N,), unsettled (N,))`` image counts of a simulated flight, or None when
     every image counts (ideal attitude or no ``setup.imaging``)."""
-    use = getattr(setup, "imaging", None)
-    if use is None or att is None or att.image_rate is None:
+    got = _tested(setup, att)
+    if got is None:
         return None
-    _, smear, settle = usable_images(use, att.image_rate[0], att.image_error[0])
+    _, smear, settle = usable_images(got[0], got[1], att.image_error[0])
     return smear, settle
 
 

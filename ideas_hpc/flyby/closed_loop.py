@@ -20,7 +20,8 @@ the cost:
   disturbance torques flies 64 spacecraft side by side
   (:func:`~ideas_hpc.core.attitude.camera_lanes.fly_cameras_lanes_into`, the
   lanes);
-* the orbits write only the positions at the images (:func:`positions_into`);
+* the orbits write only the positions at the images, and the velocities there
+  that the smear test reads (:func:`positions_into`);
 * only the unusable images are then blinded, in place
   (:func:`ideas_hpc.flyby.usable.blind_into`).
 """
@@ -45,7 +46,7 @@ from ideas_hpc.core.dynamics.propagate_positions import propagate_positions_into
 from ideas_hpc.dynamics.trajectory import MAX_STEPS, propagate_swarm, sample_times
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.flyby.camera import misalignment_dcms
-from ideas_hpc.flyby.usable import blind_into
+from ideas_hpc.flyby.usable import blind_into, scene_radius_m
 
 
 @dataclass
@@ -67,6 +68,7 @@ class FlightStatics:
     omega_RN0_R: np.ndarray    # (N, 3) rad/s
     use: np.ndarray            # (3,) exposure s, smear limit rad, settle rad
     r_max_m: float
+    scene_radius_m: float      # the footprint centre's sphere (flyby.usable.scene_radius_m)
     cs_img: np.ndarray         # (n_img, 2) cos, sin(w_s t) at the images
 
 
@@ -98,16 +100,19 @@ def flight_statics(setup, theta, periods=None) -> FlightStatics:
         dt=dt, n_steps=int(n_steps), img_every=int(img_every),
         torques=pack_torques(tuple(setup.torques), th, n_steps, dt, ws),
         sigma_RN0=s_r, omega_RN0_R=w_r, use=limits,
-        r_max_m=float(setup.body.shape.r_max),
+        r_max_m=float(setup.body.shape.r_max), scene_radius_m=scene_radius_m(setup.body.shape),
         cs_img=spin_table(ws, dt, int(n_steps), int(img_every)))
 
 
-def fly_cameras(statics: FlightStatics, start_BR, misalignment_prv, r_img, buffers: dict,
+def fly_cameras(statics: FlightStatics, start_BR, misalignment_prv, at_images, buffers: dict,
                 lanes: bool):
     """Imaging camera DCMs (N, n_img, 3, 3) of a closed loop started ``start_BR`` =
     ``(sigma_B/R, omega_B/R, wheels)`` (N, 3) about its reference: misaligned by
-    ``misalignment_prv`` (N, 3) rad or None, unusable images blinded. Lives in
-    ``buffers["dcm"]`` (reused by the next call); ``lanes``: the 64-lane loop."""
+    ``misalignment_prv`` (N, 3) rad or None, unusable images blinded. ``at_images`` =
+    ``(r_img, v_img)``: positions (m) and velocities relative to T (m/s), (N, n_img, 3),
+    in T, at the images (``v_img`` None: no smear test). Lives in ``buffers["dcm"]``
+    (reused by the next call); ``lanes``: the 64-lane loop."""
+    r_img, v_img = at_images
     n = statics.rings.shape[0]
     mis = (np.empty((0, 3, 3)) if misalignment_prv is None
            else np.ascontiguousarray(misalignment_dcms(misalignment_prv)))
@@ -126,7 +131,11 @@ def fly_cameras(statics: FlightStatics, start_BR, misalignment_prv, r_img, buffe
     dcm, ok = buffers["dcm"], buffers["usable"]
     initial = Initial(np.ascontiguousarray(s_abs[0]), np.ascontiguousarray(w_abs[0]),
                       np.ascontiguousarray(W0[0]))
-    views = ImageViews(statics.img_every, statics.cs_img, mis, statics.use, dcm, ok)
+    no_v = np.empty((0, 0, 3))
+    views = ImageViews(statics.img_every, statics.cs_img, mis, statics.use,
+                       np.ascontiguousarray(r_img) if v_img is not None else no_v,
+                       np.ascontiguousarray(v_img) if v_img is not None else no_v,
+                       statics.scene_radius_m, dcm, ok)
     if lanes:
         fly_cameras_lanes_into(statics.rings, statics.spin, statics.gains, statics.wheels,
                                statics.dt, statics.n_steps, initial, views)
@@ -144,17 +153,20 @@ def image_times(setup) -> np.ndarray:
     return np.ascontiguousarray(sample_times(t0, tf, float(setup.dt_s))[::setup.image_every])
 
 
-def positions_into(setup, world, r0, v0, out) -> np.ndarray:
+def positions_into(setup, world, r0, v0, out, v_out=None) -> np.ndarray:
     """``out`` (N, n_img, 3) m: the positions at the images (:func:`image_times`) of
     start states ``r0``, ``v0`` (N, 3) flown through ``world``, as
-    ``propagate_swarm(...)[1][:, ::image_every]`` bit for bit; a failed integration
-    flies ``propagate_swarm`` for its error."""
+    ``propagate_swarm(...)[1][:, ::image_every]`` bit for bit, and the velocities
+    relative to T (m/s) into ``v_out`` when given (``[2][:, ::image_every]``, the same
+    bits); a failed integration flies ``propagate_swarm`` for its error."""
     r0 = np.ascontiguousarray(r0, dtype=np.float64)
     v0 = np.ascontiguousarray(v0, dtype=np.float64)
     fm = world.force_model
     pk = world.forces
     status = propagate_positions_into(r0, v0, float(setup.t0_s), float(setup.tf_s), fm.rtol,
-                                      fm.atol, MAX_STEPS, image_times(setup), out, *pk.args())
+                                      fm.atol, MAX_STEPS, image_times(setup), out,
+                                      np.empty((0, 0, 3)) if v_out is None else v_out,
+                                      *pk.args())
     if np.any(status != 0) or r0.shape != v0.shape or r0.ndim != 2 or r0.shape[1] != 3:
         propagate_swarm(world.body, r0, v0, setup.t0_s, setup.tf_s, force_model=fm,
                         dt_sample=setup.dt_s, packed=pk, views=True)

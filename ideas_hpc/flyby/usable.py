@@ -2,16 +2,46 @@
 
 An image at time ``t`` is usable when
 
-* its smear is at most ``k_smear`` pixels: ``|omega_CN| t_exp <= k_smear IFOV``
-  (the camera is fixed in B, so ``|omega_CN| = |omega_BN|``), with the
-  instantaneous field of view ``IFOV = 2 eta / n_pix`` for a detector of
+* its smear is at most ``k_smear`` pixels: ``|omega_img x u| t_exp <= k_smear IFOV``,
+  with the instantaneous field of view ``IFOV = 2 eta / n_pix`` for a detector of
   ``n_pix`` pixels across, ``pitch / focal length`` for a detector given by its
-  pitch, or the diffraction sample ``lambda / D`` otherwise;
+  pitch, or the diffraction sample ``lambda / D`` otherwise. ``omega_img =
+  omega_CN - omega_LOS`` is the motion of the scene's image on the detector: the
+  camera's inertial rate relative to the turning line of sight ``u`` to the
+  imaged point P, ``omega_LOS = (u x v_rel) / rho`` (SPEC 7d, corrected; the
+  derivation and the kernel are :mod:`ideas_hpc.core.attitude.smear`). In the
+  camera frame C (boresight ``z_C``) with the spacecraft's velocity ``v``
+  relative to the body frame T and the body's spin ``omega_TN``:
+  ``|omega_img x z_C| = sqrt((w_x - wT_x - v_y / rho)^2 + (w_y - wT_y + v_x / rho)^2)``.
+  It is 0 for a camera that follows the line of sight to P and ``|v_perp| / rho``
+  for one fixed in inertial space over a still body. (Before issue 42 the test
+  read the camera's inertial rate ``|omega_CN|``, which calls a camera that
+  tracks the body at 10 km/s smeared and an inertially fixed one sharp.)
 * the pointing has settled: the principal angle of the attitude error
   ``sigma_B/R`` is at most ``settle_rad``.
 
+Approximation, stated: the smear is evaluated at the footprint centre only, the
+point P where the boresight meets the sphere of the body's volume-equivalent
+mean radius about its centre (:func:`scene_radius_m`); when the boresight misses
+that sphere, ``rho`` is the range of its limb, ``sqrt(|r|^2 - R^2)`` (equal to the
+hit range at grazing, so continuous). Points off the centre also move by the roll
+about the boresight and sit at other ranges; the real surface lies between
+``R_min`` and ``R_max``, so at a given pointing the centre's smear scales by
+``rho(R) / rho(surface)``. On the paper's geometry (0.1 km/s past Eros at
+``d_sep`` = 155.9 km, 10 ms, IFOV 6.875 microrad) the footprint centre smears
+by ``v t_exp / (rho IFOV)`` = 0.92-0.93 pixel away from closest approach and 0.99
+pixel at it (``rho`` = 147.5 km): the paper's camera is sized so that ``v t_exp``
+(1 m) is its ground sample at the altitude ``h`` = 145.5 km, so a point at
+``R_av`` (10.4 km) is smeared by exactly one pixel.
+
 Only the closed loop (``attitude.mode = "simulated"``) has a rate and an error
-to test; under ideal tracking every image is usable. An unusable image is
+to test. Perfect tracking (``attitude.mode = "ideal"``) counts every image, as
+the paper's ideal mode did: its camera would turn at the reference's rate, which
+for the paper's Nadir Pointing is the body's own, so the smear above applies to
+it too (0.92-0.99 pixel, usable); an encounter's swarm-frame pointing is fixed
+in inertial space and smears by ``v t_exp / (rho IFOV)`` (tens of pixels at
+10 km/s), which ideal attitude does not count: fly the closed loop to see it.
+An unusable image is
 replaced by a *blind* camera, one whose boresight points from the body centre
 through the spacecraft, away from the body: with the spacecraft outside the
 body's bounding sphere (``|r| > r_max``) every vertex then lies behind it
@@ -28,6 +58,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ideas_hpc.base.errors import InputError
+from ideas_hpc.body.mass_properties import mean_radius
 
 #: Defaults (docs/attitude-start.md): a 10 ms exposure, one pixel of smear, 0.1 deg settled.
 EXPOSURE_MS = 10.0
@@ -55,8 +86,19 @@ class ImageUse:
 
     @property
     def max_rate_rad_s(self) -> float:
-        """Largest camera rate of a usable image, rad/s."""
+        """Largest image rate across the line of sight of a usable image, rad/s."""
         return self.smear_pixels * self.ifov_rad / self.exposure_s
+
+    def smear_pixels_of(self, rate_rad_s):
+        """Smear in pixels of image rates ``rate_rad_s`` (rad/s): ``rate t_exp / IFOV``."""
+        return np.asarray(rate_rad_s) * self.exposure_s / self.ifov_rad
+
+
+def scene_radius_m(shape) -> float:
+    """Radius (m) of the sphere on which the smear test places the footprint centre: the
+    body's volume-equivalent mean radius ``(3 V / 4 pi)^(1/3)`` (8.41 km for eros001708;
+    its ``R_av = (R_max + R_min) / 2`` is 10.43 km, ``R_max`` 17.65 km)."""
+    return float(mean_radius(float(shape.volume)))
 
 
 def ifov_rad(eta_rad: float, *, pixels_across=None, pixel_pitch_m=None, focal_length_m=None,
@@ -76,7 +118,8 @@ def ifov_rad(eta_rad: float, *, pixels_across=None, pixel_pitch_m=None, focal_le
 def usable_images(use: ImageUse, rate_rad_s: np.ndarray, error_rad: np.ndarray):
     """``(usable (N, n_img) bool, smeared (N,) int32, unsettled (N,) int32)``.
 
-    ``rate_rad_s`` and ``error_rad`` (N, n_img): ``|omega_BN|`` and the attitude
+    ``rate_rad_s`` and ``error_rad`` (N, n_img): the footprint centre's image rate
+    across the line of sight (:mod:`ideas_hpc.core.attitude.smear`) and the attitude
     error angle at the images. An image may fail both tests; it then counts in both.
     """
     smeared = np.asarray(rate_rad_s) * use.exposure_s > use.smear_pixels * use.ifov_rad

@@ -11,7 +11,8 @@ target, Sun, encounter and force model) and the swarm's own draws (a
 
 1. flies the orbits through the world: the whole trajectory when it is wanted
    back or the camera follows it (body tracking), else only the positions at the
-   images (:func:`ideas_hpc.flyby.closed_loop.positions_into`, the same bits);
+   images, and the velocities there when the closed loop's smear test reads them
+   (:func:`ideas_hpc.flyby.closed_loop.positions_into`, the same bits);
 2. points the cameras: perfect tracking of the maneuver's reference (its
    cameras kept per world, :func:`~ideas_hpc.flyby.world.cached_static`), or the
    closed loop, flown by the first compiled variant of :data:`CLOSED_LOOPS`
@@ -20,7 +21,11 @@ target, Sun, encounter and force model) and the swarm's own draws (a
    (``tests/test_scenario_flight.py``, ``tests/test_bank_cuda.py`` for the
    device), so the choice decides speed only;
 3. applies the camera misalignments and blinds the unusable images
-   (:func:`ideas_hpc.flyby.camera.imaging_dcms`).
+   (:func:`ideas_hpc.flyby.camera.imaging_dcms`; the smear rate of the batched
+   loop, :func:`ideas_hpc.flyby.camera.smear_rates_of`, is kept on its
+   ``AttitudeResult`` as ``image_smear_rate``). Perfect tracking (``attitude.mode =
+   "ideal"``) counts every image, as the paper's ideal mode did
+   (:mod:`ideas_hpc.flyby.usable`).
 """
 
 from __future__ import annotations
@@ -36,7 +41,7 @@ from ideas_hpc.core.attitude.maneuvers import FOV_MODE, NP_MODE
 from ideas_hpc.dynamics.trajectory import propagate_swarm
 from ideas_hpc.flyby import closed_loop as _loop
 from ideas_hpc.flyby.camera import (camera_at_images, camera_dcms, imaging_dcms, misaligned,
-                                    misalignment_dcms)
+                                    misalignment_dcms, smear_rates_of)
 from ideas_hpc.flyby.encounter import track_dcms
 from ideas_hpc.flyby.world import World, array_key, cached_static
 
@@ -89,8 +94,10 @@ class Start:
 class ClosedLoop:
     """One compiled variant of the closed loop, with what it can fly.
 
-    ``fly(setup, world, key, theta, periods, start, misalignment_prv, r_img, trajectory,
-    buffers) -> (dcm as flown or None, imaging dcm, AttitudeResult or None)``.
+    ``fly(setup, world, key, theta, periods, start, misalignment_prv, at_images, trajectory,
+    buffers) -> (dcm as flown or None, imaging dcm, AttitudeResult or None)``, with
+    ``at_images = (r_img, v_img)`` the positions and velocities (N, n_img, 3) at the
+    images (``v_img`` None when no smear test reads it).
     ``devices``: where it runs; ``series``: it returns the attitude time series;
     ``codes``: the maneuver codes it flies (None: every one, body tracking from its
     table included); ``any_geometry``: False for ring frames that turn with the body
@@ -124,20 +131,23 @@ def _statics(setup, world, key, theta, periods):
 
 
 def _one_pass(lanes: bool):
-    def fly(setup, world, key, theta, periods, start, mis, r_img, trajectory, buffers):
+    def fly(setup, world, key, theta, periods, start, mis, at_images, trajectory, buffers):
         statics = _statics(setup, world, key, theta, periods)
-        dcm = _loop.fly_cameras(statics, start.state, mis, r_img,
+        dcm = _loop.fly_cameras(statics, start.state, mis, at_images,
                                 {} if buffers is None else buffers, lanes)
         return None, dcm, None
     return fly
 
 
-def _batch(setup, world, key, theta, periods, start, mis, r_img, trajectory, buffers):
+def _batch(setup, world, key, theta, periods, start, mis, at_images, trajectory, buffers):
     # the batched loop of simulate_attitude on the setup's device, time series and all
-    dcm, att = camera_at_images(setup, theta, periods, start.state,
-                                None if mis is None else misalignment_dcms(mis), r_img,
+    r_img, v_img = at_images
+    mis_CB = None if mis is None else misalignment_dcms(mis)
+    dcm, att = camera_at_images(setup, theta, periods, start.state, mis_CB, r_img,
                                 trajectory, start="reference" if start.relative else "absolute",
                                 acquisition_s=start.acquisition_s)
+    if v_img is not None:
+        att.image_smear_rate = smear_rates_of(setup, att, mis_CB, dcm, r_img, v_img)[None]
     return dcm, imaging_dcms(setup, dcm, att, r_img), att
 
 
@@ -185,7 +195,9 @@ def flight_views(setup, theta, periods, r0_T, v0_T, pert, *, world: World | None
     flown = world.flown(setup)
     closed = flown.attitude.closed_loop
     tracks = flown.maneuver.tracks_body
-    pos = vel = None
+    # the velocities at the images: only the closed loop's smear test reads them
+    smear = closed and getattr(flown, "imaging", None) is not None
+    pos = vel = v_img = None
     if plan.trajectory is not None:
         pos, vel = plan.trajectory
         r_img = np.ascontiguousarray(pos[:, ::setup.image_every])
@@ -198,7 +210,9 @@ def flight_views(setup, theta, periods, r0_T, v0_T, pert, *, world: World | None
                                           packed=world.forces, views=True)
             r_img = np.ascontiguousarray(pos[:, ::setup.image_every])
         else:
-            r_img = _positions(flown, world, r0, v0, plan.buffers)
+            r_img, v_img = _positions(flown, world, r0, v0, plan.buffers, smear)
+    if smear and v_img is None:
+        v_img = np.ascontiguousarray(vel[:, ::setup.image_every])
     mis = pert.misalignment_prv
     if not closed:
         ideal = _ideal(setup, world, flown, th, periods, r_img)
@@ -211,21 +225,27 @@ def flight_views(setup, theta, periods, r0_T, v0_T, pert, *, world: World | None
     loop = closed_loop_for(flown, start, plan.series)
     if loop.series and not plan.series:     # the time series is not kept: one sample a run
         flown = flown.with_(decimate=max(1, int(round((flown.tf_s - flown.t0_s) / flown.dt_s))))
-    dcm, imaging, att = loop.fly(flown, world, setup.flight_key, th, periods, start, mis, r_img,
-                                 None if pos is None else (pos, vel), plan.buffers)
+    dcm, imaging, att = loop.fly(flown, world, setup.flight_key, th, periods, start, mis,
+                                 (r_img, v_img), None if pos is None else (pos, vel),
+                                 plan.buffers)
     return Views(r_img, dcm, imaging, att, pos, vel)
 
 
-def _positions(flown, world, r0, v0, buffers):
-    """Positions at the images (N, n_img, 3) m, into ``buffers["r"]`` when given."""
+def _positions(flown, world, r0, v0, buffers, velocities: bool):
+    """``(r, v)``: positions (N, n_img, 3) m at the images, into ``buffers["r"]`` when
+    given, and with ``velocities`` the velocities relative to T (m/s) into
+    ``buffers["v"]`` (else None)."""
     shape = (np.shape(r0)[0], _loop.image_times(flown).size, 3)
+    names = ("r", "v") if velocities else ("r",)
     if buffers is None:
-        out = np.empty(shape)
+        outs = [np.empty(shape) for _ in names]
     else:
-        if buffers.get("r") is None or buffers["r"].shape != shape:
-            buffers["r"] = np.empty(shape)
-        out = buffers["r"]
-    return _loop.positions_into(flown, world, r0, v0, out)
+        for name in names:
+            if buffers.get(name) is None or buffers[name].shape != shape:
+                buffers[name] = np.empty(shape)
+        outs = [buffers[name] for name in names]
+    v_out = outs[1] if velocities else None
+    return _loop.positions_into(flown, world, r0, v0, outs[0], v_out), v_out
 
 
 def _ideal(setup, world, flown, th, periods, r_img):

@@ -47,6 +47,7 @@ from ideas_hpc.dynamics.force_model import ForceModel, apply_override, pack_forc
 from ideas_hpc.dynamics.forces import PackedForceModel
 from ideas_hpc.dynamics.trajectory import sun_direction_T
 from ideas_hpc.flyby.encounter import Encounter
+from ideas_hpc.flyby.usable import scene_radius_m
 
 #: Per-world statics kept per process (:func:`cached_static`); the least recently used
 #: go first. Few: one entry can be large (720 candidates' ideal cameras at 601 images
@@ -168,8 +169,10 @@ class World:
     @cached_property
     def attitude_key(self) -> tuple:
         """What the closed loop and the ideal cameras read of this world: the spin, the
-        encounter and the bounding radius (blinding)."""
-        return (self.spin_rate_rad_s, repr(self.encounter), float(self.shape.r_max))
+        encounter, the bounding radius (blinding) and the footprint sphere's radius (smear,
+        :func:`~ideas_hpc.flyby.usable.scene_radius_m`)."""
+        return (self.spin_rate_rad_s, repr(self.encounter), float(self.shape.r_max),
+                scene_radius_m(self.shape))
 
     def mapping_key(self, setup) -> tuple:
         """What a flight's rows read of this world besides the flight: the shape, and

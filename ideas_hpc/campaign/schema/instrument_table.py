@@ -3,8 +3,10 @@
 ``pixels_across`` (detector pixels across the field of view; the IFOV is then
 ``2 eta / n_pix``, else ``pixel_pitch_um / focal_length_mm`` with a detector, else
 ``lambda / D``), ``exposure_ms`` (exposure time ``t_exp``), ``smear_pixels``
-(largest smear ``|omega| t_exp / IFOV`` of a usable image) and ``settle_deg``
-(largest attitude error of a usable image): :mod:`ideas_hpc.flyby.usable`. The
+(largest smear of a usable image, ``|omega_img x u| t_exp / IFOV``: the motion of
+the scene's image on the detector at the footprint centre, the camera's rate
+relative to the turning line of sight, SPEC 7d) and ``settle_deg`` (largest
+attitude error of a usable image): :mod:`ideas_hpc.flyby.usable`. The
 test applies to the closed loop (``attitude.mode = "simulated"``) unless
 ``monte_carlo.attitude_start = "paper"`` (docs/attitude-start.md).
 """
@@ -39,9 +41,12 @@ INSTRUMENT = {
     "pixels_across": Field("int", None, nullable=True, lo=1,
                            doc="detector pixels across the field of view (IFOV 2 eta / n)"),
     "exposure_ms": Field("float", EXPOSURE_MS, si="exposure_s", to_si=MM, lo=0,
-                         lo_open=True, doc="exposure time of one image"),
+                         lo_open=True, doc="exposure time of one image (the smear test's t_exp)"),
     "smear_pixels": Field("float", SMEAR_PIXELS, lo=0, lo_open=True,
-                          doc="largest smear of a usable image, pixels"),
+                          doc="largest smear of a usable image, pixels: the scene's image "
+                              "motion across the line of sight at the footprint centre over "
+                              "the exposure (camera rate relative to the line of sight, body "
+                              "spin included)"),
     "settle_deg": Field("float", SETTLE_DEG, si="settle_rad", to_si=DEG, lo=0,
                         lo_open=True, hi=180, doc="largest attitude error of a usable image"),
 }

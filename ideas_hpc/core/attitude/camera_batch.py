@@ -6,7 +6,9 @@ spacecraft (the same operations in the same order, so the same bits), but keeps
 only what the bank's rows read: at every image it forms the camera DCM
 ``[C T] = [C B][B T]`` (the misalignment composed as
 :func:`ideas_hpc.core.attitude.compose.compose_each` does) and the usable-image
-test (:func:`ideas_hpc.flyby.usable.usable_images`), in one pass over the images
+test (:func:`ideas_hpc.flyby.usable.usable_images`, the smear rate of the footprint
+centre by :func:`ideas_hpc.core.attitude.smear.image_smear_rate` from the state and
+the camera at the image), in one pass over the images
 into a buffer the caller reuses. The flyby pipeline instead writes ``[B T]``,
 then a composed copy, then a blinded copy: three passes over ``N x n_img x 9``
 doubles (155 MB for 720 candidates over 600 s) per scenario.
@@ -26,6 +28,7 @@ from ideas_hpc.core.attitude.control import sliding_mode_into
 from ideas_hpc.core.attitude.maneuvers import reference_into
 from ideas_hpc.core.attitude.mrp import mrp_from_dcm
 from ideas_hpc.core.attitude.rigid_body import rk4_step_into
+from ideas_hpc.core.attitude.smear import image_smear_rate
 
 
 @njit(cache=True, error_model="numpy")
@@ -87,10 +90,12 @@ def fly_cameras_into(mode, dcm_RT_all, spin_rate, periods, theta_max, gains, whe
     views : :class:`~ideas_hpc.core.attitude.records.ImageViews`
         The image cadence, the spin table at the images (:func:`spin_table` of
         ``spin_rate``, ``dt``, ``n_steps``, ``img_every``), the misalignments, the
-        usable-image limits, and the arrays that receive ``[C T]`` and the flags.
+        usable-image limits, the positions and velocities at the images and the
+        footprint sphere (the smear rate, :func:`~ideas_hpc.core.attitude.smear.smear_rate_s`
+        with ``w_s = spin_rate``), and the arrays that receive ``[C T]`` and the flags.
     """
     sigma0, omega0, wheel0 = initial
-    img_every, cs_img, dcm_CB, use, out, usable = views
+    img_every, cs_img, dcm_CB, use, r_T, v_T, radius, out, usable = views
     int_limit = gains.int_limit
     I_rw = wheels.I_rw_kgm2
     J_s = wheels.J_s_kgm2
@@ -100,6 +105,7 @@ def fly_cameras_into(mode, dcm_RT_all, spin_rate, periods, theta_max, gains, whe
     exposure = use[0]
     smear_lim = use[1]
     settle = use[2]
+    smear_tested = v_T.shape[0] > 0
     sigma_RT_all = np.empty((n_sc, 3))
     for i in range(n_sc):
         sigma_RT_all[i] = mrp_from_dcm(np.ascontiguousarray(dcm_RT_all[i]))
@@ -132,7 +138,9 @@ def fly_cameras_into(mode, dcm_RT_all, spin_rate, periods, theta_max, gains, whe
             if img:
                 _dcm_CT_into(x[0], x[1], x[2], cs_img[n_img_done, 0], cs_img[n_img_done, 1],
                              dcm_CB, i, misaligned, out, n_img_done)
-                rate = np.sqrt(x[3] * x[3] + x[4] * x[4] + x[5] * x[5])
+                if smear_tested:
+                    rate = image_smear_rate(x[3], x[4], x[5], dcm_CB, out, r_T, v_T, i,
+                                            n_img_done, spin_rate, radius)
             c_img += 1
             if c_img == img_every:
                 c_img = 0

@@ -48,7 +48,10 @@ _OR = 21        # 3: omega_RN_R, rad/s
 _CB = 24        # 9: the camera misalignment [C B], row-major
 _CT = 33        # 9: the camera DCM [C T] at the image, row-major
 _RARE = 42      # 1: this step takes a rare side (1.0) or not (0.0)
-_NROW = 43
+_R = 43         # 3: position at the image, m, T (the smear test)
+_V = 46         # 3: velocity relative to T at the image, m/s
+_RATE = 49      # 1: the smear rate at the image, rad/s
+_NROW = 50
 
 # mrp_add_s, mrp_sub_s and mrp_switch_s with both sides of their branches computed and
 # one selected: the same operations on the taken side, so the same bits, but a loop

@@ -95,8 +95,17 @@ class ImageViews(NamedTuple):
     dcm_CB: np.ndarray
     #: (3,) float64, ``(exposure s, smear limit rad = pixels x IFOV, settle limit
     #: rad)``: an image is usable unless ``rate * exposure > smear limit`` or
-    #: ``error > settle``.
+    #: ``error > settle``, ``rate`` the footprint centre's image rate
+    #: (:func:`~ideas_hpc.core.attitude.smear.smear_rate_s`).
     use: np.ndarray
+    #: (N, n_img, 3) float64, the spacecraft's positions at the images, m, T.
+    r_T: np.ndarray
+    #: (N, n_img, 3) float64, its velocities relative to T at the images, m/s;
+    #: ``(0, 0, 3)``: no smear test (every rate reads 0).
+    v_T: np.ndarray
+    #: Radius of the sphere the footprint centre lies on, m
+    #: (:func:`~ideas_hpc.core.attitude.smear.scene_range_s`).
+    radius_m: float
     #: (N, n_img, 3, 3) float64, receives ``[C T]`` at every image.
     dcm_CT_out: np.ndarray
     #: (N, n_img) bool, receives the usable-image flags.

@@ -1,0 +1,204 @@
+"""Smear relative to the scene (SPEC 7d corrected, issue 42 deliverable 4): the formula
+against an independent flight of the exposure, and the issue's smear check at 10 km/s.
+
+The oracle of the formula flies the exposure in inertial space: the body frame T turns
+at ``w_s`` about ``z``, the camera moves along a straight line in T and turns at a
+constant ``omega_CN`` (``scipy`` rotations); the footprint centre P is fixed in T; the
+direction from the camera to P, in the camera frame, is projected on the detector
+(``x / z, y / z``) at both ends of the exposure, and the distance between the two
+images is the smear. Nothing of :mod:`ideas_hpc.core.attitude.smear` is used but the
+function under test.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from ideas_hpc.campaign.schema.campaign_tables import load
+from ideas_hpc.campaign.setup import setup_from_campaign
+from ideas_hpc.core.attitude.smear import smear_rates
+from ideas_hpc.flyby.camera import usable_mask
+from ideas_hpc.flyby.flight import fly
+from ideas_hpc.flyby.pass_rates import follow_check, los_rate_rad_s
+from ideas_hpc.flyby.usable import scene_radius_m
+
+T_EXP = 1e-3      # s: short, so that the central difference is exact to ~1e-8 relative
+
+
+def _sphere_point(r, u, radius):
+    """The oracle's footprint centre: the nearer root of |r + s u| = R in front of the
+    camera (numpy's polynomial roots), else the limb's range along u."""
+    roots = np.roots([1.0, 2.0 * np.dot(u, r), np.dot(r, r) - radius ** 2])
+    ahead = [s.real for s in roots if abs(s.imag) < 1e-9 * np.linalg.norm(r) and s.real > 0]
+    s = min(ahead) if ahead else math.sqrt(np.dot(r, r) - radius ** 2)
+    return r + s * u
+
+
+def _exposure_smear(dcm_CT, r_T, v_T, omega_C, spin, P_T, t_exp=T_EXP):
+    """Angle (rad) the image of P moves on the detector over ``t_exp`` centred on t = 0
+    (N = T at t = 0)."""
+    def image(t):
+        n_T = Rotation.from_rotvec([0.0, 0.0, spin * t]).as_matrix()     # [N T](t)
+        los_N = n_T @ (P_T - (r_T + v_T * t))
+        # d[C N]/dt = -[omega x][C N]: [C N](t) = exp(-[omega x] t) [C T](0)
+        c_N = Rotation.from_rotvec(-omega_C * t).as_matrix() @ dcm_CT
+        d = c_N @ los_N
+        return d[:2] / d[2]
+    return np.linalg.norm(image(0.5 * t_exp) - image(-0.5 * t_exp))
+
+
+def _random_case(rng, kind):
+    """A camera near a body of radius 10 km, its boresight on the body (``hit``), off
+    it (``miss``) or from inside the sphere (``inside``), with a misalignment."""
+    radius = 1e4
+    dist = {"hit": 6e4, "miss": 6e4, "inside": 0.6e4}[kind]
+    r = rng.normal(size=3)
+    r *= dist / np.linalg.norm(r)
+    to_body = -r / np.linalg.norm(r)
+    off = {"hit": 0.05, "miss": 0.4, "inside": 1.0}[kind]
+    u = Rotation.from_rotvec(rng.normal(size=3) * off).apply(to_body)
+    u /= np.linalg.norm(u)
+    # a camera frame whose third row is u
+    x = np.cross(u, rng.normal(size=3))
+    x /= np.linalg.norm(x)
+    dcm_CT = np.array([x, np.cross(u, x), u])
+    dcm_CB = Rotation.from_rotvec(rng.normal(size=3) * 3e-3).as_matrix()
+    dcm_BT = dcm_CB.T @ dcm_CT
+    v = rng.normal(size=3) * 3e3
+    w_B = rng.normal(size=3) * 0.02
+    return radius, r, v, dcm_CT, dcm_CB, dcm_BT, w_B
+
+
+@pytest.mark.parametrize("kind", ["hit", "miss", "inside"])
+@pytest.mark.parametrize("spin", [0.0, 3.3e-4, -0.05])
+def test_smear_rate_is_the_image_motion_over_the_exposure(kind, spin):
+    rng = np.random.default_rng([("hit", "miss", "inside").index(kind), int(spin * 1e6) + 60000])
+    for _ in range(8):
+        radius, r, v, dcm_CT, dcm_CB, dcm_BT, w_B = _random_case(rng, kind)
+        P = _sphere_point(r, dcm_CT[2], radius)
+        expect = _exposure_smear(dcm_CT, r, v, dcm_CB @ w_B, spin, P) / T_EXP
+        got = smear_rates(w_B[None, None], dcm_CB[None], dcm_CT[None, None], r[None, None],
+                          v[None, None], spin, radius)[0, 0]
+        assert got == pytest.approx(expect, rel=1e-6)
+        # without a misalignment, C = B
+        got_aligned = smear_rates(w_B[None, None], np.empty((0, 3, 3)), dcm_BT[None, None],
+                                  r[None, None], v[None, None], spin, radius)[0, 0]
+        P_B = _sphere_point(r, dcm_BT[2], radius)
+        assert got_aligned == pytest.approx(
+            _exposure_smear(dcm_BT, r, v, w_B, spin, P_B) / T_EXP, rel=1e-6)
+
+
+def test_the_two_limits():
+    # a camera fixed in N over a still body: |v_perp| / rho; one that turns with the line
+    # of sight to P (its rate from the oracle's finite difference): no smear
+    rng = np.random.default_rng(7)
+    for _ in range(10):
+        radius, r, v, dcm_CT, _, _, _ = _random_case(rng, "hit")
+        u = dcm_CT[2]
+        P = _sphere_point(r, u, radius)
+        rho = np.linalg.norm(P - r)
+        v_perp = np.linalg.norm(v - np.dot(v, u) * u)
+        fixed = smear_rates(np.zeros((1, 1, 3)), np.empty((0, 3, 3)), dcm_CT[None, None],
+                            r[None, None], v[None, None], 0.0, radius)[0, 0]
+        assert fixed == pytest.approx(v_perp / rho, rel=1e-12)
+        spin = 3.3e-4
+        h = 1e-3     # the line of sight to P in N at +-h, N = T at t = 0
+        los = [Rotation.from_rotvec([0, 0, spin * t]).apply(P - (r + v * t)) for t in (-h, h)]
+        los = [x / np.linalg.norm(x) for x in los]
+        w_los_N = np.cross(u, (los[1] - los[0]) / (2 * h))     # u x du/dt: across u
+        tracked = smear_rates((dcm_CT @ w_los_N)[None, None], np.empty((0, 3, 3)),
+                              dcm_CT[None, None], r[None, None], v[None, None], spin,
+                              radius)[0, 0]
+        assert tracked < 1e-6 * fixed
+
+
+# ---- the issue's smear check: 10 km/s, 500 km, closed loop
+
+ENCOUNTER = """
+kind = "flyby"
+[body]
+name = "sphere"
+resolution = 2
+[flyby]
+geometry = "encounter"
+speed_km_s = 10.0
+approach_dec_deg = 30.0
+approach_ra_deg = 50.0
+d_sep_km = 500.0
+before_km = 300.0
+after_km = 300.0
+[attitude]
+mode = "simulated"
+maneuver = "{maneuver}"
+[dynamics]
+gravity = "point_mass"
+srp = false
+[swarm]
+angles_rad = [0.0, 2.0, 4.0]
+"""
+
+
+def _fast_pass(tmp_path, maneuver):
+    """The closed loop through the pass, the body's spin stopped (T = N: the spacecraft's
+    velocity in T is its inertial one, the analytic values' ``v``)."""
+    p = tmp_path / f"{maneuver}.toml"
+    p.write_text(ENCOUNTER.format(maneuver=maneuver))
+    setup = setup_from_campaign(load(p))
+    params = dataclasses.replace(setup.body.params, spin_period=1e15)
+    setup = setup.with_(body=dataclasses.replace(setup.body, params=params))
+    return setup, fly(setup, [0.0, 2.0, 4.0])
+
+
+def _pixels(setup, rate):
+    return setup.imaging.smear_pixels_of(rate)
+
+
+def test_fast_pass_tracking_keeps_its_images_and_a_fixed_camera_loses_them(tmp_path):
+    v, d = 10e3, 500e3
+    track_setup, track = _fast_pass(tmp_path, "track")
+    use = track_setup.imaging
+    assert use is not None and track.attitude is not None
+    t = track_setup.image_times - track_setup.encounter.t_ca_s
+    # the wheels can follow the line of sight over the whole window (peak v / d)
+    fc = follow_check(v, d, track_setup.spacecraft)
+    assert fc.feasible and not fc.lost_windows_s
+    assert los_rate_rad_s(t, v, d).max() == pytest.approx(v / d)
+    # body tracking: the body centre is followed, its near surface (the footprint centre
+    # at R) moves by the parallax v_perp (1 / (rho_c - R) - 1 / rho_c), under a pixel
+    radius = scene_radius_m(track_setup.body.shape)
+    r = track.r_img_T
+    rng = np.linalg.norm(r, axis=-1)
+    v_img = track.attitude.image_smear_rate[0]
+    sin_v = np.abs(d / np.sqrt(d * d + (v * t) ** 2))      # v_perp / v to the body centre
+    parallax = v * sin_v * (1.0 / (rng - radius) - 1.0 / rng)
+    np.testing.assert_allclose(_pixels(track_setup, v_img), _pixels(track_setup, parallax),
+                               atol=1e-3)
+    ok = usable_mask(track_setup, track.attitude)
+    assert ok.mean() >= 0.95
+    # the encounter's Nadir Pointing: ring frames fixed in N, an inertially fixed camera;
+    # it smears by v_perp t_exp / (rho IFOV) pixels, tens of them, and keeps no image
+    fixed_setup, fixed = _fast_pass(tmp_path, "nadir")
+    r = fixed.r_img_T
+    u = fixed.dcm_BT[..., 2, :]                  # the boresight in T (misalignment none)
+    b = np.einsum("nki,nki->nk", r, u)
+    q = np.einsum("nki,nki->nk", r, r) - radius ** 2
+    hit = (b < 0) & (b * b >= q)
+    rho = np.where(hit, -b - np.sqrt(np.maximum(b * b - q, 0.0)), np.sqrt(q))
+    v_T = fixed.targeting.velocity_T[:, ::fixed_setup.image_every]
+    v_perp = np.linalg.norm(v_T - np.einsum("nki,nki->nk", v_T, u)[..., None] * u, axis=-1)
+    analytic = v_perp * use.exposure_s / (rho * use.ifov_rad)
+    got = _pixels(fixed_setup, fixed.attitude.image_smear_rate[0])
+    np.testing.assert_allclose(got, analytic, rtol=1e-9)
+    assert hit.any() and not hit.all()      # near closest approach the boresight meets R
+    # at closest approach: the issue's v t_exp / (rho IFOV), rho = d - R
+    ca = int(np.argmin(np.abs(t)))
+    assert abs(t[ca]) < 1e-9
+    np.testing.assert_allclose(got[:, ca], v * use.exposure_s / ((d - radius) * use.ifov_rad),
+                               rtol=1e-4)
+    assert got.min() > 10.0
+    assert not usable_mask(fixed_setup, fixed.attitude).any()
