@@ -264,3 +264,20 @@ def test_a_stores_resolved_config_is_not_judged():
     with pytest.raises(InputError):     # judged as a file, it sets GA keys, samples, ...
         validate_campaign(CampaignSource(data=cfg))
     validate_campaign(CampaignSource(data=cfg, resolved=True))
+
+
+def test_a_file_key_switched_off_by_set_is_warned_not_refused(tmp_path, capsys):
+    """Turning a setting off from the command line still runs: the file's own keys that
+    only the file's setting read are named in one warning line each (file and line),
+    never silently ignored; the same key given with --set is refused."""
+    base = CAMPAIGNS / "eros-design.toml"
+    c = load(base, ["design.demonstrate=false", 'body.name="ellipsoid"'])
+    err = capsys.readouterr().err
+    assert not c.config.design.demonstrate
+    line = [ln for ln in err.splitlines() if "design.demonstrate_looks" in ln]
+    assert len(line) == 1 and "warning" in line[0] and "switched off by --set" in line[0]
+    assert f"{base}:" in line[0]
+    with pytest.raises(InputError, match="design.demonstrate_looks"):
+        load(base, ["design.demonstrate=false", "design.demonstrate_looks=2"])
+    with pytest.raises(InputError, match="design.population"):     # not switched off: unread
+        load(base, ["design.population=50"])

@@ -12,8 +12,8 @@ stacks its rows itself, as the failure-tolerant one does). The margin
 designers recompute the union of the swarm HiGHS returns from the masks. Used by
 :mod:`ideas_hpc.design.exact`, :mod:`ideas_hpc.design.failures` and
 :mod:`ideas_hpc.design.stereo`. The scenario programme of the success-probability
-designer (:mod:`ideas_hpc.design.scenario_mip`) asks a different row, ``(need -
-W_heavy,s) z_s <= sum_light w y`` per scenario, without the margin: it bounds
+designer (:mod:`ideas_hpc.design.scenario_mip`) asks a different row per scenario,
+``(need - W_heavy,s) z_s <= sum_light w y``, without the margin: it bounds
 ``P_bank`` from above and must keep every swarm the evaluator counts.
 """
 

@@ -381,11 +381,23 @@ def is_read(key: str, s: Settings) -> bool:
     return bool(rule_of(key).when(s))
 
 
-def check_reads(config, raw: dict, schema: dict) -> None:
+def check_reads(config, raw: dict, schema: dict, switched_off=None) -> list:
     """Refuse the first key ``raw`` sets that the campaign ``config`` does not read (one
-    :class:`InputError` naming the key; the caller adds the file and line)."""
+    :class:`InputError` naming the key; the caller adds the file and line).
+
+    ``switched_off(key) -> bool`` (optional) says that the key is the file's own and the
+    file alone reads it: a ``--set`` override switched it off (``--set
+    attitude.mode="ideal"`` on a file with a ``[controller]``). Such a key is not refused
+    but returned, ``[(key, why), ...]``, for the caller to warn about in one line each:
+    nothing is silent, and turning a setting off from the command line still runs.
+    """
     s = Settings(config, raw)
+    off = []
     for key in set_keys(raw, schema):
         rule = rule_of(key)
         if not rule.when(s):
+            if switched_off is not None and switched_off(key):
+                off.append((key, rule.why(s)))
+                continue
             raise InputError(rule.why(s), field=key)
+    return off
