@@ -35,8 +35,8 @@ def area_floor(threshold: Threshold) -> float:
 
 
 def area_row(weights: np.ndarray, start: int, n_var: int) -> np.ndarray:
-    """``(n_var,)`` coefficients: the group ``weights`` at the columns ``start ..
-    start + G - 1`` (the ``y_g``), zero elsewhere."""
+    """``(n_var,)`` coefficients: the group ``weights`` in the columns from ``start`` to
+    ``start + G - 1`` (the ``y_g``), zero elsewhere."""
     w = np.asarray(weights, dtype=np.float64)
     row = np.zeros(n_var)
     row[start:start + w.size] = w
@@ -45,6 +45,6 @@ def area_row(weights: np.ndarray, start: int, n_var: int) -> np.ndarray:
 
 def area_constraint(threshold: Threshold, weights: np.ndarray, start: int,
                     n_var: int) -> LinearConstraint:
-    """``sum_g w_g y_g >= need + FEAS_TOL`` over the columns ``start ..`` of ``n_var``."""
+    """``sum_g w_g y_g >= need + FEAS_TOL`` over the columns from ``start`` of ``n_var``."""
     return LinearConstraint(area_row(weights, start, n_var)[None, :], area_floor(threshold),
                             np.inf)
