@@ -3,14 +3,17 @@
 A campaign file may only set keys its run reads (issue 41, ``campaign/schema/reads.py``):
 the shipped simulated flyby flown with ``--set attitude.mode="ideal"`` is refused for its
 ``[controller]`` table and its ``monte_carlo.attitude_start``, which an ideal attitude
-ignores. ``fitted(name, overrides)`` writes a copy of ``campaigns/<name>`` without the
-lines of such keys (the refusals name their lines) and returns its path; tests pass it
-with the same overrides. Copies live in one temporary folder per session.
+ignores (a file key an override switches off is warned about instead). ``fitted(name,
+overrides)`` writes a copy of ``campaigns/<name>`` without the lines of such keys (the
+refusals and warnings name their lines) and returns its path; tests pass it with the
+same overrides, so their stderr carries no such line. Copies live in one temporary folder per session.
 """
 
 from __future__ import annotations
 
 import atexit
+import contextlib
+import io
 import re
 import shutil
 import tempfile
@@ -21,6 +24,7 @@ from ideas_hpc.campaign.schema.campaign_tables import load
 
 CAMPAIGNS = Path(__file__).resolve().parent.parent / "campaigns"
 _HEADER = re.compile(r"^\s*\[")
+_SWITCHED = re.compile(r"warning: FILE:(\d+): .*switched off by --set")
 _DIR: list[Path] = []
 _MADE: dict[tuple, Path] = {}
 
@@ -51,12 +55,19 @@ def fitted(name: str, overrides: list[str]) -> Path:
     out = _folder() / f"{len(_MADE)}-{name}"
     for _ in range(len(lines)):
         out.write_text("\n".join(lines) + "\n")
+        err = io.StringIO()
         try:
-            load(out, overrides)
-            break
+            with contextlib.redirect_stderr(err):
+                load(out, overrides)
         except InputError as exc:
             if exc.file != str(out) or exc.line is None or "ignored" not in exc.message:
                 raise
             lines = _drop(lines, exc.line)
+            continue
+        # a file key the overrides switch off is warned about (not refused): drop it too
+        off = _SWITCHED.search(err.getvalue().replace(str(out), "FILE"))
+        if off is None:
+            break
+        lines = _drop(lines, int(off.group(1)))
     _MADE[key] = out
     return out
