@@ -85,8 +85,7 @@ from ideas_hpc.campaign.schema.instrument_table import INSTRUMENT
 from ideas_hpc.campaign.schema.model_fields import STORED_NAMES, flyby_errors, stored_fields
 from ideas_hpc.campaign.schema.model_tables import build_models
 from ideas_hpc.campaign.schema.kinds import KINDS as REGISTRY
-from ideas_hpc.campaign.schema.read_settings import Settings
-from ideas_hpc.campaign.schema.reads import check_reads, is_read
+from ideas_hpc.campaign.schema.read_check import check_reads, switched_off
 from ideas_hpc.campaign.schema.design_table import DESIGN, MC_SCHEMA, reliability_checks, verify_samples
 
 KINDS = REGISTRY.keys()   # live: a kind registered later is a valid choice
@@ -274,7 +273,9 @@ def validate_campaign(source: CampaignSource) -> Campaign:
         values = validate(source.data, SCHEMA)
         config = typed_config(values)
         if not source.resolved:     # a key the run ignores is refused (reads.py)
-            for key, why in check_reads(config, source.data, SCHEMA, _switched_off(source)):
+            off = switched_off(source, SCHEMA, lambda path: load_campaign(path, []),
+                               lambda data: typed_config(validate(data, SCHEMA)))
+            for key, why in check_reads(config, source.data, SCHEMA, off):
                 f, ln = source.where(key)
                 print(f"ideas-hpc: warning: {f}:{ln}: {key}: {why} (switched off by --set: "
                       "the file's value is not read)", file=sys.stderr)
@@ -286,29 +287,6 @@ def validate_campaign(source: CampaignSource) -> Campaign:
     except InputError as exc:
         raise source.locate(exc) from None
     return Campaign(config=config, raw=source.data, source=source, extras=extras)
-
-
-def _switched_off(source: CampaignSource):
-    """``key -> bool``: the file sets ``key`` itself (no ``--set`` of it) and the file
-    without its overrides reads it, so an override switched it off (reads.check_reads)."""
-    if not source.overrides or source.path is None:
-        return None
-    given = {ov.split("=", 1)[0].strip() for ov in source.overrides}
-    memo: dict = {}
-
-    def file_reads(key: str) -> bool:
-        if key in given or source.where(key)[0] == "--set":
-            return False
-        if "settings" not in memo:
-            try:
-                bare = load_campaign(source.path, [])
-                memo["settings"] = (typed_config(validate(bare.data, SCHEMA)), bare.data)
-            except InputError:
-                memo["settings"] = None
-        if memo["settings"] is None:
-            return False
-        return is_read(key, Settings(*memo["settings"]))
-    return file_reads
 
 
 def load(path, overrides: list[str] | None = None) -> Campaign:

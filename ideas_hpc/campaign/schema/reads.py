@@ -40,7 +40,7 @@ from ideas_hpc.body.formats import builtin_body, length_unit_applies
 from ideas_hpc.campaign.schema.encounter_table import ENCOUNTER
 from ideas_hpc.campaign.schema.kinds import DISPERSION_KEYS, KINDS
 from ideas_hpc.campaign.schema.read_settings import (Rule, Settings, entry_name, not_listed, owned,
-                                                     readers, set_keys)
+                                                     readers)
 from ideas_hpc.design.api.methods import METHODS
 from ideas_hpc.design.pareto.objectives import check_objectives
 from ideas_hpc.montecarlo import dispersions
@@ -379,25 +379,3 @@ def rule_of(key: str) -> Rule:
 def is_read(key: str, s: Settings) -> bool:
     """Whether the campaign of settings ``s`` reads dotted ``key``."""
     return bool(rule_of(key).when(s))
-
-
-def check_reads(config, raw: dict, schema: dict, switched_off=None) -> list:
-    """Refuse the first key ``raw`` sets that the campaign ``config`` does not read (one
-    :class:`InputError` naming the key; the caller adds the file and line).
-
-    ``switched_off(key) -> bool`` (optional) says that the key is the file's own and the
-    file alone reads it: a ``--set`` override switched it off (``--set
-    attitude.mode="ideal"`` on a file with a ``[controller]``). Such a key is not refused
-    but returned, ``[(key, why), ...]``, for the caller to warn about in one line each:
-    nothing is silent, and turning a setting off from the command line still runs.
-    """
-    s = Settings(config, raw)
-    off = []
-    for key in set_keys(raw, schema):
-        rule = rule_of(key)
-        if not rule.when(s):
-            if switched_off is not None and switched_off(key):
-                off.append((key, rule.why(s)))
-                continue
-            raise InputError(rule.why(s), field=key)
-    return off
