@@ -17,8 +17,9 @@ the scenarios that chose ``X_N``). The plan then
 
 * fixes K, the looks the certificate may make (``max_looks``, or fewer sizes left),
 * skips the sizes whose power at the share ``alpha / K`` is below :data:`MIN_POWER` (no
-  error is spent on them): the looks are the first size that can pass and the next ones,
-  K at most (fewer when ``n_max`` comes first, which raises each look's share).
+  error is spent on them; at most :data:`MAX_SKIPPED`): the looks are the first size that
+  can pass and the next ones, K at most (fewer when ``n_max`` comes first, which raises
+  each look's share).
 
 The plan reads the bank only, so it is fixed before the first validation sample: the
 certificate's guarantee (false "demonstrated" at most ``alpha``) holds whatever the
@@ -40,6 +41,9 @@ from ideas_hpc.design.settings import LookPlan
 MIN_POWER = 0.05
 #: Bootstrap samples per prediction.
 DRAWS = 200
+#: Most sizes skipped before the first look: past them the plan looks from the bank's N
+#: as it would without prediction (each size considered costs the search of its swarm).
+MAX_SKIPPED = 3
 #: With a larger sample allowed (``samples_max``), a look's M is doubled until its predicted
 #: power reaches this.
 TARGET_POWER = 0.8
@@ -130,16 +134,27 @@ def plan_looks(n_bank: int, best_of: Callable, values_of: Callable, plan: LookPl
     samples, samples_max = plan.n_samples, plan.samples_max
     max_looks = plan.max_looks if max_looks is None else max_looks
     alpha = 1.0 - float(confidence)
-    sizes = []
-    for n in range(int(n_bank), int(n_max) + 1):
-        sw, pb = best_of(n)
-        sw = np.asarray(sw, dtype=np.int64)
-        if sw.size != n:
-            break
-        sizes.append((n, sw, float(pb), np.asarray(values_of(sw), dtype=np.float64)))
-    if not sizes:
+    sizes: list = []
+
+    def size(i):
+        """Size ``n_bank + i`` (its swarm, bank P and held-out values), computed on first
+        use: a size's best swarm costs a search, so only the sizes looked at are built."""
+        while len(sizes) <= i:
+            n = int(n_bank) + len(sizes)
+            if n > int(n_max):
+                return None
+            sw, pb = best_of(n)
+            sw = np.asarray(sw, dtype=np.int64)
+            if sw.size != n:
+                return None
+            sizes.append((n, sw, float(pb), np.asarray(values_of(sw), dtype=np.float64)))
+        return sizes[i]
+
+    if size(0) is None:
         return Plan(looks=[], predicted=False)
-    k = max(1, min(int(max_looks), len(sizes)))
+    # K as the certificate plans it without prediction: max_looks, or the sizes up to n_max
+    k = max(1, min(int(max_looks), int(n_max) - int(n_bank) + 1))
+
     conf = 1.0 - alpha / k
     ladder = [int(samples)]
     while samples_max is not None and 2 * ladder[-1] <= int(samples_max):
@@ -164,10 +179,11 @@ def plan_looks(n_bank: int, best_of: Callable, values_of: Callable, plan: LookPl
     # most (fewer when n_max comes first, which raises each look's share). Fewer looks
     # would give the first more of alpha, but a look cut from the plan cannot catch a
     # first one the prediction got wrong.
-    first = next((i for i in range(len(sizes)) if look_of(i, conf)[1] >= MIN_POWER), None)
+    first = next((i for i in range(MAX_SKIPPED + 1)
+                  if size(i) is not None and look_of(i, conf)[1] >= MIN_POWER), None)
     if first is None:       # nothing can pass: today's plan, from the bank's N (it says so)
         first = 0
-    idx = list(range(first, min(first + k, len(sizes))))
+    idx = [i for i in range(first, first + k) if size(i) is not None]
     conf = 1.0 - alpha / len(idx)
     looks = []
     for i in idx:
