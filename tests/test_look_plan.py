@@ -144,3 +144,27 @@ def test_clears_agrees_with_the_bound_itself():
         if low > 1e-6:
             assert clears(x[i:i + 1], low - 1e-9, 0.97)[0]
         assert not clears(x[i:i + 1], low + 1e-9, 0.97)[0]
+
+
+def test_the_plan_builds_only_the_sizes_it_looks_at():
+    """Each size's best swarm costs a search: with n_max = 20 and the bank's N = 4 the plan
+    asks for the sizes of its K looks and the skipped ones, never the sizes beyond (the
+    campaign's designer would search swarms of up to 20 members)."""
+    asked = []
+
+    def best_of(n):
+        asked.append(n)
+        return np.arange(n), 0.9 if n == 4 else 0.99
+
+    def values_of(sw):
+        return np.full(50, 0.90024 if sw.size == 4 else 0.999)
+
+    plan = plan_looks(4, best_of, values_of,
+                      LookPlan(p=P, confidence=CONF, n_max=20, n_samples=256,
+                               demonstrate=True, max_looks=4), np.random.default_rng(0))
+    assert [lk.n for lk in plan.looks] == [5, 6, 7, 8]
+    assert sorted(set(asked)) == [4, 5, 6, 7, 8]
+    hopeless = plan_looks(4, best_of, lambda sw: np.full(50, 0.5),
+                          LookPlan(p=P, confidence=CONF, n_max=20, n_samples=256,
+                                   demonstrate=True, max_looks=2), np.random.default_rng(0))
+    assert [lk.n for lk in hopeless.looks] == [4, 5] and max(asked) <= 8
