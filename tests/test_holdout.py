@@ -62,3 +62,31 @@ def test_held_out_evaluator_is_the_exact_one():
     counted = HeldOut(lambda sw: calls.append(tuple(sw)) or np.ones(4), 4)
     assert counted.probability([5, 2]) == counted.probability([2, 5]) == 1.0
     assert calls == [(2, 5)]                                 # one flight per swarm
+
+
+def test_prefetch_scores_many_swarms_in_one_batch():
+    """Issue 43: the swarms the looks and the curve score are flown together (one set of
+    held-out flights for the union of their members). The batch is called once with each
+    unscored swarm once (sorted, duplicates and scored ones dropped), and every value is the
+    exact one on those rows (the one-at-a-time evaluator of the same rows)."""
+    rng = np.random.default_rng(5)
+    rows = rng.random((7, 9, 40)) < 0.35
+    w = rng.uniform(0.5, 1.5, 40)
+    w /= w.sum()
+    alone = HeldOut.of_rows(rows, w, 0.6, 0.1)
+    batches = []
+
+    def batch(swarms):
+        batches.append([tuple(s) for s in swarms])
+        union = np.unique(np.concatenate(swarms))
+        part = HeldOut.of_rows(rows[:, union], w, 0.6, 0.1)
+        return [part.values(np.searchsorted(union, s)) for s in swarms]
+
+    held = HeldOut(lambda sw: alone.values(sw), 7, batch=batch)
+    held.values([8, 1])                                     # scored before: not refetched
+    held.prefetch([[3, 0, 7], [1, 8], [0, 3, 7], [2, 4, 5, 6]])
+    assert batches == [[(0, 3, 7), (2, 4, 5, 6)]]
+    for sw in ([7, 3, 0], [1, 8], [6, 5, 4, 2]):
+        np.testing.assert_allclose(held.values(sw), alone.values(sw), rtol=0, atol=1e-14)
+    held.prefetch([[0, 3, 7]])
+    assert len(batches) == 1                                # nothing left to fly

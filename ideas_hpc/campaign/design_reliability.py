@@ -41,7 +41,7 @@ from ideas_hpc.base.progress import result
 from ideas_hpc.design.api import CoverSettings, ReliableSettings, ScenarioProblem, minimize
 from ideas_hpc.design.settings import LookPlan
 from ideas_hpc.design.bank import grid_size, separation_steps
-from ideas_hpc.design.certificate import (certify, group_bounds,
+from ideas_hpc.design.certificate import (certify, group_bounds, planned_looks,
                                          replicated_lower_bound)
 from ideas_hpc.design.reliability import ReliabilityDesigner
 from ideas_hpc.design.reliability_levels import n_at_levels
@@ -122,6 +122,54 @@ def _validate(c, setup, theta, need, w, exact, client, *, first=0, size=None,
                                 stream=stream)
     return Validation(rows, w, need, model, c.config.seed, first=first, seen=seen,
                       stream=stream)
+
+
+def _held_out_batch(c, setup, theta, swarms, need, w, size, client) -> list:
+    """Held-out values (H,) of several swarms from one set of flights: the union of their
+    members flies each held-out scenario once (a scenario's world and start are most of a
+    flight's cost), and each swarm is scored on its members' rows (with their draws of the
+    held-out failures, as when flown alone). A member flies the continuous draws of its
+    place in the union: each held-out scenario is still one draw of the dispersions for
+    every member, chosen by nothing the held-out values decide."""
+    mc = c.config.monte_carlo
+    model = failure_model(mc)
+    union = np.unique(np.concatenate([np.asarray(s, dtype=np.int64) for s in swarms]))
+    rows, seen = fly_validation(setup, theta[union], mc, model, seed=c.config.seed,
+                                n_samples=int(size), client=client, progress=progress.on(),
+                                stream=seeds.HOLDOUT_STREAM)
+    out = []
+    for sw in swarms:
+        at = np.searchsorted(union, np.sort(np.asarray(sw, dtype=np.int64)))
+        out.append(Validation(rows[:, at], w, need, model, c.config.seed,
+                              seen=None if seen is None else seen[:, at],
+                              stream=seeds.HOLDOUT_STREAM).per_sample)
+    return out
+
+
+def _scored_swarms(res, rel, n0: int, d, exact: bool) -> list:
+    """The swarms the look plan and the reliability curve will score on the held-out
+    scenarios, in the order they ask for them (so the bank's searches run in the same
+    order as without the prefetch): from the bank's N up to the plan's last possible look
+    (one size past its planned looks), on to the first size whose bank P reaches the
+    curve's top, then the curve's smaller sizes from the nominal N."""
+    k = planned_looks(d.demonstrate, res.n, d.n_max, d.demonstrate_looks, exact)
+    # the plan's looks start at the bank's N or past a skipped size: a later start (up to
+    # MAX_SKIPPED) flies its last sizes alone, without a search for sizes it never needs
+    top = res.n + (k if d.demonstrate else 0)
+    out, n = [], res.n
+    while n <= int(d.n_max):
+        sw, pb = (res.indices, res.probability) if n == res.n else rel.best_of(n)
+        if np.asarray(sw).size != n:
+            break
+        out.append(sw)
+        if n >= top and pb >= CURVE_TOP:
+            break
+        n += 1
+    for n in range(min(n0, res.n), res.n):
+        sw = rel.best_of(n)[0]
+        if np.asarray(sw).size == n:
+            out.append(sw)
+    return out
 
 
 def _tolerant_designs(nominal_bank, threshold, d, sep) -> list:
@@ -238,7 +286,10 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=Non
     w = rel.ev.w
     held = None if not h_n else HeldOut(lambda sw: _validate(
         c, setup, bank.theta[sw], need, w, exact, client, size=h_n,
-        stream=seeds.HOLDOUT_STREAM).per_sample, h_n)
+        stream=seeds.HOLDOUT_STREAM).per_sample, h_n,
+        batch=lambda swarms: _held_out_batch(c, setup, bank.theta, swarms, need, w, h_n, client))
+    if held is not None:    # the swarms the looks and the curve score, flown together
+        held.prefetch(_scored_swarms(res, rel, int(nominal.data["best_swarm_size"]), d, exact))
     cert = _certify(c, setup, client, bank, res, rel, need, w, exact, held)
     chosen_val = cert.final.extra
     # the looks past the bank's answer: stepped up (design.demonstrate), or planned past

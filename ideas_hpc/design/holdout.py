@@ -10,7 +10,9 @@ bank 0.952 for its N = 6, validation 0.915) it is the difference between the two
 So the swarms the bank chose are *scored* on H held-out scenarios: draws of the same
 dispersions on their own stream (:data:`ideas_hpc.base.seeds.HOLDOUT_STREAM`), flown for
 the members of the swarms scored only (a swarm of N costs N / C of a bank scenario), each
-giving the swarm's exact failure-weighted P. A held-out mean is unbiased for a swarm those
+giving the swarm's exact failure-weighted P. The swarms the looks and the curve will ask
+for are flown together (:meth:`HeldOut.prefetch`: the union of their members once per
+held-out scenario, one set of flights instead of one per size). A held-out mean is unbiased for a swarm those
 draws did not choose, so it is what the design reports as the bank's estimate of P, what
 the look plan predicts from (:mod:`ideas_hpc.design.look_plan`) and what the validation's
 P-hat is compared with; ``P_bank - P_heldout`` is the measured bias. The held-out draws
@@ -41,11 +43,31 @@ class HeldOut:
         scenario (the campaign flies them; :meth:`of_rows` scores given rows).
     size : int
         H.
+    batch : callable, optional
+        ``[swarm, ...] -> [(H,), ...]``: several swarms scored together (the campaign flies
+        the union of their members once, :meth:`prefetch`); without it, one at a time.
     """
 
-    def __init__(self, score: Callable, size: int):
-        self._score, self.size = score, int(size)
+    def __init__(self, score: Callable, size: int, batch: Callable | None = None):
+        self._score, self.size, self._batch = score, int(size), batch
         self._cache: dict = {}
+
+    @staticmethod
+    def _key(swarm) -> tuple:
+        return tuple(int(i) for i in np.sort(np.asarray(swarm, dtype=np.int64)))
+
+    def prefetch(self, swarms) -> None:
+        """Score the swarms not yet scored in one batch (the flights of a held-out scenario
+        cost mostly its world and start, so flying the union of the members once is about
+        a size's cost instead of one per size; issue 43). Without a batch: nothing."""
+        if self._batch is None:
+            return
+        todo = list(dict.fromkeys(k for k in map(self._key, swarms)
+                                  if k and k not in self._cache))
+        if not todo:
+            return
+        for k, v in zip(todo, self._batch([np.array(k, dtype=np.int64) for k in todo])):
+            self._cache[k] = np.asarray(v, dtype=np.float64)
 
     @classmethod
     def of_rows(cls, rows, w, need: float, model) -> "HeldOut | None":
@@ -58,10 +80,10 @@ class HeldOut:
 
     def values(self, swarm) -> np.ndarray:
         """(H,) exact failure-weighted P of ``swarm`` in each held-out scenario."""
-        sw = np.sort(np.asarray(swarm, dtype=np.int64))
-        key = tuple(int(i) for i in sw)
+        key = self._key(swarm)
         if key not in self._cache:
-            self._cache[key] = np.asarray(self._score(sw), dtype=np.float64)
+            self._cache[key] = np.asarray(self._score(np.array(key, dtype=np.int64)),
+                                          dtype=np.float64)
         return self._cache[key]
 
     def probability(self, swarm) -> float:
