@@ -5,6 +5,7 @@ agreement test holds its 95 % level on draws of a known truth."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from ideas_hpc.design.holdout import HeldOut, agreement
 
@@ -90,3 +91,38 @@ def test_prefetch_scores_many_swarms_in_one_batch():
         np.testing.assert_allclose(held.values(sw), alone.values(sw), rtol=0, atol=1e-14)
     held.prefetch([[0, 3, 7]])
     assert len(batches) == 1                                # nothing left to fly
+
+
+def test_search_keys_keep_the_full_keys_argmax():
+    """``Evaluator.scored`` computes the coverage tie-break only for swarms within 1e-6 of the
+    best P. Oracle: the full keys ``round(P, 12) + 1e-6 mean coverage`` from plain NumPy
+    (survivor subsets enumerated, coverage summed); the argmax (first on ties) and the
+    maximum must be the same, on plateaus (every P 0), on spread values and on swarms whose
+    P differ by less than the coverage term."""
+    from itertools import combinations
+
+    from ideas_hpc.design.reliability_eval import Evaluator
+    rng = np.random.default_rng(11)
+    # p_f 1e-4: swarms that survive any one loss differ by ~1e-8, inside the tie band
+    for need, density, q in ((0.99, 0.2, 0.1), (0.5, 0.3, 0.1), (0.3, 0.5, 0.1),
+                             (0.0, 0.3, 0.1), (0.6, 0.45, 1e-4), (0.5, 0.4, 1e-4)):
+        rows = rng.random((6, 10, 25)) < density
+        w = rng.uniform(0.5, 1.5, 25)
+        w /= w.sum()
+        ev = Evaluator(rows, w, need, q)
+        sw = np.array(list(combinations(range(10), 3)), dtype=np.int64)
+        full = []
+        for s in sw:
+            p, cov = 0.0, 0.0
+            for sc in range(6):
+                cov += w[rows[sc, s].any(axis=0)].sum() / 6
+                for mask in range(8):
+                    alive = [s[i] for i in range(3) if mask >> i & 1]
+                    c = w[rows[sc, alive].any(axis=0)].sum() if alive else 0.0
+                    if c >= need - 1e-12:
+                        p += (1 - q) ** len(alive) * q ** (3 - len(alive)) / 6
+            full.append(round(p, 12) + 1e-6 * cov)
+        full = np.array(full)
+        key = ev.scored(sw)
+        assert int(np.argmax(key)) == int(np.argmax(full))
+        assert key.max() == pytest.approx(full.max(), abs=1e-12)
