@@ -112,9 +112,6 @@ MUTATIONS: tuple[Mutation, ...] = (
       "if False and (world.mapping_key(self.setup)",
       ("tests/test_recipes.py::test_recipe_world_dispersion_the_pole",)),
     # ---- designers
-    M("search_keys_tie_band_zero", "designers", "ideas_hpc/design/reliability_eval.py",
-      "TIE_BAND = 2e-6", "TIE_BAND = 0.0",
-      ("tests/test_holdout.py::test_search_keys_keep_the_full_keys_argmax",)),
     M("ring_bound_optimistic_single", "designers", "ideas_hpc/core/design/ring_gaps.py",
       "tot[1, s] = M[s, K]", "tot[1, s] = 0.5 * M[s, K]",
       ("tests/test_ring_bound.py::test_bound_is_the_least_gap_miss_and_never_above_the_truth",)),

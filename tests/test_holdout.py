@@ -94,8 +94,7 @@ def test_prefetch_scores_many_swarms_in_one_batch():
 
 
 def test_search_keys_keep_the_full_keys_argmax():
-    """``Evaluator.scored`` computes the coverage tie-break only for swarms within 1e-6 of the
-    best P. Oracle: the full keys ``round(P, 12) + 1e-6 mean coverage`` from plain NumPy
+    """``Evaluator.scored``, the searches' order keys. Oracle: the full keys ``round(P, 12) + 1e-6 mean coverage`` from plain NumPy
     (survivor subsets enumerated, coverage summed); the argmax (first on ties) and the
     maximum must be the same, on plateaus (every P 0), on spread values and on swarms whose
     P differ by less than the coverage term."""

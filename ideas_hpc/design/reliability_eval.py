@@ -31,11 +31,6 @@ from ideas_hpc.failures.weights import survivor_weights
 N_ENUM_MAX = 24
 
 
-#: Swarms whose rounded P lies within this of the best get the full key of
-#: :meth:`Evaluator.scored` (above the coverage term's 1e-6 weight, with room for rounding).
-TIE_BAND = 2e-6
-
-
 class Evaluator:
     """Exact ``P_bank`` of swarms on one bank (compiled, batched; module docstring).
 
@@ -88,18 +83,9 @@ class Evaluator:
                       else self.upper(sw))
 
     def scored(self, swarms) -> np.ndarray:
-        """(K,) order keys for the searches' argmax: ``P_bank``, ties (e.g. P = 0 below the
-        threshold) broken by the mean coverage, so searches move on the plateaus too:
-        ``round(P, 12) + 1e-6 cov``.
-
-        The coverage term is below 1e-6, so only swarms whose P is within 1e-6 of the best
-        can win: their keys are computed in full, the others keep their bare P (below
-        every full key there). The maximum and the argmax are those of the full keys; the
-        coverage pass, about half of a search's cost, runs for the near ones only."""
+        """(K,) order keys: ``P_bank``, ties (e.g. P = 0 below the threshold) broken by
+        the mean coverage, so searches move on the plateaus too."""
         sw = self._swarms(swarms)
-        key = np.round(self(sw), 12)
-        near = np.flatnonzero(key >= key.max() - TIE_BAND) if key.size else key
-        if near.size:
-            cov = swarm_coverages(self.rows, np.ascontiguousarray(sw[near]), self.w)
-            key[near] = key[near] + 1e-6 * cov.mean(axis=1)
-        return key
+        p = self(sw)
+        cov = swarm_coverages(self.rows, sw, self.w).mean(axis=1)
+        return np.round(p, 12) + 1e-6 * cov
