@@ -49,11 +49,11 @@ from ideas_hpc.design.reliability_stats import lower_confidence_bound
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.base import progress
 from ideas_hpc.engine.job_cluster import phase_client
-from ideas_hpc.failures.model import as_model
-from ideas_hpc.failures.sampling import drawn_coverage, sample_probabilities, validation_failures
 from ideas_hpc.montecarlo.dispersions import scenario_dispersed
 from ideas_hpc.montecarlo.failure_dispersion import failure_model
-from ideas_hpc.montecarlo.scenarios import build_scenario_bank, fly_members, fly_members_seen
+from ideas_hpc.montecarlo.scenarios import build_scenario_bank
+from ideas_hpc.campaign.validation_flights import (  # noqa: F401 (Validation, fly_validation:
+    Validation, fly_validation, fly_validation_world, sample_weights)  # their old home)
 from ideas_hpc.base import seeds
 from ideas_hpc.campaign.design_exact import design_exact
 from ideas_hpc.campaign.schema.design_checks import designer_errors
@@ -81,34 +81,6 @@ def continuous_off(mc, setup) -> bool:
     return not scenario_dispersed(mc, setup)
 
 
-class Validation:
-    """The chosen swarm flown through fresh samples (module docstring, step 4): per sample
-    the exact failure-weighted P and one drawn outcome (:mod:`ideas_hpc.failures.sampling`;
-    ``seen``: the first-seen times of losses in the pass, None: whole-pass)."""
-
-    def __init__(self, rows, w, need, model, seed: int, first: int = 0, seen=None,
-                 stream: int = seeds.VALIDATION_STREAM):
-        model = as_model(model)
-        self.first = int(first)
-        draws = validation_failures(model, rows.shape[1], seed, self.first, rows.shape[0],
-                                    stream)
-        self.per_sample = sample_probabilities(rows, w, need, model, draws, seen)
-        self.p_hat = float(self.per_sample.mean())
-        # the bound at the look's share of the error is computed once, by certify(): its
-        # look's value is copied here (_certify); None for flights that are no look
-        self.lower = None
-        self.coverage, self.n_failed = drawn_coverage(rows, w, draws, seen)
-
-
-def fly_validation(setup, theta, mc, model, **keywords):
-    """``(rows, seen)`` of validation flights: with losses in the pass and seen rows, when
-    each member first sees each vertex (:func:`~ideas_hpc.montecarlo.scenarios.fly_members_seen`);
-    else the rows alone and ``seen = None`` (whole-pass losses)."""
-    if model.in_pass_share > 0.0 and not setup.coverage.requirement:
-        return fly_members_seen(setup, theta, mc, **keywords)
-    return fly_members(setup, theta, None, mc, **keywords), None
-
-
 def _validate(c, setup, theta, need, w, exact, client, *, first=0, size=None,
               stream=seeds.VALIDATION_STREAM):
     """Validation samples ``first .. first + M - 1`` of ``theta`` (no bound: :func:`_certify`
@@ -117,11 +89,11 @@ def _validate(c, setup, theta, need, w, exact, client, *, first=0, size=None,
     d, mc = c.config.design, c.config.monte_carlo
     m = 1 if exact else (verify_samples(d) if size is None else int(size))
     model = failure_model(mc)
-    rows, seen = fly_validation(setup, theta, mc, model, seed=c.config.seed, n_samples=m,
-                                client=client, progress=progress.on(), first=first,
-                                stream=stream)
-    return Validation(rows, w, need, model, c.config.seed, first=first, seen=seen,
-                      stream=stream)
+    rows, seen, areas = fly_validation_world(setup, theta, mc, model, seed=c.config.seed,
+                                             n_samples=m, client=client,
+                                             progress=progress.on(), first=first, stream=stream)
+    return Validation(rows, sample_weights(areas, w, rows.shape[0]), need, model,
+                      c.config.seed, first=first, seen=seen, stream=stream)
 
 
 def _held_out_batch(c, setup, theta, swarms, need, w, size, client) -> list:
@@ -134,9 +106,11 @@ def _held_out_batch(c, setup, theta, swarms, need, w, size, client) -> list:
     mc = c.config.monte_carlo
     model = failure_model(mc)
     union = np.unique(np.concatenate([np.asarray(s, dtype=np.int64) for s in swarms]))
-    rows, seen = fly_validation(setup, theta[union], mc, model, seed=c.config.seed,
-                                n_samples=int(size), client=client, progress=progress.on(),
-                                stream=seeds.HOLDOUT_STREAM)
+    rows, seen, areas = fly_validation_world(setup, theta[union], mc, model,
+                                             seed=c.config.seed, n_samples=int(size),
+                                             client=client, progress=progress.on(),
+                                             stream=seeds.HOLDOUT_STREAM)
+    w = sample_weights(areas, w, rows.shape[0])     # a sample's world weighs every member
     out = []
     for sw in swarms:
         at = np.searchsorted(union, np.sort(np.asarray(sw, dtype=np.int64)))

@@ -45,6 +45,10 @@ swarm_size_at_p_f                   (p_f_level,)            p_f uncertain: the f
                                                             known at each of the prior's levels
 probability_at_p_f                  (p_f_level,)            its P on the bank at that p_f
 proven_bound_at_p_f                 (p_f_level,)            the proven lower bound on N there
+scenario_vertex_weight              (scenario, vertex)      drawn worlds only (issue 42): each
+                                                            scenario's vertex area fractions
+scenario_reach                      (scenario,)             drawn worlds only: what all grid
+                                                            candidates reach in each scenario
 ==================================  ======================  =========================================
 
 Attrs ``failure_model`` (one line) and ``failure_model_record`` (the resolved
@@ -63,6 +67,8 @@ from dataclasses import dataclass
 import numpy as np
 import xarray as xr
 
+from ideas_hpc.base.vertex_weights import normalised
+from ideas_hpc.design.reliability_eval import Evaluator
 from ideas_hpc.design.api.methods import method_of_designer
 from ideas_hpc.base.seeds import SCENARIO_STREAM, VALIDATION_STREAM
 from ideas_hpc.campaign.design_exact import ExactDesign
@@ -117,6 +123,21 @@ def _held_vars(held: dict, curve) -> xr.Dataset:
           "within their 95 % sampling error (|difference| <= 1.96 sqrt(s_v^2/M + s_h^2/H))")
     _with(ds, "reliability_vs_n_holdout", "1", "P of the curve's swarms on the held-out "
           "scenarios")
+    return ds
+
+
+def world_vars(rows, areas) -> xr.Dataset:
+    """``scenario_vertex_weight`` (scenario, vertex) and ``scenario_reach`` (scenario,) of a
+    bank whose vertex weights differ by scenario (issue 42; a shared (V,) keeps the nominal
+    ``vertex_area`` alone): each scenario's area fractions (zero outside its reference) and
+    the coverage all candidates reach together there with them."""
+    w = normalised(areas, np.shape(rows)[0])
+    ds = xr.Dataset({"scenario_vertex_weight": (("scenario", "vertex"), w),
+                     "scenario_reach": (("scenario",), Evaluator(rows, w, 0.0, 0.0).reach())})
+    _with(ds, "scenario_vertex_weight", "1", "area fraction of each vertex in each scenario's "
+          "world (its reference area; each row sums to 1)")
+    _with(ds, "scenario_reach", "1", "coverage all grid candidates reach together in each "
+          "scenario, with that scenario's weights")
     return ds
 
 
@@ -271,6 +292,8 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
         new = new.merge(_level_vars(run.levels))
     if run.held is not None:
         new = new.merge(_held_vars(run.held, curve))
+    if np.ndim(bank.areas) == 2:        # drawn worlds: the weights differ by scenario
+        new = new.merge(world_vars(bank.rows, bank.areas))
     ds = xr.merge([ds.drop_vars([k for k in new.data_vars if k in ds]), new],
                   combine_attrs="override")
     attrs = dict(nominal.attrs)

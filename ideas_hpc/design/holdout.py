@@ -71,7 +71,8 @@ class HeldOut:
 
     @classmethod
     def of_rows(cls, rows, w, need: float, model) -> "HeldOut | None":
-        """Held-out scenarios given as rows (S, C, V) of every candidate (None: no rows)."""
+        """Held-out scenarios given as rows (S, C, V) of every candidate (None: no rows);
+        ``w`` their vertex fractions, (V,) shared or (S, V) per scenario (drawn worlds)."""
         rows = np.asarray(rows, dtype=bool)
         if rows.shape[0] == 0:
             return None

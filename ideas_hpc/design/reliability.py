@@ -52,6 +52,7 @@ import numpy as np
 
 from ideas_hpc.base import progress
 from ideas_hpc.base.errors import InputError
+from ideas_hpc.base.vertex_weights import normalised
 from ideas_hpc.design.bank import CandidateBank, reduce_problem
 from ideas_hpc.design.reliability_eval import N_ENUM_MAX, Evaluator  # noqa: F401 (their old home)
 from ideas_hpc.design.reliability_search import all_swarms, extend, improve
@@ -95,10 +96,8 @@ class ReliabilityDesigner:
     def __init__(self, rows, areas, *, need: float, p_f, sep_steps: int = 0,
                  time_limit: float | None = None, enumerate_budget: int = 20000,
                  bound_solver=None, tolerance_solver=None):
-        rows = np.asarray(rows, dtype=bool)
-        w = np.asarray(areas, dtype=np.float64)
-        w = w / w.sum()
-        self.ev = Evaluator(rows, w, need, p_f)
+        rows = np.asarray(rows, dtype=bool)    # areas (V,) shared or (S, V) per scenario
+        self.ev = Evaluator(rows, normalised(areas, rows.shape[0]), need, p_f)
         self.s_n, self.c_n = rows.shape[0], rows.shape[1]
         self.m, self.model = int(sep_steps), as_model(p_f)
         self.t0 = time.perf_counter()
@@ -128,10 +127,10 @@ class ReliabilityDesigner:
         if self._lows is None:
             lows = np.ones(self.s_n, dtype=np.int64)
             step = 2 * math.pi / self.c_n
-            areas = self.ev.w
             for s in progress.steps(range(self.s_n), "ring-gap bounds", unit="scenario"):
                 if self.out_of_time():   # the rest keep the trivial bound 1 (still proven)
                     break
+                areas = self.ev.w_of(s)      # each scenario's bound with its own weights
                 bank = CandidateBank(theta=step * np.arange(self.c_n), masks=self.ev.rows[s],
                                      areas=areas, step_rad=step, d_sep_m=1.0)
                 red = reduce_problem(bank.masks, areas, merge_candidates=False)
@@ -291,7 +290,8 @@ def min_swarm_reliable(rows, areas, settings: ReliableSettings | None = None,
     ----------
     rows : (S, C, V) bool
         Scenario bank rows.
-    areas : (V,) m^2
+    areas : (V,) or (S, V) m^2
+        Vertex areas, shared or per scenario (each scenario's over its own sum).
     settings : ReliableSettings
         The search (:mod:`ideas_hpc.design.settings`), or the keywords below.
     p : float

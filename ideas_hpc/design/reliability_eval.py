@@ -16,6 +16,11 @@ A model that is not exchangeable (per-spacecraft p_f, stated common-cause groups
 depends on which spacecraft flies which member: member k is the k-th grid candidate
 of the swarm in increasing order (the order the design stores), so swarms are sorted
 before they are scored.
+
+Vertex weights ``w``: ``(V,)`` shared by every scenario, or ``(S, V)`` per scenario (issue
+42: each scenario a drawn world with its own vertex areas and reference area); the kernels
+read scenario s's row (:func:`~ideas_hpc.core.design.reliability.weight_row`), and
+:meth:`Evaluator.reach` is then a per-scenario array.
 """
 
 from __future__ import annotations
@@ -23,6 +28,7 @@ from __future__ import annotations
 import numpy as np
 
 from ideas_hpc.base.errors import InputError
+from ideas_hpc.base import vertex_weights
 from ideas_hpc.core.design.reliability import swarm_coverages, weighted_probabilities
 from ideas_hpc.failures.model import as_model
 from ideas_hpc.failures.weights import survivor_weights
@@ -35,14 +41,36 @@ class Evaluator:
     """Exact ``P_bank`` of swarms on one bank (compiled, batched; module docstring).
 
     ``p_f``: a :class:`~ideas_hpc.failures.model.FailureModel`, or a bare per-spacecraft
-    failure probability (independent failures, today's model).
+    failure probability (independent failures, today's model). ``w``: area fractions,
+    ``(V,)`` shared or ``(S, V)`` per scenario (module docstring; normalised by the
+    caller, :func:`ideas_hpc.base.vertex_weights.normalised`).
     """
 
     def __init__(self, rows, w, need: float, p_f):
         self.rows = np.ascontiguousarray(rows, dtype=np.bool_)
         self.w = np.ascontiguousarray(w, dtype=np.float64)
+        if self.w.ndim not in (1, 2) or self.w.shape[-1] != self.rows.shape[2] or (
+                self.w.ndim == 2 and self.w.shape[0] not in (1, self.rows.shape[0])):
+            raise InputError(f"vertex weights of shape {self.w.shape} do not fit rows of "
+                             f"shape {self.rows.shape} (need (V,) or (S, V))", field="areas")
         self.need = float(need)
         self.model = as_model(p_f)
+
+    @property
+    def per_scenario_weights(self) -> bool:
+        """True when the vertex weights differ by scenario (``w`` is (S, V), S > 1)."""
+        return vertex_weights.per_scenario(self.w)
+
+    def w_of(self, s: int) -> np.ndarray:
+        """(V,) the vertex weights of scenario ``s``."""
+        return vertex_weights.row(self.w, s)
+
+    def reach(self) -> np.ndarray:
+        """(S,) the coverage all candidates reach together in each scenario, with that
+        scenario's weights (shared weights: the same union rule as a single bank's
+        :attr:`~ideas_hpc.design.bank.CandidateBank.reach`, per scenario)."""
+        seen = self.rows.any(axis=1)
+        return np.array([float(self.w_of(s)[seen[s]].sum()) for s in range(seen.shape[0])])
 
     @property
     def p_f(self):

@@ -21,6 +21,11 @@ subset-minimal ones are kept (:func:`ideas_hpc.core.design.reliability.minimal_s
 A scenario with an unseen heavy group, or whose light groups cannot make up
 the rest, is unreachable and its ``z_s`` is fixed to 0.
 
+Each scenario's rows use its own vertex weights (``w`` (S, V), issue 42; a shared (V,)
+is every scenario's): the groups, the heavy test and the area row of scenario s involve
+only ``x``, ``z_s`` and ``y_{s,g}``, so the programme stays a relaxation of the bank's
+counting with weights that differ by scenario.
+
 ``sum x <= m`` (not ``= m``) makes ``U_m`` nondecreasing in m. HiGHS's dual
 bound is a proven upper bound on the optimum, so :meth:`ScenarioMIP.solve`
 returns a proven ``Ubar_m >= U_m`` even at a time limit.
@@ -36,6 +41,7 @@ import numpy as np
 from scipy import sparse
 from scipy.optimize import Bounds, LinearConstraint
 
+from ideas_hpc.base.vertex_weights import row
 from ideas_hpc.core.design.reliability import minimal_sets
 from ideas_hpc.design.bank import conflict_windows
 from ideas_hpc.design.highs import run_milp
@@ -86,7 +92,7 @@ class ScenarioMIP:
         z_ub = np.ones(s_n)
         light_w: list[np.ndarray] = []
         for s in range(s_n):
-            cover, weight = scenario_groups(rows[s], w)
+            cover, weight = scenario_groups(rows[s], row(w, s))   # that scenario's weights
             empty = ~cover.any(axis=1)
             heavy = weight > slack + 1e-12
             if np.any(heavy & empty):

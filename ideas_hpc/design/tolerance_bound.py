@@ -47,6 +47,7 @@ import numpy as np
 
 from ideas_hpc.base import progress
 from ideas_hpc.base.errors import InputError
+from ideas_hpc.base.vertex_weights import row
 from ideas_hpc.design.reliability_stats import proof_model
 from ideas_hpc.failures.sums import downset_bound
 
@@ -98,8 +99,9 @@ class ToleranceBound:
     Parameters
     ----------
     rows : (S, C, V) bool
-    w : (V,) float64
-        Vertex weights (fractions).
+    w : (V,) or (S, V) float64
+        Vertex weights (fractions), shared or per scenario: scenario s's tolerant minimum
+        is solved with its own row, so each ``N_{k,s}`` bound holds for its world.
     need : float
         Coverage threshold (fraction).
     lows0 : (S,) int
@@ -165,7 +167,8 @@ class ToleranceBound:
                                   f"{self.s_n} (integer programme"
                                   + ("" if budget is None else f", at most {budget:.0f} s")
                                   + ")")
-                    got = self.solver(self.rows[s], self.w, self.need, k, budget, self.step)
+                    got = self.solver(self.rows[s], row(self.w, s), self.need, k, budget,
+                                      self.step)
                     self.pace.append(time.perf_counter() - t)
                     self.lows[s][k] = max(int(got), self.lows[s][0] + k)
         return self._mean(n, p_f)

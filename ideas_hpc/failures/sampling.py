@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ideas_hpc.base.vertex_weights import row
 from ideas_hpc.base.seeds import STREAM_FAILURES, VALIDATION_STREAM, stream_rng
 from ideas_hpc.core.design.reliability import weighted_probabilities
 from ideas_hpc.failures.model import FailureModel
@@ -101,9 +102,11 @@ def sample_probabilities(rows, w, need: float, model: FailureModel, draws,
     fails (that member either survives, or images it before its loss), so it is taken
     out of the enumeration (weight 0, threshold lowered by its area) and the zeta
     transform of the exact kernel stays. Without times the loss counts as whole-pass
-    (a lower bound on P).
+    (a lower bound on P). ``w``: vertex fractions, (V,) shared or (M, V) per sample (each
+    sample a drawn world, issue 42).
     """
     rows = np.ascontiguousarray(rows, dtype=np.bool_)
+    w = np.ascontiguousarray(w, dtype=np.float64)
     m_n, n = rows.shape[0], rows.shape[1]
     weights = kernel_weights(model, n)
     swarm = np.arange(n, dtype=np.int64)[None, :]
@@ -114,18 +117,21 @@ def sample_probabilities(rows, w, need: float, model: FailureModel, draws,
     out = np.empty(m_n)
     for k in range(m_n):
         if early[k] is None:
-            out[k] = weighted_probabilities(rows[k:k + 1], swarm, w, need, weights)[0, 0]
+            out[k] = weighted_probabilities(rows[k:k + 1], swarm, row(w, k), need,
+                                            weights)[0, 0]
             continue
         sure = early[k].any(axis=0)
-        w_k = np.where(sure, 0.0, w)
-        out[k] = weighted_probabilities(rows[k:k + 1], swarm, w_k, need - float(w[sure].sum()),
+        wk = row(w, k)
+        w_k = np.where(sure, 0.0, wk)
+        out[k] = weighted_probabilities(rows[k:k + 1], swarm, w_k, need - float(wk[sure].sum()),
                                         weights)[0, 0]
     return out
 
 
 def drawn_coverage(rows, w, draws, seen_fraction=None) -> tuple[np.ndarray, np.ndarray]:
     """``(coverage (M,), lost (M,) int32)`` of each flight with its losses drawn: the
-    survivors' union plus what members lost in the pass imaged before their loss."""
+    survivors' union plus what members lost in the pass imaged before their loss; ``w``
+    (V,) shared or (M, V) per sample."""
     m_n = rows.shape[0]
     cov = np.empty(m_n)
     lost = np.empty(m_n, dtype=np.int32)
@@ -135,6 +141,6 @@ def drawn_coverage(rows, w, draws, seen_fraction=None) -> tuple[np.ndarray, np.n
         early = None if seen_fraction is None else seen_early(d, seen_fraction[k])
         if early is not None:
             seen = seen | (early & d.failed[:, None]).any(axis=0)
-        cov[k] = float(w[seen].sum()) if seen.any() else 0.0
+        cov[k] = float(row(w, k)[seen].sum()) if seen.any() else 0.0
         lost[k] = int(d.failed.sum())
     return cov, lost

@@ -15,6 +15,12 @@ see them, ``W0[b] = sum_{v: b_v = b} w_v``; the subset-sum (zeta) transform
 ``f[B] = sum_{b subset of B} W0[b]`` gives the area no member of ``T`` sees as
 ``f[~T]`` (every vertex whose seers all failed), so ``cov_s(T) = sum w - f[~T]``.
 Cost per scenario ``O(N V + N 2^N)``.
+
+Vertex weights (issue 42): every kernel takes ``w`` either ``(V,)``, one weight vector
+shared by every scenario, or ``(S_w, V)``, the weight of vertex v in scenario s (a drawn
+world: same mesh, different vertex areas and reference area), read as row ``s`` when
+``S_w > 1`` and row 0 otherwise (:func:`weight_row`). The sums run over the same
+vertices in the same order either way, so shared weights give the same floats.
 """
 
 from __future__ import annotations
@@ -48,6 +54,14 @@ def independent_weights(p_f, n):
 
 
 @njit(cache=True)
+def weight_row(w, s):
+    """(V,) view of the weights of scenario ``s``: ``w`` itself when 1-D (shared), else
+    row ``s`` of ``(S_w, V)``, row 0 when ``S_w = 1`` (module docstring)."""
+    w2 = w.reshape((-1, w.shape[-1]))
+    return w2[s if w2.shape[0] > 1 else 0]
+
+
+@njit(cache=True)
 def weighted_probability(rows, s, members, w, need, weights):
     """Probability that the swarm ``members`` reaches ``need`` in scenario ``s``, its
     survivor sets weighted by ``weights`` (module docstring, ``pi(T)`` for ``p_f``).
@@ -60,8 +74,9 @@ def weighted_probability(rows, s, members, w, need, weights):
         Scenario index.
     members : (N,) int64
         Candidate indices of the swarm (N <= 30); bit i of a survivor mask is member i.
-    w : (V,) float64
-        Vertex area fractions (sum 1).
+    w : (V,) or (S_w, V) float64
+        Vertex area fractions (each row sums to 1), shared or per scenario
+        (:func:`weight_row`).
     need : float
         Threshold coverage, area fraction.
     weights : (N + 1,) or (2^N,) float64
@@ -77,15 +92,16 @@ def weighted_probability(rows, s, members, w, need, weights):
     n = members.size
     full = (1 << n) - 1
     f = np.zeros(1 << n)
-    v_n = w.size
+    ws = weight_row(w, s)
+    v_n = ws.size
     total = 0.0
     for v in range(v_n):
         b = 0
         for i in range(n):
             if rows[s, members[i], v]:
                 b |= 1 << i
-        f[b] += w[v]
-        total += w[v]
+        f[b] += ws[v]
+        total += ws[v]
     for i in range(n):
         bit = 1 << i
         for m in range(1 << n):
@@ -116,8 +132,8 @@ def weighted_probabilities(rows, swarms, w, need, weights):
     rows : (S, C, V) bool
     swarms : (K, N) int64
         Candidate indices, one swarm per row.
-    w : (V,) float64
-        Vertex area fractions.
+    w : (V,) or (S, V) float64
+        Vertex area fractions, shared or per scenario (:func:`weight_row`).
     need : float
         Threshold coverage, area fraction.
     weights : (N + 1,) or (2^N,) float64
@@ -195,8 +211,8 @@ def swarm_coverages(rows, swarms, w):
     ----------
     rows : (S, C, V) bool
     swarms : (K, N) int64
-    w : (V,) float64
-        Vertex area fractions.
+    w : (V,) or (S, V) float64
+        Vertex area fractions, shared or per scenario (:func:`weight_row`).
     """
     k_n, n = swarms.shape
     s_n, _, v_n = rows.shape
@@ -204,11 +220,12 @@ def swarm_coverages(rows, swarms, w):
     for j in prange(k_n * s_n):
         k = j // s_n
         s = j - k * s_n
+        ws = weight_row(w, s)
         a = 0.0
         for v in range(v_n):
             for i in range(n):
                 if rows[s, swarms[k, i], v]:
-                    a += w[v]
+                    a += ws[v]
                     break
         out[k, s] = a
     return out
