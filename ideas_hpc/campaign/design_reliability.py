@@ -258,6 +258,12 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=Non
                       "design.bank_level") from None
     rel = res.designer
     w = rel.ev.w
+    if rel.ev.per_scenario_weights:     # drawn worlds: the threshold is one fraction of each
+        reach = rel.ev.reach()          # world's reference; where all candidates miss it, P_s = 0
+        _log(f"drawn worlds: all candidates reach {100 * reach.min():.3f} % to "
+             f"{100 * reach.max():.3f} % of the scenarios' reference areas; "
+             f"{int((reach < need - 1e-12).sum())} of {s_n} scenarios are below the threshold "
+             f"{100 * need:.3f} % whatever flies")
     held = None if not h_n else HeldOut(lambda sw: _validate(
         c, setup, bank.theta[sw], need, w, exact, client, size=h_n,
         stream=seeds.HOLDOUT_STREAM).per_sample, h_n,

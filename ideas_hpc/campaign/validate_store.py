@@ -104,7 +104,8 @@ def validate_store(store, *, samples: int = 1024, seed: int | None = None, first
 
     from ideas_hpc.campaign.schema.campaign_tables import validate_campaign
     from ideas_hpc.campaign.schema.toml_file import CampaignSource
-    from ideas_hpc.campaign.design_reliability import Validation, fly_validation
+    from ideas_hpc.campaign.validation_flights import (Validation, fly_validation_world,
+                                                       sample_weights)
     from ideas_hpc.campaign.setup import setup_from_campaign
     from ideas_hpc.design.reliability_stats import lower_confidence_bound
     from ideas_hpc.engine.store_meta import store_attrs
@@ -133,15 +134,21 @@ def validate_store(store, *, samples: int = 1024, seed: int | None = None, first
     mc = c.config.monte_carlo
     t0 = time.perf_counter()
     model = failure_model(mc)
-    rows, seen = fly_validation(setup, theta, mc, model, seed=seed, n_samples=int(samples),
-                                progress=progress, first=int(first))
+    rows, seen, areas = fly_validation_world(setup, theta, mc, model, seed=seed,
+                                             n_samples=int(samples), progress=progress,
+                                             first=int(first))
     if rows.shape[2] != w.size:
         raise InputError(f"the body flown now has {rows.shape[2]} vertices, the store's "
                          f"{w.size} ({attrs.get('body', '?')}): set IDEAS_HPC_DATA as the "
                          "design run had it", field="store")
     need = float(attrs["reliability_threshold"])
     # the design's own validation (failures.sampling): exact P and one drawn outcome each
-    v = Validation(rows, w, need, model, seed, first=int(first), seen=seen)
+    # drawn worlds (issue 42): each flight's own weights; a store whose bank had weights by
+    # scenario refuses flights that bring none (validation_flights.sample_weights)
+    bank_w = (np.asarray(ds["scenario_vertex_weight"].values)
+              if "scenario_vertex_weight" in ds else w)
+    v = Validation(rows, sample_weights(areas, bank_w, rows.shape[0]), need, model, seed,
+                   first=int(first), seen=seen)
     per = v.per_sample
     # the same tolerance as the exact enumeration (the requirement's one comparison)
     wins = meets(v.coverage, need)

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ideas_hpc.base.errors import InputError
 from ideas_hpc.base.progress import steps
 from ideas_hpc.design.bank import CandidateBank
 from ideas_hpc.design.exact import greedy_swarm, max_coverage, prepare
@@ -76,6 +77,9 @@ class CoverageCurve:
 def coverage_curve(bank: CandidateBank, n_max: int, *, min_separation: float = 0.0,
                    time_limit: float | None = None) -> CoverageCurve:
     """Proven best coverage for every swarm size from 1 to ``n_max`` (module docstring)."""
+    if np.ndim(bank.areas) != 1:     # one world's curve; worlds by scenario: the bank's P
+        raise InputError("the coverage curve is of one world: vertex areas (V,), got shape "
+                         f"{np.shape(bank.areas)}", field="areas")
     t0 = time.perf_counter()
     prepared = prepare(bank, min_separation)
     reach = bank.reach
