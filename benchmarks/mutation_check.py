@@ -208,6 +208,9 @@ MUTATIONS: tuple[Mutation, ...] = (
     M("scenario_mip_first_world", "designers", "ideas_hpc/design/scenario_mip.py",
       "scenario_groups(rows[s], row(w, s))", "scenario_groups(rows[s], row(w, 0))",
       ("tests/test_per_world_weights.py::test_every_proof_holds_with_weights_by_scenario",)),
+    M("tolerance_first_world", "designers", "ideas_hpc/design/tolerance_bound.py",
+      "self.solver(self.rows[s], row(self.w, s),", "self.solver(self.rows[s], row(self.w, 0),",
+      ("tests/test_per_world_weights.py::test_every_proof_holds_with_weights_by_scenario",)),
     M("validation_first_sample_weights", "statistics", "ideas_hpc/failures/sampling.py",
       "        wk = row(w, k)\n", "        wk = row(w, 0)\n",
       ("tests/test_per_world_weights.py::"

@@ -9,7 +9,6 @@ import itertools
 
 import numpy as np
 import pytest
-from numba import njit
 
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.base.vertex_weights import normalised
@@ -23,39 +22,9 @@ from ideas_hpc.design.reliability_eval import Evaluator
 from ideas_hpc.design.scenario_mip import ScenarioMIP
 from ideas_hpc.failures.model import as_model
 from ideas_hpc.failures.sampling import FailureDraw, drawn_coverage, sample_probabilities
+from test_failure_model import _old_kernel   # the kernel before issues 41 and 42, copied
 
 P_F, NEED, P = 0.1, 0.85, 0.7
-
-
-@njit
-def _main_probability(rows, s, members, w, need, weights):
-    """The kernel before issue 42 (one shared (V,) w), copied: the reference floats."""
-    n = members.size
-    full = (1 << n) - 1
-    f = np.zeros(1 << n)
-    total = 0.0
-    for v in range(w.size):
-        b = 0
-        for i in range(n):
-            if rows[s, members[i], v]:
-                b |= 1 << i
-        f[b] += w[v]
-        total += w[v]
-    for i in range(n):
-        bit = 1 << i
-        for m in range(1 << n):
-            if m & bit:
-                f[m] += f[m ^ bit]
-    out = 0.0
-    for t in range(1 << n):
-        if total - f[full ^ t] >= need - 1e-12:
-            k = 0
-            x = t
-            while x:
-                x &= x - 1
-                k += 1
-            out += weights[k]
-    return out
 
 
 def brute_ps(rows, w2, members, need, p_f, sure=None):
@@ -129,7 +98,7 @@ def test_shared_weights_give_the_floats_of_before():
     assert np.array_equal(normalised(a), w) and np.array_equal(tiled[3], w)
     swarms = np.array([[0, 2, 4, 6], [1, 3, 5, 8], [0, 1, 7, 8]], np.int64)
     weights = independent_weights(P_F, 4)
-    old = np.array([[_main_probability(rows, s, sw, w, 0.6, weights) for s in range(6)]
+    old = np.array([[_old_kernel(rows, s, sw, w, 0.6, P_F) for s in range(6)]
                     for sw in swarms])
     for ww in (w, w[None, :].copy(), tiled):
         assert np.array_equal(weighted_probabilities(rows, swarms, ww, 0.6, weights), old)
@@ -197,6 +166,21 @@ def test_every_proof_holds_with_weights_by_scenario(seed):
     tol = d.tolerance()
     for n in range(1, 7):
         assert tol.upper(n, d.model, None) >= best_true(rows, w2, n) - 1e-12
+    for s in range(4):      # each k-tolerant minimum bound is its own world's
+        for k, low in tol.lows[s].items():
+            assert low <= fewest_tolerant(rows[s], w2[s], k), (s, k, low)
+
+
+def fewest_tolerant(rows_s, w, k):
+    """Fewest candidates of which every subset left after any k failures covers NEED in one
+    scenario (exhaustive; 9 when none of 8 does)."""
+    c_n = rows_s.shape[0]
+    for n in range(k + 1, c_n + 1):
+        for c in itertools.combinations(range(c_n), n):
+            if all(w[rows_s[list(t)].any(axis=0)].sum() >= NEED - 1e-12
+                   for t in itertools.combinations(c, n - k)):
+                return n
+    return c_n + 1
 
 
 def test_held_out_rows_with_weights_by_scenario():
