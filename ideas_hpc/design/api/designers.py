@@ -29,7 +29,8 @@ _NONE = np.zeros(0, dtype=np.int64)
 
 @dataclass(frozen=True)
 class ScenarioProblem:
-    """The scenario bank: ``rows`` (S, C, V) bool, ``areas`` (V,) m^2 and the
+    """The scenario bank: ``rows`` (S, C, V) bool, ``areas`` (V,) m^2 shared or (S, V) per
+    scenario (drawn worlds, issue 42: zero outside a world's reference area) and the
     candidates' angles ``theta_rad`` (C,)."""
 
     rows: np.ndarray
