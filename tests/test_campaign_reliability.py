@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
+from scipy.stats import binom
 
 from ideas_hpc.report.write import write_report
 from ideas_hpc.report.html_reliability import reliability_html_figures
@@ -55,7 +56,8 @@ FREE = BASE20 + QUIET + ["design.success_probability=0.9", "monte_carlo.failure_
 @pytest.fixture(scope="module")
 def free_store(tmp_path_factory):
     """The sample-free design (continuous dispersions off), shared by two tests."""
-    return run_file(DESIGN, out=tmp_path_factory.mktemp("free") / "r.zarr", overrides=FREE)
+    return run_file(DESIGN, out=tmp_path_factory.mktemp("free") / "r.zarr",
+                    overrides=FREE + ["design.tolerant_markers=true"])
 
 
 def test_sample_free_design_is_exact(free_store, tmp_path):
@@ -87,6 +89,18 @@ def test_sample_free_design_is_exact(free_store, tmp_path):
     best_smaller = swarm_probabilities(np.ascontiguousarray(bank.masks[None]), smaller, w,
                                        need, 0.05).max()
     assert best_smaller < 0.9
+    # asked for, the k-failure-tolerant markers: P at least the binomial chance of at most
+    # k failures of N_k, and no (N_k - 1)-swarm keeps the threshold through every k failures
+    assert list(ds["tolerated"].values) == [1, 2]
+
+    def covers(members):
+        return bool(members) and w[bank.masks[list(members)].any(axis=0)].sum() >= need - 1e-12
+
+    for k, n_k, p_k in zip(ds["tolerated"].values, ds["tolerant_swarm_size"].values,
+                           ds["tolerant_probability"].values):
+        assert p_k >= binom.cdf(k, n_k, 0.05) - 1e-12
+        for sw in all_swarms(bank.n_candidates, int(n_k) - 1, m_sep):
+            assert not all(covers(sub) for sub in itertools.combinations(sw, int(n_k) - 1 - k))
     assert ds["reliability_vs_n"].attrs["units"] == "1"
     assert "long_name" in ds["validation_lower_bound"].attrs
     # the optimisation on the bank and the validation are stored apart (nothing stepped here)
@@ -126,6 +140,8 @@ def test_dispersed_design_stores_validation(tmp_path):
     ds = xr.open_zarr(run_file(DESIGN, out=tmp_path / "d.zarr", overrides=sets))
     v = ds["validation_probability"].values
     assert v.shape == (24,) and np.all((v >= 0) & (v <= 1))
+    # no failure-tolerant markers unless asked (design.tolerant_markers, issue 43)
+    assert ds.sizes.get("tolerated", 0) == 0
     assert float(ds["validation_p_hat"]) == pytest.approx(v.mean())
     assert float(ds["validation_lower_bound"]) <= v.mean()
     assert bool(ds["demonstrated"]) == (float(ds["validation_lower_bound"]) >= 0.5)

@@ -211,7 +211,7 @@ def design_reliable(c, setup, client, *, bank_store: str | None = None):
     # builds the bank: their ~17 s no longer wait for it (same designs)
     tolerant = (client.submit(_tolerant_designs, nominal.bank, nominal.threshold, d, sep,
                               pure=False)
-                if client is not None else None)
+                if client is not None and d.tolerant_markers else None)
     t0 = time.perf_counter()
     fresh = bank_store is not None and not Path(bank_store).exists()
     bank = build_scenario_bank(setup, d.grid_step_rad, mc, seed=c.config.seed,
@@ -297,8 +297,11 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=Non
         curve.append((n, pb, rel.upper(n), v.p_hat, low, sw, ph))
         if pb >= CURVE_TOP and n >= chosen.n:
             break
-    tolerant = _tolerant(tolerant.result() if tolerant is not None else
-                         _tolerant_designs(nominal.bank, nominal.threshold, d, sep), rel)
+    # the markers only when asked (design.tolerant_markers): their HiGHS minute held a
+    # worker idle for the bank on the main job (issue 43)
+    tolerant = [] if not d.tolerant_markers else _tolerant(
+        tolerant.result() if tolerant is not None else
+        _tolerant_designs(nominal.bank, nominal.threshold, d, sep), rel)
     stat = None if exact else statistical_bound(rel, p, model, d.n_max, d.confidence)
     # the levels get what the design's time limit has left, at least a tenth of it
     levels = None if model.prior is None else n_at_levels(

@@ -66,6 +66,11 @@ DESIGN = {
                                 doc="most validation samples of one look: the look plan "
                                     "doubles a look's M from design.verify_samples toward 80 % "
                                     "predicted power (default: design.verify_samples)"),
+    "tolerant_markers": Field("bool", False,
+                              doc="mark the 1- and 2-failure-tolerant designs on the reliability "
+                                  "curve (HiGHS on the nominal bank: about a minute of one "
+                                  "worker, ending with 40 % gaps on eros001708; off by default, "
+                                  "issue 43)"),
     "population": Field("int", 100, lo=2, doc="GA population size"),
     "generations": Field("int", 115, lo=1),
     "n_max": Field("int", 20, lo=1, hi=200),
