@@ -188,3 +188,22 @@ def test_the_eros_class_campaign_runs(tmp_path):
     ds = xr.open_zarr(run_file(str(CAMPAIGN), out=str(tmp_path / "ec.zarr"), workers=0,
                                progress=False))
     assert 1 <= int(ds["best_swarm_size"]) <= 20
+
+
+def test_worlds_never_share_statics(drawn):
+    # two meshes with the same bounding and footprint radii still key apart (the digest)
+    from ideas_hpc.body.shape import build_shape
+    from ideas_hpc.flyby.usable import scene_radius_m
+
+    _, setup = drawn
+    a = drawn_world(setup, 1, seeds.SCENARIO_STREAM, 0)
+    v = a.shape.vertices_T.copy()
+    r = np.linalg.norm(v, axis=1)
+    i = int(np.argsort(r)[r.size // 2])        # a middling vertex: not the farthest
+    v[i] *= 0.999
+    shape = build_shape(v, a.shape.faces, name="moved", source="test")
+    b = dataclasses.replace(a, body=dataclasses.replace(a.body, shape=shape))
+    assert shape.r_max == a.shape.r_max
+    assert a.attitude_key != b.attitude_key and a.mapping_key(setup) != b.mapping_key(setup)
+    if scene_radius_m(shape) == scene_radius_m(a.shape):
+        assert a.attitude_key[:4] == b.attitude_key[:4]
