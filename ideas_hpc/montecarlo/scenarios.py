@@ -128,8 +128,12 @@ def _rows_chunk(ks, *, engine: RowEngine, mc, seed, stream):
 
 
 def row_engine(setup: FlybySetup, theta, mc, seed: int, stream: int) -> RowEngine:
-    """Targeted candidates ``theta`` with their nominal witnesses; budget from draw 0."""
+    """Targeted candidates ``theta`` with their nominal witnesses; budget from draw 0.
+    With a target prior no world is the nominal one: no witnesses (every row is
+    recomputed in full, :meth:`RowEngine.rows`)."""
     r0, v0 = nominal_start(setup, theta)
+    if setup.target is not None:
+        return RowEngine(setup, theta, r0, v0)
     pilot = Perturbation(**draw_world(mc, setup, theta, seed, stream, 0))
     return RowEngine(setup, theta, r0, v0).prepare(pilot)
 
