@@ -207,3 +207,23 @@ def test_worlds_never_share_statics(drawn):
     assert a.attitude_key != b.attitude_key and a.mapping_key(setup) != b.mapping_key(setup)
     if scene_radius_m(shape) == scene_radius_m(a.shape):
         assert a.attitude_key[:4] == b.attitude_key[:4]
+
+
+def test_a_bank_store_keeps_each_worlds_areas(drawn, tmp_path):
+    import zarr
+
+    c, setup = drawn
+    mc = c.config.monte_carlo
+    path = str(tmp_path / "bank.zarr")
+    a = build_scenario_bank(setup, STEP, mc, seed=4, n_scenarios=3, progress=False,
+                            chunk_size=2, store=path)
+    b = build_scenario_bank(setup, STEP, mc, seed=4, n_scenarios=3, progress=False,
+                            chunk_size=2, store=path)
+    assert b.attrs.get("reused") and not a.attrs.get("reused")
+    np.testing.assert_array_equal(a.rows, b.rows)
+    stored = zarr.open_group(path, mode="r")["areas"][...]
+    for s in range(3):
+        raw = setup.target.draw(4, s, family=seeds.SCENARIO_STREAM).shape
+        np.testing.assert_allclose(stored[s], raw.vertex_areas, rtol=1e-12, atol=0)
+    free = build_scenario_bank(setup, STEP, mc, seed=4, n_scenarios=3, progress=False)
+    np.testing.assert_array_equal(a.rows, free.rows)

@@ -38,7 +38,7 @@ from ideas_hpc.attitude.modes import ATTITUDE_MODES, ATTITUDE_STARTS
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.body.formats import builtin_body, length_unit_applies
 from ideas_hpc.campaign.schema.encounter_table import ENCOUNTER
-from ideas_hpc.campaign.schema.target_table import SPREADS
+from ideas_hpc.campaign.schema.target_table import TARGET_RULES, drawn, why_drawn
 from ideas_hpc.campaign.schema.kinds import DISPERSION_KEYS, KINDS
 from ideas_hpc.campaign.schema.read_settings import (Rule, Settings, entry_name, not_listed, owned,
                                                      readers)
@@ -202,21 +202,11 @@ def _why_length_unit(s: Settings) -> str:
             "unit applies to mesh files such as .obj/.ply/.stl/.off")
 
 
-def _drawn(s: Settings) -> bool:
-    """A drawn target prior (``[target] prior`` not "known") supplies the body."""
-    return s.config.target.prior != "known"
-
-
-def _why_drawn(s: Settings) -> str:
-    return (f"is ignored with target.prior = {s.config.target.prior!r}: the prior supplies "
-            "the body (its nominal, meshed at body.resolution)")
-
-
 def _resolution(s: Settings) -> bool:
     """The analytic built-in bodies are meshed at ``body.resolution`` (Eros without its data
     file falls back to one), and so is a drawn prior's nominal; a shape file has its own
     vertices."""
-    if _drawn(s):
+    if drawn(s):
         return True
     b = s.config.body
     found = builtin_body(b.name)
@@ -308,12 +298,9 @@ ENCOUNTER_KEY = Rule(lambda s: not _paper(s),
 #: Conditions on other settings (module docstring); a key not here and listed by no kind
 #: entry is read by every kind.
 RULES: dict[str, Rule] = {
-    "body.length_unit": Rule(lambda s: not _drawn(s) and _length_unit(s),
-                             lambda s: _why_drawn(s) if _drawn(s) else _why_length_unit(s)),
-    **{f"body.{k}": Rule(lambda s: not _drawn(s), _why_drawn)
-       for k in ("name", "params", "data_path", "shape", "kernels")},
-    **{f"target.{k}": Rule(_drawn, lambda s: 'overrides a drawn prior\'s spread: set '
-                                              'target.prior = "eros-class"') for k in SPREADS},
+    "body.length_unit": Rule(lambda s: not drawn(s) and _length_unit(s),
+                             lambda s: why_drawn(s) if drawn(s) else _why_length_unit(s)),
+    **TARGET_RULES,
     "body.resolution": Rule(_resolution, _why_resolution),
     "body.spice_body": Rule(_kernels, lambda s: "needs body.kernels (the SPICE kernels that "
                                                 "give the body's orbit and spin)"),

@@ -35,6 +35,7 @@ Overrides of the prior's spreads (``"eros-class"`` only; default: the prior's ow
 from __future__ import annotations
 
 from ideas_hpc.base.fields import Field
+from ideas_hpc.campaign.schema.read_settings import Rule
 from ideas_hpc.base.units import DEG
 
 DAY_S = 86400.0
@@ -63,3 +64,24 @@ TARGET = {
 #: The spread overrides (every key but ``prior``): read with a drawn prior only
 #: (:mod:`ideas_hpc.campaign.schema.reads`).
 SPREADS = tuple(k for k in TARGET if k != "prior")
+
+
+def drawn(s) -> bool:
+    """A drawn target prior (``target.prior`` not "known") supplies the body (settings
+    ``s`` of :mod:`ideas_hpc.campaign.schema.read_settings`)."""
+    return s.config.target.prior != "known"
+
+
+def why_drawn(s) -> str:
+    return (f"is ignored with target.prior = {s.config.target.prior!r}: the prior supplies "
+            "the body (its nominal, meshed at body.resolution)")
+
+
+#: The key-read rules of the prior (:data:`ideas_hpc.campaign.schema.reads.RULES`): a
+#: drawn prior's body keys are not read, nor are the spreads of the known prior.
+TARGET_RULES = {
+    **{f"body.{k}": Rule(lambda s: not drawn(s), why_drawn)
+       for k in ("name", "params", "data_path", "shape", "kernels")},
+    **{f"target.{k}": Rule(drawn, lambda s: 'overrides a drawn prior\'s spread: set '
+                                             'target.prior = "eros-class"') for k in SPREADS},
+}
