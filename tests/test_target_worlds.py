@@ -155,6 +155,7 @@ def test_known_prior_is_todays_bank():
     (['target.prior="known"', "target.sigma_pole_deg=5.0"], "target.sigma_pole_deg"),
     (['body.name="eros"'], "body.name"),
     (['body.data_path="/tmp"'], "body.data_path"),
+    (['body.length_unit="m"'], "body.length_unit"),
 ])
 def test_bad_target_input_is_one_line_naming_the_field(sets, field):
     with pytest.raises(InputError) as err:
