@@ -6,7 +6,7 @@ built-in prior of an Eros-class target, :func:`ideas_hpc.body.target_prior.eros_
 Gaussian random spheres on the Eros-sized ellipsoid, its size, pole and rotation
 spreads). ``"eros-class"`` supplies the body: its nominal ellipsoid meshed at
 ``body.resolution``, with Eros' Table 1 orbit, mass and spin, and the prior's pole
-and rotation phase (:func:`ideas_hpc.campaign.target.target_setup`); no data file is
+and rotation phase (:func:`ideas_hpc.campaign.target.prior_body`); no data file is
 read, and ``body.name``, ``body.params``, ``body.data_path``, ``body.shape`` and
 ``body.kernels`` are refused as not read. Scenario ``s`` of the bank then flies world
 ``s`` of the prior (:mod:`ideas_hpc.flyby.target_world`).
