@@ -111,6 +111,18 @@ MUTATIONS: tuple[Mutation, ...] = (
       "if world is not None and (world.mapping_key(self.setup)",
       "if False and (world.mapping_key(self.setup)",
       ("tests/test_recipes.py::test_recipe_world_dispersion_the_pole",)),
+    # ---- one world per scenario from the target prior (issue 42)
+    M("target_world_frame_transposed", "world", "ideas_hpc/flyby/target_world.py",
+      "q = nominal_dcm_TN(setup) @ dcm_TN(base, tw.pole_lon_lat_rad, tw.phase_tca_rad).T",
+      "q = dcm_TN(base, tw.pole_lon_lat_rad, tw.phase_tca_rad) @ nominal_dcm_TN(setup).T",
+      ("tests/test_target_worlds.py::test_world_is_placed_by_its_pole_and_phase",)),
+    M("target_world_streams_shared", "world", "ideas_hpc/flyby/target_world.py",
+      "prior.draw(int(seed), int(k), family=int(family))", "prior.draw(int(seed), int(k))",
+      ("tests/test_target_worlds.py::test_streams_give_disjoint_worlds",)),
+    M("bank_flies_the_nominal_world", "world", "ideas_hpc/montecarlo/scenarios.py",
+      "        if setup.target is None:\n            out[i] = engine.scenario_rows(pert, reuse=True)",
+      "        if True:\n            out[i] = engine.scenario_rows(pert, reuse=True)",
+      ("tests/test_target_worlds.py::test_drawn_rows_are_full_recomputations",)),
     # ---- designers
     M("ring_bound_optimistic_single", "designers", "ideas_hpc/core/design/ring_gaps.py",
       "tot[1, s] = M[s, K]", "tot[1, s] = 0.5 * M[s, K]",

@@ -38,7 +38,13 @@ SMALL = {
                          "design.angle_step_deg=5.0"],
     "eros-stereo-design.toml": ["design.verify_samples=2", "design.angle_step_deg=12.0",
                                 "design.time_limit_s=5"],
+    # already coarse; its [target] prior supplies the body (no data file, no body.name)
+    "eros-class-flyby.toml": [],
 }
+#: Files whose body comes from their [target] prior: run as shipped, never on another body.
+PRIOR_BODY = {"eros-class-flyby.toml"}
+#: ... and those that wait for the design side's per-scenario areas (S, V) (issue 42).
+NEEDS_WORLD_AREAS = {"eros-class-flyby.toml"}
 FORBIDDEN = ("design.n_max", "design.eps_tol_pct", "coverage.", "design.failures_tolerated")
 
 
@@ -59,8 +65,14 @@ def _run(name: str, sets: list, out: Path, shared_root: Path | None = None) -> x
     return xr.open_zarr(store)
 
 
-@pytest.mark.parametrize("name", FILES)
+@pytest.mark.parametrize("name", [
+    pytest.param(f, marks=pytest.mark.skip(reason="needs the design side's per-scenario areas "
+                                                  "(S, V), issue 42: unskip once merged"))
+    if f in NEEDS_WORLD_AREAS else f for f in FILES])
 def test_campaign_runs_on_the_ellipsoid(name, tmp_path):
+    if name in PRIOR_BODY:
+        _run(name, SMALL[name], tmp_path)
+        return
     ds = _run(name, ['body.name="ellipsoid"'] + SMALL[name], tmp_path)
     assert ds.attrs["body"] == "ellipsoid"
 
@@ -92,7 +104,8 @@ def test_files_left_to_the_docs_are_run_there_as_shipped():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", [f for f in FILES if f not in RUN_BY_DOCS])
+@pytest.mark.parametrize("name", [f for f in FILES
+                                  if f not in RUN_BY_DOCS and f not in PRIOR_BODY])
 def test_campaign_runs_on_eros001708_as_shipped(name, tmp_path, tmp_path_factory, eros1708):
     # shared with tests/test_ga_optimum.py: its shipped seed is one of the GA's seeds
     ds = _run(name, AS_SHIPPED + EROS_SIZES.get(name, []), tmp_path,

@@ -141,6 +141,11 @@ VALUES = {
                                           "monte_carlo.failure_probability=0.1"],
     "run.chunk_size": ["run.chunk_size=4"], "run.workers": ["run.workers=2"],
     "run.device": ['run.device="cuda"'],
+    "target.prior": ['target.prior="eros-class"'],
+    **{f"target.{k}": [f"target.{k}={v}", 'target.prior="eros-class"']
+       for k, v in (("sigma_r", 0.1), ("correlation_deg", 40.0), ("sigma_diameter_pct", 5.0),
+                    ("sigma_pole_deg", 2.0), ("p_mirror", 0.5), ("sigma_phase_deg", 5.0),
+                    ("lightcurve_days", 10.0))},
 }
 #: Keys whose valid value needs files: every variant reads them (checked on the
 #: declaration; tests/test_spice_in.py loads real kernels).

@@ -22,6 +22,7 @@ from ideas_hpc.body.bodies import load_body
 from ideas_hpc.body.formats import load_shape_file
 from ideas_hpc.campaign.schema.spice_table import apply_spice
 from ideas_hpc.campaign.schema.model_fields import flyby_errors
+from ideas_hpc.campaign.target import prior_body, target_prior
 from ideas_hpc.dynamics.trajectory import sun_direction_T
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.flyby.encounter import Encounter, approach_angles, approach_speed, window_s
@@ -56,9 +57,11 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
             params = params_from_mapping(params, prefix="body.params.")
         except InputError as exc:
             raise c.source.locate(exc) from None
+    prior = target_prior(c)     # None: [target] prior = "known", the [body] itself
     try:
-        body = load_body(b.name, data_path=b.data_path, resolution=b.resolution,
-                         params=params, length_unit=b.length_unit)
+        body = prior_body(prior, cfg) if prior is not None else load_body(
+            b.name, data_path=b.data_path, resolution=b.resolution, params=params,
+            length_unit=b.length_unit)
         body.require_params()
         if b.shape is not None:     # a mesh (DSK...) for the named body, its parameters kept
             body = _replace_shape(c, body, b)
@@ -119,7 +122,7 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
         epoch_s=epoch_s, encounter=enc, imaging=_imaging(cfg, eta),
         attitude_start=cfg.monte_carlo.attitude_start,
         torques=torques_from_config(c.raw.get("torques"), prefix="torques."),
-        device=device)
+        device=device, target=prior)
 
 
 def _imaging(cfg, eta_rad: float) -> ImageUse | None:

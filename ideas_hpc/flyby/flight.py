@@ -97,6 +97,10 @@ class FlybySetup:
     #: where the closed-loop flights run, "cpu" or "cuda" (ideas_hpc.attitude.device): an
     #: execution choice, left out of the bank's shaping hash
     device: str = "cpu"
+    #: The target prior whose worlds the scenarios fly (a
+    #: :class:`~ideas_hpc.body.target_prior.TargetPrior`, :mod:`ideas_hpc.flyby.target_world`);
+    #: None: every scenario flies ``body`` (the known target)
+    target: object | None = None
 
     @property
     def geometry(self) -> Geometry:
@@ -155,7 +159,7 @@ class FlybySetup:
 
 
 #: The fields of :class:`FlybySetup` that make its :class:`~ideas_hpc.flyby.world.World`.
-_WORLD_FIELDS = ("body", "force_model", "epoch_s", "encounter")
+_WORLD_FIELDS = ("body", "force_model", "epoch_s", "encounter", "target")
 
 
 def endpoints(setup: FlybySetup, theta) -> tuple[np.ndarray, np.ndarray]:

@@ -25,7 +25,8 @@ frames, spin tables, the reference at the first step, the ideal cameras, the
 BVH and the lighting) is kept per process in :func:`cached_static`, keyed by the
 parts of the world it reads (:attr:`World.attitude_key`, :meth:`World.mapping_key`),
 so scenarios that share them (gravity and reflectivity draws on one body) share it,
-and a scenario with another pole, spin or shape gets its own.
+and a scenario with another pole, spin or shape gets its own (the worlds of a target
+prior, :mod:`ideas_hpc.flyby.target_world`: every key holds the shape's digest).
 """
 
 from __future__ import annotations
@@ -170,9 +171,10 @@ class World:
     def attitude_key(self) -> tuple:
         """What the closed loop and the ideal cameras read of this world: the spin, the
         encounter, the bounding radius (blinding) and the footprint sphere's radius (smear,
-        :func:`~ideas_hpc.flyby.usable.scene_radius_m`)."""
+        :func:`~ideas_hpc.flyby.usable.scene_radius_m`), and the mesh itself (its digest):
+        worlds of a target prior never share statics (issue 42)."""
         return (self.spin_rate_rad_s, repr(self.encounter), float(self.shape.r_max),
-                scene_radius_m(self.shape))
+                scene_radius_m(self.shape), shape_digest(self.shape))
 
     def mapping_key(self, setup) -> tuple:
         """What a flight's rows read of this world besides the flight: the shape, and

@@ -170,6 +170,8 @@ class RowEngine:
             return self._full(r_img, dcm, world)     # another shape or Sun: no proofs
         if not self.fast:
             return self._full(r_img, dcm)
+        if self.witness is None:    # no proofs prepared (a target prior's engine)
+            return self._full(r_img, dcm, world)
         r = np.ascontiguousarray(r_img, dtype=np.float64)
         c = np.ascontiguousarray(dcm, dtype=np.float64)
         r_nom, dcm_nom = self.nominal()

@@ -2,7 +2,8 @@
 
 The store is an ordinary engine store (:mod:`ideas_hpc.engine`) whose
 ``sample`` dimension is the scenario: variable ``rows`` (sample, candidate,
-vertex) bool, plus ``theta`` (candidate, rad) and ``areas`` (vertex, m^2).
+vertex) bool, plus ``theta`` (candidate, rad) and ``areas`` (vertex, m^2; with a
+target prior (world, vertex), world ``s`` scenario ``s``'s).
 Its ``config`` attr is :func:`~ideas_hpc.montecarlo.scenarios.shaping_config`
 (everything that shapes the rows: flyby, body, continuous dispersions, grid,
 seed, number of scenarios), so
@@ -42,13 +43,16 @@ def _template(theta, areas, n_scenarios: int):
     import dask.array as da
     import xarray as xr
 
-    c, v = theta.size, areas.size
+    c, v = theta.size, areas.shape[-1]
     rows = da.zeros((int(n_scenarios), c, v), dtype=bool, chunks=(int(n_scenarios), c, v))
+    # (S, V) with a target prior: each scenario's world has its own vertex areas, written
+    # in full at creation (the engine leaves a variable along ``sample`` to the chunks)
+    dims = ("world", "vertex") if areas.ndim == 2 else ("vertex",)
     return xr.Dataset(
         {"rows": (("sample", "candidate", "vertex"), rows,
                   {"long_name": "vertex seen (or mapped) by the candidate in the scenario"}),
          "theta": (("candidate",), theta, {"units": "rad", "long_name": "grid swarm angle"}),
-         "areas": (("vertex",), areas, {"units": "m^2", "long_name": "vertex area"})},
+         "areas": (dims, areas, {"units": "m^2", "long_name": "vertex area"})},
         coords={"sample": np.arange(int(n_scenarios)), "candidate": np.arange(c),
                 "vertex": np.arange(v)})
 

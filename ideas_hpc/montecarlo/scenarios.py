@@ -41,6 +41,7 @@ from ideas_hpc.flyby.flight import FlybySetup, Perturbation, endpoints, target
 from ideas_hpc.base.seeds import (HOLDOUT_STREAM, SCENARIO_STREAM, STREAM_ATTITUDE,
                                   STREAM_BODY, STREAM_SPACECRAFT, VALIDATION_STREAM, stream_rng)
 from ideas_hpc.montecarlo import dispersions as _dispersions
+from ideas_hpc.flyby.target_world import scenario_world, world_areas
 from ideas_hpc.montecarlo.scenario_rows import RowEngine
 from ideas_hpc.montecarlo.scenario_store import build_into_store, chunk_task
 
@@ -59,8 +60,9 @@ class ScenarioBank:
         The design grid, ``theta_k = k 2 pi / C``.
     rows : (S, C, V) bool
         Vertex ``v`` seen (or mapped) by candidate ``c`` in scenario ``s``.
-    areas : (V,) m^2
-        Vertex areas.
+    areas : (V,) or (S, V) m^2
+        Vertex areas: the body's, or with a target prior each scenario's world's
+        (:func:`~ideas_hpc.flyby.target_world.world_areas`).
     attrs : dict
         Provenance: seed, stream words, ``n_scenarios``, config hash, timing.
     """
@@ -115,13 +117,23 @@ def _rows_chunk(ks, *, engine: RowEngine, mc, seed, stream):
     out = np.empty((len(ks), engine.theta.size, setup.body.shape.n_vertices), dtype=bool)
     for i, k in enumerate(ks):
         pert = Perturbation(**draw_world(mc, setup, engine.theta, seed, stream, int(k)))
-        out[i] = engine.scenario_rows(pert, reuse=True)
+        if setup.target is None:
+            out[i] = engine.scenario_rows(pert, reuse=True)
+            continue
+        # world k of the stream's family: its own shape, so its rows are recomputed in
+        # full (RowEngine.rows: the nominal's proofs hold for the nominal shape only)
+        world = scenario_world(setup, seed, stream, int(k), pert.params_override)
+        out[i] = engine.rows(*engine.flight(pert, True, world), world=world)
     return out
 
 
 def row_engine(setup: FlybySetup, theta, mc, seed: int, stream: int) -> RowEngine:
-    """Targeted candidates ``theta`` with their nominal witnesses; budget from draw 0."""
+    """Targeted candidates ``theta`` with their nominal witnesses; budget from draw 0.
+    With a target prior no world is the nominal one: no witnesses (every row is
+    recomputed in full, :meth:`RowEngine.rows`)."""
     r0, v0 = nominal_start(setup, theta)
+    if setup.target is not None:
+        return RowEngine(setup, theta, r0, v0)
     pilot = Perturbation(**draw_world(mc, setup, theta, seed, stream, 0))
     return RowEngine(setup, theta, r0, v0).prepare(pilot)
 
@@ -155,8 +167,10 @@ def shaping_config(setup: FlybySetup, mc, step_rad: float, seed: int, n: int) ->
                           if d.designer == "exact" for k, f in d.keys}
     mc_d = {f.name: getattr(mc, f.name) for f in dataclasses.fields(mc) if f.name not in skip}
     sh = setup.body.shape
+    # a setup without a target prior hashes as before the field existed (stores reused)
     fs = {f.name: repr(getattr(setup, f.name)) for f in dataclasses.fields(setup)
-          if f.name not in ("body", "seed", "decimate", "device")}
+          if f.name not in ("body", "seed", "decimate", "device")
+          and not (f.name == "target" and setup.target is None)}
     import hashlib
     mesh = hashlib.sha256(np.ascontiguousarray(sh.vertices_T).tobytes()
                           + np.ascontiguousarray(sh.faces).tobytes()).hexdigest()
@@ -193,7 +207,7 @@ def build_scenario_bank(setup: FlybySetup, step_rad: float, mc, *, seed: int, n_
     """
     t0 = time.perf_counter()
     theta = grid_theta(step_rad)
-    areas = np.asarray(setup.body.shape.vertex_areas, dtype=np.float64)
+    areas = world_areas(setup, seed, SCENARIO_STREAM, range(int(n_scenarios)))
     config = shaping_config(setup, mc, step_rad, seed, n_scenarios)
     attrs = {"seed": int(seed), "scenario_stream": SCENARIO_STREAM,
              "validation_stream": VALIDATION_STREAM, "n_scenarios": int(n_scenarios),
@@ -241,6 +255,14 @@ def fly_members(setup: FlybySetup, theta, periods, mc, *, seed: int, n_samples: 
                        VALIDATION_CHUNK, progress, _flights_label(stream))
 
 
+def flight_areas(setup: FlybySetup, *, seed: int, n_samples: int, first: int = 0,
+                 stream: int = VALIDATION_STREAM) -> np.ndarray:
+    """Vertex areas (m^2) of the flights :func:`fly_members` (same arguments) flies:
+    ``(V,)`` of the body without a target prior, else ``(M, V)``, row ``m`` sample
+    ``first + m``'s world of ``stream``."""
+    return world_areas(setup, seed, stream, range(int(first), int(first) + int(n_samples)))
+
+
 def _flights_label(stream: int) -> str:
     return "held-out flights" if int(stream) == HOLDOUT_STREAM else "validation flights"
 
@@ -253,7 +275,7 @@ def _seen_chunk(ks, *, engine: RowEngine, mc, seed, stream):
     out = np.empty((len(ks), engine.theta.size, setup.body.shape.n_vertices), dtype=np.int32)
     for i, k in enumerate(ks):
         pert = Perturbation(**draw_world(mc, setup, engine.theta, seed, stream, int(k)))
-        world = engine.world(pert)
+        world = scenario_world(setup, seed, stream, int(k), pert.params_override)
         r_img, dcm = engine.flight(pert, True, world)
         rows = engine.rows(r_img, dcm, world=world)
         first = engine.first_seen(r_img, dcm, world)

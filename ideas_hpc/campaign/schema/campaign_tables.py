@@ -57,7 +57,10 @@ in :mod:`ideas_hpc.campaign.schema.design_table`);
 ``mutation_probability`` and ``time_limit_s`` (the exact reference curve).
 
 ``[monte_carlo]`` ``samples`` and the dispersions (see :data:`MC_SCHEMA`).
-``[run]`` ``chunk_size``, ``workers``."""
+``[run]`` ``chunk_size``, ``workers``.
+
+``[target]`` ``prior`` (``known`` or ``eros-class``) and the prior's spread overrides:
+:mod:`ideas_hpc.campaign.schema.target_table`."""
 
 from __future__ import annotations
 
@@ -81,6 +84,7 @@ from ideas_hpc.base.units import DEG, KM, MINUTE
 from ideas_hpc.campaign.schema.design_checks import DESIGNER_FIELDS, resolve_angle_step
 from ideas_hpc.campaign.schema.encounter_table import ENCOUNTER, check_encounter
 from ideas_hpc.campaign.schema.spice_table import SPICE_BODY, SPICE_FLYBY, resolve_spice
+from ideas_hpc.campaign.schema.target_table import TARGET
 from ideas_hpc.campaign.schema.instrument_table import INSTRUMENT
 from ideas_hpc.campaign.schema.model_fields import STORED_NAMES, flyby_errors, stored_fields
 from ideas_hpc.campaign.schema.model_tables import build_models
@@ -158,6 +162,7 @@ SCHEMA = {
     "design": DESIGN,
     "monte_carlo": MC_SCHEMA,
     "run": RUN,
+    "target": TARGET,
 }
 
 
@@ -169,8 +174,10 @@ Attitude = typed_table("Attitude", ATTITUDE, __name__)
 Design = typed_table("Design", DESIGN, __name__)
 MonteCarlo = typed_table("MonteCarlo", MC_SCHEMA, __name__)
 Run = typed_table("Run", RUN, __name__)
+Target = typed_table("Target", TARGET, __name__)
 TABLES = {"body": Body, "instrument": Instrument, "flyby": Flyby, "swarm": Swarm,
-          "attitude": Attitude, "design": Design, "monte_carlo": MonteCarlo, "run": Run}
+          "attitude": Attitude, "design": Design, "monte_carlo": MonteCarlo, "run": Run,
+          "target": Target}
 
 
 @dataclass(frozen=True)
@@ -191,6 +198,7 @@ class CampaignConfig:
     design: Any
     monte_carlo: Any
     run: Any
+    target: Any
 
 
 def typed_config(values: dict) -> CampaignConfig:

@@ -38,6 +38,7 @@ from ideas_hpc.attitude.modes import ATTITUDE_MODES, ATTITUDE_STARTS
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.body.formats import builtin_body, length_unit_applies
 from ideas_hpc.campaign.schema.encounter_table import ENCOUNTER
+from ideas_hpc.campaign.schema.target_table import TARGET_RULES, drawn, why_drawn
 from ideas_hpc.campaign.schema.kinds import DISPERSION_KEYS, KINDS
 from ideas_hpc.campaign.schema.read_settings import (Rule, Settings, entry_name, not_listed, owned,
                                                      readers)
@@ -203,7 +204,10 @@ def _why_length_unit(s: Settings) -> str:
 
 def _resolution(s: Settings) -> bool:
     """The analytic built-in bodies are meshed at ``body.resolution`` (Eros without its data
-    file falls back to one); a shape file has its own vertices."""
+    file falls back to one), and so is a drawn prior's nominal; a shape file has its own
+    vertices."""
+    if drawn(s):
+        return True
     b = s.config.body
     found = builtin_body(b.name)
     return b.shape is None and found is not None and not found[1].real_eros
@@ -294,7 +298,9 @@ ENCOUNTER_KEY = Rule(lambda s: not _paper(s),
 #: Conditions on other settings (module docstring); a key not here and listed by no kind
 #: entry is read by every kind.
 RULES: dict[str, Rule] = {
-    "body.length_unit": Rule(_length_unit, _why_length_unit),
+    "body.length_unit": Rule(lambda s: not drawn(s) and _length_unit(s),
+                             lambda s: why_drawn(s) if drawn(s) else _why_length_unit(s)),
+    **TARGET_RULES,
     "body.resolution": Rule(_resolution, _why_resolution),
     "body.spice_body": Rule(_kernels, lambda s: "needs body.kernels (the SPICE kernels that "
                                                 "give the body's orbit and spin)"),
