@@ -11,7 +11,8 @@ What differs between them, and only that, is here:
   encounter's are fixed in N (spin 0, ``[N S]``) -- and how a DCM in that frame
   becomes ``[B T]`` and ``[B N]`` (:meth:`Geometry.maneuver_frame`,
   :meth:`Geometry.to_T`, :meth:`Geometry.to_N`);
-* the Sun and the approach in the store attrs (:meth:`Geometry.attrs`).
+* the Sun and the approach in the store attrs (:meth:`Geometry.attrs`);
+* the time of closest approach (:meth:`Geometry.closest_approach_s`).
 
 Callers never ask which geometry they fly.
 """
@@ -69,6 +70,11 @@ class Geometry:
         """Store attrs of the geometry (SI)."""
         raise NotImplementedError
 
+    def closest_approach_s(self, setup) -> float:
+        """The time of closest approach (TCA), s after the arrival epoch: where the
+        reference area lit at TCA is taken (:mod:`ideas_hpc.mapping.reference`)."""
+        raise NotImplementedError
+
     def camera(self, setup, spin_rad_s: float, ideal, simulate):
         """``([B T], AttitudeResult or None)``: ``ideal(spin, dcm_TS)`` or
         ``simulate(spin, dcm_TS)`` (by ``setup.attitude_mode``) in the maneuver frame,
@@ -118,6 +124,14 @@ class PaperGeometry(Geometry):
     def attrs(self, setup):
         return {"geometry": "paper"}
 
+    def closest_approach_s(self, setup):
+        # the arcs run from z_start to z_stop along the spin axis at fixed x, y: nearest
+        # the body where z = 0, at constant speed (gravity bends a pass by metres) at
+        # t0 + (tf - t0) z_start / (z_start - z_stop): the middle of the paper's window
+        z0, z1 = float(setup.z_start_m), float(setup.z_stop_m)
+        frac = z0 / (z0 - z1) if z0 != z1 else 0.5
+        return float(setup.t0_s + (setup.tf_s - setup.t0_s) * min(1.0, max(0.0, frac)))
+
 
 @dataclass(frozen=True)
 class EncounterGeometry(Geometry):
@@ -148,6 +162,9 @@ class EncounterGeometry(Geometry):
 
     def attrs(self, setup):
         return encounter_attrs(setup)
+
+    def closest_approach_s(self, setup):
+        return float(self.encounter.t_ca_s)
 
 
 #: The paper's geometry (it has no parameters of its own).

@@ -19,7 +19,7 @@ import math
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.design.api.methods import METHODS
 from ideas_hpc.failures.weights import all_lost
-from ideas_hpc.mapping.requirement import TARGET_RULES
+from ideas_hpc.mapping.requirement import REFERENCES, TARGET_RULES
 from ideas_hpc.montecarlo.dispersions import dispersion_keys
 from ideas_hpc.montecarlo.failure_dispersion import failure_model
 from ideas_hpc.campaign.schema.kinds import KINDS
@@ -77,6 +77,11 @@ DESIGN = {
     "target_rule": Field("str", "reach", choices=TARGET_RULES.keys(),
                          doc="the target: 'reach' (100 %, or what the candidates reach "
                              "together when less) or 'full' (100 %, else fail)"),
+    "coverage_reference": Field("str", "surface", choices=REFERENCES.keys(),
+                                doc="what coverage is a fraction of: 'surface' (the whole "
+                                    "surface, the paper's) or 'lit_at_tca' (the area lit "
+                                    "at closest approach within coverage.max_incidence_deg;"
+                                    " docs/requirement.md)"),
     "angle_step_rad": Field("float", None, nullable=True, lo=0, hi=1.0,
                             doc="deprecated alias of angle_step_deg, in rad"),
     "p_min_min": Field("float", 0.3, si="p_min_s", to_si=MINUTE, lo=0, lo_open=True),
