@@ -128,6 +128,20 @@ def holdout_scenarios(d, exact: bool) -> int:
     return HOLDOUT_PER_SAMPLE * verify_samples(d)
 
 
+def reference_checks(c) -> None:
+    """``design.coverage_reference`` other than the whole surface where a run would read
+    coverage that ignores it: the plain exact design's Monte Carlo verification flies
+    whole-surface coverage (the success-probability design's bank and validation weigh by
+    the reference, docs/requirement.md)."""
+    d = c.design
+    if d.coverage_reference != "surface" and d.success_probability is None \
+            and verify_samples(d) > 0:
+        raise InputError(f"{d.coverage_reference!r} weighs the design but not the Monte Carlo "
+                         "verification of a design without design.success_probability (its "
+                         "coverage is of the whole surface): set design.verify_samples = 0, "
+                         "or design.success_probability", field="design.coverage_reference")
+
+
 def reliability_checks(c) -> None:
     """Cross-checks of the success-probability keys (bad inputs of issue 20)."""
     d = c.design
