@@ -125,12 +125,17 @@ class PaperGeometry(Geometry):
         return {"geometry": "paper"}
 
     def closest_approach_s(self, setup):
-        # the arcs run from z_start to z_stop along the spin axis at fixed x, y: nearest
-        # the body where z = 0, at constant speed (gravity bends a pass by metres) at
-        # t0 + (tf - t0) z_start / (z_start - z_stop): the middle of the paper's window
-        z0, z1 = float(setup.z_start_m), float(setup.z_stop_m)
-        frac = z0 / (z0 - z1) if z0 != z1 else 0.5
-        return float(setup.t0_s + (setup.tf_s - setup.t0_s) * min(1.0, max(0.0, frac)))
+        # each arc is a straight inertial chord (gravity bends a pass by metres) from
+        # p0 = (d, 0, z_start) to the end point turned with the body over the window,
+        # p1 = (d cos phi, d sin phi, z_stop), phi = w (tf - t0); nearest the centre at
+        # u = -p0 . (p1 - p0) / |p1 - p0|^2 of the window (the same for every ring angle)
+        d, z0, z1 = float(setup.d_sep_m), float(setup.z_start_m), float(setup.z_stop_m)
+        span = float(setup.tf_s - setup.t0_s)
+        phi = setup.body.params.spin_rate * span
+        p0 = np.array([d, 0.0, z0])
+        dp = np.array([d * math.cos(phi), d * math.sin(phi), z1]) - p0
+        u = -float(p0 @ dp) / float(dp @ dp) if float(dp @ dp) > 0.0 else 0.5
+        return float(setup.t0_s + span * min(1.0, max(0.0, u)))
 
 
 @dataclass(frozen=True)
