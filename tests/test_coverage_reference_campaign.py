@@ -116,6 +116,8 @@ def test_a_design_on_the_lit_reference(lit_store, tmp_path):
     frac = w[seen].sum() / w.sum()
     assert float(ds["best_coverage_of_reference"]) == pytest.approx(frac, rel=1e-12)
     assert frac >= float(a["threshold_coverage"]) - 1e-9
+    # the designer weighed its rows by the same reference (the flight is its nominal)
+    assert float(ds["design_coverage"]) == pytest.approx(frac, rel=1e-9)
     # ... and not the whole surface's: the two differ on this pass
     whole = ds["vertex_area"].values[seen].sum() / ds["vertex_area"].values.sum()
     assert abs(frac - whole) > 0.05
@@ -134,3 +136,35 @@ def test_a_store_without_the_label_reads_as_the_papers_map():
     assert coverage_meaning(vis).endswith("visual (lit, incidence <= 60 deg) map of the area "
                                           "lit at closest approach")
     assert "geometric" not in coverage_meaning(xr.Dataset({"mapped": ((), True)}))
+
+
+def test_a_success_probability_design_weighs_the_lit_area(tmp_path):
+    """The scenario bank and the validation (and ``ideas-hpc validate``) weigh by the lit
+    area: continuous dispersions off, P is the exact enumeration over the nominal masks
+    with the lit weights, written out in numpy (test_campaign_reliability.exact_p); on
+    the whole surface the same swarm would score 0 (it maps ~75 % of it)."""
+    from ideas_hpc.campaign.validate_store import validate_store
+    from ideas_hpc.design import build_bank
+    from test_campaign_reliability import DESIGN as RELIABLE, FREE, exact_p
+
+    lit = ['design.coverage_reference="lit_at_tca"']
+    store = run_file(RELIABLE, out=tmp_path / "p.zarr", overrides=FREE + lit)
+    ds = xr.open_zarr(store)
+    c = load(RELIABLE, FREE + lit)
+    setup = setup_from_campaign(c)
+    bank = build_bank(setup, c.config.design.grid_step_rad)
+    s = setup.sun_T([setup.geometry.closest_approach_s(setup)])[0]
+    facing = setup.body.shape.vertex_normals_T @ s > 0.0     # convex: no cast shadow
+    w = np.where(facing, bank.areas, 0.0)
+    assert np.array_equal(ds["reference_area"].values, w)
+    need = ds.attrs["reliability_threshold"]
+    idx = list(np.rint(ds["swarm_angle"].values / bank.step_rad).astype(int)
+               % bank.n_candidates)
+    p = exact_p(bank.masks, w / w.sum(), idx, need, 0.05)
+    assert p >= 0.9
+    assert float(ds["reliability_probability"]) == pytest.approx(p, abs=1e-12)
+    assert float(ds["validation_p_hat"]) == pytest.approx(p, abs=1e-12)
+    whole = bank.areas / bank.areas.sum()
+    assert exact_p(bank.masks, whole, idx, need, 0.05) < 0.5
+    v = validate_store(store, samples=2, progress=False)
+    assert v.p_hat == pytest.approx(p, abs=1e-12)
