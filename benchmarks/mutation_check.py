@@ -306,6 +306,29 @@ MUTATIONS: tuple[Mutation, ...] = (
       "ideas_hpc/campaign/schema/campaign_tables.py",
       "if not source.resolved:", "if source.resolved:",
       ("tests/test_key_reads.py::test_a_stores_resolved_config_is_not_judged",)),
+    # ---- the coverage reference (issue 42)
+    M("reference_incidence_complement", "kernels", "ideas_hpc/mapping/reference.py",
+      "lit &= cos_i >= math.cos(float(max_incidence_rad))",
+      "lit &= cos_i >= math.sin(float(max_incidence_rad))",
+      ("tests/test_coverage_reference.py::test_a_sphere_lit_fraction_is_the_spherical_cap",)),
+    M("reference_shadow_ray_too_short", "kernels", "ideas_hpc/mapping/reference.py",
+      "reach = SHADOW_REACH * float(np.max(np.linalg.norm(p, axis=1)))",
+      "reach = 0.05 * float(np.max(np.linalg.norm(p, axis=1)))",
+      ("tests/test_coverage_reference.py::test_cast_shadows_match_a_brute_force_ray_test",)),
+    M("bank_weighs_the_whole_surface", "designers", "ideas_hpc/campaign/design_reliability.py",
+      'if c.config.design.coverage_reference != "surface":',
+      'if c.config.design.coverage_reference == "none":',
+      ("tests/test_coverage_reference_campaign.py::"
+       "test_a_success_probability_design_weighs_the_lit_area",)),
+    M("exact_design_weighs_the_whole_surface", "designers", "ideas_hpc/campaign/design_exact.py",
+      'if requirement.reference != "surface":   # issue 42',
+      'if requirement.reference == "none":   # issue 42',
+      ("tests/test_coverage_reference_campaign.py::test_a_design_on_the_lit_reference",)),
+    M("paper_tca_ignores_spin", "designers", "ideas_hpc/flyby/geometry.py",
+      "dp = np.array([d * math.cos(phi), d * math.sin(phi), z1]) - p0",
+      "dp = np.array([d, 0.0, z1]) - p0",
+      ("tests/test_coverage_reference_campaign.py::"
+       "test_the_paper_closest_approach_is_the_trajectory_minimum",)),
 )
 
 

@@ -104,6 +104,7 @@ VALUES = {
     "design.holdout_scenarios": ["design.holdout_scenarios=40"],
     "design.verify_samples_max": ["design.verify_samples_max=512"],
     "design.target_rule": ['design.target_rule="full"'],
+    "design.coverage_reference": ['design.coverage_reference="lit_at_tca"'],
     "design.generations": ["design.generations=5"], "design.n_max": ["design.n_max=10"],
     "design.eps_tol_pct": ["design.eps_tol_pct=1.0"],
     "design.angle_step_rad": ["design.angle_step_rad=0.05"],

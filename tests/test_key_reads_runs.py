@@ -97,6 +97,9 @@ TOUCHED = {
     "design.angle_step_deg": ("the grid check of every design kind reads the grid (design-fov "
                               "has none: its default passes)", ("design-fov",)),
     "design.angle_step_rad": ("as design.angle_step_deg", ("design-fov",)),
+    "design.coverage_reference": ("the requirement record copies it; a kind that does not "
+                                  "declare it refuses the key, so it keeps the whole surface",
+                                  ("design-ga", "monte-carlo")),
     "design.eps_tol_pct": ("the FoV GA computes a threshold it keeps for nadir designs only",
                            ("design-fov",)),
     "design.n_max": ("the FoV GA's estimate of its work (the cluster's size)", ("design-fov",)),

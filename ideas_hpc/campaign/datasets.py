@@ -89,13 +89,16 @@ def setup_attrs(setup) -> dict:
 def base_attrs(c, setup) -> dict:
     """Global attrs of every campaign store besides the engine's provenance (resolved
     config and hash, code version, seed, creation time): kind, execution settings
-    (not hashed), the campaign file and the setup's sizing."""
+    (not hashed), the campaign file, the setup's sizing and what its coverage is
+    (``coverage_reference``, ``requirement_kind``, ``requirement``: issue 42)."""
     from ideas_hpc.engine.store_meta import config_json
     from ideas_hpc.campaign.schema.campaign_tables import EXECUTION_KNOBS
+    from ideas_hpc.campaign.setup import requirement_attrs, requirement_from_campaign
 
     knobs = {k: getattr(getattr(c.config, k.split(".")[0]), k.split(".")[1])
              for k in EXECUTION_KNOBS}
     attrs = {"kind": c.kind, "execution": config_json(knobs),
              "campaign_file": str(c.source.path)}
     attrs.update(setup_attrs(setup))
+    attrs.update(requirement_attrs(requirement_from_campaign(c)))
     return attrs

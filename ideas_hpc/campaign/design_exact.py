@@ -11,6 +11,7 @@ swarm, and the store variables ``design_method``, ``solver_status``,
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import json
 import math
@@ -33,6 +34,7 @@ from ideas_hpc.design.candidates import candidate_masks
 from ideas_hpc.design.resolution import eps_tol_warning
 from ideas_hpc.flyby.flight import fly, target
 from ideas_hpc.campaign.setup import requirement_from_campaign, setup_from_campaign
+from ideas_hpc.flyby.reference_area import reference_areas
 from ideas_hpc.campaign import precompile
 from ideas_hpc.montecarlo.verify import verify_swarm
 from ideas_hpc.campaign import datasets
@@ -117,13 +119,15 @@ def design_exact(c, setup, client) -> ExactDesign:
                                                         [(0.0, 0.0, 0)]))
     bank = build_bank(setup, d.grid_step_rad, client=client, chunk_size=d.chunk_size,
                       quality=stereo, pairs=stereo)
+    if requirement.reference != "surface":   # issue 42: rows weighed by the reference area
+        bank = dataclasses.replace(bank, areas=reference_areas(setup, requirement))
     scorer = stereo_scorer(bank) if stereo else bank
     t_masks = time.perf_counter() - t0
     _log(f"candidate {'rows' if setup.coverage.requirement else 'masks'}: {bank.n_candidates} "
          f"grid angles ({math.degrees(bank.step_rad):g} deg)"
          f"{' and their stereo pairs' if stereo else ''} in {t_masks:.1f} s")
     notes: list = []
-    coarse = eps_tol_warning(bank.areas, requirement.eps_tol)
+    coarse = eps_tol_warning(bank.areas[bank.areas > 0], requirement.eps_tol)
     if coarse is not None:          # it still runs: a strict requirement may be meant
         _log(coarse)
     thr = _threshold(scorer, requirement, notes)
@@ -223,6 +227,14 @@ def verification_vars(c, setup, theta, threshold: float, client) -> tuple[dict, 
     return data, attrs, v.summary()
 
 
+def reference_coverage(w, cov) -> float:
+    """A flight's mapped (or, without a requirement, observed) area as a fraction of the
+    reference area of vertex weights ``w`` (:mod:`ideas_hpc.mapping.reference`); ``cov``
+    its :class:`~ideas_hpc.mapping.coverage.CoverageResult`."""
+    mapped = cov.observed if cov.quality is None else cov.quality.mapped
+    return float(np.sum(w[np.asarray(mapped, dtype=bool)]) / np.sum(w))
+
+
 def checked_setup(c, theta):
     """The kind's flyby setup (with the maneuver its registry entry flies), checked by
     targeting swarm ``theta`` once here: a targeting failure is the user's to fix, in
@@ -273,6 +285,11 @@ def _run_exact(c, setup, workers, scheduler, cluster, slurm_config, designer) ->
     ds = datasets.flyby_dataset(setup, flight)
     ds = xr.merge([ds, res.data, xr.Dataset(vdata)], combine_attrs="override")
     ds["best_coverage"] = ((), flight.coverage.coverage)
+    requirement = requirement_from_campaign(c)
+    if requirement.reference != "surface":
+        w = reference_areas(setup, requirement)
+        ds["reference_area"] = (("vertex",), w)
+        ds["best_coverage_of_reference"] = ((), reference_coverage(w, flight.coverage))
     ds.attrs.update(datasets.base_attrs(c, setup))
     ds.attrs.update(res.attrs)
     ds.attrs.update(vattrs)

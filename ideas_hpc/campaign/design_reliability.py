@@ -29,6 +29,7 @@ are exact (no sampling): ``P-hat`` is the exact P and so is its bound.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import shutil
 import sys
@@ -217,6 +218,8 @@ def design_reliable(c, setup, client, *, bank_store: str | None = None):
     bank = build_scenario_bank(setup, d.grid_step_rad, mc, seed=c.config.seed,
                                n_scenarios=s_n, client=client, store=bank_store,
                                progress=progress.on())
+    if c.config.design.coverage_reference != "surface":   # the nominal world's reference
+        bank = dataclasses.replace(bank, areas=nominal.bank.areas)
     t_bank = time.perf_counter() - t0
     try:
         return _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant,

@@ -36,10 +36,19 @@ from ideas_hpc.mapping.requirement import Requirement
 def requirement_from_campaign(c) -> Requirement:
     """The campaign's coverage :class:`~ideas_hpc.mapping.requirement.Requirement`:
     ``design.eps_tol_pct`` (already a fraction, ``config.design.eps_tol``),
-    ``design.target_rule`` and the ``[coverage]`` options as its observation limits
-    (the very object the setup's ``coverage`` is). Every kind builds it here, once."""
+    ``design.target_rule``, ``design.coverage_reference`` and the ``[coverage]`` options
+    as its observation limits (the very object the setup's ``coverage`` is). Every kind
+    builds it here, once."""
     d = c.config.design
-    return Requirement(eps_tol=d.eps_tol, limits=c.extras["coverage"], rule=d.target_rule)
+    return Requirement(eps_tol=d.eps_tol, limits=c.extras["coverage"], rule=d.target_rule,
+                       reference=d.coverage_reference)
+
+
+def requirement_attrs(requirement: Requirement) -> dict:
+    """The store attrs that say what a design's coverage is (issue 42): the reference
+    (``coverage_reference``), the requirement's kind and its one-line label."""
+    return {"coverage_reference": requirement.reference, "requirement_kind": requirement.kind,
+            "requirement": requirement.label}
 
 
 def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:

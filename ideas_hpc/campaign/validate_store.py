@@ -128,7 +128,9 @@ def validate_store(store, *, samples: int = 1024, seed: int | None = None, first
         raise InputError(f"{seed} is the design's own seed: give another", field="--seed")
     ds = xr.open_zarr(store)
     theta = np.asarray(ds["swarm_angle"].values, dtype=np.float64)
-    w = np.asarray(ds["vertex_area"].values, dtype=np.float64)
+    # the design's weights: its reference area (issue 42) or the whole surface
+    w = np.asarray(ds["reference_area" if "reference_area" in ds else "vertex_area"].values,
+                   dtype=np.float64)
     w = w / w.sum()
     setup = setup_from_campaign(c)
     mc = c.config.monte_carlo

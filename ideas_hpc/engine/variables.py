@@ -106,6 +106,10 @@ _VARS = (
     StoreVar("best_swarm_size", (), np.int64, long_name="spacecraft in the design"),
     StoreVar("best_coverage", (), long_name="coverage of the design, area fraction (mapped "
              "when a [coverage] requirement is set)"),
+    StoreVar("best_coverage_of_reference", (), long_name="coverage of the design, fraction "
+             "of the reference area (design.coverage_reference)"),
+    StoreVar("reference_area", V, units="m^2", long_name="vertex weight of the coverage "
+             "reference: its area in the reference, 0 outside (design.coverage_reference)"),
     StoreVar("design_coverage", (), long_name="coverage of the design on the designer's "
              "candidate masks, area fraction"),
     StoreVar("proven_bound", (), long_name="proven lower bound on the number of spacecraft"),

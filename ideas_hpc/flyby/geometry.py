@@ -11,7 +11,8 @@ What differs between them, and only that, is here:
   encounter's are fixed in N (spin 0, ``[N S]``) -- and how a DCM in that frame
   becomes ``[B T]`` and ``[B N]`` (:meth:`Geometry.maneuver_frame`,
   :meth:`Geometry.to_T`, :meth:`Geometry.to_N`);
-* the Sun and the approach in the store attrs (:meth:`Geometry.attrs`).
+* the Sun and the approach in the store attrs (:meth:`Geometry.attrs`);
+* the time of closest approach (:meth:`Geometry.closest_approach_s`).
 
 Callers never ask which geometry they fly.
 """
@@ -69,6 +70,11 @@ class Geometry:
         """Store attrs of the geometry (SI)."""
         raise NotImplementedError
 
+    def closest_approach_s(self, setup) -> float:
+        """The time of closest approach (TCA), s after the arrival epoch: where the
+        reference area lit at TCA is taken (:mod:`ideas_hpc.mapping.reference`)."""
+        raise NotImplementedError
+
     def camera(self, setup, spin_rad_s: float, ideal, simulate):
         """``([B T], AttitudeResult or None)``: ``ideal(spin, dcm_TS)`` or
         ``simulate(spin, dcm_TS)`` (by ``setup.attitude_mode``) in the maneuver frame,
@@ -118,6 +124,19 @@ class PaperGeometry(Geometry):
     def attrs(self, setup):
         return {"geometry": "paper"}
 
+    def closest_approach_s(self, setup):
+        # each arc is a straight inertial chord (gravity bends a pass by metres) from
+        # p0 = (d, 0, z_start) to the end point turned with the body over the window,
+        # p1 = (d cos phi, d sin phi, z_stop), phi = w (tf - t0); nearest the centre at
+        # u = -p0 . (p1 - p0) / |p1 - p0|^2 of the window (the same for every ring angle)
+        d, z0, z1 = float(setup.d_sep_m), float(setup.z_start_m), float(setup.z_stop_m)
+        span = float(setup.tf_s - setup.t0_s)
+        phi = setup.body.params.spin_rate * span
+        p0 = np.array([d, 0.0, z0])
+        dp = np.array([d * math.cos(phi), d * math.sin(phi), z1]) - p0
+        u = -float(p0 @ dp) / float(dp @ dp) if float(dp @ dp) > 0.0 else 0.5
+        return float(setup.t0_s + span * min(1.0, max(0.0, u)))
+
 
 @dataclass(frozen=True)
 class EncounterGeometry(Geometry):
@@ -148,6 +167,9 @@ class EncounterGeometry(Geometry):
 
     def attrs(self, setup):
         return encounter_attrs(setup)
+
+    def closest_approach_s(self, setup):
+        return float(self.encounter.t_ca_s)
 
 
 #: The paper's geometry (it has no parameters of its own).

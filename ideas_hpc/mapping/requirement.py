@@ -12,8 +12,15 @@ designers, the verification, the scans and the report. It holds
   them, which the coverage kernels decide, so every candidate row a designer reads
   already honours them;
 * ``rule``: the target rule, a :data:`TARGET_RULES` entry (``design.target_rule``);
-* ``reference``: what coverage is a fraction of, a :data:`REFERENCES` entry (today
-  the whole surface).
+* ``reference``: what coverage is a fraction of, a :data:`REFERENCES` entry
+  (``design.coverage_reference``: the whole surface, or the area lit at closest
+  approach, issue 42; weights by :func:`ideas_hpc.mapping.reference.reference_weights`).
+
+Its :attr:`Requirement.kind` is ``"visual"`` when a vertex must be lit (``require_lit``
+or an incidence limit; with the emission and GSD limits that is the visual-mapping
+requirement of SPEC 7f) and ``"geometric"`` otherwise (the paper's map, fit for thermal
+mapping); :attr:`Requirement.label` states it and the reference in one line, which the
+store records (attr ``requirement``) and the summary and the report print.
 
 One method resolves it against what the candidates can reach,
 :meth:`Requirement.threshold`, into a :class:`Threshold`::
@@ -34,6 +41,7 @@ A new target rule is one :func:`register_rule` call (any module; the test module
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -42,7 +50,7 @@ from ideas_hpc.base.fields import number
 from ideas_hpc.core.design.reliability import COVER_TOL
 from ideas_hpc.mapping.options import CoverageOptions
 
-__all__ = ["COVER_TOL", "REFERENCES", "TARGET_RULES", "Requirement", "TargetRule", "Threshold",
+__all__ = ["COVER_TOL", "REFERENCES", "REFERENCE_LABELS", "TARGET_RULES", "Requirement", "TargetRule", "Threshold",
            "as_threshold", "meets", "register_rule", "threshold_of"]
 
 
@@ -140,9 +148,17 @@ register_rule(TargetRule("reach", _reach_target,
 register_rule(TargetRule("full", _full_target,
                          "100 %; the design fails when 100 % - eps_tol is out of reach"))
 
-#: What coverage is a fraction of. Issue 42 adds the area lit at closest approach, which
-#: the flights' coverage must then read as well.
-REFERENCES = {"surface": "the whole surface: the observed area over the total vertex area"}
+#: What coverage is a fraction of (``design.coverage_reference``): the weights of each are
+#: :func:`ideas_hpc.mapping.reference.reference_weights`.
+REFERENCES = {
+    "surface": "the whole surface: the observed area over the total vertex area",
+    "lit_at_tca": ("the area lit at closest approach: the vertices whose Sun incidence at "
+                   "TCA is within the incidence limit (< 90 deg when none), cast shadows "
+                   "included when the coverage reads the Sun"),
+}
+#: How the summary and the report name each reference.
+REFERENCE_LABELS = {"surface": "the whole surface",
+                    "lit_at_tca": "the area lit at closest approach"}
 
 
 @dataclass(frozen=True)
@@ -169,3 +185,34 @@ class Requirement:
         ``reach`` (area fraction; None: unknown, the rule's target for an unknown reach)."""
         target = TARGET_RULES[self.rule].target(reach, self.eps_tol)
         return threshold_of(target, self.eps_tol, reach)
+
+    @property
+    def kind(self) -> str:
+        """``"visual"`` when a vertex must be lit (``require_lit`` or an incidence limit):
+        a map of the surface as the Sun shows it; else ``"geometric"``, the paper's map
+        of what the cameras see, lit or not (fit for thermal mapping)."""
+        lim = self.limits
+        return "visual" if (lim.require_lit or lim.max_incidence_rad is not None) \
+            else "geometric"
+
+    @property
+    def label(self) -> str:
+        """One line for the store, the summary and the report: ``"visual (lit, incidence
+        <= 60 deg, emission <= 70 deg, GSD <= 5 m) map of the area lit at closest
+        approach"`` or ``"geometric (thermal, the paper's) map of the whole surface"``."""
+        lim = self.limits
+        if self.kind == "visual":
+            parts = ["lit"]
+            for name, rad in (("incidence", lim.max_incidence_rad),
+                              ("emission", lim.max_emission_rad),
+                              ("phase", lim.max_phase_rad)):
+                if rad is not None:
+                    parts.append(f"{name} <= {math.degrees(rad):g} deg")
+            if lim.max_resolution_m is not None:
+                parts.append(f"GSD <= {lim.max_resolution_m:g} m")
+            if lim.require_stereo:
+                parts.append("stereo")
+            head = f"visual ({', '.join(parts)})"
+        else:
+            head = "geometric (thermal, the paper's)"
+        return f"{head} map of {REFERENCE_LABELS[self.reference]}"

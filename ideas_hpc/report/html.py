@@ -96,6 +96,7 @@ def body_figure(ds):
 
 def _title(ds, text: str) -> str:
     from ideas_hpc.plots.figures import body_name
+    from ideas_hpc.report.requirement import coverage_meaning
 
     return f"{text} ({body_name(ds)})"
 
@@ -226,13 +227,15 @@ def write_html(ds, summary: str, path) -> Path:
         parts.append(fig.to_html(full_html=False, include_plotlyjs=k == 0,
                                  div_id=f"figure-{k}", config={"displaylogo": False}))
     from ideas_hpc.plots.figures import body_name
+    from ideas_hpc.report.requirement import coverage_meaning
 
     page = (f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
             f"<title>ideas_hpc report: {html.escape(body_name(ds))}</title>"
             "<style>body{font-family:sans-serif;margin:1em 2em}pre{white-space:pre-wrap;"
             "background:#f6f6f6;padding:.8em}</style></head><body>"
             f"<h1>ideas_hpc report: {html.escape(str(ds.attrs.get('kind', '')))} on "
-            f"{html.escape(body_name(ds))}</h1>" + "\n".join(parts)
+            f"{html.escape(body_name(ds))}</h1>"
+            f"<p><b>{html.escape(coverage_meaning(ds))}</b></p>" + "\n".join(parts)
             + f"<h2>Summary</h2><pre>{html.escape(summary)}</pre></body></html>\n")
     path.write_text(page, encoding="utf-8")
     return path

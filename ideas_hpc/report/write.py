@@ -17,6 +17,7 @@ from ideas_hpc.base.units import DEG, KM
 from ideas_hpc.report.reliability import (reliability_figures, reliability_lines,
                                                    swarm_label)
 from ideas_hpc.campaign.schema.kinds import KINDS
+from ideas_hpc.report.requirement import coverage_meaning
 from ideas_hpc.campaign.vocabulary import requirement_line, verification_verdict
 
 
@@ -63,6 +64,8 @@ def _summary(ds, figs) -> str:
                      f"{int(ds['best_swarm_size'])}, " + _requirement(ds))
         for note in json.loads(a.get("notes", "[]")):
             lines.append(f"note: {note}")
+    if "coverage" in ds or "design_method" in ds:
+        lines.append(coverage_meaning(ds))
     if "design_method" in ds:
         lines.extend(_design_lines(ds))
     if "pareto_n" in ds:
@@ -80,6 +83,9 @@ def _summary(ds, figs) -> str:
             lines.append(f"coverage over {ok.sum()} sample{'' if ok.sum() == 1 else 's'}: mean {cov[ok].mean():.3f} %, min "
                          f"{cov[ok].min():.3f} %, 5th percentile {np.percentile(cov[ok], 5):.3f} %,"
                          f" max {cov[ok].max():.3f} %")
+        if "best_coverage_of_reference" in ds:
+            lines.append(f"coverage{flown} of the reference area: "
+                         f"{100 * float(ds['best_coverage_of_reference']):.3f} %")
         if "mapped" in ds and "coverage_seen" in ds:
             seen = np.atleast_1d(ds["coverage_seen"].values) * 100
             lines.append(f"coverage counts vertices meeting the [coverage] requirement; "

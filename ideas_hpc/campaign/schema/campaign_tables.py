@@ -90,7 +90,8 @@ from ideas_hpc.campaign.schema.model_fields import STORED_NAMES, flyby_errors, s
 from ideas_hpc.campaign.schema.model_tables import build_models
 from ideas_hpc.campaign.schema.kinds import KINDS as REGISTRY
 from ideas_hpc.campaign.schema.read_check import check_reads, switched_off
-from ideas_hpc.campaign.schema.design_table import DESIGN, MC_SCHEMA, reliability_checks, verify_samples
+from ideas_hpc.campaign.schema.design_table import (DESIGN, MC_SCHEMA, reference_checks,
+                                                reliability_checks, verify_samples)
 
 KINDS = REGISTRY.keys()   # live: a kind registered later is a valid choice
 
@@ -262,6 +263,7 @@ def _cross_checks(c: CampaignConfig) -> None:
         check_objectives(d.objectives)
     check_encounter(fb, c.attitude)
     reliability_checks(c)
+    reference_checks(c)
     step = fb.dt_s
     img = 1.0 / c.instrument.image_rate_hz
     if abs(img / step - round(img / step)) > 1e-9:

@@ -19,7 +19,7 @@ import math
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.design.api.methods import METHODS
 from ideas_hpc.failures.weights import all_lost
-from ideas_hpc.mapping.requirement import TARGET_RULES
+from ideas_hpc.mapping.requirement import REFERENCES, TARGET_RULES
 from ideas_hpc.montecarlo.dispersions import dispersion_keys
 from ideas_hpc.montecarlo.failure_dispersion import failure_model
 from ideas_hpc.campaign.schema.kinds import KINDS
@@ -82,6 +82,11 @@ DESIGN = {
     "target_rule": Field("str", "reach", choices=TARGET_RULES.keys(),
                          doc="the target: 'reach' (100 %, or what the candidates reach "
                              "together when less) or 'full' (100 %, else fail)"),
+    "coverage_reference": Field("str", "surface", choices=REFERENCES.keys(),
+                                doc="what coverage is a fraction of: 'surface' (the whole "
+                                    "surface, the paper's) or 'lit_at_tca' (the area lit "
+                                    "at closest approach within coverage.max_incidence_deg;"
+                                    " docs/requirement.md)"),
     "angle_step_rad": Field("float", None, nullable=True, lo=0, hi=1.0,
                             doc="deprecated alias of angle_step_deg, in rad"),
     "p_min_min": Field("float", 0.3, si="p_min_s", to_si=MINUTE, lo=0, lo_open=True),
@@ -126,6 +131,20 @@ def holdout_scenarios(d, exact: bool) -> int:
     if d.holdout_scenarios is not None:
         return int(d.holdout_scenarios)
     return HOLDOUT_PER_SAMPLE * verify_samples(d)
+
+
+def reference_checks(c) -> None:
+    """``design.coverage_reference`` other than the whole surface where a run would read
+    coverage that ignores it: the plain exact design's Monte Carlo verification flies
+    whole-surface coverage (the success-probability design's bank and validation weigh by
+    the reference, docs/requirement.md)."""
+    d = c.design
+    if d.coverage_reference != "surface" and d.success_probability is None \
+            and verify_samples(d) > 0:
+        raise InputError(f"{d.coverage_reference!r} weighs the design but not the Monte Carlo "
+                         "verification of a design without design.success_probability (its "
+                         "coverage is of the whole surface): set design.verify_samples = 0, "
+                         "or design.success_probability", field="design.coverage_reference")
 
 
 def reliability_checks(c) -> None:

@@ -128,7 +128,7 @@ KINDS: dict[str, Kind] = {k.name: k for k in (
          "fewest spacecraft for the coverage target (exact integer programme or GA)",
          methods=(("exact", "ideas_hpc.campaign.design_nadir", "run_design_exact",
                    COVER + ("design.failures_tolerated", "design.verify_samples",
-                            DISPERSION_KEYS)),),
+                            "design.coverage_reference", DISPERSION_KEYS)),),
          swarm="designed", stereo=True, success_probability=True,
          continuous_methods=("ga",), nadir_swarm_store=True,
          reads=COVER + GA_SEARCH),     # the GA, with its gap to the exact optimum
