@@ -80,6 +80,7 @@ from ideas_hpc.base.fields import (Field, live_typed_table, schema_defaults, to_
 from ideas_hpc.base.units import DEG, KM, MINUTE
 from ideas_hpc.campaign.schema.design_checks import DESIGNER_FIELDS, resolve_angle_step
 from ideas_hpc.campaign.schema.encounter_table import ENCOUNTER, check_encounter
+from ideas_hpc.campaign.schema.navigation_table import NAVIGATION, check_navigation
 from ideas_hpc.campaign.schema.spice_table import SPICE_BODY, SPICE_FLYBY, resolve_spice
 from ideas_hpc.campaign.schema.instrument_table import INSTRUMENT
 from ideas_hpc.campaign.schema.model_fields import STORED_NAMES, flyby_errors, stored_fields
@@ -158,6 +159,7 @@ SCHEMA = {
     "design": DESIGN,
     "monte_carlo": MC_SCHEMA,
     "run": RUN,
+    "navigation": NAVIGATION,
 }
 
 
@@ -169,8 +171,10 @@ Attitude = typed_table("Attitude", ATTITUDE, __name__)
 Design = typed_table("Design", DESIGN, __name__)
 MonteCarlo = typed_table("MonteCarlo", MC_SCHEMA, __name__)
 Run = typed_table("Run", RUN, __name__)
+Navigation = typed_table("Navigation", NAVIGATION, __name__)
 TABLES = {"body": Body, "instrument": Instrument, "flyby": Flyby, "swarm": Swarm,
-          "attitude": Attitude, "design": Design, "monte_carlo": MonteCarlo, "run": Run}
+          "attitude": Attitude, "design": Design, "monte_carlo": MonteCarlo, "run": Run,
+          "navigation": Navigation}
 
 
 @dataclass(frozen=True)
@@ -191,6 +195,7 @@ class CampaignConfig:
     design: Any
     monte_carlo: Any
     run: Any
+    navigation: Any = None
 
 
 def typed_config(values: dict) -> CampaignConfig:
@@ -253,6 +258,7 @@ def _cross_checks(c: CampaignConfig) -> None:
     with config_fields(DESIGNER_FIELDS):
         check_objectives(d.objectives)
     check_encounter(fb, c.attitude)
+    check_navigation(c.navigation)
     reliability_checks(c)
     step = fb.dt_s
     img = 1.0 / c.instrument.image_rate_hz
