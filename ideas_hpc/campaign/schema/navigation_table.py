@@ -75,10 +75,10 @@ def navigation_error(nav) -> NavigationError:
            "sigma_tca_s": nav.tca_sigma_s, "sigma_member_m": nav.member_sigma_m,
            "sigma_minor_m": nav.bplane_minor_m, "update": nav.update}
     own = {k: v for k, v in own.items() if v is not None}
-    if base is None:
-        own.setdefault("sigma_minor_m", own["sigma_major_m"])
-        base = NavigationError(own["sigma_major_m"], own["sigma_minor_m"])
     try:
+        if base is None:
+            own.setdefault("sigma_minor_m", own["sigma_major_m"])
+            base = NavigationError(own["sigma_major_m"], own["sigma_minor_m"])
         return dataclasses.replace(base, **own)
     except InputError as exc:
         raise InputError(exc.message, field=NAVIGATION_FIELDS.get(exc.field, exc.field)) \
