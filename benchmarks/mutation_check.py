@@ -277,6 +277,15 @@ MUTATIONS: tuple[Mutation, ...] = (
       "ideas_hpc/campaign/schema/campaign_tables.py",
       "if not source.resolved:", "if source.resolved:",
       ("tests/test_key_reads.py::test_a_stores_resolved_config_is_not_judged",)),
+    # ---- navigation (SPEC 7f)
+    M("nav_start_ignores_the_spin", "kernels", "ideas_hpc/flyby/nav_flight.py",
+      "return _r3(phi, o), -_r3(phi, w_x_o)", "return _r3(phi, o), 0.0 * _r3(phi, w_x_o)",
+      ("tests/test_navigation_flights.py::"
+       "test_the_true_miss_moves_by_the_drawn_bplane_offset_and_tca_shift",)),
+    M("nav_tracking_aims_at_the_true_target", "kernels", "ideas_hpc/flyby/nav_flight.py",
+      "np.where(lock[..., None], r, r - dr)", "np.where(lock[..., None], r, r + 0.0 * dr)",
+      ("tests/test_navigation_flights.py::"
+       "test_tracking_the_predicted_target_carries_the_analytic_bias",)),
 )
 
 
