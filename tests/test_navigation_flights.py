@@ -222,6 +222,9 @@ def test_the_nav_campaign_records_its_navigation_and_the_papers_pass_refuses_it(
     err = setup.navigation.error
     assert math.isclose(err.sigma_major_m, 32e3 / 3) and math.isclose(err.sigma_tca_s, 7.3 / 3)
     assert "9 days" in err.update
+    attrs = setup.geometry.attrs(setup)
+    assert attrs["navigation_sigma_major_m"] == err.sigma_major_m
+    assert attrs["navigation_update"] == err.update
     with pytest.raises(InputError) as exc:
         _minimal(['navigation.preset="lutetia"'])
     assert 'flyby.geometry = "encounter"' in exc.value.message
