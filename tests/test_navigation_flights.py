@@ -8,6 +8,7 @@ plain geometry of a line missing a sphere.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -20,7 +21,8 @@ from ideas_hpc.campaign.schema.toml_file import CampaignSource, apply_overrides
 from ideas_hpc.campaign.setup import setup_from_campaign
 from ideas_hpc.flyby.flight import Perturbation
 from ideas_hpc.flyby.navigation import NavigationPlan, bplane_frame
-from ideas_hpc.flyby.pass_rates import pointing_bias_rad
+from ideas_hpc.flyby.camera import usable_mask
+from ideas_hpc.flyby.pass_rates import follow_check, pointing_bias_rad
 from ideas_hpc.flyby.views import FlightPlan, flight_views
 from ideas_hpc.montecarlo import dispersions
 from ideas_hpc.montecarlo.scenarios import draw_world, nominal_start
@@ -228,3 +230,33 @@ def test_the_nav_campaign_records_its_navigation_and_the_papers_pass_refuses_it(
     with pytest.raises(InputError) as exc:
         _minimal(['navigation.preset="lutetia"'])
     assert 'flyby.geometry = "encounter"' in exc.value.message
+
+
+def test_images_are_lost_where_the_wheels_cannot_follow_the_line_of_sight():
+    """Closed-loop body tracking at 10 km/s and the sized 157 km: the paper's wheels follow
+    (:func:`follow_check`: 1.3 % of the torque limit) and every image is usable; with a
+    torque limit of 0.05 mN m the analytic windows where ``I |alpha| > u_max`` open 20.1 s
+    before closest approach, and no image is lost before that, images are lost after it,
+    and the flight blinds them (what the design's rows see). Exposure 1 ms so that smear
+    does not decide (this checks the wheels)."""
+    setup = _setup(['attitude.mode="simulated"', 'attitude.maneuver="track"',
+                    "instrument.exposure_ms=1.0", "flyby.before_km=300.0",
+                    "flyby.after_km=100.0"])
+    theta = THETA[:2]
+    r0, v0 = nominal_start(setup, theta)
+    t = setup.image_times - setup.encounter.t_ca_s
+    for u_max, lost in ((setup.spacecraft.u_max_N_m, False), (5e-5, True)):
+        flown = setup.with_(spacecraft=dataclasses.replace(setup.spacecraft, u_max_N_m=u_max))
+        check = follow_check(setup.encounter.speed_m_s, setup.d_sep_m, flown.spacecraft)
+        assert check.feasible is not lost
+        v = flight_views(flown, theta, None, r0, v0, Perturbation(), plan=FlightPlan(series=True))
+        ok = usable_mask(flown, v.attitude)
+        if not lost:
+            assert ok.all()
+            continue
+        start = check.lost_windows_s[0][0]
+        assert t[0] < start - 5.0
+        assert ok[:, t < start].all()
+        assert (~ok[:, t > start]).sum(axis=1).min() > 0.5 * (t > start).sum()
+        blinded = np.any(v.imaging_BT != v.dcm_BT, axis=(-1, -2))
+        np.testing.assert_array_equal(blinded, ~ok)
