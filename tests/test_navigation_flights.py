@@ -264,7 +264,7 @@ def test_images_are_lost_where_the_wheels_cannot_follow_the_line_of_sight():
 
 def test_the_closed_loop_tracks_the_predicted_target_too():
     """Simulated body tracking takes the believed track as its reference: its boresight
-    is the ideal camera's (aimed at the predicted target, 4.7 deg off the true centre here)
+    is the ideal camera's (aimed at the predicted target, up to 4.7 deg off the true centre here)
     to within the loop's tracking error (0.01 deg; the settle limit is 0.1 deg)."""
     setup = _setup(['attitude.maneuver="track"'])
     frame = bplane_frame(setup.encounter.v_inf_T)
@@ -275,4 +275,4 @@ def test_the_closed_loop_tracks_the_predicted_target_too():
     apart = np.degrees(np.arccos(np.clip(np.einsum("nki,nki->nk", za, zb), -1.0, 1.0)))
     assert apart.max() < 0.01
     u = -ideal.r_img_T / np.linalg.norm(ideal.r_img_T, axis=-1)[..., None]
-    assert np.degrees(np.arccos(np.einsum("nki,nki->nk", zb, u))).min() > 4.0
+    assert np.degrees(np.arccos(np.einsum("nki,nki->nk", zb, u))).max() > 4.0
