@@ -286,6 +286,12 @@ MUTATIONS: tuple[Mutation, ...] = (
       "np.where(lock[..., None], r, r - dr)", "np.where(lock[..., None], r, r + 0.0 * dr)",
       ("tests/test_navigation_flights.py::"
        "test_tracking_the_predicted_target_carries_the_analytic_bias",)),
+    M("nav_common_error_drawn_per_candidate", "statistics",
+      "ideas_hpc/montecarlo/dispersions.py",
+      "navigation_dispersion.COMMON_VARS, level=\"body\"",
+      "navigation_dispersion.COMMON_VARS, level=\"spacecraft\"",
+      ("tests/test_navigation_flights.py::"
+       "test_the_common_error_is_shared_by_every_candidate_and_independent_of_chunking",)),
 )
 
 
