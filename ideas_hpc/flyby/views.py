@@ -12,7 +12,10 @@ target, Sun, encounter and force model) and the swarm's own draws (a
 1. flies the orbits through the world: the whole trajectory when it is wanted
    back or the camera follows it (body tracking), else only the positions at the
    images, and the velocities there when the closed loop's smear test reads them
-   (:func:`ideas_hpc.flyby.closed_loop.positions_into`, the same bits);
+   (:func:`ideas_hpc.flyby.closed_loop.positions_into`, the same bits); on an
+   encounter, from a start moved by the scenario's navigation draws (``target_offset_N``,
+   ``member_offset_N``; :mod:`ideas_hpc.flyby.nav_flight`), body tracking then aiming at
+   the predicted target (and, with terminal tracking, at the measured centroid);
 2. points the cameras: perfect tracking of the maneuver's reference (its
    cameras kept per world, :func:`~ideas_hpc.flyby.world.cached_static`), or the
    closed loop, flown by the first compiled variant of :data:`CLOSED_LOOPS`
