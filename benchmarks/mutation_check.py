@@ -329,6 +329,21 @@ MUTATIONS: tuple[Mutation, ...] = (
       "dp = np.array([d, 0.0, z1]) - p0",
       ("tests/test_coverage_reference_campaign.py::"
        "test_the_paper_closest_approach_is_the_trajectory_minimum",)),
+    # ---- navigation (SPEC 7f)
+    M("nav_start_ignores_the_spin", "kernels", "ideas_hpc/flyby/nav_flight.py",
+      "return _r3(phi, o), -_r3(phi, w_x_o)", "return _r3(phi, o), 0.0 * _r3(phi, w_x_o)",
+      ("tests/test_navigation_flights.py::"
+       "test_the_true_miss_moves_by_the_drawn_bplane_offset_and_tca_shift",)),
+    M("nav_tracking_aims_at_the_true_target", "kernels", "ideas_hpc/flyby/nav_flight.py",
+      "np.where(lock[..., None], r, r - dr)", "np.where(lock[..., None], r, r + 0.0 * dr)",
+      ("tests/test_navigation_flights.py::"
+       "test_tracking_the_predicted_target_carries_the_analytic_bias",)),
+    M("nav_common_error_drawn_per_candidate", "statistics",
+      "ideas_hpc/montecarlo/dispersions.py",
+      "navigation_dispersion.COMMON_VARS, level=\"body\"",
+      "navigation_dispersion.COMMON_VARS, level=\"spacecraft\"",
+      ("tests/test_navigation_flights.py::"
+       "test_the_common_error_is_shared_by_every_candidate_and_independent_of_chunking",)),
 )
 
 

@@ -43,6 +43,7 @@ VARIANTS = {
     "design-pareto": ['kind="design-pareto"'],
     "monte-carlo": ['kind="monte-carlo"', ANGLES],
     "monte-carlo-simulated": ['kind="monte-carlo"', ANGLES, 'attitude.mode="simulated"'],
+    "monte-carlo-encounter": ['kind="monte-carlo"', ANGLES, 'flyby.geometry="encounter"'],
 }
 
 #: dotted key -> the --set lines that give it a valid value other than its default (with a
@@ -147,6 +148,20 @@ VALUES = {
        for k, v in (("sigma_r", 0.1), ("correlation_deg", 40.0), ("sigma_diameter_pct", 5.0),
                     ("sigma_pole_deg", 2.0), ("p_mirror", 0.5), ("sigma_phase_deg", 5.0),
                     ("lightcurve_days", 10.0))},
+    "navigation.preset": ['navigation.preset="arrokoth"'],
+    "navigation.bplane_major_km": ["navigation.bplane_major_km=30.0"],
+    "navigation.bplane_minor_km": ["navigation.bplane_minor_km=3.0",
+                                   "navigation.bplane_major_km=30.0"],
+    "navigation.bplane_angle_deg": ["navigation.bplane_angle_deg=30.0",
+                                    'navigation.preset="lutetia"'],
+    "navigation.tca_sigma_s": ["navigation.tca_sigma_s=2.0", 'navigation.preset="lutetia"'],
+    "navigation.member_sigma_km": ["navigation.member_sigma_km=0.2",
+                                   'navigation.preset="lutetia"'],
+    "navigation.update": ['navigation.update="2 days out"', 'navigation.preset="lutetia"'],
+    "navigation.terminal_pixels": ["navigation.terminal_pixels=5.0",
+                                   'navigation.preset="lutetia"'],
+    "navigation.centroid_sigma_deg": ["navigation.centroid_sigma_deg=0.01",
+                                      'navigation.preset="lutetia"'],
 }
 #: Keys whose valid value needs files: every variant reads them (checked on the
 #: declaration; tests/test_spice_in.py loads real kernels).

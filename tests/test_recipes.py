@@ -187,8 +187,9 @@ def test_recipe_dispersion_reaches_the_success_probability_designer(tmp_path, mo
     seed = load(design, RELIABILITY).config.seed
     for k in range(12):
         body = stream_rng(seed, SCENARIO_STREAM, k, STREAM_BODY)
-        body.standard_normal(3)          # gravity, then reflectivity: the entries before it
-        body.uniform(0.0, 1.0)
+        body.standard_normal(3)          # gravity, reflectivity, navigation: the entries
+        body.uniform(0.0, 1.0)           # before it
+        body.standard_normal(3)
         assert body.uniform(-1.0, 1.0) in drawn, k
 
 
@@ -259,8 +260,9 @@ def test_recipe_world_dispersion_the_pole(tmp_path, monkeypatch):
     differs = 0
     for k in range(3):
         body = stream_rng(5, SCENARIO_STREAM, k, STREAM_BODY)
-        body.standard_normal(3)          # gravity, then reflectivity: the entries before it
-        body.uniform(0.0, 1.0)
+        body.standard_normal(3)          # gravity, reflectivity, navigation: the entries
+        body.uniform(0.0, 1.0)           # before it
+        body.standard_normal(3)
         z = body.standard_normal(2)
         pert = Perturbation(**draw_world(mc, setup, theta, 5, SCENARIO_STREAM, k))
         ra, dec = setup.world.pole_rad

@@ -23,6 +23,7 @@ from ideas_hpc.body.formats import load_shape_file
 from ideas_hpc.campaign.schema.spice_table import apply_spice
 from ideas_hpc.campaign.schema.model_fields import flyby_errors
 from ideas_hpc.campaign.target import prior_body, target_prior
+from ideas_hpc.campaign.schema.navigation_table import navigation_plan
 from ideas_hpc.dynamics.trajectory import sun_direction_T
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.flyby.encounter import Encounter, approach_angles, approach_speed, window_s
@@ -131,7 +132,19 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
         epoch_s=epoch_s, encounter=enc, imaging=_imaging(cfg, eta),
         attitude_start=cfg.monte_carlo.attitude_start,
         torques=torques_from_config(c.raw.get("torques"), prefix="torques."),
-        device=device, target=prior)
+        device=device, target=prior, navigation=_navigation(cfg, eta, sizing))
+
+
+def _navigation(cfg, eta_rad: float, sizing):
+    """The ``[navigation]`` table's plan (None without one); terminal tracking's lock range
+    for a body of the mean diameter ``2 r_av`` seen with the instrument's IFOV."""
+    inst = cfg.instrument
+    ifov = 1.0
+    if cfg.navigation.terminal_pixels is not None:
+        ifov = ifov_rad(eta_rad, pixels_across=inst.pixels_across,
+                        pixel_pitch_m=inst.pixel_pitch_m, focal_length_m=inst.focal_length_m,
+                        wavelength_m=inst.wavelength_m, aperture_m=inst.aperture_m)
+    return navigation_plan(cfg.navigation, 2.0 * sizing.r_av, ifov)
 
 
 def _imaging(cfg, eta_rad: float) -> ImageUse | None:

@@ -267,4 +267,18 @@ def encounter_attrs(setup) -> dict:
     sun = setup.sun_T([enc.t_ca_s])[0]
     return {"geometry": "encounter", "speed_m_s": enc.speed_m_s, "approach_ra_rad": enc.ra_rad,
             "approach_dec_rad": enc.dec_rad, "t_ca_s": enc.t_ca_s,
-            "phase_angle_rad": phase_angle(enc, sun), "v_inf_T_m_s": enc.v_inf_T.tolist()}
+            "phase_angle_rad": phase_angle(enc, sun), "v_inf_T_m_s": enc.v_inf_T.tolist(),
+            **navigation_attrs(getattr(setup, "navigation", None))}
+
+
+def navigation_attrs(plan) -> dict:
+    """Store attrs of the navigation errors (SPEC 7f; 1-sigma, SI), or {} without them."""
+    if plan is None:
+        return {}
+    e = plan.error
+    return {"navigation_sigma_major_m": e.sigma_major_m, "navigation_sigma_minor_m":
+            e.sigma_minor_m, "navigation_angle_rad": e.theta_rad,
+            "navigation_sigma_tca_s": e.sigma_tca_s, "navigation_sigma_member_m": e.sigma_member_m,
+            "navigation_update": e.update, "navigation_source": e.source,
+            "navigation_detect_range_m": plan.detect_range_m,
+            "navigation_centroid_sigma_rad": plan.centroid_sigma_rad}

@@ -35,6 +35,7 @@ from ideas_hpc.attitude.modes import AttitudeMode, AttitudeStart, attitude_mode,
 from ideas_hpc.body.bodies import Body
 from ideas_hpc.flyby.encounter import Encounter
 from ideas_hpc.flyby.geometry import Geometry, geometry_of
+from ideas_hpc.flyby.navigation import NavigationPlan
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.flyby.views import FlightPlan, flight_views
 from ideas_hpc.flyby.world import World
@@ -101,6 +102,9 @@ class FlybySetup:
     #: :class:`~ideas_hpc.body.target_prior.TargetPrior`, :mod:`ideas_hpc.flyby.target_world`);
     #: None: every scenario flies ``body`` (the known target)
     target: object | None = None
+    #: navigation errors of an encounter and terminal tracking (SPEC 7f;
+    #: ideas_hpc.flyby.navigation.NavigationPlan), drawn by the dispersions; None: none
+    navigation: NavigationPlan | None = None
 
     @property
     def geometry(self) -> Geometry:
@@ -248,6 +252,12 @@ class Perturbation:
     velocity_error_T: np.ndarray | None = None  # (N, 3) m/s
     active: np.ndarray | None = None          # (N,) bool, False: failed
     misalignment_prv: np.ndarray | None = None  # (N, 3) rad, camera [CB] as a PRV
+    # navigation (SPEC 7f; ideas_hpc.flyby.nav_flight), frame N of the encounter, m: the
+    # true target's offset from the predicted one at the predicted TCA (3,), common to
+    # the swarm, and each member's own error (N, 3)
+    target_offset_N: np.ndarray | None = None
+    member_offset_N: np.ndarray | None = None
+    centroid_prv: np.ndarray | None = None      # (N, 3) rad: terminal tracking's error
 
 
 @dataclass

@@ -171,12 +171,23 @@ def draw_navigation(err: NavigationError, rng: np.random.Generator,
     n = int(n_members)
     if n < 0:
         raise InputError(f"must be >= 0, got {n_members}", field="n_members")
+    xi, eta, dt = draw_common(err, rng)
+    return NavigationDraw(xi_m=xi, eta_m=eta, dt_tca_s=dt,
+                          member_offsets_m=draw_members(err, rng, n))
+
+
+def draw_common(err: NavigationError, rng: np.random.Generator) -> tuple[float, float, float]:
+    """The common part of one draw, ``(xi m, eta m, dt_tca s)``, from 3 normals (major axis,
+    minor axis, TCA): one per scenario, shared by every member."""
     z = rng.standard_normal(3)
     c, s = math.cos(err.theta_rad), math.sin(err.theta_rad)
     u, w = err.sigma_major_m * z[0], err.sigma_minor_m * z[1]
-    members = rng.standard_normal((n, 3)) * err.sigma_member_m
-    return NavigationDraw(xi_m=c * u - s * w, eta_m=s * u + c * w,
-                          dt_tca_s=err.sigma_tca_s * float(z[2]), member_offsets_m=members)
+    return c * u - s * w, s * u + c * w, err.sigma_tca_s * float(z[2])
+
+
+def draw_members(err: NavigationError, rng: np.random.Generator, n: int) -> np.ndarray:
+    """Each member's own error, ``(n, 3)`` m in N, from ``3 n`` normals (isotropic)."""
+    return rng.standard_normal((int(n), 3)) * err.sigma_member_m
 
 
 def target_offset_N(draw: NavigationDraw, v_inf_N, k_N=K_ECLIPTIC_N, *,
@@ -198,6 +209,32 @@ def member_offsets_N(draw: NavigationDraw, v_inf_N, k_N=K_ECLIPTIC_N) -> np.ndar
     """Each member's position error relative to the true target, ``(n, 3)`` m in N: its
     own error less the common target offset (along-track part included)."""
     return draw.member_offsets_m - target_offset_N(draw, v_inf_N, k_N)[None, :]
+
+
+@dataclass(frozen=True)
+class NavigationPlan:
+    """What a flight knows of its navigation (SPEC 7f), on
+    :attr:`~ideas_hpc.flyby.flight.FlybySetup.navigation`.
+
+    Attributes
+    ----------
+    error : NavigationError
+        The update's 1-sigma errors, drawn per scenario (common) and per member.
+    detect_range_m : float
+        Terminal tracking locks on the measured centroid from this range on, m
+        (:meth:`~ideas_hpc.flyby.pass_rates.TerminalTracking.detection_range_m`); 0: never
+        (body tracking aims at the predicted target throughout).
+    centroid_sigma_rad : float
+        1-sigma per camera axis (x_B, y_B) of the locked centroid pointing, rad.
+    """
+
+    error: NavigationError
+    detect_range_m: float = 0.0
+    centroid_sigma_rad: float = 0.0
+
+    def __post_init__(self):
+        number(self.detect_range_m, "detect_range_m", lo=0.0)
+        number(self.centroid_sigma_rad, "centroid_sigma_rad", lo=0.0)
 
 
 def _three_sigma(major_km, minor_km, tca_s, speed_km_s, update, source, theta_deg=0.0,

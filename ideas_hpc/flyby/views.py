@@ -12,7 +12,10 @@ target, Sun, encounter and force model) and the swarm's own draws (a
 1. flies the orbits through the world: the whole trajectory when it is wanted
    back or the camera follows it (body tracking), else only the positions at the
    images, and the velocities there when the closed loop's smear test reads them
-   (:func:`ideas_hpc.flyby.closed_loop.positions_into`, the same bits);
+   (:func:`ideas_hpc.flyby.closed_loop.positions_into`, the same bits); on an
+   encounter, from a start moved by the scenario's navigation draws (``target_offset_N``,
+   ``member_offset_N``; :mod:`ideas_hpc.flyby.nav_flight`), body tracking then aiming at
+   the predicted target (and, with terminal tracking, at the measured centroid);
 2. points the cameras: perfect tracking of the maneuver's reference (its
    cameras kept per world, :func:`~ideas_hpc.flyby.world.cached_static`), or the
    closed loop, flown by the first compiled variant of :data:`CLOSED_LOOPS`
@@ -43,6 +46,8 @@ from ideas_hpc.flyby import closed_loop as _loop
 from ideas_hpc.flyby.camera import (camera_at_images, camera_dcms, imaging_dcms, misaligned,
                                     misalignment_dcms, smear_rates_of)
 from ideas_hpc.flyby.encounter import track_dcms
+from ideas_hpc.flyby.nav_flight import (aim_positions_T, believed_track, member_offsets,
+                                        start_errors_T, with_centroid_errors)
 from ideas_hpc.flyby.world import World, array_key, cached_static
 
 
@@ -198,12 +203,16 @@ def flight_views(setup, theta, periods, r0_T, v0_T, pert, *, world: World | None
     # the velocities at the images: only the closed loop's smear test reads them
     smear = closed and getattr(flown, "imaging", None) is not None
     pos = vel = v_img = None
+    nav = member_offsets(pert, th.size) if flown.encounter is not None else None
     if plan.trajectory is not None:
         pos, vel = plan.trajectory
         r_img = np.ascontiguousarray(pos[:, ::setup.image_every])
     else:
         r0 = r0_T if pert.position_error_T is None else r0_T + pert.position_error_T
         v0 = v0_T if pert.velocity_error_T is None else v0_T + pert.velocity_error_T
+        if nav is not None:     # the navigation draws move the start (nav_flight)
+            dr, dv = start_errors_T(flown, nav)
+            r0, v0 = r0 + dr, v0 + dv
         if plan.series or tracks:
             _, pos, vel = propagate_swarm(world.body, r0, v0, setup.t0_s, setup.tf_s,
                                           force_model=world.force_model, dt_sample=setup.dt_s,
@@ -215,7 +224,7 @@ def flight_views(setup, theta, periods, r0_T, v0_T, pert, *, world: World | None
         v_img = np.ascontiguousarray(vel[:, ::setup.image_every])
     mis = pert.misalignment_prv
     if not closed:
-        ideal = _ideal(setup, world, flown, th, periods, r_img)
+        ideal = _ideal(setup, world, flown, th, periods, r_img, (nav, pert.centroid_prv))
         if mis is not None:
             dcm = misaligned(ideal, misalignment_dcms(mis))
         else:       # the pipeline's caller owns its arrays; the bank only reads them
@@ -225,9 +234,11 @@ def flight_views(setup, theta, periods, r0_T, v0_T, pert, *, world: World | None
     loop = closed_loop_for(flown, start, plan.series)
     if loop.series and not plan.series:     # the time series is not kept: one sample a run
         flown = flown.with_(decimate=max(1, int(round((flown.tf_s - flown.t0_s) / flown.dt_s))))
+    track = None if pos is None else (pos, vel)
+    if track is not None and tracks and nav is not None:    # aim at the predicted target
+        track = believed_track(flown, pos, vel, nav)
     dcm, imaging, att = loop.fly(flown, world, setup.flight_key, th, periods, start, mis,
-                                 (r_img, v_img), None if pos is None else (pos, vel),
-                                 plan.buffers)
+                                 (r_img, v_img), track, plan.buffers)
     return Views(r_img, dcm, imaging, att, pos, vel)
 
 
@@ -248,10 +259,17 @@ def _positions(flown, world, r0, v0, buffers, velocities: bool):
     return _loop.positions_into(flown, world, r0, v0, outs[0], v_out), v_out
 
 
-def _ideal(setup, world, flown, th, periods, r_img):
-    """Perfect tracking's cameras: along the flown positions (body tracking), else the
+def _ideal(setup, world, flown, th, periods, r_img, navigation=(None, None)):
+    """Perfect tracking's cameras: along the flown positions (body tracking; with
+    ``navigation = (offsets (N, 3) m in N, centroid errors (N, 3) rad)`` at the predicted
+    target, then the measured centroid, :mod:`~ideas_hpc.flyby.nav_flight`), else the
     maneuver's reference, which no draw but the world changes (kept per world)."""
     if flown.maneuver.tracks_body:
-        return track_dcms(flown, r_img)[0]
+        off, centroid = navigation
+        if off is None:
+            return track_dcms(flown, r_img)[0]
+        dcm = track_dcms(flown, aim_positions_T(flown, r_img, off))[0]
+        return with_centroid_errors(flown, dcm, r_img, None if centroid is None
+                                    else misalignment_dcms(centroid))
     return cached_static(("ideal", setup.flight_key, world.attitude_key, array_key(th, periods)),
                          lambda: camera_dcms(flown, th, periods)[0])

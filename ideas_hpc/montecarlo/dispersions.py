@@ -36,7 +36,7 @@ from ideas_hpc.base.errors import InputError
 from ideas_hpc.base.fields import Field
 from ideas_hpc.base.seeds import sample_rng
 from ideas_hpc.engine.variables import StoreVar
-from ideas_hpc.montecarlo import failure_dispersion
+from ideas_hpc.montecarlo import failure_dispersion, navigation_dispersion
 from ideas_hpc.base.units import DEG, MM
 
 DISPERSION_CHILD = 1  # spawn_key suffix of the child stream
@@ -285,6 +285,19 @@ DISPERSIONS: tuple[Dispersion, ...] = (
                keys=(("sigma_misalignment_deg", Field("float", 0.0, si="sigma_misalignment_rad",
                                                       to_si=DEG, lo=0, hi=90)),),
                level="spacecraft", active=lambda mc, setup: mc.sigma_misalignment_rad != 0),
+    # navigation at an encounter (SPEC 7f; the [navigation] table, FlybySetup.navigation):
+    # the target's ephemeris error once per scenario for the whole swarm, each member's own
+    Dispersion("navigation", navigation_dispersion.draw_common,
+               lambda v: {"target_offset_N": v["target_offset"]},
+               navigation_dispersion.COMMON_VARS, level="body",
+               active=navigation_dispersion.common_active,
+               applies=navigation_dispersion.applies),
+    Dispersion("navigation_member", navigation_dispersion.draw_member,
+               lambda v: {"member_offset_N": v["member_offset"],
+                          "centroid_prv": v["centroid_prv"]},
+               navigation_dispersion.MEMBER_VARS, level="spacecraft",
+               active=navigation_dispersion.member_active,
+               applies=navigation_dispersion.applies),
 )
 DISPERSION_ORDER = tuple(d.name for d in DISPERSIONS)
 DISPERSION_VARS: tuple[StoreVar, ...] = tuple(v for d in DISPERSIONS for v in d.variables)

@@ -83,6 +83,7 @@ from ideas_hpc.base.fields import (Field, live_typed_table, schema_defaults, to_
 from ideas_hpc.base.units import DEG, KM, MINUTE
 from ideas_hpc.campaign.schema.design_checks import DESIGNER_FIELDS, resolve_angle_step
 from ideas_hpc.campaign.schema.encounter_table import ENCOUNTER, check_encounter
+from ideas_hpc.campaign.schema.navigation_table import NAVIGATION, check_navigation
 from ideas_hpc.campaign.schema.spice_table import SPICE_BODY, SPICE_FLYBY, resolve_spice
 from ideas_hpc.campaign.schema.target_table import TARGET
 from ideas_hpc.campaign.schema.instrument_table import INSTRUMENT
@@ -164,6 +165,7 @@ SCHEMA = {
     "monte_carlo": MC_SCHEMA,
     "run": RUN,
     "target": TARGET,
+    "navigation": NAVIGATION,
 }
 
 
@@ -176,9 +178,10 @@ Design = typed_table("Design", DESIGN, __name__)
 MonteCarlo = typed_table("MonteCarlo", MC_SCHEMA, __name__)
 Run = typed_table("Run", RUN, __name__)
 Target = typed_table("Target", TARGET, __name__)
+Navigation = typed_table("Navigation", NAVIGATION, __name__)
 TABLES = {"body": Body, "instrument": Instrument, "flyby": Flyby, "swarm": Swarm,
           "attitude": Attitude, "design": Design, "monte_carlo": MonteCarlo, "run": Run,
-          "target": Target}
+          "target": Target, "navigation": Navigation}
 
 
 @dataclass(frozen=True)
@@ -200,6 +203,7 @@ class CampaignConfig:
     monte_carlo: Any
     run: Any
     target: Any
+    navigation: Any = None
 
 
 def typed_config(values: dict) -> CampaignConfig:
@@ -262,6 +266,7 @@ def _cross_checks(c: CampaignConfig) -> None:
     with config_fields(DESIGNER_FIELDS):
         check_objectives(d.objectives)
     check_encounter(fb, c.attitude)
+    check_navigation(c.navigation)
     reliability_checks(c)
     reference_checks(c)
     step = fb.dt_s
