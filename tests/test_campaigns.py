@@ -44,7 +44,6 @@ SMALL = {
 #: Files whose body comes from their [target] prior: run as shipped, never on another body.
 PRIOR_BODY = {"eros-class-flyby.toml"}
 #: ... and those that wait for the design side's per-scenario areas (S, V) (issue 42).
-NEEDS_WORLD_AREAS = {"eros-class-flyby.toml"}
 FORBIDDEN = ("design.n_max", "design.eps_tol_pct", "coverage.", "design.failures_tolerated")
 
 
@@ -65,10 +64,7 @@ def _run(name: str, sets: list, out: Path, shared_root: Path | None = None) -> x
     return xr.open_zarr(store)
 
 
-@pytest.mark.parametrize("name", [
-    pytest.param(f, marks=pytest.mark.skip(reason="needs the design side's per-scenario areas "
-                                                  "(S, V), issue 42: unskip once merged"))
-    if f in NEEDS_WORLD_AREAS else f for f in FILES])
+@pytest.mark.parametrize("name", FILES)
 def test_campaign_runs_on_the_ellipsoid(name, tmp_path):
     if name in PRIOR_BODY:
         _run(name, SMALL[name], tmp_path)

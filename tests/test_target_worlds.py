@@ -178,8 +178,6 @@ def test_overrides_reach_the_prior():
     assert p.rotation.dt_epoch_to_tca_s == pytest.approx(10 * 86400.0)
 
 
-@pytest.mark.skip(reason="needs the design side's per-scenario vertex weights, areas (S, V) "
-                         "(issue 42, the design helper's branch): unskip once merged")
 def test_the_eros_class_campaign_runs(tmp_path):
     # the whole success-probability design on drawn worlds, coarse (about 30 s warm)
     import xarray as xr

@@ -53,6 +53,8 @@ from ideas_hpc.engine.job_cluster import phase_client
 from ideas_hpc.montecarlo.dispersions import scenario_dispersed
 from ideas_hpc.montecarlo.failure_dispersion import failure_model
 from ideas_hpc.montecarlo.scenarios import build_scenario_bank
+from ideas_hpc.flyby.target_world import world_areas
+from ideas_hpc.campaign.setup import requirement_from_campaign
 from ideas_hpc.campaign.validation_flights import (  # noqa: F401 (Validation, fly_validation:
     Validation, fly_validation, fly_validation_world, sample_weights)  # their old home)
 from ideas_hpc.base import seeds
@@ -90,7 +92,8 @@ def _validate(c, setup, theta, need, w, exact, client, *, first=0, size=None,
     d, mc = c.config.design, c.config.monte_carlo
     m = 1 if exact else (verify_samples(d) if size is None else int(size))
     model = failure_model(mc)
-    rows, seen, areas = fly_validation_world(setup, theta, mc, model, seed=c.config.seed,
+    rows, seen, areas = fly_validation_world(setup, theta, mc, model,
+                                             requirement_from_campaign(c), seed=c.config.seed,
                                              n_samples=m, client=client,
                                              progress=progress.on(), first=first, stream=stream)
     return Validation(rows, sample_weights(areas, w, rows.shape[0]), need, model,
@@ -108,7 +111,7 @@ def _held_out_batch(c, setup, theta, swarms, need, w, size, client) -> list:
     model = failure_model(mc)
     union = np.unique(np.concatenate([np.asarray(s, dtype=np.int64) for s in swarms]))
     rows, seen, areas = fly_validation_world(setup, theta[union], mc, model,
-                                             seed=c.config.seed, n_samples=int(size),
+                                             requirement_from_campaign(c), seed=c.config.seed, n_samples=int(size),
                                              client=client, progress=progress.on(),
                                              stream=seeds.HOLDOUT_STREAM)
     w = sample_weights(areas, w, rows.shape[0])     # a sample's world weighs every member
@@ -218,8 +221,9 @@ def design_reliable(c, setup, client, *, bank_store: str | None = None):
     bank = build_scenario_bank(setup, d.grid_step_rad, mc, seed=c.config.seed,
                                n_scenarios=s_n, client=client, store=bank_store,
                                progress=progress.on())
-    if c.config.design.coverage_reference != "surface":   # the nominal world's reference
-        bank = dataclasses.replace(bank, areas=nominal.bank.areas)
+    if c.config.design.coverage_reference != "surface":   # each world's reference area
+        bank = dataclasses.replace(bank, areas=world_areas(
+            setup, c.config.seed, seeds.SCENARIO_STREAM, range(s_n), requirement_from_campaign(c)))
     t_bank = time.perf_counter() - t0
     try:
         return _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant,

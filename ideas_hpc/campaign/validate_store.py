@@ -106,7 +106,7 @@ def validate_store(store, *, samples: int = 1024, seed: int | None = None, first
     from ideas_hpc.campaign.schema.toml_file import CampaignSource
     from ideas_hpc.campaign.validation_flights import (Validation, fly_validation_world,
                                                        sample_weights)
-    from ideas_hpc.campaign.setup import setup_from_campaign
+    from ideas_hpc.campaign.setup import requirement_from_campaign, setup_from_campaign
     from ideas_hpc.design.reliability_stats import lower_confidence_bound
     from ideas_hpc.engine.store_meta import store_attrs
     from ideas_hpc.base.errors import InputError
@@ -136,7 +136,8 @@ def validate_store(store, *, samples: int = 1024, seed: int | None = None, first
     mc = c.config.monte_carlo
     t0 = time.perf_counter()
     model = failure_model(mc)
-    rows, seen, areas = fly_validation_world(setup, theta, mc, model, seed=seed,
+    rows, seen, areas = fly_validation_world(setup, theta, mc, model,
+                                             requirement_from_campaign(c), seed=seed,
                                              n_samples=int(samples), progress=progress,
                                              first=int(first))
     if rows.shape[2] != w.size:

@@ -31,7 +31,7 @@ from ideas_hpc.base.errors import InputError
 from ideas_hpc.base.vertex_weights import normalised, per_scenario
 from ideas_hpc.failures.model import as_model
 from ideas_hpc.failures.sampling import drawn_coverage, sample_probabilities, validation_failures
-from ideas_hpc.montecarlo.scenarios import fly_members, fly_members_seen
+from ideas_hpc.montecarlo.scenarios import flight_areas, fly_members, fly_members_seen
 
 
 def unpack_flights(out) -> tuple:
@@ -84,15 +84,24 @@ class Validation:
         self.coverage, self.n_failed = drawn_coverage(rows, w, draws, seen)
 
 
-def fly_validation_world(setup, theta, mc, model, **keywords) -> tuple:
+def fly_validation_world(setup, theta, mc, model, requirement=None, **keywords) -> tuple:
     """``(rows, seen, areas)`` of validation flights (:func:`unpack_flights`): with losses in
     the pass and seen rows, when each member first sees each vertex
     (:func:`~ideas_hpc.montecarlo.scenarios.fly_members_seen`); else ``seen = None``
-    (whole-pass losses). ``areas`` None: the flights share the bank's weights."""
+    (whole-pass losses). ``areas`` None: the flights share the bank's weights; with a
+    target prior, each sample's world's reference area of ``requirement`` (its vertex
+    areas when None; :func:`~ideas_hpc.montecarlo.scenarios.flight_areas`)."""
     if model.in_pass_share > 0.0 and not setup.coverage.requirement:
-        return unpack_flights(fly_members_seen(setup, theta, mc, **keywords))
-    rows, _, areas = unpack_flights(fly_members(setup, theta, None, mc, **keywords))
-    return rows, None, areas
+        rows, seen, areas = unpack_flights(fly_members_seen(setup, theta, mc, **keywords))
+    else:
+        rows, _, areas = unpack_flights(fly_members(setup, theta, None, mc, **keywords))
+        seen = None
+    if areas is None and setup.target is not None:
+        areas = flight_areas(setup, seed=keywords["seed"], n_samples=rows.shape[0],
+                             first=keywords.get("first", 0),
+                             stream=keywords.get("stream", seeds.VALIDATION_STREAM),
+                             requirement=requirement)
+    return rows, seen, areas
 
 
 def fly_validation(setup, theta, mc, model, **keywords):

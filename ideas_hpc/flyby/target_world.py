@@ -47,6 +47,7 @@ from ideas_hpc.body.bodies import Body
 from ideas_hpc.body.shape import build_shape
 from ideas_hpc.core.dynamics.ephemeris import dcm_PN
 from ideas_hpc.dynamics.forces import elements_and_pole
+from ideas_hpc.flyby.reference_area import reference_areas
 from ideas_hpc.flyby.world import World
 
 #: Drawn worlds kept per process (a bank chunk's worlds are drawn again for its areas).
@@ -122,9 +123,17 @@ def scenario_world(setup, seed: int, family: int, k: int, params_override=None) 
     return base.perturbed(params_override)
 
 
-def world_areas(setup, seed: int, family: int, ks) -> np.ndarray:
+def world_areas(setup, seed: int, family: int, ks, requirement=None) -> np.ndarray:
     """Vertex areas, m^2: ``(V,)`` of the nominal body without a target prior, else
-    ``(len(ks), V)``, row ``i`` world ``ks[i]``'s of stream ``family``."""
+    ``(len(ks), V)``, row ``i`` world ``ks[i]``'s of stream ``family``. With a
+    ``requirement`` (:class:`~ideas_hpc.mapping.requirement.Requirement`), each world's
+    reference area instead (:func:`~ideas_hpc.flyby.reference_area.reference_areas`: the
+    surface lit at closest approach in that world, its own shape under the Sun)."""
+    if requirement is not None:
+        if setup.target is None:
+            return reference_areas(setup, requirement)
+        return np.stack([reference_areas(drawn_world(setup, seed, family, int(k)).flown(setup),
+                                         requirement) for k in ks])
     if setup.target is None:
         return np.asarray(setup.body.shape.vertex_areas, dtype=np.float64)
     return np.stack([drawn_world(setup, seed, family, int(k)).shape.vertex_areas for k in ks])

@@ -256,11 +256,13 @@ def fly_members(setup: FlybySetup, theta, periods, mc, *, seed: int, n_samples: 
 
 
 def flight_areas(setup: FlybySetup, *, seed: int, n_samples: int, first: int = 0,
-                 stream: int = VALIDATION_STREAM) -> np.ndarray:
+                 stream: int = VALIDATION_STREAM, requirement=None) -> np.ndarray:
     """Vertex areas (m^2) of the flights :func:`fly_members` (same arguments) flies:
     ``(V,)`` of the body without a target prior, else ``(M, V)``, row ``m`` sample
-    ``first + m``'s world of ``stream``."""
-    return world_areas(setup, seed, stream, range(int(first), int(first) + int(n_samples)))
+    ``first + m``'s world of ``stream``; with a ``requirement``, its reference area in
+    each world (:func:`~ideas_hpc.flyby.target_world.world_areas`)."""
+    return world_areas(setup, seed, stream, range(int(first), int(first) + int(n_samples)),
+                       requirement)
 
 
 def _flights_label(stream: int) -> str:

@@ -21,6 +21,8 @@ import dataclasses
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.base.fields import Field
 from ideas_hpc.base.units import DEG, KM
+from ideas_hpc.campaign.schema.kinds import DISPERSION_KEYS
+from ideas_hpc.campaign.schema.read_settings import Rule, not_listed
 from ideas_hpc.flyby.navigation import PRESETS, NavigationError, NavigationPlan
 from ideas_hpc.flyby.pass_rates import TerminalTracking
 
@@ -95,3 +97,17 @@ def navigation_plan(nav, diameter_m: float, ifov_rad: float) -> NavigationPlan |
     if nav.terminal_pixels is not None:
         rng = TerminalTracking(nav.terminal_pixels).detection_range_m(diameter_m, ifov_rad)
     return NavigationPlan(navigation_error(nav), rng, nav.centroid_sigma_rad)
+
+
+def _why_navigation(s) -> str:
+    if s.config.flyby.geometry == "paper":
+        return ('is a navigation error of an encounter: set flyby.geometry = "encounter" '
+                "(the paper's pass has no B-plane)")
+    return not_listed(DISPERSION_KEYS)(s) + " (the navigation errors are drawn with them)"
+
+
+#: Who reads a ``[navigation]`` key (:mod:`~ideas_hpc.campaign.schema.reads`): an
+#: encounter's, drawn by the runs that fly dispersed samples.
+NAVIGATION_RULES = {f"navigation.{k}": Rule(lambda s: s.config.flyby.geometry != "paper"
+                                            and s.samples, _why_navigation)
+                    for k in NAVIGATION}

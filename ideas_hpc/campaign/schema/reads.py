@@ -39,7 +39,7 @@ from ideas_hpc.base.errors import InputError
 from ideas_hpc.body.formats import builtin_body, length_unit_applies
 from ideas_hpc.campaign.schema.encounter_table import ENCOUNTER
 from ideas_hpc.campaign.schema.target_table import TARGET_RULES, drawn, why_drawn
-from ideas_hpc.campaign.schema.navigation_table import NAVIGATION
+from ideas_hpc.campaign.schema.navigation_table import NAVIGATION_RULES
 from ideas_hpc.campaign.schema.kinds import DISPERSION_KEYS, KINDS
 from ideas_hpc.campaign.schema.read_settings import (Rule, Settings, entry_name, not_listed, owned,
                                                      readers)
@@ -296,18 +296,6 @@ ENCOUNTER_KEY = Rule(lambda s: not _paper(s),
                      lambda s: 'is an encounter key: set flyby.geometry = "encounter"')
 
 
-def _why_navigation(s: Settings) -> str:
-    if _paper(s):
-        return ('is a navigation error of an encounter: set flyby.geometry = "encounter" '
-                "(the paper's pass has no B-plane)")
-    return not_listed(DISPERSION_KEYS)(s) + " (the navigation errors are drawn with them)"
-
-
-#: A ``[navigation]`` key (:mod:`~ideas_hpc.campaign.schema.navigation_table`): an encounter's,
-#: drawn by the runs that fly dispersed samples.
-NAVIGATION_KEY = Rule(lambda s: not _paper(s) and s.samples, _why_navigation)
-
-
 #: Conditions on other settings (module docstring); a key not here and listed by no kind
 #: entry is read by every kind.
 RULES: dict[str, Rule] = {
@@ -332,7 +320,7 @@ RULES: dict[str, Rule] = {
     **{f"flyby.{k}": Rule(_paper, _why_encounter_window) for k in ("tf_s", "z_start_km",
                                                                    "z_stop_km")},
     **{f"flyby.{k}": ENCOUNTER_KEY for k in ENCOUNTER if k != "geometry"},
-    **{f"navigation.{k}": NAVIGATION_KEY for k in NAVIGATION},
+    **NAVIGATION_RULES,
     **{f"instrument.{k}": Rule(_imaging, _why_imaging)
        for k in ("pixels_across", "exposure_ms", "smear_pixels", "settle_deg")},
     "swarm.angles_rad": Rule(_angles_read, _why_angles),
