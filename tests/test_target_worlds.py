@@ -189,13 +189,17 @@ def test_the_eros_class_campaign_runs(tmp_path):
                                    "design.angle_step_deg=15",
                                    "design.holdout_scenarios=20"]))
     assert 1 <= int(ds["best_swarm_size"]) <= 20
-    # the design weighed scenario s by world s's own vertex areas: drawn here from the
-    # prior directly (an area is unchanged by the world's turn into the nominal frame)
+    # the design weighed scenario s by world s's own vertex areas over its lit part (the
+    # campaign's lit_at_tca reference): the areas drawn here from the prior directly (an
+    # area is unchanged by the world's turn into the nominal frame)
     w = ds["scenario_vertex_weight"].values
     prior = eros_class_prior(resolution=3)
+    assert ds.attrs["coverage_reference"] == "lit_at_tca"
     for s in (0, 7, w.shape[0] - 1):
         a = prior.draw(2026, s, family=seeds.SCENARIO_STREAM).shape.vertex_areas
-        np.testing.assert_allclose(w[s], a / a.sum(), rtol=1e-10)
+        lit = w[s] > 0
+        assert 0.25 < a[lit].sum() / a.sum() < 0.75     # about the half facing the Sun
+        np.testing.assert_allclose(w[s][lit], a[lit] / a[lit].sum(), rtol=1e-10)
     # the worlds decide: the chosen swarm's P differs between scenarios (on one known
     # world with failures alone every scenario would score the same binomial sum)
     assert np.ptp(ds["scenario_probability"].values) > 0.1
