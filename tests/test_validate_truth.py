@@ -17,17 +17,16 @@ from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.campaign.setup import requirement_from_campaign, setup_from_campaign
 from ideas_hpc.campaign.validate_store import validate_store
 from ideas_hpc.campaign.validate_truth import (TruthOptions, pooled, truth_setup,
-                                               truth_world)
+                                               truth_shape, truth_world)
 from ideas_hpc.campaign.validation_flights import fly_validation_world
 from ideas_hpc.cli import main
-from ideas_hpc.design.reliability_stats import lower_confidence_bound
 from ideas_hpc.montecarlo.failure_dispersion import failure_model
 from small_stores import small_store
 
 ROOT = Path(__file__).resolve().parent.parent
 CAMPAIGN = ROOT / "campaigns" / "eros-class-flyby.toml"
-#: the eros-class design made small: 20 deg grid, 20 scenarios (p = 0.5), few verifications
-SMALL = ["design.angle_step_deg=20", "design.n_max=8", "design.verify_samples=8",
+#: the eros-class design made small: a 20 deg grid (18 candidates), 20 scenarios (p = 0.5)
+SMALL = ["design.angle_step_deg=20", "design.n_max=8", "design.verify_samples=20",
          "design.time_limit_s=20"]
 SWARM = np.deg2rad([0.0, 120.0, 240.0])
 
@@ -99,20 +98,34 @@ def test_a_truth_equal_to_a_known_body_is_the_ordinary_validation(tmp_path_facto
     assert not np.allclose(small.per_sample, plain.per_sample)
 
 
-@pytest.mark.parametrize("args,option", [
-    (["--truth-pole", "10,100"], "--truth-pole"),
-    (["--truth-pole", "400,0"], "--truth-pole"),
-    (["--truth-pole", "ten"], "--truth-pole"),
-    (["--truth-period-h", "-5"], "--truth-period-h"),
-    (["--truth-shape", "/nonexistent/truth.obj"], "--truth-shape"),
-    (["--truth-shape", "ellipsoid:1,2"], "--truth-shape"),
+@pytest.mark.parametrize("args,option,words", [
+    (["--truth-pole", "10,100"], "--truth-pole", "Dec in [-90, 90]"),
+    (["--truth-pole", "400,0"], "--truth-pole", "RA must be in [0, 360)"),
+    (["--truth-pole", "ten"], "--truth-pole", "RA,DEC in degrees"),
+    (["--truth-period-h", "-5"], "--truth-period-h", "> 0"),
+    (["--truth-phase-deg", "nan"], "--truth-phase-deg", "finite"),
+    (["--truth-shape", "/nonexistent/truth.obj"], "--truth-shape", "no shape file"),
+    (["--truth-shape", "ellipsoid:1,2"], "--truth-shape", "three positive semi-axes"),
+    (["--truth-shape", "ellipsoid:1,-2,3"], "--truth-shape", "three positive semi-axes"),
 ])
-def test_bad_truth_options_are_one_line_naming_the_option(args, option, tmp_path_factory,
-                                                         capsys):
+def test_bad_truth_options_are_one_line_naming_the_option(args, option, words,
+                                                         tmp_path_factory, capsys):
     store = small_store("design-reliability", tmp_path_factory.mktemp("small-stores"))
+    capsys.readouterr()         # the store's own run, when this test built it
     assert main(["validate", str(store), "--samples", "2", "--no-progress", *args]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and option in err[0]
+    assert len(err) == 1 and option in err[0] and words in err[0]
+
+
+def test_a_bad_shape_file_names_the_option_and_the_file(tmp_path):
+    from ideas_hpc.campaign.validate_truth import truth_shape
+
+    bad = tmp_path / "truth.tab"
+    bad.write_text("v 1 0 0\nv 0 1 0\nf 1 2\n")
+    with pytest.raises(InputError) as e:
+        truth_shape(str(bad))
+    assert e.value.field == "--truth-shape" and "truth.tab" in str(e.value)
+    assert "\n" not in str(e.value)
 
 
 def test_pooled_truths_inside_the_prior(class_store, tmp_path, capsys):
@@ -135,6 +148,16 @@ def test_pooled_truths_inside_the_prior(class_store, tmp_path, capsys):
                                phase_rad=math.radians(ph))) for s, p, ph in truths]
     for v, r in zip(vals, runs):          # the API and the CLI fly the same samples
         np.testing.assert_allclose(v.per_sample, r["per_sample"], atol=1e-12)
+    # inside the prior: the size within 3 sigma (10 % each) of the estimate, the pole within
+    # 3 sigma (10 deg) of the estimated one
+    c = load(CAMPAIGN)
+    setup = setup_from_campaign(c)
+    prior_pole = setup.target.pole.pole_N
+    for s, p, _ in truths:
+        tw = truth_world(setup, truth_shape(s), pole_ra_dec_rad=tuple(
+            math.radians(float(x)) for x in p.split(",")))
+        assert abs(tw.diameter_m / setup.target.diameter_m - 1.0) < 0.3
+        assert math.degrees(math.acos(float(tw.pole_N @ prior_pole))) < 30.0
     pool = pooled(vals)
     # the pooled P-hat is the sample-weighted mean of the truths' own P-hats
     assert pool.p_hat == pytest.approx(sum(v.p_hat * v.samples for v in vals) / 18, abs=1e-12)
@@ -143,3 +166,4 @@ def test_pooled_truths_inside_the_prior(class_store, tmp_path, capsys):
     # one truth pooled alone is its own validation
     assert pooled(vals[:1]).lower == pytest.approx(vals[0].lower, abs=0)
     assert "pooled over 3 given truths" in pool.line()
+    print(pool.line())

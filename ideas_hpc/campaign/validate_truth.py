@@ -88,27 +88,31 @@ def truth_shape(spec: str, resolution: int = 3) -> Shape:
     from ideas_hpc.body.formats import builtin_body, builtin_names, load_shape_file
 
     text = str(spec).strip()
+    if text.lower().startswith("ellipsoid:"):
+        return analytic.ellipsoid_mesh(*_axes_km(text), resolution, name="truth-ellipsoid")
+    got = builtin_body(text)
+    if got is not None and not Path(text).is_file():
+        return got[1].load(None, resolution, None)[0]
+    if not Path(text).is_file():
+        raise InputError(f"{text!r} is no shape file, built-in body "
+                         f"({', '.join(builtin_names())}) or ellipsoid:A,B,C (km)",
+                         field="--truth-shape")
     try:
-        if text.lower().startswith("ellipsoid:"):
-            axes = [float(x) * 1e3 for x in text.split(":", 1)[1].split(",")]
-            if len(axes) != 3 or not all(math.isfinite(a) and a > 0 for a in axes):
-                raise ValueError
-            return analytic.ellipsoid_mesh(*axes, resolution, name="truth-ellipsoid")
-        got = builtin_body(text)
-        if got is not None and not Path(text).is_file():
-            return got[1].load(None, resolution, None)[0]
-        if not Path(text).is_file():
-            raise InputError(f"{text!r} is no shape file, built-in body "
-                             f"({', '.join(builtin_names())}) or ellipsoid:A,B,C (km)",
-                             field="--truth-shape")
         return load_shape_file(text)
-    except ValueError:
-        raise InputError(f"ellipsoid:A,B,C needs three positive semi-axes in km, got "
-                         f"{text!r}", field="--truth-shape") from None
     except InputError as exc:
-        if exc.field == "--truth-shape":
-            raise
-        raise InputError(f"{text}: {exc.message}", field="--truth-shape") from None
+        raise InputError(f"{text}: {exc}", field="--truth-shape") from None
+
+
+def _axes_km(text: str) -> list[float]:
+    """The semi-axes (m) of ``ellipsoid:A,B,C`` (km)."""
+    try:
+        axes = [float(x) * 1e3 for x in text.split(":", 1)[1].split(",")]
+    except ValueError:
+        axes = []
+    if len(axes) != 3 or not all(math.isfinite(a) and a > 0 for a in axes):
+        raise InputError(f"ellipsoid:A,B,C needs three positive semi-axes in km, got "
+                         f"{text!r}", field="--truth-shape")
+    return axes
 
 
 def parse_pole(text: str) -> tuple[float, float]:
