@@ -15,8 +15,8 @@ from ideas_hpc.body.analytic import ellipsoid_mesh
 from ideas_hpc.body.spin_prior import DCM_N_EQ, angles_from_unit
 from ideas_hpc.campaign.schema.campaign_tables import load
 from ideas_hpc.campaign.setup import requirement_from_campaign, setup_from_campaign
-from ideas_hpc.campaign.validate_store import validate_store
-from ideas_hpc.campaign.validate_truth import (TruthOptions, pooled, truth_setup,
+from ideas_hpc.campaign.validate_store import pooled, validate_store
+from ideas_hpc.campaign.validate_truth import (TruthOptions, truth_setup,
                                                truth_shape, truth_world)
 from ideas_hpc.campaign.validation_flights import fly_validation_world
 from ideas_hpc.cli import main

@@ -170,6 +170,53 @@ def validate_store(store, *, samples: int = 1024, seed: int | None = None, first
                            wall_s=time.perf_counter() - t0, truth=truth_words)
 
 
+@dataclass(frozen=True)
+class Pooled:
+    """Several truths' validations as one sample (:func:`pooled`)."""
+
+    per_sample: np.ndarray
+    successes: int
+    lower: float
+    confidence: float
+    p: float
+    truths: int
+
+    @property
+    def samples(self) -> int:
+        return int(self.per_sample.size)
+
+    @property
+    def p_hat(self) -> float:
+        return float(self.per_sample.mean())
+
+    def line(self) -> str:
+        lo, hi = wilson_interval(self.successes, self.samples)
+        return (f"pooled over {self.truths} given truths, {self.samples} samples: P-hat = "
+                f"{self.p_hat:.4f}, {100 * self.confidence:g} % lower bound {self.lower:.4f} "
+                f"{'>=' if self.lower >= self.p else '<'} p = {self.p:g}; with failures drawn "
+                f"{self.successes} of {self.samples} succeed (Wilson 95 % [{lo:.4f}, {hi:.4f}])")
+
+
+def pooled(validations) -> Pooled:
+    """Pool :class:`StoreValidation` results of one design, e.g. several given truths
+    (:mod:`ideas_hpc.campaign.validate_truth`): P-hat = sum of per-sample P / total
+    samples, its bound by the validation's own bound function at the store's confidence,
+    the drawn successes summed with their Wilson interval."""
+    from ideas_hpc.base.errors import InputError
+    from ideas_hpc.design.reliability_stats import lower_confidence_bound
+
+    vs = list(validations)
+    if not vs:
+        raise InputError("needs at least one validation", field="validations")
+    if len({(v.confidence, v.p) for v in vs}) != 1:
+        raise InputError("the validations are of different designs (confidence or p differ)",
+                         field="validations")
+    per = np.concatenate([np.asarray(v.per_sample, dtype=np.float64) for v in vs])
+    return Pooled(per_sample=per, successes=int(sum(v.successes for v in vs)),
+                  lower=lower_confidence_bound(per, vs[0].confidence),
+                  confidence=vs[0].confidence, p=vs[0].p, truths=len(vs))
+
+
 def _given_truth(setup, truth, resolution: int):
     """``(setup, words)``: ``setup`` flying the given truth and its description, or
     ``(setup, None)`` when none is given."""

@@ -26,7 +26,7 @@ A design on a known body (no ``[target]`` prior) accepts a truth too: it is plac
 way about the body's own pole and phase; a truth equal to the design's body gives the
 ordinary validation's values (``tests/test_validate_truth.py``).
 
-Several truths pool (:func:`pooled`): all their per-sample values as one sample, its mean
+Several truths pool (:func:`~ideas_hpc.campaign.validate_store.pooled`): all their per-sample values as one sample, its mean
 and the same betting bound as the validation
 (:func:`~ideas_hpc.design.reliability_stats.lower_confidence_bound`), and the drawn successes
 summed with their Wilson interval. The pooled P-hat estimates the mean over the truths
@@ -58,6 +58,9 @@ class GivenTruth:
 
     world: TargetWorld
     name: str = "given truth"
+    #: every draw is the same world: placed once per process
+    #: (:func:`~ideas_hpc.flyby.target_world.drawn_world`)
+    one_world = True
 
     def draw(self, seed: int, k: int, family: int = 0) -> TargetWorld:
         return self.world
@@ -190,50 +193,3 @@ def describe(world: TargetWorld, opts: TruthOptions) -> str:
             f"D {world.diameter_m / 1e3:.4g} km, pole RA {math.degrees(ra):.2f} Dec "
             f"{math.degrees(dec):.2f} deg, period {world.spin_period_s / HOUR:.4g} h, "
             f"phase {math.degrees(world.phase_tca_rad):.1f} deg at TCA)")
-
-
-@dataclass(frozen=True)
-class Pooled:
-    """Several truths' validations as one sample (:func:`pooled`)."""
-
-    per_sample: np.ndarray
-    successes: int
-    lower: float
-    confidence: float
-    p: float
-    truths: int
-
-    @property
-    def samples(self) -> int:
-        return int(self.per_sample.size)
-
-    @property
-    def p_hat(self) -> float:
-        return float(self.per_sample.mean())
-
-    def line(self) -> str:
-        from ideas_hpc.campaign.validate_store import wilson_interval
-
-        lo, hi = wilson_interval(self.successes, self.samples)
-        return (f"pooled over {self.truths} given truths, {self.samples} samples: P-hat = "
-                f"{self.p_hat:.4f}, {100 * self.confidence:g} % lower bound {self.lower:.4f} "
-                f"{'>=' if self.lower >= self.p else '<'} p = {self.p:g}; with failures drawn "
-                f"{self.successes} of {self.samples} succeed (Wilson 95 % [{lo:.4f}, {hi:.4f}])")
-
-
-def pooled(validations) -> Pooled:
-    """Pool :class:`~ideas_hpc.campaign.validate_store.StoreValidation` results of one
-    design (module docstring): P-hat = sum of per-sample P / total samples, its bound by
-    the validation's own bound function at the store's confidence."""
-    from ideas_hpc.design.reliability_stats import lower_confidence_bound
-
-    vs = list(validations)
-    if not vs:
-        raise InputError("needs at least one validation", field="validations")
-    if len({(v.confidence, v.p) for v in vs}) != 1:
-        raise InputError("the validations are of different designs (confidence or p differ)",
-                         field="validations")
-    per = np.concatenate([np.asarray(v.per_sample, dtype=np.float64) for v in vs])
-    return Pooled(per_sample=per, successes=int(sum(v.successes for v in vs)),
-                  lower=lower_confidence_bound(per, vs[0].confidence),
-                  confidence=vs[0].confidence, p=vs[0].p, truths=len(vs))
