@@ -57,20 +57,9 @@ def wilson_interval(successes: int, n: int, z: float = Z95) -> tuple[float, floa
     return lo, hi
 
 
-@dataclass(frozen=True)
-class StoreValidation:
-    """Outcome of :func:`validate_store`."""
-
-    n: int
-    seed: int
-    first: int
-    per_sample: np.ndarray      # (M,) exact failure-weighted P per sample
-    success: np.ndarray         # (M,) bool: the sample maps the threshold, failures drawn
-    lower: float                # one-sided betting lower bound on P at ``confidence``
-    confidence: float
-    p: float
-    wall_s: float
-    truth: str | None = None    # the given truth, in words (None: the design's worlds)
+class _Outcome:
+    """What a validation and a pool of them share (``per_sample``, ``success``, ``lower``,
+    ``confidence``, ``p`` fields): the counts, P-hat and the verdict's words."""
 
     @property
     def successes(self) -> int:
@@ -84,16 +73,36 @@ class StoreValidation:
     def p_hat(self) -> float:
         return float(self.per_sample.mean())
 
-    def line(self) -> str:
+    def verdict(self) -> str:
+        """The bound against p, and the drawn successes with their Wilson interval."""
         lo, hi = wilson_interval(self.successes, self.samples)
+        return (f"{100 * self.confidence:g} % lower bound {self.lower:.4f} "
+                f"{'>=' if self.lower >= self.p else '<'} p = {self.p:g}; with failures "
+                f"drawn {self.successes} of {self.samples} succeed "
+                f"({self.successes / self.samples:.4f}, Wilson 95 % [{lo:.4f}, {hi:.4f}])")
+
+
+@dataclass(frozen=True)
+class StoreValidation(_Outcome):
+    """Outcome of :func:`validate_store`."""
+
+    n: int
+    seed: int
+    first: int
+    per_sample: np.ndarray      # (M,) exact failure-weighted P per sample
+    success: np.ndarray         # (M,) bool: the sample maps the threshold, failures drawn
+    lower: float                # one-sided betting lower bound on P at ``confidence``
+    confidence: float
+    p: float
+    wall_s: float
+    truth: str | None = None    # the given truth, in words (None: the design's worlds)
+
+    def line(self) -> str:
         last = self.first + self.samples - 1
         return (f"independent validation: N = {self.n} swarm, seed {self.seed}, samples "
                 f"{self.first}..{last}: P-hat = {self.p_hat:.4f} (failures exact), "
-                f"{100 * self.confidence:g} % lower bound {self.lower:.4f} "
-                f"{'>=' if self.lower >= self.p else '<'} p = {self.p:g}; with failures "
-                f"drawn {self.successes} of {self.samples} succeed "
-                f"({self.successes / self.samples:.4f}, Wilson 95 % [{lo:.4f}, {hi:.4f}]) "
-                f"in {self.wall_s:.0f} s" + (f"; {self.truth}" if self.truth else ""))
+                f"{self.verdict()} in {self.wall_s:.0f} s"
+                + (f"; {self.truth}" if self.truth else ""))
 
 
 def validate_store(store, *, samples: int = 1024, seed: int | None = None, first: int = 0,
@@ -171,30 +180,19 @@ def validate_store(store, *, samples: int = 1024, seed: int | None = None, first
 
 
 @dataclass(frozen=True)
-class Pooled:
-    """Several truths' validations as one sample (:func:`pooled`)."""
+class Pooled(_Outcome):
+    """Several validations of one design as one sample (:func:`pooled`)."""
 
     per_sample: np.ndarray
-    successes: int
+    success: np.ndarray
     lower: float
     confidence: float
     p: float
     truths: int
 
-    @property
-    def samples(self) -> int:
-        return int(self.per_sample.size)
-
-    @property
-    def p_hat(self) -> float:
-        return float(self.per_sample.mean())
-
     def line(self) -> str:
-        lo, hi = wilson_interval(self.successes, self.samples)
         return (f"pooled over {self.truths} given truths, {self.samples} samples: P-hat = "
-                f"{self.p_hat:.4f}, {100 * self.confidence:g} % lower bound {self.lower:.4f} "
-                f"{'>=' if self.lower >= self.p else '<'} p = {self.p:g}; with failures drawn "
-                f"{self.successes} of {self.samples} succeed (Wilson 95 % [{lo:.4f}, {hi:.4f}])")
+                f"{self.p_hat:.4f}, {self.verdict()}")
 
 
 def pooled(validations) -> Pooled:
@@ -212,7 +210,7 @@ def pooled(validations) -> Pooled:
         raise InputError("the validations are of different designs (confidence or p differ)",
                          field="validations")
     per = np.concatenate([np.asarray(v.per_sample, dtype=np.float64) for v in vs])
-    return Pooled(per_sample=per, successes=int(sum(v.successes for v in vs)),
+    return Pooled(per_sample=per, success=np.concatenate([np.asarray(v.success) for v in vs]),
                   lower=lower_confidence_bound(per, vs[0].confidence),
                   confidence=vs[0].confidence, p=vs[0].p, truths=len(vs))
 
