@@ -51,11 +51,19 @@ def _fly(c, setup, first, n):
                                 seed=77, n_samples=n, first=first, progress=False)
 
 
-def test_a_drawn_world_given_as_truth_flies_as_drawn(drawn):
+LIT = ['design.coverage_reference="lit_at_tca"', "coverage.max_incidence_deg=80"]
+
+
+@pytest.mark.parametrize("sets", [[], LIT], ids=["surface", "lit_at_tca"])
+def test_a_drawn_world_given_as_truth_flies_as_drawn(drawn, sets):
     """World k of the validation stream, given back as a truth (shape, pole, period, phase),
-    flies sample k exactly as the drawn path does; at sample k + 1 it is still world k
-    (its areas, and not the drawn world k + 1's rows)."""
+    flies sample k exactly as the drawn path does, with the same weights (its vertex areas,
+    or its area lit at TCA); at sample k + 1 it is still world k (its weights, and not the
+    drawn world k + 1's rows)."""
     c, setup = drawn
+    if sets:
+        c = load(CAMPAIGN, sets)
+        setup = setup_from_campaign(c)
     k = 3
     tw = setup.target.draw(77, k, family=seeds.VALIDATION_STREAM)
     ra, dec = angles_from_unit(DCM_N_EQ.T @ tw.pole_N)
@@ -65,9 +73,12 @@ def test_a_drawn_world_given_as_truth_flies_as_drawn(drawn):
     rows_t, _, areas_t = _fly(c, truth_setup(setup, truth), k, 2)
     np.testing.assert_array_equal(rows_t[0], rows_d[0])
     np.testing.assert_allclose(areas_t[0], areas_d[0], rtol=1e-12, atol=0)
-    for m in range(2):         # every sample weighs world k's own vertex areas
-        np.testing.assert_allclose(areas_t[m], tw.shape.vertex_areas, rtol=1e-12, atol=0)
-    assert not np.allclose(areas_d[1], tw.shape.vertex_areas, rtol=1e-6)
+    np.testing.assert_allclose(areas_t[1], areas_t[0], rtol=1e-12, atol=0)
+    if not sets:               # the whole surface: world k's own vertex areas
+        np.testing.assert_allclose(areas_t[0], tw.shape.vertex_areas, rtol=1e-12, atol=0)
+    else:                      # a part of it, lit at TCA
+        assert 0.2 < areas_t[0].sum() / tw.shape.vertex_areas.sum() < 0.8
+    assert not np.allclose(areas_d[1], areas_t[1], rtol=1e-6)
     assert not np.array_equal(rows_t[1], rows_d[1])
 
 
@@ -107,6 +118,7 @@ def test_a_truth_equal_to_a_known_body_is_the_ordinary_validation(tmp_path_facto
     (["--truth-shape", "/nonexistent/truth.obj"], "--truth-shape", "no shape file"),
     (["--truth-shape", "ellipsoid:1,2"], "--truth-shape", "three positive semi-axes"),
     (["--truth-shape", "ellipsoid:1,-2,3"], "--truth-shape", "three positive semi-axes"),
+    (["--truth-shape", "ellipsoid:9000,7000,6000"], "--truth-shape", "within a factor 10"),
 ])
 def test_bad_truth_options_are_one_line_naming_the_option(args, option, words,
                                                          tmp_path_factory, capsys):

@@ -180,8 +180,15 @@ def truth_setup(setup, world: TargetWorld):
 def options_world(setup, opts: TruthOptions, resolution: int = 3) -> TargetWorld:
     """:func:`truth_world` of the command line's options."""
     shape = None if opts.shape is None else truth_shape(opts.shape, resolution)
-    return truth_world(setup, shape, pole_ra_dec_rad=opts.pole_ra_dec_rad,
-                       period_s=opts.period_s, phase_rad=opts.phase_rad)
+    world = truth_world(setup, shape, pole_ra_dec_rad=opts.pole_ra_dec_rad,
+                        period_s=opts.period_s, phase_rad=opts.phase_rad)
+    # a mesh file carries no unit (km is read): a body 1000 times too large is one in metres
+    if not 0.1 <= world.size_scale <= 10.0:
+        raise InputError(f"{opts.shape}: its volume-equivalent diameter "
+                         f"{world.diameter_m / 1e3:.4g} km is not within a factor 10 of the "
+                         f"design's {world.diameter_m / world.size_scale / 1e3:.4g} km (a file "
+                         "in metres? shape files are read in km)", field="--truth-shape")
+    return world
 
 
 def describe(world: TargetWorld, opts: TruthOptions) -> str:
