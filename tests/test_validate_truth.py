@@ -82,17 +82,28 @@ def test_a_drawn_world_given_as_truth_flies_as_drawn(drawn, sets):
     assert not np.array_equal(rows_t[1], rows_d[1])
 
 
-def test_a_truth_of_its_own_mesh_flies_its_own_vertices(drawn):
+@pytest.mark.parametrize("in_pass", [False, True], ids=["whole-pass", "losses-in-pass"])
+def test_a_truth_of_its_own_mesh_flies_its_own_vertices(drawn, in_pass):
     """A truth of another topology (an ellipsoid at resolution 2: 162 vertices, the design's
-    642) gives rows and weights per vertex of its own mesh; a small sphere far inside the
-    swarm's ring is seen as a sphere is: every member sees the side it faces."""
+    642) gives rows, weights and (losses in the pass) first-seen times per vertex of its own
+    mesh; a body inside the ring is seen on every side."""
     c, setup = drawn
+    if in_pass:
+        c = load(CAMPAIGN, ["monte_carlo.failure_in_pass_share=0.5"])
+        setup = setup_from_campaign(c)
     shape = ellipsoid_mesh(8e3, 6e3, 5e3, 2)
-    rows, _, areas = _fly(c, truth_setup(setup, truth_world(setup, shape)), 0, 2)
+    rows, seen, areas = _fly(c, truth_setup(setup, truth_world(setup, shape)), 0, 2)
     assert rows.shape == (2, SWARM.size, shape.n_vertices) and shape.n_vertices == 162
     assert areas.shape == (2, shape.n_vertices)
     np.testing.assert_allclose(areas[0], shape.vertex_areas, rtol=1e-12)
     assert rows.any(axis=1).mean() > 0.2
+    if in_pass:               # seen: a pass fraction where the row holds, inf elsewhere
+        assert seen.shape == rows.shape
+        timed = seen[np.isfinite(seen)]
+        assert np.all(np.isfinite(seen) <= rows) and np.all((timed >= 0) & (timed <= 1))
+        assert timed.size > 0.9 * rows.sum()
+    else:
+        assert seen is None
 
 
 def test_a_truth_equal_to_a_known_body_is_the_ordinary_validation(tmp_path_factory):
