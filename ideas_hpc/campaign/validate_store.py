@@ -18,7 +18,9 @@ gives
 
 The body must be the one the design saw: a store made on the built-in ellipsoid
 (``IDEAS_HPC_DATA`` unset) is validated with it unset too; a mismatch of the
-mesh is refused.
+mesh is refused. With ``--truth-shape``, ``--truth-pole``, ``--truth-period-h`` or
+``--truth-phase-deg`` every sample flies that one given target instead
+(:mod:`ideas_hpc.campaign.validate_truth`; its own mesh and weights).
 """
 
 from __future__ import annotations
@@ -55,19 +57,9 @@ def wilson_interval(successes: int, n: int, z: float = Z95) -> tuple[float, floa
     return lo, hi
 
 
-@dataclass(frozen=True)
-class StoreValidation:
-    """Outcome of :func:`validate_store`."""
-
-    n: int
-    seed: int
-    first: int
-    per_sample: np.ndarray      # (M,) exact failure-weighted P per sample
-    success: np.ndarray         # (M,) bool: the sample maps the threshold, failures drawn
-    lower: float                # one-sided betting lower bound on P at ``confidence``
-    confidence: float
-    p: float
-    wall_s: float
+class _Outcome:
+    """What a validation and a pool of them share (``per_sample``, ``success``, ``lower``,
+    ``confidence``, ``p`` fields): the counts, P-hat and the verdict's words."""
 
     @property
     def successes(self) -> int:
@@ -81,24 +73,47 @@ class StoreValidation:
     def p_hat(self) -> float:
         return float(self.per_sample.mean())
 
-    def line(self) -> str:
+    def verdict(self) -> str:
+        """The bound against p, and the drawn successes with their Wilson interval."""
         lo, hi = wilson_interval(self.successes, self.samples)
+        return (f"{100 * self.confidence:g} % lower bound {self.lower:.4f} "
+                f"{'>=' if self.lower >= self.p else '<'} p = {self.p:g}; with failures "
+                f"drawn {self.successes} of {self.samples} succeed "
+                f"({self.successes / self.samples:.4f}, Wilson 95 % [{lo:.4f}, {hi:.4f}])")
+
+
+@dataclass(frozen=True)
+class StoreValidation(_Outcome):
+    """Outcome of :func:`validate_store`."""
+
+    n: int
+    seed: int
+    first: int
+    per_sample: np.ndarray      # (M,) exact failure-weighted P per sample
+    success: np.ndarray         # (M,) bool: the sample maps the threshold, failures drawn
+    lower: float                # one-sided betting lower bound on P at ``confidence``
+    confidence: float
+    p: float
+    wall_s: float
+    truth: str | None = None    # the given truth, in words (None: the design's worlds)
+
+    def line(self) -> str:
         last = self.first + self.samples - 1
         return (f"independent validation: N = {self.n} swarm, seed {self.seed}, samples "
                 f"{self.first}..{last}: P-hat = {self.p_hat:.4f} (failures exact), "
-                f"{100 * self.confidence:g} % lower bound {self.lower:.4f} "
-                f"{'>=' if self.lower >= self.p else '<'} p = {self.p:g}; with failures "
-                f"drawn {self.successes} of {self.samples} succeed "
-                f"({self.successes / self.samples:.4f}, Wilson 95 % [{lo:.4f}, {hi:.4f}]) "
-                f"in {self.wall_s:.0f} s")
+                f"{self.verdict()} in {self.wall_s:.0f} s"
+                + (f"; {self.truth}" if self.truth else ""))
 
 
 def validate_store(store, *, samples: int = 1024, seed: int | None = None, first: int = 0,
-                   progress: bool = True, same_seed: bool = False) -> StoreValidation:
+                   progress: bool = True, same_seed: bool = False,
+                   truth=None) -> StoreValidation:
     """Fly a design store's swarm through fresh samples (module docstring).
 
     ``same_seed`` lets ``seed`` be the design's own (then sample k is the design's
     validation sample k: a check of this command, not an independent validation).
+    ``truth``: a :class:`~ideas_hpc.campaign.validate_truth.TruthOptions` (or a
+    :class:`~ideas_hpc.body.target_prior.TargetWorld`) every sample flies.
     """
     import xarray as xr
 
@@ -133,6 +148,7 @@ def validate_store(store, *, samples: int = 1024, seed: int | None = None, first
                    dtype=np.float64)
     w = w / w.sum()
     setup = setup_from_campaign(c)
+    setup, truth_words = _given_truth(setup, truth, c.config.body.resolution)
     mc = c.config.monte_carlo
     t0 = time.perf_counter()
     model = failure_model(mc)
@@ -140,7 +156,7 @@ def validate_store(store, *, samples: int = 1024, seed: int | None = None, first
                                              requirement_from_campaign(c), seed=seed,
                                              n_samples=int(samples), progress=progress,
                                              first=int(first))
-    if rows.shape[2] != w.size:
+    if truth_words is None and rows.shape[2] != w.size:
         raise InputError(f"the body flown now has {rows.shape[2]} vertices, the store's "
                          f"{w.size} ({attrs.get('body', '?')}): set IDEAS_HPC_DATA as the "
                          "design run had it", field="store")
@@ -160,12 +176,69 @@ def validate_store(store, *, samples: int = 1024, seed: int | None = None, first
                            success=wins,
                            lower=lower_confidence_bound(per, conf), confidence=conf,
                            p=float(attrs["success_probability"]),
-                           wall_s=time.perf_counter() - t0)
+                           wall_s=time.perf_counter() - t0, truth=truth_words)
+
+
+@dataclass(frozen=True)
+class Pooled(_Outcome):
+    """Several validations of one design as one sample (:func:`pooled`)."""
+
+    per_sample: np.ndarray
+    success: np.ndarray
+    lower: float
+    confidence: float
+    p: float
+    truths: int
+
+    def line(self) -> str:
+        return (f"pooled over {self.truths} given truths, {self.samples} samples: P-hat = "
+                f"{self.p_hat:.4f}, {self.verdict()}")
+
+
+def pooled(validations) -> Pooled:
+    """Pool :class:`StoreValidation` results of one design, e.g. several given truths
+    (:mod:`ideas_hpc.campaign.validate_truth`): P-hat = sum of per-sample P / total
+    samples, its bound by the validation's own bound function at the store's confidence,
+    the drawn successes summed with their Wilson interval."""
+    from ideas_hpc.base.errors import InputError
+    from ideas_hpc.design.reliability_stats import lower_confidence_bound
+
+    vs = list(validations)
+    if not vs:
+        raise InputError("needs at least one validation", field="validations")
+    if len({(v.confidence, v.p) for v in vs}) != 1:
+        raise InputError("the validations are of different designs (confidence or p differ)",
+                         field="validations")
+    per = np.concatenate([np.asarray(v.per_sample, dtype=np.float64) for v in vs])
+    return Pooled(per_sample=per, success=np.concatenate([np.asarray(v.success) for v in vs]),
+                  lower=lower_confidence_bound(per, vs[0].confidence),
+                  confidence=vs[0].confidence, p=vs[0].p, truths=len(vs))
+
+
+def _given_truth(setup, truth, resolution: int):
+    """``(setup, words)``: ``setup`` flying the given truth and its description, or
+    ``(setup, None)`` when none is given."""
+    from ideas_hpc.body.target_prior import TargetWorld
+    from ideas_hpc.campaign.validate_truth import (TruthOptions, describe, options_world,
+                                                   truth_setup)
+
+    if truth is None or (isinstance(truth, TruthOptions) and not truth.given):
+        return setup, None
+    if isinstance(truth, TargetWorld):
+        world, words = truth, describe(truth, TruthOptions(shape="given world"))
+    else:
+        world = options_world(setup, truth, resolution)
+        words = describe(world, truth)
+    return truth_setup(setup, world), words
 
 
 def _cmd_validate(args) -> int:
+    from ideas_hpc.campaign.validate_truth import truth_options
+
+    truth = truth_options(args.truth_shape, args.truth_pole, args.truth_period_h,
+                          args.truth_phase_deg)
     v = validate_store(args.store, samples=args.samples, seed=args.seed, first=args.first,
-                       progress=not args.no_progress)
+                       progress=not args.no_progress, truth=truth)
     print(v.line())
     if args.out:
         np.savez(args.out, per_sample=v.per_sample, success=v.success, seed=v.seed,
@@ -190,4 +263,15 @@ def add_validate_command(sub) -> None:
     p.add_argument("--out", default=None,
                    help="also write the per-sample values (.npz: per_sample, success)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    t = p.add_argument_group("a given truth (every sample flies this one target; navigation "
+                             "errors, dispersions and failures still drawn; an option left "
+                             "out takes the design's nominal value)")
+    t.add_argument("--truth-shape", default=None, metavar="FILE|NAME",
+                   help="shape file (km; its body frame, origin at the centre of mass), "
+                        "built-in body name, or ellipsoid:A,B,C (semi-axes, km)")
+    t.add_argument("--truth-pole", default=None, metavar="RA,DEC",
+                   help="spin pole, deg, J2000 equatorial")
+    t.add_argument("--truth-period-h", type=float, default=None, help="spin period, h")
+    t.add_argument("--truth-phase-deg", type=float, default=None,
+                   help="rotation angle W at closest approach, deg")
     p.set_defaults(handler=_cmd_validate)

@@ -102,7 +102,9 @@ def placed_world(setup, tw) -> World:
 def drawn_world(setup, seed: int, family: int, k: int) -> World:
     """World ``k`` of design stream ``family`` under ``setup.target`` (kept per process)."""
     prior = setup.target
-    key = (id(prior), id(setup.body), int(seed), int(family), int(k))
+    # a prior of one world (a given truth, ``one_world``) is placed once, not per draw
+    draw = (0, 0, 0) if getattr(prior, "one_world", False) else (int(seed), int(family), int(k))
+    key = (id(prior), id(setup.body), *draw)
     with _LOCK:
         got = _WORLDS.get(key)
         if got is not None and got[0] is prior and got[1] is setup.body:

@@ -114,17 +114,25 @@ def draw_world(mc, setup: FlybySetup, theta: np.ndarray, seed: int, stream: int,
 
 def _rows_chunk(ks, *, engine: RowEngine, mc, seed, stream):
     setup = engine.setup
-    out = np.empty((len(ks), engine.theta.size, setup.body.shape.n_vertices), dtype=bool)
+    out = None
     for i, k in enumerate(ks):
         pert = Perturbation(**draw_world(mc, setup, engine.theta, seed, stream, int(k)))
         if setup.target is None:
-            out[i] = engine.scenario_rows(pert, reuse=True)
-            continue
-        # world k of the stream's family: its own shape, so its rows are recomputed in
-        # full (RowEngine.rows: the nominal's proofs hold for the nominal shape only)
-        world = scenario_world(setup, seed, stream, int(k), pert.params_override)
-        out[i] = engine.rows(*engine.flight(pert, True, world), world=world)
+            row = engine.scenario_rows(pert, reuse=True)
+        else:
+            # world k of the stream's family: its own shape, so its rows are recomputed in
+            # full (RowEngine.rows: the nominal's proofs hold for the nominal shape only)
+            world = scenario_world(setup, seed, stream, int(k), pert.params_override)
+            row = engine.rows(*engine.flight(pert, True, world), world=world)
+        out = _rows_out(out, len(ks), row)
+        out[i] = row
     return out
+
+
+def _rows_out(out, n: int, row: np.ndarray) -> np.ndarray:
+    """The chunk's (n, K, V) array, made at its first row: V is the flown world's vertex
+    count (a given truth, :mod:`ideas_hpc.campaign.validate_truth`, may have its own mesh)."""
+    return np.empty((n,) + row.shape, dtype=row.dtype) if out is None else out
 
 
 def row_engine(setup: FlybySetup, theta, mc, seed: int, stream: int) -> RowEngine:
@@ -274,14 +282,16 @@ def _seen_chunk(ks, *, engine: RowEngine, mc, seed, stream):
     of its row, ``UNTIMED`` for one of its row without a first image (never on one flight;
     counted as seen only at the end), -1 outside its row."""
     setup = engine.setup
-    out = np.empty((len(ks), engine.theta.size, setup.body.shape.n_vertices), dtype=np.int32)
+    out = None
     for i, k in enumerate(ks):
         pert = Perturbation(**draw_world(mc, setup, engine.theta, seed, stream, int(k)))
         world = scenario_world(setup, seed, stream, int(k), pert.params_override)
         r_img, dcm = engine.flight(pert, True, world)
         rows = engine.rows(r_img, dcm, world=world)
         first = engine.first_seen(r_img, dcm, world)
-        out[i] = np.where(rows, np.where(first >= 0, first, UNTIMED), -1)
+        row = np.where(rows, np.where(first >= 0, first, UNTIMED), -1).astype(np.int32)
+        out = _rows_out(out, len(ks), row)
+        out[i] = row
     return out
 
 
