@@ -28,6 +28,7 @@ SMALL = {
     "eros-design-quick.toml": ["design.angle_step_deg=12.0"],
     "eros-fast-encounter.toml": ["design.verify_samples=2", "design.angle_step_deg=6.0"],
     "eros-fast-encounter-flyby.toml": [],
+    "eros-fast-encounter-nav.toml": ["design.verify_samples=2", "design.angle_step_deg=6.0"],
     "eros-flyby.toml": [],
     "eros-fov-ga.toml": ["design.population=6", "design.generations=2"],
     "eros-monte-carlo.toml": ["monte_carlo.samples=2", "run.chunk_size=1"],
@@ -39,11 +40,10 @@ SMALL = {
     "eros-stereo-design.toml": ["design.verify_samples=2", "design.angle_step_deg=12.0",
                                 "design.time_limit_s=5"],
     # already coarse; its [target] prior supplies the body (no data file, no body.name)
-    "eros-class-flyby.toml": [],
+    "eros-class-flyby.toml": ["design.angle_step_deg=15.0", "design.holdout_scenarios=20"],
 }
 #: Files whose body comes from their [target] prior: run as shipped, never on another body.
 PRIOR_BODY = {"eros-class-flyby.toml"}
-#: ... and those that wait for the design side's per-scenario areas (S, V) (issue 42).
 FORBIDDEN = ("design.n_max", "design.eps_tol_pct", "coverage.", "design.failures_tolerated")
 
 

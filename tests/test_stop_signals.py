@@ -31,13 +31,17 @@ DESIGN = fitted("eros-design.toml", SETS)
 # The child blocks inside the design phase (after the scenario bank is stored) until
 # the signal arrives: the test waits on that state, not on a clock.
 CHILD = """
-import sys
+import select, sys
 # the success-probability designer's adapter (design.api) calls this name at run time
 from ideas_hpc.design.api import designers as d
 def blocked(*a, **k):
     print("IN DESIGN", file=sys.stderr, flush=True)
-    sys.stdin.read()
-    raise SystemExit("stdin closed without a signal")
+    # wait for the signal in short selects, not one blocking read: the OS may hand the
+    # signal to another thread (tqdm's monitor), and then only a main thread that wakes
+    # runs Python's handler (a read() of stdin hung a loaded CI run here)
+    while True:
+        if select.select([sys.stdin], [], [], 0.05)[0] and not sys.stdin.read(1):
+            raise SystemExit("stdin closed without a signal")
 d.min_swarm_reliable = blocked
 from ideas_hpc.cli import main
 sys.exit(main(sys.argv[1:]))

@@ -29,11 +29,13 @@ CAMPAIGN = ROOT / "campaigns" / "eros-class-flyby.toml"
 SMALL = ["design.angle_step_deg=20", "design.n_max=8", "design.verify_samples=20",
          "design.time_limit_s=20"]
 SWARM = np.deg2rad([0.0, 120.0, 240.0])
+#: the whole surface as the reference (the campaign ships the area lit at TCA)
+SURFACE = ['design.coverage_reference="surface"']
 
 
 @pytest.fixture(scope="module")
 def drawn():
-    c = load(CAMPAIGN)
+    c = load(CAMPAIGN, SURFACE)
     return c, setup_from_campaign(c)
 
 
@@ -89,7 +91,9 @@ def test_a_truth_of_its_own_mesh_flies_its_own_vertices(drawn, in_pass):
     mesh; a body inside the ring is seen on every side."""
     c, setup = drawn
     if in_pass:
-        c = load(CAMPAIGN, ["monte_carlo.failure_in_pass_share=0.5"])
+        # first-seen times are kept for plain visibility only (not for a lit requirement)
+        c = load(CAMPAIGN, SURFACE + ["monte_carlo.failure_in_pass_share=0.5",
+                                      "coverage.require_lit=false"])
         setup = setup_from_campaign(c)
     shape = ellipsoid_mesh(8e3, 6e3, 5e3, 2)
     rows, seen, areas = _fly(c, truth_setup(setup, truth_world(setup, shape)), 0, 2)

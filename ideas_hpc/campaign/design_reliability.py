@@ -55,6 +55,7 @@ from ideas_hpc.montecarlo.failure_dispersion import failure_model
 from ideas_hpc.montecarlo.scenarios import build_scenario_bank
 from ideas_hpc.flyby.target_world import world_areas
 from ideas_hpc.campaign.setup import requirement_from_campaign
+from ideas_hpc.mapping.requirement import meets
 from ideas_hpc.campaign.validation_flights import (  # noqa: F401 (Validation, fly_validation:
     Validation, fly_validation, fly_validation_world, sample_weights)  # their old home)
 from ideas_hpc.base import seeds
@@ -269,7 +270,7 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=Non
         reach = rel.ev.reach()          # world's reference; where all candidates miss it, P_s = 0
         _log(f"drawn worlds: all candidates reach {100 * reach.min():.3f} % to "
              f"{100 * reach.max():.3f} % of the scenarios' reference areas; "
-             f"{int((reach < need - 1e-12).sum())} of {s_n} scenarios are below the threshold "
+             f"{int((~meets(reach, need)).sum())} of {s_n} scenarios are below the threshold "
              f"{100 * need:.3f} % whatever flies")
     held = None if not h_n else HeldOut(lambda sw: _validate(
         c, setup, bank.theta[sw], need, w, exact, client, size=h_n,

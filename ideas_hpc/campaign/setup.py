@@ -132,7 +132,9 @@ def setup_from_campaign(c, *, maneuver: str | None = None) -> FlybySetup:
         epoch_s=epoch_s, encounter=enc, imaging=_imaging(cfg, eta),
         attitude_start=cfg.monte_carlo.attitude_start,
         torques=torques_from_config(c.raw.get("torques"), prefix="torques."),
-        device=device, target=prior, navigation=_navigation(cfg, eta, sizing))
+        device=device, target=prior,
+        # read only when the file has the table: a run without one reads none of its keys
+        navigation=_navigation(cfg, eta, sizing) if c.raw.get("navigation") else None)
 
 
 def _navigation(cfg, eta_rad: float, sizing):
