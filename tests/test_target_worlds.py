@@ -67,6 +67,13 @@ def test_streams_give_disjoint_worlds(drawn):
             assert np.abs(v[i] - v[j]).max() > 10.0    # metres: other shapes
 
 
+def _row(setup, flight):
+    """What a bank row holds: the vertices mapped under the campaign's [coverage]
+    requirement (lit, here), or seen without one."""
+    cov = flight.coverage
+    return cov.quality.mapped if setup.coverage.requirement else cov.observed
+
+
 def test_drawn_rows_are_full_recomputations(drawn):
     # oracle: the flyby pipeline (whole flight, coverage from scratch) of the world's body
     # as a known target, from the bank's nominal start states and the scenario's draws
@@ -79,14 +86,17 @@ def test_drawn_rows_are_full_recomputations(drawn):
         known = dataclasses.replace(setup, body=world.body, target=None)
         pert = Perturbation(**draw_world(mc, setup, bank.theta, 7, seeds.SCENARIO_STREAM, s))
         f = fly_open_loop(known, bank.theta, None, r0, v0, pert)
-        np.testing.assert_array_equal(bank.rows[s].any(axis=0), f.coverage.observed)
+        np.testing.assert_array_equal(bank.rows[s].any(axis=0), _row(setup, f))
         for k in (0, 5):
-            one = {key: (val if key == "params_override" else np.ascontiguousarray(val[k:k + 1]))
+            # per-candidate draws cut to candidate k; shared ones (parameters, the
+            # navigation's common target offset) kept whole
+            one = {key: (np.ascontiguousarray(val[k:k + 1]) if key != "params_override"
+                         and np.ndim(val) and np.shape(val)[0] == bank.theta.size else val)
                    for key, val in draw_world(mc, setup, bank.theta, 7, seeds.SCENARIO_STREAM,
                                               s).items()}
             fk = fly_open_loop(known, bank.theta[k:k + 1], None, r0[k:k + 1], v0[k:k + 1],
                                Perturbation(**one))
-            np.testing.assert_array_equal(bank.rows[s, k], fk.coverage.observed)
+            np.testing.assert_array_equal(bank.rows[s, k], _row(setup, fk))
 
 
 def test_areas_are_each_drawn_shapes(drawn):
