@@ -23,7 +23,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ideas_hpc.base.constants import MU_SUN
-from ideas_hpc.core.dynamics.ephemeris import sun_T_batch
+from ideas_hpc.core.dynamics.ephemeris import dcm_PN, sun_T_batch
 from ideas_hpc.core.dynamics.targeting import propagate_batch, target_batch
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.dynamics.force_model import ForceModel, pack_force_model
@@ -306,3 +306,18 @@ def ring_states(body, angles, d_sep, z_start, z_stop):
     r0 = np.stack([d_sep * np.cos(th), d_sep * np.sin(th), zs], axis=1)
     rt = np.stack([d_sep * np.cos(th), d_sep * np.sin(th), ze], axis=1)
     return np.ascontiguousarray(r0), np.ascontiguousarray(rt)
+
+
+def body_dcm_TN(params: PhysicalParams, w_rad, pole_lon_lat=None) -> np.ndarray:
+    """``[T N] = R3(W) [P N]`` (rows: the body-fixed axes in N) at rotation angle(s) ``w_rad``
+    (rad, scalar -> (3, 3), array (n,) -> (n, 3, 3)) about the pole ``(lambda, beta)`` in N
+    (rad; default ``params``' own pole, or its orbit normal: SPEC section 4). Used by the
+    SPICE export and by the drawn worlds' placement."""
+    elements, pole = elements_and_pole(params)
+    if pole_lon_lat is not None:
+        pole = np.array([pole_lon_lat[0], pole_lon_lat[1], 1.0])
+    w = np.asarray(w_rad, dtype=np.float64)
+    c, s = np.cos(w), np.sin(w)
+    r3 = np.zeros(w.shape + (3, 3))
+    r3[..., 0, 0], r3[..., 0, 1], r3[..., 1, 0], r3[..., 1, 1], r3[..., 2, 2] = c, s, -s, c, 1.0
+    return r3 @ dcm_PN(elements, pole)

@@ -31,17 +31,10 @@ FRAME_BASE = 1_490_000   #: frame IDs of the exported frames (NAIF leaves 1,400,
 
 def dcm_TN(params, tau_s):
     """``[TN]`` (rows: T axes in ECLIPJ2000) at ``tau_s`` s after the element epoch."""
-    from ideas_hpc.core.dynamics.ephemeris import dcm_PN
-    from ideas_hpc.dynamics.forces import elements_and_pole
+    from ideas_hpc.dynamics.trajectory import body_dcm_TN
 
-    elements, pole = elements_and_pole(params)
-    pn = dcm_PN(elements, pole)
     tau = np.atleast_1d(np.asarray(tau_s, dtype=np.float64))
-    w = params.prime_meridian + params.spin_rate * tau
-    c, s = np.cos(w), np.sin(w)
-    r3 = np.zeros((tau.size, 3, 3))
-    r3[:, 0, 0], r3[:, 0, 1], r3[:, 1, 0], r3[:, 1, 1], r3[:, 2, 2] = c, s, -s, c, 1.0
-    return r3 @ pn
+    return body_dcm_TN(params, params.prime_meridian + params.spin_rate * tau)
 
 
 def pck_text(body_id: int, params, et_elements: float, dcm_NJ) -> str:

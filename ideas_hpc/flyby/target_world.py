@@ -37,7 +37,6 @@ Every world shares the nominal mesh's topology (vertex count and faces), so rows
 from __future__ import annotations
 
 import dataclasses
-import math
 import threading
 from collections import OrderedDict
 
@@ -45,8 +44,7 @@ import numpy as np
 
 from ideas_hpc.body.bodies import Body
 from ideas_hpc.body.shape import build_shape
-from ideas_hpc.core.dynamics.ephemeris import dcm_PN
-from ideas_hpc.dynamics.forces import elements_and_pole
+from ideas_hpc.dynamics.trajectory import body_dcm_TN
 from ideas_hpc.flyby.reference_area import reference_areas
 from ideas_hpc.flyby.world import World
 
@@ -56,18 +54,11 @@ _WORLDS: OrderedDict = OrderedDict()
 _LOCK = threading.Lock()
 
 
-def _r3(angle: float) -> np.ndarray:
-    c, s = math.cos(angle), math.sin(angle)
-    return np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
 def dcm_TN(params, pole_lon_lat=None, w_rad: float = 0.0) -> np.ndarray:
     """``[T N] = R3(W) [P N]`` for the pole ``(lambda, beta)`` in N (rad; default
-    ``params``' own pole, or its orbit normal) at rotation angle ``w_rad``."""
-    elements, pole = elements_and_pole(params)
-    if pole_lon_lat is not None:
-        pole = np.array([pole_lon_lat[0], pole_lon_lat[1], 1.0])
-    return _r3(w_rad) @ dcm_PN(elements, pole)
+    ``params``' own pole, or its orbit normal) at rotation angle ``w_rad``
+    (:func:`~ideas_hpc.dynamics.trajectory.body_dcm_TN`)."""
+    return body_dcm_TN(params, w_rad, pole_lon_lat)
 
 
 def t_tca_s(setup) -> float:
