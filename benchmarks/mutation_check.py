@@ -349,6 +349,31 @@ MUTATIONS: tuple[Mutation, ...] = (
       "np.where(lock[..., None], r, r - dr)", "np.where(lock[..., None], r, r + 0.0 * dr)",
       ("tests/test_navigation_flights.py::"
        "test_tracking_the_predicted_target_carries_the_analytic_bias",)),
+    M("terminal_lock_ignored_by_the_loop", "kernels", "ideas_hpc/flyby/nav_flight.py",
+      "    lock = locked(setup, pos_T)\n    if not lock.any():\n        return track_reference(",
+      "    lock = locked(setup, pos_T) & False\n    if not lock.any():\n        return track_reference(",
+      ("tests/test_terminal_tracking.py::"
+       "test_the_closed_loop_locks_on_the_centroid_and_converges_to_its_error",)),
+    M("terminal_centroid_turned_backwards", "kernels", "ideas_hpc/flyby/nav_flight.py",
+      "out[i, k, 0:3] = mrp_from_dcm(np.ascontiguousarray(c @ rn))",
+      "out[i, k, 0:3] = mrp_from_dcm(np.ascontiguousarray(c.T @ rn))",
+      ("tests/test_terminal_tracking.py::"
+       "test_the_closed_loop_locks_on_the_centroid_and_converges_to_its_error",)),
+    M("terminal_slew_rate_sign", "kernels", "ideas_hpc/flyby/nav_flight.py",
+      "np.ascontiguousarray(vel_T - (1.0 - lam) * dv + lam1 * dr)",
+      "np.ascontiguousarray(vel_T - (1.0 - lam) * dv - lam1 * dr)",
+      ("tests/test_terminal_tracking.py::"
+       "test_the_closed_loop_locks_on_the_centroid_and_converges_to_its_error",)),
+    M("wheel_torque_limit_loose", "kernels", "ideas_hpc/core/attitude/rigid_body.py",
+      "    if v > u_max:\n        v = u_max\n    elif v < -u_max:\n        v = -u_max\n",
+      "    if v > 10.0 * u_max:\n        v = 10.0 * u_max\n    elif v < -10.0 * u_max:\n"
+      "        v = -10.0 * u_max\n",
+      ("tests/test_terminal_tracking.py::"
+       "test_images_are_lost_from_where_the_wheels_cannot_follow_the_centroid",)),
+    M("encounter_exposure_the_papers", "kernels", "ideas_hpc/flyby/usable.py",
+      "return (ENCOUNTER_EXPOSURE_MS if encounter else EXPOSURE_MS) * 1e-3",
+      "return (EXPOSURE_MS if encounter else EXPOSURE_MS) * 1e-3",
+      ("tests/test_smear.py::test_the_fast_campaigns_expose_for_the_parallax_of_a_tracked_pass",)),
     M("nav_common_error_drawn_per_candidate", "statistics",
       "ideas_hpc/montecarlo/dispersions.py",
       "navigation_dispersion.COMMON_VARS, level=\"body\"",

@@ -24,6 +24,8 @@ from ideas_hpc.campaign.schema.spice_table import apply_spice
 from ideas_hpc.campaign.schema.model_fields import flyby_errors
 from ideas_hpc.campaign.target import prior_body, target_prior
 from ideas_hpc.campaign.schema.navigation_table import navigation_plan
+from ideas_hpc.campaign.schema.instrument_table import exposure_ms
+from ideas_hpc.base.units import MM
 from ideas_hpc.dynamics.trajectory import sun_direction_T
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.flyby.encounter import Encounter, approach_angles, approach_speed, window_s
@@ -158,7 +160,8 @@ def _imaging(cfg, eta_rad: float) -> ImageUse | None:
     return ImageUse(ifov_rad(eta_rad, pixels_across=inst.pixels_across,
                              pixel_pitch_m=inst.pixel_pitch_m, focal_length_m=inst.focal_length_m,
                              wavelength_m=inst.wavelength_m, aperture_m=inst.aperture_m),
-                    exposure_s=inst.exposure_s, smear_pixels=inst.smear_pixels,
+                    exposure_s=exposure_ms(cfg) * MM,
+                    smear_pixels=inst.smear_pixels,
                     settle_rad=inst.settle_rad)
 
 

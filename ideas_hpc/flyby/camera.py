@@ -41,7 +41,9 @@ def camera_dcms(setup, theta, periods=None, *, state0: InitialState | None = Non
     (:func:`ideas_hpc.attitude.simulate_attitude`).
     ``r_img_T`` (N, n_img, 3): the flown positions, for body tracking;
     ``track_T``: ``(position_T, velocity_T)`` (N, T, 3) at every attitude step,
-    for body tracking with simulated attitude.
+    for body tracking with simulated attitude, or its reference table (N, T, 9) already
+    built (:func:`ideas_hpc.flyby.nav_flight.terminal_reference`: navigation errors and
+    terminal tracking).
     Returns ``(dcm_BT (N, n_img, 3, 3), AttitudeResult or None)``.
     """
     sigma0, omega0, wheel0 = from_keywords(None, None, None, None, state0, initial)[3].arrays()
@@ -58,7 +60,9 @@ def camera_dcms(setup, theta, periods=None, *, state0: InitialState | None = Non
         if track_T is None:
             raise InputError("body tracking with simulated attitude needs the flown positions "
                              "and velocities at every step", field="track_T")
-        sim_kw = dict(sim_kw, ref_table=track_reference(setup, *track_T))
+        table = (track_T if isinstance(track_T, np.ndarray)
+                 else track_reference(setup, *track_T))
+        sim_kw = dict(sim_kw, ref_table=table)
     if sigma0 is None and closed:
         # no initial state given: the setup's own start (SPEC 7d), sample 0
         (sigma0, omega0, wheel0), word = undrawn_start(

@@ -32,13 +32,28 @@ camera then aims at the true centre, turned by the member's centroid error (a sm
 rotation about ``x_B`` and ``y_B``, drawn per member). Other maneuvers (nadir, sweeps)
 fly their planned attitude in N, which does not depend on the target's position: their
 error is the offset of the track alone.
+
+The closed loop (``attitude.mode = "simulated"``) flies the same aim as its reference
+(:func:`terminal_reference`): the believed track's body-tracking reference before the lock,
+then, from the first attitude step at which the true range is within the detection range,
+a slew of :data:`LOCK_SLEW_S` that moves the aim point from the predicted target onto the
+true centre (the measured centroid) and turns in the centroid error, after which the
+reference is the flown track's, turned by that error. The wheels follow it within their
+torque and momentum limits; where the line of sight's own rate and acceleration near
+closest approach exceed them (:func:`~ideas_hpc.flyby.pass_rates.follow_check`) the
+error grows past the settle limit and those images are lost (blinded), as the design sees.
+Ideal attitude locks at once (perfect tracking has no transient).
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ideas_hpc.core.attitude.compose import compose_each
+from ideas_hpc.core.attitude.mrp import dcm_from_mrp, mrp_from_dcm, mrp_from_prv
+from ideas_hpc.flyby.encounter import track_reference
 
 
 def member_offsets(pert, n: int) -> np.ndarray | None:
@@ -121,3 +136,69 @@ def with_centroid_errors(setup, dcm_BT, r_img_T, centroid_dcm) -> np.ndarray:
     turned = compose_each(np.ascontiguousarray(centroid_dcm, dtype=np.float64),
                           np.ascontiguousarray(dcm_BT, dtype=np.float64))
     return np.where(lock[..., None, None], turned, dcm_BT)
+
+
+#: Duration (s) of the closed loop's slew from the prediction onto the measured centroid at
+#: the lock. A step of the reference by the ephemeris bias (degrees) would wind up the
+#: controller's integral during the transient (K_I = 0.01 1/s^2 then holds an error of
+#: ~0.1 deg for a minute, measured), which a flight's attitude system avoids by commanding
+#: a slew; 5 s of ``(1 - cos)`` profile asks ``theta_b pi^2 / (2 t_s^2)``, 1.5e-3 rad/s^2
+#: (0.7 % of the paper's wheels' torque) for a 0.9 deg bias.
+LOCK_SLEW_S = 5.0
+
+
+def lock_ramp(setup, lock: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(lam, lam', lam'')`` (N, T): the share of the way from the prediction to the
+    centroid at the attitude steps, ``(1 - cos(pi tau / t_s)) / 2`` for ``tau`` from the
+    first locked step (``lock`` (N, T) bool) to ``t_s = LOCK_SLEW_S``, 1 after, 0 before,
+    and its first and second time derivatives (1/s, 1/s^2)."""
+    dt = float(setup.dt_s)
+    k0 = np.where(lock.any(axis=1), np.argmax(lock, axis=1), lock.shape[1])
+    tau = (np.arange(lock.shape[1])[None, :] - k0[:, None]) * dt
+    w = math.pi / LOCK_SLEW_S
+    on = (tau >= 0.0) & (tau < LOCK_SLEW_S)
+    lam = np.where(tau >= LOCK_SLEW_S, 1.0, np.where(on, 0.5 * (1.0 - np.cos(w * tau)), 0.0))
+    return (lam, np.where(on, 0.5 * w * np.sin(w * tau), 0.0),
+            np.where(on, 0.5 * w * w * np.cos(w * tau), 0.0))
+
+
+def turned_reference(table: np.ndarray, prv: np.ndarray, ramp) -> np.ndarray:
+    """A body-tracking reference table (N, T, 9) (``[sigma_RN, omega_RN_R, omegadot_RN_R]``)
+    turned by the share ``lam`` of each member's centroid error ``prv`` (N, 3) rad (a
+    rotation about a fixed axis: ``[R' R] = C(lam a)``, ``a = prv``), ``ramp = (lam, lam',
+    lam'')`` (N, T) from :func:`lock_ramp`: ``[R' N] = C [R N]``,
+    ``omega' = C omega + lam' a``, ``omegadot' = C omegadot + lam'' a + omega' x lam' a``
+    (inertial derivative in R' components, S&J eq. 2.16 on ``omega_R'R = lam' a``)."""
+    lam, lam1, lam2 = ramp
+    out = np.array(table, dtype=np.float64, copy=True)
+    a_all = np.asarray(prv, dtype=np.float64).reshape(-1, 3)
+    for i, k in zip(*np.nonzero(lam > 0.0)):
+        a = a_all[i]
+        c = dcm_from_mrp(mrp_from_prv(np.ascontiguousarray(lam[i, k] * a)))
+        rn = dcm_from_mrp(np.ascontiguousarray(table[i, k, 0:3]))
+        out[i, k, 0:3] = mrp_from_dcm(np.ascontiguousarray(c @ rn))
+        w = c @ table[i, k, 3:6] + lam1[i, k] * a
+        out[i, k, 3:6] = w
+        out[i, k, 6:9] = c @ table[i, k, 6:9] + lam2[i, k] * a + np.cross(w, lam1[i, k] * a)
+    return out
+
+
+def terminal_reference(setup, pos_T, vel_T, off_N, centroid_prv=None) -> np.ndarray:
+    """The closed loop's body-tracking reference (N, T, 9) in N with navigation errors
+    (module docstring): at the predicted target (the believed track,
+    :func:`believed_track`) until terminal tracking locks (:func:`locked` at every attitude
+    step of the flown ``pos_T``), then slewed over :data:`LOCK_SLEW_S` onto the measured
+    centroid (the flown track ``pos_T``, ``vel_T``) turned by ``centroid_prv`` (N, 3) rad
+    or None: the aim point moves from the prediction to the true centre,
+    ``r - (1 - lam) R3 o`` with velocity ``v - (1 - lam) dv + lam' R3 o``, and the rates
+    and accelerations are that moving aim's (:func:`lock_ramp`)."""
+    lock = locked(setup, pos_T)
+    if not lock.any():
+        return track_reference(setup, *believed_track(setup, pos_T, vel_T, off_N))
+    t = setup.t0_s + setup.dt_s * np.arange(np.shape(pos_T)[1])
+    dr, dv = offset_T(setup, off_N, t)
+    ramp = lock_ramp(setup, lock)
+    lam, lam1 = ramp[0][..., None], ramp[1][..., None]
+    table = track_reference(setup, np.ascontiguousarray(pos_T - (1.0 - lam) * dr),
+                            np.ascontiguousarray(vel_T - (1.0 - lam) * dv + lam1 * dr))
+    return table if centroid_prv is None else turned_reference(table, centroid_prv, ramp)

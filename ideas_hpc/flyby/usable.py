@@ -61,7 +61,18 @@ from ideas_hpc.base.errors import InputError
 from ideas_hpc.body.mass_properties import mean_radius
 
 #: Defaults (docs/attitude-start.md): a 10 ms exposure, one pixel of smear, 0.1 deg settled.
+#: 10 ms is the paper's pass (0.1 km/s): its camera is sized so that ``v t_exp`` is one
+#: ground sample.
 EXPOSURE_MS = 10.0
+#: The default exposure on an encounter (``flyby.geometry = "encounter"``), ms. A framing
+#: camera at a fast flyby exposes for milliseconds: tracking the body centre at 10 km/s and
+#: ~157 km, the footprint centre (at the mean radius ``R``) moves across it by the parallax
+#: ``v (1 / (rho - R) - 1 / rho)`` = 3.4e-3 rad/s, 5 pixels of the paper's 6.9 microrad
+#: camera in 10 ms and 0.5 in 1 ms (1.1 at Eros' 17 km long axis). New Horizons' LORRI sets
+#: its exposure in 1 ms steps (0 to 64 967 ms; Weaver et al. 2020, PASP 132, 035003) and
+#: imaged Pluto near closest approach with "unusually short exposures to avoid blurring"
+#: (NASA/JHUAPL, December 2015 release of the closest-approach strip).
+ENCOUNTER_EXPOSURE_MS = 1.0
 SMEAR_PIXELS = 1.0
 SETTLE_DEG = 0.1
 EXPOSURE_S = EXPOSURE_MS * 1e-3
@@ -92,6 +103,12 @@ class ImageUse:
     def smear_pixels_of(self, rate_rad_s):
         """Smear in pixels of image rates ``rate_rad_s`` (rad/s): ``rate t_exp / IFOV``."""
         return np.asarray(rate_rad_s) * self.exposure_s / self.ifov_rad
+
+
+def default_exposure_s(encounter: bool) -> float:
+    """The exposure (s) when ``instrument.exposure_ms`` is not given: 1 ms on an encounter
+    (:data:`ENCOUNTER_EXPOSURE_MS`), 10 ms on the paper's pass (:data:`EXPOSURE_MS`)."""
+    return (ENCOUNTER_EXPOSURE_MS if encounter else EXPOSURE_MS) * 1e-3
 
 
 def scene_radius_m(shape) -> float:

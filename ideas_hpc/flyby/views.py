@@ -15,7 +15,8 @@ target, Sun, encounter and force model) and the swarm's own draws (a
    (:func:`ideas_hpc.flyby.closed_loop.positions_into`, the same bits); on an
    encounter, from a start moved by the scenario's navigation draws (``target_offset_N``,
    ``member_offset_N``; :mod:`ideas_hpc.flyby.nav_flight`), body tracking then aiming at
-   the predicted target (and, with terminal tracking, at the measured centroid);
+   the predicted target (and, with terminal tracking, at the measured centroid, in the
+   ideal cameras and the closed loop's reference alike);
 2. points the cameras: perfect tracking of the maneuver's reference (its
    cameras kept per world, :func:`~ideas_hpc.flyby.world.cached_static`), or the
    closed loop, flown by the first compiled variant of :data:`CLOSED_LOOPS`
@@ -46,8 +47,8 @@ from ideas_hpc.flyby import closed_loop as _loop
 from ideas_hpc.flyby.camera import (camera_at_images, camera_dcms, imaging_dcms, misaligned,
                                     misalignment_dcms, smear_rates_of)
 from ideas_hpc.flyby.encounter import track_dcms
-from ideas_hpc.flyby.nav_flight import (aim_positions_T, believed_track, member_offsets,
-                                        start_errors_T, with_centroid_errors)
+from ideas_hpc.flyby.nav_flight import (aim_positions_T, member_offsets, start_errors_T,
+                                        terminal_reference, with_centroid_errors)
 from ideas_hpc.flyby.world import World, array_key, cached_static
 
 
@@ -235,8 +236,9 @@ def flight_views(setup, theta, periods, r0_T, v0_T, pert, *, world: World | None
     if loop.series and not plan.series:     # the time series is not kept: one sample a run
         flown = flown.with_(decimate=max(1, int(round((flown.tf_s - flown.t0_s) / flown.dt_s))))
     track = None if pos is None else (pos, vel)
-    if track is not None and tracks and nav is not None:    # aim at the predicted target
-        track = believed_track(flown, pos, vel, nav)
+    if track is not None and tracks and nav is not None:
+        # the reference table: at the predicted target, then at the measured centroid
+        track = terminal_reference(flown, pos, vel, nav, pert.centroid_prv)
     dcm, imaging, att = loop.fly(flown, world, setup.flight_key, th, periods, start, mis,
                                  (r_img, v_img), track, plan.buffers)
     return Views(r_img, dcm, imaging, att, pos, vel)

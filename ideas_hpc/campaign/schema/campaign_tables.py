@@ -86,7 +86,7 @@ from ideas_hpc.campaign.schema.encounter_table import ENCOUNTER, check_encounter
 from ideas_hpc.campaign.schema.navigation_table import NAVIGATION, check_navigation
 from ideas_hpc.campaign.schema.spice_table import SPICE_BODY, SPICE_FLYBY, resolve_spice
 from ideas_hpc.campaign.schema.target_table import TARGET
-from ideas_hpc.campaign.schema.instrument_table import INSTRUMENT
+from ideas_hpc.campaign.schema.instrument_table import INSTRUMENT, exposure_ms
 from ideas_hpc.campaign.schema.model_fields import STORED_NAMES, flyby_errors, stored_fields
 from ideas_hpc.campaign.schema.model_tables import build_models
 from ideas_hpc.campaign.schema.kinds import KINDS as REGISTRY
@@ -373,5 +373,7 @@ def resolved_config(c: Campaign) -> dict[str, Any]:
     d = c.config.design
     out.effective = {"design.angle_step_deg": d.grid_step_rad / DEG,
                      "design.angle_step_rad": d.angle_step_rad,
-                     "design.verify_samples": verify_samples(d)}
+                     "design.verify_samples": verify_samples(d),
+                     "instrument.exposure_ms": exposure_ms(c.config)}
     return out
+

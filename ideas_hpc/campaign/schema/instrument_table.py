@@ -2,7 +2,8 @@
 
 ``pixels_across`` (detector pixels across the field of view; the IFOV is then
 ``2 eta / n_pix``, else ``pixel_pitch_um / focal_length_mm`` with a detector, else
-``lambda / D``), ``exposure_ms`` (exposure time ``t_exp``), ``smear_pixels``
+``lambda / D``), ``exposure_ms`` (exposure time ``t_exp``; by default 10 ms on the paper's
+pass and 1 ms on an encounter, :data:`ideas_hpc.flyby.usable.ENCOUNTER_EXPOSURE_MS`), ``smear_pixels``
 (largest smear of a usable image, ``|omega_img x u| t_exp / IFOV``: the motion of
 the scene's image on the detector at the footprint centre, the camera's rate
 relative to the turning line of sight, SPEC 7d) and ``settle_deg`` (largest
@@ -15,7 +16,8 @@ from __future__ import annotations
 
 from ideas_hpc.base.fields import Field
 from ideas_hpc.base.instrument import INSTRUMENT_DEFAULTS as _CAM
-from ideas_hpc.flyby.usable import EXPOSURE_MS, SETTLE_DEG, SMEAR_PIXELS
+from ideas_hpc.flyby.usable import (ENCOUNTER_EXPOSURE_MS, EXPOSURE_MS, SETTLE_DEG, SMEAR_PIXELS,
+                                    default_exposure_s)
 from ideas_hpc.base.units import CM, DEG, MM, UM
 
 INSTRUMENT = {
@@ -40,8 +42,11 @@ INSTRUMENT = {
                              to_si=MM, lo=0, lo_open=True),
     "pixels_across": Field("int", None, nullable=True, lo=1,
                            doc="detector pixels across the field of view (IFOV 2 eta / n)"),
-    "exposure_ms": Field("float", EXPOSURE_MS, si="exposure_s", to_si=MM, lo=0,
-                         lo_open=True, doc="exposure time of one image (the smear test's t_exp)"),
+    "exposure_ms": Field("float", None, nullable=True, si="exposure_s", to_si=MM, lo=0,
+                         lo_open=True,
+                         doc=f"exposure time of one image (the smear test's t_exp); default "
+                             f"{EXPOSURE_MS:g} on the paper's pass, {ENCOUNTER_EXPOSURE_MS:g} on "
+                             f"an encounter (flyby.usable.ENCOUNTER_EXPOSURE_MS)"),
     "smear_pixels": Field("float", SMEAR_PIXELS, lo=0, lo_open=True,
                           doc="largest smear of a usable image, pixels: the scene's image "
                               "motion across the line of sight at the footprint centre over "
@@ -50,3 +55,12 @@ INSTRUMENT = {
     "settle_deg": Field("float", SETTLE_DEG, si="settle_rad", to_si=DEG, lo=0,
                         lo_open=True, hi=180, doc="largest attitude error of a usable image"),
 }
+
+
+def exposure_ms(config) -> float:
+    """``instrument.exposure_ms`` as flown (ms) of a typed campaign config: the file's, else
+    the geometry's default (:func:`ideas_hpc.flyby.usable.default_exposure_s`); a resolved
+    config's ``effective`` value, so that a store written when the default was 10 ms on
+    every geometry resumes on the paper's pass."""
+    s = config.instrument.exposure_s
+    return (default_exposure_s(config.flyby.geometry == "encounter") if s is None else s) / MM
