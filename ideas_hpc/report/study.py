@@ -52,19 +52,15 @@ def _gallery(st, ds, out: Path):
                                "(P_s: the designed swarm's P in that scenario)")
 
 
-def _bplane(st, ds, groups: dict, out: Path):
+def _bplane(st, shape, groups: dict, out: Path):
     from ideas_hpc.campaign.study import bplane_geometry
     from ideas_hpc.plots.study import bplane_figure
 
     cov, swarm = bplane_geometry(st)
     nav = groups.get("navigation")
     others = () if nav is None else tuple(float(s) for s in nav["bplane_sigma"].values)
-    radius = None
-    if "vertex_position" in ds:
-        from ideas_hpc.report.write import _shape
-
-        vol = _shape(ds).mass_properties.volume_m3
-        radius = (3.0 * vol / (4.0 * math.pi)) ** (1.0 / 3.0)
+    radius = None if shape is None else (
+        3.0 * shape.mass_properties.volume_m3 / (4.0 * math.pi)) ** (1.0 / 3.0)
     err = st.setup.navigation.error
     return bplane_figure(cov, swarm, out / "study_bplane.png", d_sep_m=float(st.setup.d_sep_m),
                          other_sigmas_m=others, body_radius_m=radius,
@@ -72,8 +68,9 @@ def _bplane(st, ds, groups: dict, out: Path):
                                f"(TCA 1-sigma {err.sigma_tca_s:.3g} s)")
 
 
-def study_figures(store, ds, groups: dict, out: Path) -> list[Path]:
-    """The study's figures that apply to a success-probability design store."""
+def study_figures(store, ds, groups: dict, out: Path, shape=None) -> list[Path]:
+    """The study's figures that apply to a success-probability design store (``shape``: the
+    store's body, whose volume-equivalent circle the B-plane figure draws)."""
     from ideas_hpc.base.progress import log
     from ideas_hpc.campaign.study import open_study
     from ideas_hpc.plots.study import answers_figure
@@ -94,5 +91,5 @@ def study_figures(store, ds, groups: dict, out: Path) -> list[Path]:
         figs.append(_gallery(st, ds, out))
     nav = st.setup.navigation
     if nav is not None and nav.error.sigma_major_m > 0 and st.setup.encounter is not None:
-        figs.append(_bplane(st, ds, groups, out))
+        figs.append(_bplane(st, shape, groups, out))
     return figs

@@ -332,7 +332,7 @@ def write_report(store, out=None, *, html: bool = False) -> Path:
     from ideas_hpc.report.study import study_figures, study_groups, study_lines
 
     groups = study_groups(store)
-    extras = study_figures(store, ds, groups, out)
+    extras = study_figures(store, ds, groups, out, shape=shape)
     figs.extend(extras)
     summary = out / "summary.txt"
     summary.write_text(_summary(ds, figs) + "".join(f"{line}\n" for line in study_lines(groups)))
