@@ -230,3 +230,21 @@ def test_study_command_writes_groups_and_the_report_shows_them(tmp_path, capsys)
     page = (out / "report.html").read_text()
     for name in ("study_answers", "study_prior_gallery", "study_bplane"):
         assert f'<img alt="{name}" style="max-width:100%" src="data:image/png;base64,' in page
+
+
+def test_answers_that_do_not_apply_say_why(tmp_path_factory, capsys):
+    """A design of a known body without navigation errors: every answer says it does not
+    apply, and the store gains no study group."""
+    from small_stores import small_store
+
+    from ideas_hpc.campaign.study import GROUPS
+    from ideas_hpc.cli import main
+    from ideas_hpc.report.study import study_groups
+
+    store = small_store("design-reliability", tmp_path_factory.mktemp("small-stores"))
+    capsys.readouterr()
+    assert main(["study", str(store), "--no-progress"]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert [ln.split(":")[0] for ln in lines] == list(GROUPS)
+    assert all(": does not apply: " in ln for ln in lines)
+    assert study_groups(store) == {}

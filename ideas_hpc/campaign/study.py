@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -46,6 +47,7 @@ from ideas_hpc.base import seeds
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.base.progress import log, result
 from ideas_hpc.base.units import KM
+from ideas_hpc.campaign.study_lines import PRICE_UNDEFINED, answer_line
 
 #: The answers, in the order they run and print.
 ANSWERS = ("ignorance", "navigation", "per-target")
@@ -138,10 +140,11 @@ class Study:
             res = minimize(ScenarioProblem(bank.rows, bank.areas, bank.theta), settings).detail
         except InputError as exc:
             log(f"no swarm of at most {settings.n_max} reaches {self.level:g}: {exc.message}")
-            return {"n": -1, "probability": np.nan, "status": "not reached",
+            return {"n": -1, "probability": np.nan, "status": "not reached", "bound": -1,
                     "swarm_probability": swarm_p}
         return {"n": int(res.n), "probability": float(res.probability),
-                "status": str(res.status), "swarm_probability": swarm_p}
+                "status": str(res.status), "bound": int(math.ceil(res.bound - 1e-9)),
+                "swarm_probability": swarm_p}
 
 
 def open_study(store, client=None) -> Study:
@@ -157,6 +160,23 @@ def open_study(store, client=None) -> Study:
     return Study(store=Path(store), c=c, setup=setup_from_campaign(c), theta=theta,
                  need=float(attrs["reliability_threshold"]),
                  p=float(attrs["success_probability"]), client=client)
+
+
+def _search_vars(dim: str, rows: list) -> dict:
+    """The fewest-N search's variables of ``rows`` (:meth:`Study.fewest`) along ``dim``."""
+    return {
+        "fewest_n": (dim, np.array([r["n"] for r in rows], dtype=np.int64), {
+            "units": "1", "long_name": "fewest N found with P_bank >= the level (-1: none up "
+                                       "to n_max)"}),
+        "fewest_bound": (dim, np.array([r["bound"] for r in rows], dtype=np.int64), {
+            "units": "1", "long_name": "proven lower bound on that N (-1: none reached)"}),
+        "fewest_status": (dim, _labels(*[r["status"] for r in rows]), {
+            "units": "1", "long_name": "status of the search (optimal: N proven fewest)"}),
+        "fewest_probability": (dim, np.array([r["probability"] for r in rows]), {
+            "units": "1", "long_name": "P_bank of the fewest-N swarm"}),
+        "swarm_probability": (dim, np.array([r["swarm_probability"] for r in rows]), {
+            "units": "1", "long_name": "P_bank of the designed swarm (common random "
+                                       "numbers across the rows)"})}
 
 
 def _labels(*names) -> np.ndarray:
@@ -181,23 +201,17 @@ def price_of_ignorance(st: Study):
     rows = [st.fewest(st.setup, st.bank(st.setup, None)),
             st.fewest(known, st.bank(known, "known"))]
     price = rows[0]["n"] - rows[1]["n"] if min(r["n"] for r in rows) > 0 else None
-    ds = xr.Dataset(
-        {"fewest_n": ("case", np.array([r["n"] for r in rows], dtype=np.int64),
-                      {"units": "1", "long_name": "proven fewest N with P_bank >= the level "
-                                                  "(-1: none up to n_max)"}),
-         "fewest_probability": ("case", np.array([r["probability"] for r in rows]),
-                                {"units": "1", "long_name": "P_bank of that swarm"}),
-         "swarm_probability": ("case", np.array([r["swarm_probability"] for r in rows]),
-                               {"units": "1", "long_name": "P_bank of the designed swarm"})},
+    return xr.Dataset(
+        _search_vars("case", rows),
         coords={"case": ("case", _labels("prior", "known"),
                          {"long_name": "the target prior, or its nominal body known exactly"})},
-        attrs=_attrs(st, price=-999 if price is None else int(price),
+        # PRICE_UNDEFINED: a case reaches the level with no N up to n_max
+        attrs=_attrs(st, price=PRICE_UNDEFINED if price is None else int(price),
                      scenario_stream=seeds.SCENARIO_STREAM,
                      known_bank=str(st.work / "known-scenarios.zarr")))
-    return ds
 
 
-def navigation_value(st: Study, sigmas_m) -> "object":
+def navigation_value(st: Study, sigmas_m):
     """Answer 2 (module docstring): ``xarray.Dataset`` over ``bplane_sigma`` (descending),
     the campaign's own sigma included."""
     import xarray as xr
@@ -223,13 +237,7 @@ def navigation_value(st: Study, sigmas_m) -> "object":
     monotone = bool(np.all(np.diff(sp) >= -1e-12))
     bp_cov, bp_swarm = bplane_geometry(st)
     return xr.Dataset(
-        {"swarm_probability": ("bplane_sigma", sp, {"units": "1", "long_name":
-                               "P_bank of the designed swarm (common random numbers)"}),
-         "fewest_n": ("bplane_sigma", np.array([r["n"] for r in rows], dtype=np.int64),
-                      {"units": "1", "long_name": "proven fewest N with P_bank >= the level "
-                                                  "(-1: none up to n_max)"}),
-         "fewest_probability": ("bplane_sigma", np.array([r["probability"] for r in rows]),
-                                {"units": "1", "long_name": "P_bank of the fewest-N swarm"}),
+        {**_search_vars("bplane_sigma", rows),
          "tca_sigma": ("bplane_sigma", np.array([plan.error.sigma_tca_s * s / own
                                                  for s in sig]),
                        {"units": "s", "long_name": "1-sigma of the time of closest approach "
@@ -243,6 +251,7 @@ def navigation_value(st: Study, sigmas_m) -> "object":
         coords={"bplane_sigma": ("bplane_sigma", np.array(sig), {
             "units": "m", "long_name": "B-plane 1-sigma semi-major axis"}),
                 "bplane_axis": ("bplane_axis", _labels("T", "R")),
+                "spacecraft": ("spacecraft", np.arange(bp_swarm.shape[0])),
                 "bplane_axis2": ("bplane_axis2", _labels("T", "R"))},
         attrs=_attrs(st, monotone=int(monotone), campaign_sigma_m=own,
                      scenario_stream=seeds.SCENARIO_STREAM,
@@ -279,6 +288,10 @@ def per_target(st: Study, worlds: int, per_world: int):
              "units": "1", "long_name": "standard error of the conditional P (inner draws)"}),
          "inner_probability": (("world", "inner"), r.per_sample, {
              "units": "1", "long_name": "exact failure-weighted P of each inner draw"})},
+        coords={"world": ("world", np.arange(r.worlds), {
+                    "long_name": "outer target world m (world m of family NESTED_STREAM)"}),
+                "inner": ("inner", np.arange(r.per_world), {
+                    "long_name": "inner draw j (sample m K + j of NESTED_STREAM)"})},
         attrs=_attrs(st, worlds=r.worlds, per_world=r.per_world, meeting=r.meeting,
                      share=r.share, wilson_low=lo, wilson_high=hi,
                      nested_stream=seeds.NESTED_STREAM,
@@ -297,11 +310,27 @@ def _stored(store: Path, group: str, options: dict):
     return ds if ds.attrs.get("study_options") == json.dumps(options, sort_keys=True) else None
 
 
+def not_applicable(st: Study, name: str) -> str | None:
+    """Why answer ``name`` does not apply to the store's design (None: it does)."""
+    nav = st.setup.navigation
+    if name in ("ignorance", "per-target") and st.setup.target is None:
+        return "the target is known ([target] prior = \"known\"): every world is the same"
+    if name == "navigation" and (nav is None or nav.error.sigma_major_m <= 0.0):
+        return "the campaign has no [navigation] errors to scale"
+    return None
+
+
+def _compute(st: Study, name: str, opts: StudyOptions):
+    if name == "ignorance":
+        return price_of_ignorance(st)
+    if name == "navigation":
+        return navigation_value(st, opts.sigmas_m)
+    return per_target(st, opts.worlds, opts.per_world)
+
+
 def run_study(store, opts: StudyOptions = StudyOptions(), client=None) -> list[str]:
     """Run the chosen answers on a design store (module docstring); returns their lines,
-    also printed as results."""
-    from ideas_hpc.campaign.study_lines import answer_line
-
+    also printed as results (an answer that does not apply says why in its line)."""
     st = open_study(store, client)
     out = []
     for name in opts.answers:
@@ -310,20 +339,18 @@ def run_study(store, opts: StudyOptions = StudyOptions(), client=None) -> list[s
             options["sigmas_m"] = [float(s) for s in opts.sigmas_m]
         if name == "per-target":
             options.update(worlds=int(opts.worlds), per_world=int(opts.per_world))
-        group = GROUPS[name]
-        ds = None if opts.force else _stored(st.store, group, options)
-        if ds is None:
-            t0 = time.perf_counter()
-            if name == "ignorance":
-                ds = price_of_ignorance(st)
-            elif name == "navigation":
-                ds = navigation_value(st, opts.sigmas_m)
-            else:
-                ds = per_target(st, opts.worlds, opts.per_world)
-            ds.attrs.update(study_options=json.dumps(options, sort_keys=True),
-                            wall_s=time.perf_counter() - t0)
-            ds.to_zarr(st.store, group=group, mode="w", consolidated=False)
-        line = answer_line(name, ds)
+        why = not_applicable(st, name)
+        if why is not None:
+            line = f"{name}: does not apply: {why}"
+        else:
+            ds = None if opts.force else _stored(st.store, GROUPS[name], options)
+            if ds is None:
+                t0 = time.perf_counter()
+                ds = _compute(st, name, opts)
+                ds.attrs.update(study_options=json.dumps(options, sort_keys=True),
+                                wall_s=time.perf_counter() - t0)
+                ds.to_zarr(st.store, group=GROUPS[name], mode="w", consolidated=False)
+            line = answer_line(name, ds)
         result(line)
         out.append(line)
     return out

@@ -8,9 +8,18 @@ import numpy as np
 
 from ideas_hpc.base.units import KM
 
+#: The stored price of ignorance when a case reaches no N up to ``design.n_max``.
+PRICE_UNDEFINED = -999
 
-def _n(n: int, n_max: str = "n_max") -> str:
-    return f"N = {int(n)}" if int(n) > 0 else f"no N <= {n_max}"
+
+def _n(ds, i: int) -> str:
+    """Row ``i``'s fewest N, with the search's status when it is not proven."""
+    n = int(ds["fewest_n"].values[i])
+    if n <= 0:
+        return "no N <= n_max"
+    st = str(ds["fewest_status"].values[i]) if "fewest_status" in ds else "optimal"
+    return f"N = {n}" + ("" if st == "optimal" else
+                         f" ({st}, proven >= {int(ds['fewest_bound'].values[i])})")
 
 
 def _p(x: float) -> str:
@@ -19,14 +28,13 @@ def _p(x: float) -> str:
 
 def ignorance_line(ds) -> str:
     """The price of ignorance: both fewest N, their P, the difference."""
-    n = ds["fewest_n"].values
     p = ds["fewest_probability"].values
     price = int(ds.attrs["price"])
-    words = ("undefined (a case reaches no N)" if price == -999 else
+    words = ("undefined (a case reaches no N)" if price == PRICE_UNDEFINED else
              f"{price:+d} spacecraft" + (" (negative: the nominal body is harder to map "
                                          "than the prior's average world)" if price < 0 else ""))
-    return (f"price of ignorance: prior {_n(n[0])} (P_bank {_p(p[0])}), known nominal body "
-            f"{_n(n[1])} (P_bank {_p(p[1])}) at the same encounter, navigation and "
+    return (f"price of ignorance: prior {_n(ds, 0)} (P_bank {_p(p[0])}), known nominal body "
+            f"{_n(ds, 1)} (P_bank {_p(p[1])}) at the same encounter, navigation and "
             f"requirement (level {float(ds.attrs['bank_level']):g}): {words}")
 
 
@@ -34,10 +42,12 @@ def navigation_line(ds) -> str:
     """P of the designed swarm and the fewest N against the B-plane 1-sigma."""
     own = float(ds.attrs["campaign_sigma_m"])
     parts = []
-    for s, sp, n, pn in zip(ds["bplane_sigma"].values, ds["swarm_probability"].values,
-                            ds["fewest_n"].values, ds["fewest_probability"].values):
+    for i, (s, sp, n, pn) in enumerate(zip(ds["bplane_sigma"].values,
+                                           ds["swarm_probability"].values,
+                                           ds["fewest_n"].values,
+                                           ds["fewest_probability"].values)):
         mark = "*" if s == own else ""
-        parts.append(f"{s / KM:g}{mark} km: P {sp:.4f}, {_n(n)}"
+        parts.append(f"{s / KM:g}{mark} km: P {sp:.4f}, {_n(ds, i)}"
                      + (f" (P {pn:.4f})" if n > 0 else ""))
     mono = "monotone" if int(ds.attrs["monotone"]) else "NOT monotone"
     return (f"value of a late navigation update (B-plane 1-sigma; * the campaign's): "

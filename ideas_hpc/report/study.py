@@ -84,7 +84,8 @@ def study_figures(store, ds, groups: dict, out: Path, shape=None) -> list[Path]:
                                    p=float(ds.attrs["success_probability"])))
     try:
         st = open_study(store)
-    except Exception as exc:    # the report never fails on its extras
+    except (OSError, KeyError, ValueError) as exc:   # a store the setup cannot be rebuilt
+        # for (its body's data absent, an older config): the report's extras only
         log(f"report: no prior gallery or B-plane figure ({exc})")
         return figs
     if st.setup.target is not None:
