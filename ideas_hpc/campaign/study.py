@@ -68,6 +68,7 @@ class StudyOptions:
     per_world: int = 10
     answers: tuple = ANSWERS
     force: bool = False
+    time_limit_s: float | None = None     # each fewest-N search; None: the campaign's
 
     def __post_init__(self):
         if not self.sigmas_m or any(not s > 0 for s in self.sigmas_m):
@@ -80,6 +81,8 @@ class StudyOptions:
         for name, v in (("--worlds", self.worlds), ("--per-world", self.per_world)):
             if int(v) < 1:
                 raise InputError(f"must be >= 1, got {v}", field=name)
+        if self.time_limit_s is not None and not self.time_limit_s > 0:
+            raise InputError(f"must be > 0 s, got {self.time_limit_s}", field="--time-limit-s")
 
 
 @dataclass
@@ -93,6 +96,7 @@ class Study:
     need: float                 # coverage threshold (area fraction)
     p: float                    # required success probability
     client: object = None
+    time_limit_s: float | None = None   # each fewest-N search (None: design.time_limit_s)
 
     @property
     def work(self) -> Path:
@@ -131,8 +135,9 @@ class Study:
         from ideas_hpc.design.api import ScenarioProblem, minimize
         from ideas_hpc.design.reliability_eval import Evaluator
 
-        settings = bank_settings(self.c, setup, self.need, self.level,
-                                 float(self.c.config.design.time_limit_s))
+        limit = self.c.config.design.time_limit_s if self.time_limit_s is None else \
+            self.time_limit_s
+        settings = bank_settings(self.c, setup, self.need, self.level, float(limit))
         ev = Evaluator(bank.rows, normalised(bank.areas, bank.rows.shape[0]), self.need,
                        settings.model)
         swarm_p = float(ev([self.indices(bank)])[0])
@@ -331,7 +336,7 @@ def _compute(st: Study, name: str, opts: StudyOptions):
 def run_study(store, opts: StudyOptions = StudyOptions(), client=None) -> list[str]:
     """Run the chosen answers on a design store (module docstring); returns their lines,
     also printed as results (an answer that does not apply says why in its line)."""
-    st = open_study(store, client)
+    st = dataclasses.replace(open_study(store, client), time_limit_s=opts.time_limit_s)
     out = []
     for name in opts.answers:
         options = {"answer": name}
@@ -339,6 +344,8 @@ def run_study(store, opts: StudyOptions = StudyOptions(), client=None) -> list[s
             options["sigmas_m"] = [float(s) for s in opts.sigmas_m]
         if name == "per-target":
             options.update(worlds=int(opts.worlds), per_world=int(opts.per_world))
+        else:
+            options["time_limit_s"] = opts.time_limit_s
         why = not_applicable(st, name)
         if why is not None:
             line = f"{name}: does not apply: {why}"
@@ -372,7 +379,8 @@ def _cmd_study(args) -> int:
 
     answers = tuple(a.strip() for a in args.answers.split(",") if a.strip())
     opts = StudyOptions(sigmas_m=_km_list(args.bplane_sigmas_km), worlds=args.worlds,
-                        per_world=args.per_world, answers=answers, force=args.force)
+                        per_world=args.per_world, answers=answers, force=args.force,
+                        time_limit_s=args.time_limit_s)
     with progress.enabled(not args.no_progress):
         run_study(args.store, opts)
     return 0
@@ -397,6 +405,9 @@ def add_study_command(sub) -> None:
                    help="inner draws K per world (default 10)")
     p.add_argument("--answers", default=",".join(ANSWERS),
                    help=f"which answers, comma-separated (default {','.join(ANSWERS)})")
+    p.add_argument("--time-limit-s", type=float, default=None,
+                   help="seconds for each fewest-N search (default: the campaign's "
+                        "design.time_limit_s); a search stopped by it says so")
     p.add_argument("--force", action="store_true",
                    help="recompute answers already stored with the same options")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")

@@ -33,6 +33,9 @@ def ignorance_line(ds) -> str:
     words = ("undefined (a case reaches no N)" if price == PRICE_UNDEFINED else
              f"{price:+d} spacecraft" + (" (negative: the nominal body is harder to map "
                                          "than the prior's average world)" if price < 0 else ""))
+    if price != PRICE_UNDEFINED and "fewest_status" in ds and any(
+            str(x) != "optimal" for x in ds["fewest_status"].values):
+        words += " (not proven: a search stopped before proving its N)"
     return (f"price of ignorance: prior {_n(ds, 0)} (P_bank {_p(p[0])}), known nominal body "
             f"{_n(ds, 1)} (P_bank {_p(p[1])}) at the same encounter, navigation and "
             f"requirement (level {float(ds.attrs['bank_level']):g}): {words}")
