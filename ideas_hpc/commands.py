@@ -149,7 +149,7 @@ def add_commands(sub) -> None:
     from ideas_hpc.campaign.body_report import add_body_command
     from ideas_hpc.export.kernels import add_export_command
     from ideas_hpc.campaign.validate_store import add_validate_command
-    from ideas_hpc.campaign.study import add_study_command
+    from ideas_hpc.campaign.study_command import add_study_command
     add_body_command(sub)
     add_export_command(sub)
     add_validate_command(sub)
