@@ -1,6 +1,6 @@
 """``ideas-hpc run``, ``ideas-hpc report`` (SPEC section 9) and ``ideas-hpc scan-arrival``,
-``ideas-hpc scan-encounter``, ``ideas-hpc resolution`` (``body``, ``export`` and
-``validate`` live beside their code)."""
+``ideas-hpc scan-encounter``, ``ideas-hpc resolution`` (``body``, ``export``, ``validate``
+and ``study`` live beside their code)."""
 
 from __future__ import annotations
 
@@ -149,9 +149,11 @@ def add_commands(sub) -> None:
     from ideas_hpc.campaign.body_report import add_body_command
     from ideas_hpc.export.kernels import add_export_command
     from ideas_hpc.campaign.validate_store import add_validate_command
+    from ideas_hpc.campaign.study_command import add_study_command
     add_body_command(sub)
     add_export_command(sub)
     add_validate_command(sub)
+    add_study_command(sub)
     from ideas_hpc.campaign.resolution_study import EROS_MODELS
 
     v = sub.add_parser("resolution", help="one design campaign on several shape models",

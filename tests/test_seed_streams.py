@@ -57,3 +57,18 @@ def test_no_module_outside_seeds_makes_its_own_stream():
         offenders += [f"{path.relative_to(PKG)}:{n.lineno}" for n in ast.walk(tree)
                       if _makes_a_stream(n)]
     assert offenders == []
+
+
+def test_nested_stream_is_its_documented_key_and_apart_from_the_others():
+    """``ideas-hpc study``'s nested draws (issue 42): sample ``k`` purpose ``c`` of
+    NESTED_STREAM is ``SeedSequence(seed, spawn_key=(NESTED_STREAM, k, c))``, a stream word
+    no other family uses."""
+    words = {seeds.SCENARIO_STREAM, seeds.VALIDATION_STREAM, seeds.HOLDOUT_STREAM,
+             seeds.WORLD_STREAM, seeds.NAVIGATION_STREAM}
+    assert seeds.NESTED_STREAM not in words
+    got = seeds.stream_rng(7, seeds.NESTED_STREAM, 5, seeds.STREAM_BODY).random(8)
+    ref = np.random.default_rng(np.random.SeedSequence(
+        7, spawn_key=(seeds.NESTED_STREAM, 5, seeds.STREAM_BODY))).random(8)
+    assert np.array_equal(got, ref)
+    assert not np.array_equal(got, seeds.stream_rng(7, seeds.VALIDATION_STREAM, 5,
+                                                    seeds.STREAM_BODY).random(8))

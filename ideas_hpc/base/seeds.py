@@ -36,7 +36,9 @@ keyed by four words (so never a sample's, a sample child's or a design stream's 
 ``c`` is :data:`WORLD_SHAPE`, :data:`WORLD_SIZE`, :data:`WORLD_POLE` or
 :data:`WORLD_ROTATION`; ``family`` is 0, or :data:`SCENARIO_STREAM` /
 :data:`VALIDATION_STREAM` to keep the bank's worlds and fresh validation worlds apart
-(:func:`world_rng`, :func:`navigation_rng`).
+(:func:`world_rng`, :func:`navigation_rng`). ``ideas-hpc study`` nests draws inside worlds
+(:data:`NESTED_STREAM`: world ``m`` of that family, its inner draw ``j`` sample ``m K + j`` of
+that design stream).
 
 Stores keep ``s`` in their attrs and, per sample, the first :data:`SEED_WORDS`
 words of the sample's sequence state (:func:`seeds_for`), which identify it.
@@ -103,6 +105,12 @@ VALIDATION_STREAM = 0x7A11DA7E
 #: :mod:`ideas_hpc.design.holdout`): draws of the same dispersions as the bank's and the
 #: validation's, disjoint from both (no selection and no certificate uses them).
 HOLDOUT_STREAM = 0x401D0B7E
+#: Stream of ``ideas-hpc study``'s nested draws (issue 42, the per-target reliability;
+#: :mod:`ideas_hpc.campaign.study_nested`): outer world ``m`` is world ``m`` of family
+#: ``NESTED_STREAM`` (:func:`world_rng`), and its inner draw ``j`` of navigation errors,
+#: dispersions and failures is sample ``m K + j`` of this design stream (``K`` inner draws
+#: per world). Disjoint from the bank's, the validation's and the held-out scenarios'.
+NESTED_STREAM = 0x4E57ED0D
 #: Purposes within one scenario / validation sample (third spawn-key word).
 STREAM_BODY, STREAM_SPACECRAFT, STREAM_ATTITUDE = 0, 1, 2
 #: Purpose of a validation sample's failures (issue 20: the drawn-failure outcomes;
@@ -117,11 +125,11 @@ def stream_seed_sequence(campaign_seed: int, stream: int, k: int,
                          purpose: int) -> np.random.SeedSequence:
     """``SeedSequence(campaign_seed, spawn_key=(stream, k, purpose))``: draw ``k`` of a design stream.
 
-    ``stream`` is :data:`SCENARIO_STREAM`, :data:`VALIDATION_STREAM` or
-    :data:`HOLDOUT_STREAM`; three key words keep these apart from every Monte Carlo sample
-    (module docstring).
+    ``stream`` is :data:`SCENARIO_STREAM`, :data:`VALIDATION_STREAM`,
+    :data:`HOLDOUT_STREAM` or :data:`NESTED_STREAM`; three key words keep these apart from
+    every Monte Carlo sample (module docstring).
     """
-    if int(stream) not in (SCENARIO_STREAM, VALIDATION_STREAM, HOLDOUT_STREAM):
+    if int(stream) not in (SCENARIO_STREAM, VALIDATION_STREAM, HOLDOUT_STREAM, NESTED_STREAM):
         raise InputError(f"unknown design stream {stream!r}", field="stream")
     return np.random.SeedSequence(int(campaign_seed),
                                   spawn_key=(int(stream), int(k), int(purpose)))

@@ -29,7 +29,6 @@ are exact (no sampling): ``P-hat`` is the exact P and so is its bound.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import shutil
 import sys
@@ -39,9 +38,8 @@ from pathlib import Path
 import numpy as np
 
 from ideas_hpc.base.progress import result
-from ideas_hpc.design.api import CoverSettings, ReliableSettings, ScenarioProblem, minimize
+from ideas_hpc.design.api import CoverSettings, ScenarioProblem, minimize
 from ideas_hpc.design.settings import LookPlan
-from ideas_hpc.design.bank import grid_size, separation_steps
 from ideas_hpc.design.certificate import (certify, group_bounds, planned_looks,
                                          replicated_lower_bound)
 from ideas_hpc.design.reliability import ReliabilityDesigner
@@ -52,14 +50,13 @@ from ideas_hpc.base import progress
 from ideas_hpc.engine.job_cluster import phase_client
 from ideas_hpc.montecarlo.dispersions import scenario_dispersed
 from ideas_hpc.montecarlo.failure_dispersion import failure_model
-from ideas_hpc.montecarlo.scenarios import build_scenario_bank
-from ideas_hpc.flyby.target_world import world_areas
 from ideas_hpc.campaign.setup import requirement_from_campaign
 from ideas_hpc.mapping.requirement import meets
 from ideas_hpc.campaign.validation_flights import (  # noqa: F401 (Validation, fly_validation:
     Validation, fly_validation, fly_validation_world, sample_weights)  # their old home)
 from ideas_hpc.base import seeds
 from ideas_hpc.campaign.design_exact import design_exact
+from ideas_hpc.campaign.bank_design import bank_settings, campaign_bank
 from ideas_hpc.campaign.schema.design_checks import designer_errors
 from ideas_hpc.campaign.reliability_vars import BankRun, reliability_dataset
 from ideas_hpc.campaign.schema.design_table import holdout_scenarios, verify_samples
@@ -219,12 +216,7 @@ def design_reliable(c, setup, client, *, bank_store: str | None = None):
                 if client is not None and d.tolerant_markers else None)
     t0 = time.perf_counter()
     fresh = bank_store is not None and not Path(bank_store).exists()
-    bank = build_scenario_bank(setup, d.grid_step_rad, mc, seed=c.config.seed,
-                               n_scenarios=s_n, client=client, store=bank_store,
-                               progress=progress.on())
-    if c.config.design.coverage_reference != "surface":   # each world's reference area
-        bank = dataclasses.replace(bank, areas=world_areas(
-            setup, c.config.seed, seeds.SCENARIO_STREAM, range(s_n), requirement_from_campaign(c)))
+    bank = campaign_bank(c, setup, s_n, client, bank_store)
     t_bank = time.perf_counter() - t0
     try:
         return _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant,
@@ -248,17 +240,12 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=Non
          # the markers' ~60 s of HiGHS hold a worker the bank would otherwise use
          + (" (one worker designed the failure-tolerant markers meanwhile)"
             if tolerant is not None and not bank.attrs.get("reused") else ""))
-    n_grid = grid_size(d.grid_step_rad)
     sep = c.config.swarm.min_separation_m
-    m_sep = separation_steps(2 * math.pi / n_grid, setup.d_sep_m, sep, n_grid)
     level = p if d.bank_level is None else float(d.bank_level)
     try:
         with designer_errors(c):
             res = minimize(ScenarioProblem(bank.rows, bank.areas, bank.theta),
-                           ReliableSettings(p=level, p_f=model.p_f[0],
-                                            threshold=nominal.threshold, n_max=d.n_max,
-                                            sep_steps=m_sep, time_limit_s=left,
-                                            failures=model)).detail
+                           bank_settings(c, setup, nominal.threshold, level, left)).detail
     except InputError as exc:
         if level == p or exc.field != "design.success_probability":
             raise

@@ -105,6 +105,24 @@ class StoreValidation(_Outcome):
                 + (f"; {self.truth}" if self.truth else ""))
 
 
+def store_campaign(store) -> tuple:
+    """``(campaign, attrs)`` of a success-probability design store: its resolved config
+    validated again, and its root attrs (an input error when it holds no such design)."""
+    from ideas_hpc.base.errors import InputError
+    from ideas_hpc.campaign.schema.campaign_tables import validate_campaign
+    from ideas_hpc.campaign.schema.toml_file import CampaignSource
+    from ideas_hpc.engine.store_meta import store_attrs
+
+    attrs = store_attrs(Path(store))
+    if "reliability_threshold" not in attrs:
+        raise InputError(f"{store} holds no success-probability design (no "
+                         "reliability_threshold)", field="store")
+    cfg = dict(attrs["config"])
+    cfg.pop("models", None)
+    src = Path(attrs["campaign_file"]) if attrs.get("campaign_file") else None
+    return validate_campaign(CampaignSource(data=cfg, path=src, resolved=True)), attrs
+
+
 def validate_store(store, *, samples: int = 1024, seed: int | None = None, first: int = 0,
                    progress: bool = True, same_seed: bool = False,
                    truth=None) -> StoreValidation:
@@ -117,27 +135,17 @@ def validate_store(store, *, samples: int = 1024, seed: int | None = None, first
     """
     import xarray as xr
 
-    from ideas_hpc.campaign.schema.campaign_tables import validate_campaign
-    from ideas_hpc.campaign.schema.toml_file import CampaignSource
     from ideas_hpc.campaign.validation_flights import (Validation, fly_validation_world,
                                                        sample_weights)
     from ideas_hpc.campaign.setup import requirement_from_campaign, setup_from_campaign
     from ideas_hpc.design.reliability_stats import lower_confidence_bound
-    from ideas_hpc.engine.store_meta import store_attrs
     from ideas_hpc.base.errors import InputError
     from ideas_hpc.mapping.requirement import meets
     from ideas_hpc.montecarlo.failure_dispersion import failure_model
 
-    attrs = store_attrs(Path(store))
-    if "reliability_threshold" not in attrs:
-        raise InputError(f"{store} holds no success-probability design (no "
-                         "reliability_threshold)", field="store")
     if samples < 1:
         raise InputError(f"must be >= 1, got {samples}", field="--samples")
-    cfg = dict(attrs["config"])
-    cfg.pop("models", None)
-    src = Path(attrs["campaign_file"]) if attrs.get("campaign_file") else None
-    c = validate_campaign(CampaignSource(data=cfg, path=src, resolved=True))
+    c, attrs = store_campaign(store)
     seed = int(attrs["campaign_seed"]) + 1 if seed is None else int(seed)
     if seed == int(attrs["campaign_seed"]) and not same_seed:
         raise InputError(f"{seed} is the design's own seed: give another", field="--seed")

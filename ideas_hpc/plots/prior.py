@@ -41,24 +41,27 @@ def _shaded(ax, world, lim_km: float, elev: float, azim: float) -> None:
 
 
 def prior_gallery(worlds, path, *, title: str = "", elev: float = 30.0,
-                  azim: float = -55.0) -> Path:
+                  azim: float = -55.0, notes=None) -> Path:
     """Draw ``worlds`` (:class:`~ideas_hpc.body.target_prior.TargetWorld`) on one scale, four
     per row, each titled with its draw number, volume-equivalent diameter, ecliptic pole
-    and spin period; the grey line is the spin axis (+z of T). Returns ``path``."""
+    and spin period (and ``notes[i]``, one more phrase per world, when given); the grey
+    line is the spin axis (+z of T). Returns ``path``."""
     worlds = list(worlds)
     n = len(worlds)
     cols = min(4, n)
     rows = math.ceil(n / cols)
     lim = max(float(np.abs(w.shape.vertices_T).max()) for w in worlds) / 1e3 * 0.95
-    fig = plt.figure(figsize=(2.6 * cols, 1.8 * rows + (0.4 if title else 0.0)))
+    fig = plt.figure(figsize=(2.6 * cols, (1.8 if notes is None else 2.0) * rows
+                              + (0.4 if title else 0.0)))
     for i, w in enumerate(worlds):
         ax = fig.add_subplot(rows, cols, i + 1, projection="3d")
         _shaded(ax, w, lim, elev, azim)
         lon, lat = (math.degrees(a) for a in w.pole_lon_lat_rad)
         mirror = " (mirror)" if w.pole_mirrored else ""
+        note = "" if notes is None else f"\n{notes[i]}"
         ax.set_title(f"k = {w.k}: D = {w.diameter_m / 1e3:.1f} km\n"
-                     f"pole ({lon:.0f}, {lat:.0f}) deg{mirror}, P = {w.spin_period_s / 3600:.3f} h",
-                     fontsize=7, pad=0)
+                     f"pole ({lon:.0f}, {lat:.0f}) deg{mirror}, P = {w.spin_period_s / 3600:.3f} h"
+                     f"{note}", fontsize=7, pad=0)
     if title:
         fig.suptitle(title, fontsize=9)
     fig.subplots_adjust(left=0.0, right=1.0, bottom=0.0, top=0.86 if title else 0.93,

@@ -219,13 +219,27 @@ def figures_of(ds) -> list:
     return figs
 
 
-def write_html(ds, summary: str, path) -> Path:
-    """One self-contained page: the summary and :func:`figures_of`, plotly.js inlined."""
+def _image(png: Path) -> str:
+    """A PNG inlined as a data URI (the page stays one file)."""
+    import base64
+
+    data = base64.b64encode(Path(png).read_bytes()).decode("ascii")
+    return (f'<figure><img alt="{html.escape(Path(png).stem)}" style="max-width:100%" '
+            f'src="data:image/png;base64,{data}"></figure>')
+
+
+def write_html(ds, summary: str, path, images=()) -> Path:
+    """One self-contained page: the summary and :func:`figures_of`, plotly.js inlined;
+    ``images``: PNGs shown under "Answers under the target prior" (``ideas-hpc study``'s
+    figures, the prior's gallery, the B-plane ellipse: :mod:`ideas_hpc.report.study`)."""
     path = Path(path)
     parts = []
     for k, fig in enumerate(figures_of(ds)):
         parts.append(fig.to_html(full_html=False, include_plotlyjs=k == 0,
                                  div_id=f"figure-{k}", config={"displaylogo": False}))
+    if images:
+        parts.append("<h2>Answers under the target prior</h2>"
+                     + "\n".join(_image(p) for p in images))
     from ideas_hpc.plots.figures import body_name
     from ideas_hpc.report.requirement import coverage_meaning
 

@@ -329,10 +329,15 @@ def write_report(store, out=None, *, html: bool = False) -> Path:
                                                 ylabel=label, scale=scale))
     if "coverage" in ds and "sample" in ds["coverage"].dims:
         figs.append(figures.mc_coverage(ds, out / "mc_coverage.png"))
+    from ideas_hpc.report.study import study_figures, study_groups, study_lines
+
+    groups = study_groups(store)
+    extras = study_figures(store, ds, groups, out, shape=shape)
+    figs.extend(extras)
     summary = out / "summary.txt"
-    summary.write_text(_summary(ds, figs))
+    summary.write_text(_summary(ds, figs) + "".join(f"{line}\n" for line in study_lines(groups)))
     if html:
         from ideas_hpc.report.html import write_html
 
-        write_html(ds, summary.read_text(), out / "report.html")
+        write_html(ds, summary.read_text(), out / "report.html", images=extras)
     return summary

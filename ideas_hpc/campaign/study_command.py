@@ -1,0 +1,58 @@
+"""The ``ideas-hpc study`` command line (:mod:`ideas_hpc.campaign.study`; docs/study.md)."""
+
+from __future__ import annotations
+
+from ideas_hpc.base.errors import InputError
+from ideas_hpc.base.units import KM
+from ideas_hpc.campaign.study import ANSWERS, StudyOptions, run_study
+
+
+def _km_list(text: str) -> tuple:
+    try:
+        vals = tuple(float(x) * KM for x in str(text).split(",") if x.strip())
+    except ValueError:
+        vals = ()
+    if not vals or any(not v > 0 for v in vals):
+        raise InputError(f"needs positive km separated by commas, got {text!r}",
+                         field="--bplane-sigmas-km")
+    return vals
+
+
+def _cmd_study(args) -> int:
+    from ideas_hpc.base import progress
+
+    answers = tuple(a.strip() for a in args.answers.split(",") if a.strip())
+    opts = StudyOptions(sigmas_m=_km_list(args.bplane_sigmas_km), worlds=args.worlds,
+                        per_world=args.per_world, answers=answers, force=args.force,
+                        time_limit_s=args.time_limit_s)
+    with progress.enabled(not args.no_progress):
+        run_study(args.store, opts)
+    return 0
+
+
+def add_study_command(sub) -> None:
+    p = sub.add_parser("study", help="answers of a design under a target prior: the price "
+                                     "of ignorance, the value of a late navigation update, "
+                                     "per-target reliability",
+                       description="Reruns the design's bank and search on variants of the "
+                                   "store's campaign (the known nominal body; scaled B-plane "
+                                   "errors) and flies the designed swarm through nested draws "
+                                   "(worlds outer, navigation, dispersions and failures inner); "
+                                   "writes each answer into the store (groups study_*) and "
+                                   "prints one line per answer (docs/study.md).")
+    p.add_argument("store", help="store of a design-nadir run with design.success_probability")
+    p.add_argument("--bplane-sigmas-km", default="100,30,10,3",
+                   help="B-plane 1-sigma semi-major axes, km, the ellipse and TCA sigma "
+                        "scaled in proportion (default 100,30,10,3; the campaign's is added)")
+    p.add_argument("--worlds", type=int, default=20, help="outer target worlds M (default 20)")
+    p.add_argument("--per-world", type=int, default=10,
+                   help="inner draws K per world (default 10)")
+    p.add_argument("--answers", default=",".join(ANSWERS),
+                   help=f"which answers, comma-separated (default {','.join(ANSWERS)})")
+    p.add_argument("--time-limit-s", type=float, default=None,
+                   help="seconds for each fewest-N search (default: the campaign's "
+                        "design.time_limit_s); a search stopped by it says so")
+    p.add_argument("--force", action="store_true",
+                   help="recompute answers already stored with the same options")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    p.set_defaults(handler=_cmd_study)
