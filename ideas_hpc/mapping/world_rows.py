@@ -3,9 +3,11 @@
 A world of a target prior (SPEC 7f) is flown by every candidate of its scenario around
 one mesh under one Sun, so what the rows read of the world is built once and shared
 (:class:`WorldStatics`): the kernels' mesh record (vertices, unit normals, areas), the
-strict options with the Sun at the images, the BVH, and the lighting table
-(:func:`ideas_hpc.core.mapping.world_rows.lit_at_images`: lit at each image, which does
-not depend on the candidate). :func:`rows_of_world` then gives the rows of any flight
+strict options with the Sun at the images, the BVH, the lighting table
+(:func:`ideas_hpc.core.mapping.world_statics.lit_at_images`: lit at each image, which
+does not depend on the candidate) and each vertex's clear cone
+(:func:`~ideas_hpc.core.mapping.world_statics.clear_cones`: sight lines inside it need
+no occlusion ray). :func:`rows_of_world` then gives the rows of any flight
 through that world, identical to :func:`ideas_hpc.design.candidates.rows_from_views`:
 
 * seen rows (no requirement): the early-out per-candidate scan
@@ -29,6 +31,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ideas_hpc.core.mapping import world_rows as _wr
+from ideas_hpc.core.mapping import world_statics as _ws
 from ideas_hpc.core.mapping.coverage import observed_by_spacecraft
 from ideas_hpc.core.mapping.observations import quality_tests
 from ideas_hpc.core.mapping.quality_masks import quality_by_spacecraft
@@ -48,6 +51,9 @@ class WorldStatics(NamedTuple):
     bvh: Bvh
     #: (V, n_img) bool, lit at each image (``(V, 0)`` when the options read no light).
     lit: np.ndarray
+    #: (V,) float64, the cosine of each vertex's clear cone (2.0: none; all 2.0 without
+    #: occlusion).
+    cos_clear: np.ndarray
 
 
 def needs_light(options: CoverageOptions) -> bool:
@@ -62,11 +68,13 @@ def world_statics(shape, options: CoverageOptions, sun_T, n_img: int) -> WorldSt
     no Sun) at ``n_img`` images, for the coverage ``options``."""
     opts, bvh = strict_records(shape, options, sun_T, int(n_img))
     mesh = mesh_record(shape)
+    nv = mesh.vertices_T_m.shape[0]
     if needs_light(options):
-        lit = _wr.lit_at_images(mesh, opts.sun_T, bvh)
+        lit = _ws.lit_at_images(mesh, opts.sun_T, bvh)
     else:
-        lit = np.zeros((mesh.vertices_T_m.shape[0], 0), dtype=np.bool_)
-    return WorldStatics(mesh, opts, bvh, lit)
+        lit = np.zeros((nv, 0), dtype=np.bool_)
+    cos_clear = _ws.clear_cones(mesh, bvh) if options.occlusion else np.full(nv, 2.0)
+    return WorldStatics(mesh, opts, bvh, lit, cos_clear)
 
 
 def rows_of_world(statics: WorldStatics, options: CoverageOptions, r_img, dcm,
@@ -76,7 +84,7 @@ def rows_of_world(statics: WorldStatics, options: CoverageOptions, r_img, dcm,
     camera DCMs ``dcm`` (K, n_img, 3, 3) at ``image_times`` (s), with the camera's
     ``frustum`` ``(eta_rad, near_m, far_m)``."""
     eta, near, far = frustum
-    mesh, opts, bvh, lit = statics
+    mesh, opts, bvh, lit, cos_clear = statics
     # the shape is only read for its name in messages: the records hold the mesh
     r, c, tan_eta, near, far, _ = check_geometry(None, r_img, dcm, eta, near, far)
     t = np.ascontiguousarray(np.asarray(image_times, dtype=np.float64))
@@ -88,4 +96,4 @@ def rows_of_world(statics: WorldStatics, options: CoverageOptions, r_img, dcm,
         usable, stereo, _ = quality_by_spacecraft(mesh, cam, opts, bvh, quality)
         return usable & stereo
     return _wr.mapped_by_spacecraft(mesh, cam, opts, bvh, QualityTests(*quality_tests(quality)),
-                                    lit)
+                                    lit, cos_clear)
