@@ -21,7 +21,8 @@ from ideas_hpc.core.mapping import world_statics as ws
 from ideas_hpc.core.mapping.segments import segments_blocked
 from ideas_hpc.design.candidates import rows_from_views
 from ideas_hpc.flyby.flight import Perturbation
-from ideas_hpc.mapping.coverage import camera_record, check_geometry, occlusion_structure
+from ideas_hpc.mapping.coverage import (camera_record, check_geometry, mesh_record,
+                                        occlusion_structure)
 from ideas_hpc.mapping.world_rows import rows_of_world, world_statics
 from ideas_hpc.montecarlo.scenario_rows import full_rows_of
 from ideas_hpc.montecarlo.scenarios import (build_scenario_bank, draw_world, grid_theta,
@@ -109,27 +110,29 @@ def test_rows_of_a_world_match_the_quality_pass_under_every_option(rough, name):
 
 
 def test_lighting_table_is_the_shadow_ray_test(rough):
-    # a low Sun sweeping 24 deg across a rough body: 40-odd runs of several images each,
-    # shadow edges inside runs; oracle: the exact ray test image by image
+    # a low Sun sweeping across a rough body: 20-odd runs of several images each, shadow
+    # edges inside runs; oracle: the exact ray test image by image
     setup, world, _, _ = rough
     shape = world.shape
     tree = occlusion_structure(shape)
     ang = np.radians(np.linspace(-12.0, 12.0, 241))
-    sun = np.stack([np.cos(ang) * 0.2, np.sin(ang) * 0.2, np.full_like(ang, 0.98)], axis=1)
-    sun /= np.linalg.norm(sun, axis=1)[:, None]
-    from ideas_hpc.mapping.coverage import mesh_record
-    lit = ws.lit_at_images(mesh_record(shape), np.ascontiguousarray(sun), tree)
+    sun = np.stack([np.cos(ang) * 0.2, np.sin(ang) * 0.2, np.full_like(ang, 0.3)], axis=1)
+    sun = np.ascontiguousarray(sun / np.linalg.norm(sun, axis=1)[:, None])
+    lit = ws.lit_at_images(mesh_record(shape), sun, tree)
     v, n = shape.vertices_T, shape.vertex_normals_T
     nv, ni = v.shape[0], sun.shape[0]
     origins = np.repeat(v, ni, axis=0)
     far = origins + 1e9 * np.tile(sun, (nv, 1))
     blocked = segments_blocked(*tree, origins, far, np.repeat(np.arange(nv), ni))
-    want = ((n @ sun.T) > 0.0) & ~blocked.reshape(nv, ni)
+    facing = (n @ sun.T) > 0.0
+    want = facing & ~blocked.reshape(nv, ni)
     np.testing.assert_array_equal(lit, want)
-    assert (want.any(axis=1) & ~want.all(axis=1) & (n @ sun.T > 0).all(axis=1)).sum() > 5, \
-        "some faces toward the Sun all along must be shadowed at some images"
-    start, axis, half = ws.sun_runs(np.ascontiguousarray(sun), ws.SUN_CONE_MAX)
-    assert start.size > 30 and np.diff(start).min() > 2 and half.max() <= ws.SUN_CONE_MAX
+    start, _, half = ws.sun_runs(sun, ws.SUN_CONE_MAX)
+    assert start.size > 15 and np.diff(start).min() > 2 and half.max() <= ws.SUN_CONE_MAX
+    shade = facing & ~want
+    edges = sum(int((shade[:, a:b].any(axis=1) & ~shade[:, a:b].all(axis=1)).sum())
+                for a, b in zip(start[:-1], start[1:]))
+    assert edges >= 10, "shadow edges must fall inside runs"
 
 
 def test_clear_cones_hold_no_blocked_sight_line(rough):
@@ -138,7 +141,6 @@ def test_clear_cones_hold_no_blocked_sight_line(rough):
     setup, world, _, _ = rough
     shape = world.shape
     tree = occlusion_structure(shape)
-    from ideas_hpc.mapping.coverage import mesh_record
     cos_c = ws.clear_cones(mesh_record(shape), tree)
     v, n = shape.vertices_T, shape.vertex_normals_T
     used = cos_c < 2.0
