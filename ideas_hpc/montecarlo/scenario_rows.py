@@ -8,10 +8,12 @@ deviation *budget* could see it, and then turns any perturbed flight
 :func:`ideas_hpc.design.candidates.rows_from_views` on that flight. The budget only
 decides speed, never the rows; it is taken from a pilot scenario (the
 deviations of scenario 0, with head room). Rows with a ``[coverage]``
-requirement (quality masks) take the full recomputation, and so does a scenario
-whose world differs from the nominal one in what the rows read besides the flight
-(its shape, or its Sun under a lighting requirement:
-:meth:`~ideas_hpc.flyby.world.World.mapping_key`). Every scenario is flown by the one
+requirement (quality masks) take no proofs, and neither does a scenario whose world
+differs from the nominal one in what the rows read besides the flight (its shape, or
+its Sun under a lighting requirement: :meth:`~ideas_hpc.flyby.world.World.mapping_key`):
+those come from the world's own statics, built once per world and shared by every
+candidate (:func:`world_rows`, the world bank of issue 43: each row stops at its first
+usable image), identical to the full recomputation :func:`full_rows_of`. Every scenario is flown by the one
 flight path (:func:`ideas_hpc.flyby.views.flight_views`), which picks the one-pass
 closed loop (the pipeline's flight, same bits) when it covers the scenario.
 """
