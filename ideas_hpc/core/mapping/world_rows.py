@@ -35,6 +35,7 @@ import numpy as np
 from numba import njit, prange
 
 from ideas_hpc.core.mapping.observations import L_RES
+from ideas_hpc.core.mapping.scenario_proofs import _vertex
 from ideas_hpc.core.mapping.pass_tree import LEAF, pass_runs, pass_tree, run_rejected
 from ideas_hpc.core.mapping.segments import segment_hit
 from ideas_hpc.core.mapping.visibility import _seen
@@ -54,16 +55,9 @@ def _usable(j, k, i, mesh, cam, opts, tests, light, hint, bvh):
         return False, hint
     if not _seen(j, k, i, mesh, cam, opts, bvh, False, False):
         return False, hint
-    vertices = mesh.vertices_T_m
-    normals = mesh.normals_T
     r_T = cam.r_T_m
     sun_T = opts.sun_T
-    px = vertices[j, 0]
-    py = vertices[j, 1]
-    pz = vertices[j, 2]
-    nx = normals[j, 0]
-    ny = normals[j, 1]
-    nz = normals[j, 2]
+    px, py, pz, nx, ny, nz, _ = _vertex(mesh, j)
     # the quality pass's expressions (observations._scan), on the same floats
     lx = r_T[k, i, 0] - px
     ly = r_T[k, i, 1] - py
@@ -98,15 +92,8 @@ def _first_usable(j, k, tree, runs, stack, mesh, cam, opts, bvh, tests, light):
     """The first usable image of vertex ``j`` by candidate ``k`` (-1: none): the walk of
     its pass tree (:mod:`ideas_hpc.core.mapping.pass_tree`) in image order, runs that no
     image of can see the vertex skipped."""
-    vertices = mesh.vertices_T_m
-    normals = mesh.normals_T
     r_T = cam.r_T_m
-    px = vertices[j, 0]
-    py = vertices[j, 1]
-    pz = vertices[j, 2]
-    nx = normals[j, 0]
-    ny = normals[j, 1]
-    nz = normals[j, 2]
+    px, py, pz, nx, ny, nz, _ = _vertex(mesh, j)
     hint = np.int64(-1)
     sp = 1
     stack[0] = 0

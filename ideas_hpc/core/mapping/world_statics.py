@@ -34,6 +34,7 @@ import numpy as np
 from numba import njit, prange
 
 from ideas_hpc.core.mapping.bvh import cone_clear, tri_cone_gap
+from ideas_hpc.core.mapping.scenario_proofs import _vertex
 from ideas_hpc.core.mapping.segments import segment_hit
 
 #: Largest half-angle (rad) of the Sun directions of one lighting run: wider cones
@@ -104,21 +105,14 @@ def lit_at_images(mesh, sun_T, bvh):
         Unit body -> Sun direction in T per image.
     bvh : :class:`~ideas_hpc.core.mapping.records.Bvh`
     """
-    vertices = mesh.vertices_T_m
-    normals = mesh.normals_T
-    nv = vertices.shape[0]
+    nv = mesh.vertices_T_m.shape[0]
     nimg = sun_T.shape[0]
     start, axis, half = sun_runs(sun_T, SUN_CONE_MAX)
     nrun = half.shape[0]
     lit = np.zeros((nv, nimg), dtype=np.bool_)
     tree = (bvh.node_bounds_m, bvh.node_info, bvh.tri_m, bvh.tri_vid)
     for j in prange(nv):
-        px = vertices[j, 0]
-        py = vertices[j, 1]
-        pz = vertices[j, 2]
-        nx = normals[j, 0]
-        ny = normals[j, 1]
-        nz = normals[j, 2]
+        px, py, pz, nx, ny, nz, _ = _vertex(mesh, j)
         hint = np.int64(-1)
         for r in range(nrun):
             facing = False
@@ -160,21 +154,14 @@ THETA_MIN = 0.01
 def clear_cones(mesh, bvh):
     """(V,) float64: the cosine of each vertex's clear cone (module docstring; 2.0: none),
     the BVH walked with boxes wholly below the tangent plane skipped."""
-    vertices = mesh.vertices_T_m
-    normals = mesh.normals_T
     nb = bvh.node_bounds_m
     info = bvh.node_info
     tri = bvh.tri_m
     vid = bvh.tri_vid
-    nv = vertices.shape[0]
+    nv = mesh.vertices_T_m.shape[0]
     out = np.full(nv, 2.0)
     for j in prange(nv):
-        px = vertices[j, 0]
-        py = vertices[j, 1]
-        pz = vertices[j, 2]
-        nx = normals[j, 0]
-        ny = normals[j, 1]
-        nz = normals[j, 2]
+        px, py, pz, nx, ny, nz, _ = _vertex(mesh, j)
         pn = px * nx + py * ny + pz * nz
         # "strictly below": by 1e-9 of the vertex's scale, far above the rounding
         below = -1e-9 * (np.sqrt(px * px + py * py + pz * pz) + 1.0)
