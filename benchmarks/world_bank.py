@@ -21,8 +21,8 @@ Rows are compared bit for bit on every world. The headline is the ratio of the t
 per-scenario times (CPU seconds of the process, which a shared machine's load changes
 less than the wall clock; both are printed), with the world bank's phases per
 scenario. ``--scaling`` adds the world bank's cost per scenario against the number of
-candidates (180 / 360 / 720), of vertices (icosphere resolution 2 / 3 / 4: 162 / 642 /
-2562) and of images per candidate (image rate 2.5 / 5 / 10 Hz: 51 / 101 / 201), with
+candidates (180 / 360 / 720), of vertices (icosphere resolution 3 / 4 / 5: 642 / 2562 /
+10242; the prior's degree 11 needs 3 or finer) and of images per candidate (image rate 2.5 / 5 / 10 Hz: 51 / 101 / 201), with
 power-law exponents fitted to the CPU times.
 """
 
@@ -46,7 +46,7 @@ ROOT = Path(__file__).resolve().parent.parent
 CAMPAIGN = ROOT / "campaigns" / "eros-class-flyby.toml"
 PHASES = ("draw and place the world", "flight", "world statics", "rows")
 SCALING = {"candidates": ("step", (2.0, 1.0, 0.5)),
-           "vertices": ("body.resolution", (2, 3, 4)),
+           "vertices": ("body.resolution", (3, 4, 5)),
            "images per candidate": ("instrument.image_rate_hz", (2.5, 5.0, 10.0))}
 
 

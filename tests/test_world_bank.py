@@ -141,7 +141,7 @@ def test_clear_cones_hold_no_blocked_sight_line(rough):
     setup, world, _, _ = rough
     shape = world.shape
     tree = occlusion_structure(shape)
-    cos_c = ws.clear_cones(mesh_record(shape), tree)
+    cos_c = ws.clear_cones(mesh_record(shape), tree, ws.THETA_CAP)
     v, n = shape.vertices_T, shape.vertex_normals_T
     used = cos_c < 2.0
     theta = np.arccos(np.minimum(cos_c[used], 1.0))

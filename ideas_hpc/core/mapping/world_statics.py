@@ -16,7 +16,9 @@ Sun, so two per-vertex facts are the world's, not the candidate's:
 * **the clear cone** (:func:`clear_cones`): the largest cone around the vertex normal
   ``n_j`` that no face (other than the vertex's own) meets. A face lying strictly below
   the tangent plane ``(x - p_j) . n_j = 0`` cannot meet a sight line that rises above
-  it; every other face ``f`` leaves the cone of half-angle ``theta_f``, its angular
+  it, nor can a face in a BVH box whose every point lies beyond the cone found so far
+  (``(x - p_j) . n_j <= top`` and ``|x - p_j| >= dist`` over the box, so its angle from
+  ``n_j`` exceeds ``theta`` when ``top < cos(theta) dist``); every other face ``f`` leaves the cone of half-angle ``theta_f``, its angular
   distance from ``n_j`` seen from ``p_j``
   (:func:`~ideas_hpc.core.mapping.bvh.tri_cone_gap`, the distance
   :func:`~ideas_hpc.core.mapping.bvh.cone_clear` tests). So with
@@ -150,10 +152,21 @@ THETA_CAP = 1.5
 THETA_MIN = 0.01
 
 
+@njit(cache=True, inline="always")
+def _box_gap2(nb, node, px, py, pz):
+    """Squared distance (m^2) from ``p`` to box ``node`` (0 inside)."""
+    gx = max(nb[node, 0] - px, 0.0, px - nb[node, 3])
+    gy = max(nb[node, 1] - py, 0.0, py - nb[node, 4])
+    gz = max(nb[node, 2] - pz, 0.0, pz - nb[node, 5])
+    return gx * gx + gy * gy + gz * gz
+
+
 @njit(parallel=True, cache=True)
-def clear_cones(mesh, bvh):
-    """(V,) float64: the cosine of each vertex's clear cone (module docstring; 2.0: none),
-    the BVH walked with boxes wholly below the tangent plane skipped."""
+def clear_cones(mesh, bvh, theta_cap):
+    """(V,) float64: the cosine of each vertex's clear cone (module docstring; 2.0: none)
+    of half-angle at most ``theta_cap`` (rad, at most :data:`THETA_CAP`: a wider cap proves
+    more sight lines, a narrower one prunes more of the BVH), the BVH walked with boxes
+    wholly below the tangent plane or beyond the cone found so far skipped."""
     nb = bvh.node_bounds_m
     info = bvh.node_info
     tri = bvh.tri_m
@@ -165,7 +178,7 @@ def clear_cones(mesh, bvh):
         pn = px * nx + py * ny + pz * nz
         # "strictly below": by 1e-9 of the vertex's scale, far above the rounding
         below = -1e-9 * (np.sqrt(px * px + py * py + pz * pz) + 1.0)
-        theta = THETA_CAP
+        theta = min(theta_cap, THETA_CAP)
         stack = np.empty(64, dtype=np.int64)
         sp = 1
         stack[0] = 0
@@ -176,10 +189,19 @@ def clear_cones(mesh, bvh):
                    + max(nb[node, 2] * nz, nb[node, 5] * nz)) - pn
             if top < below:
                 continue
+            # every point x of the box has (x - p) . n <= top and |x - p| >= dist: beyond
+            # the cone found so far when top < cos(theta) dist (with a margin)
+            dist = np.sqrt(_box_gap2(nb, node, px, py, pz))
+            if top < np.cos(theta) * dist * (1.0 - 1e-9) + below:
+                continue
             left = info[node, 0]
             if left >= 0:
+                # the nearer child first: the faces that narrow the cone are near the vertex
+                right = info[node, 1]
+                if _box_gap2(nb, left, px, py, pz) < _box_gap2(nb, right, px, py, pz):
+                    left, right = right, left
                 stack[sp] = left
-                stack[sp + 1] = info[node, 1]
+                stack[sp + 1] = right
                 sp += 2
                 continue
             for f in range(info[node, 2], info[node, 2] + info[node, 3]):
