@@ -43,8 +43,16 @@ this checkout in the same run, rows compared bit for bit
 (:mod:`whole_bank`); the headline is that ratio. Issue 31's reference is
 ``--against 01c8c61``, the bank before it.
 
+``--world-bank``: the world bank instead (issue 43, :mod:`world_bank`): every scenario a
+drawn world of ``campaigns/eros-class-flyby.toml``, the world bank against full
+recomputation of the same worlds in the same run (``--worlds``, 720 candidates at the
+default step), rows compared; with ``--scaling`` its exponents in candidates, vertices
+and images per candidate. Headline last: ``scenarios: <R>x faster than full
+recomputation`` (CPU seconds per scenario).
+
 Usage: ``python benchmarks/bench_scenarios.py [--scenarios 3] [--ideal] [--step 0.5]
-[--scaling] [--against REV [--bank-scenarios 256] [--workers 2]]``
+[--scaling] [--against REV [--bank-scenarios 256] [--workers 2]]``, or
+``python benchmarks/bench_scenarios.py --world-bank [--worlds 6] [--step 0.5] [--scaling]``
 """
 
 from __future__ import annotations
@@ -220,7 +228,18 @@ def main(argv=None) -> None:
                          "(whole_bank.py; eros001708 needed; headline last)")
     ap.add_argument("--bank-scenarios", type=int, default=256)
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--world-bank", action="store_true",
+                    help="the world bank (a drawn world per scenario) against full "
+                         "recomputation of the same worlds (world_bank.py; headline last)")
+    ap.add_argument("--worlds", type=int, default=6, help="worlds of --world-bank")
     args = ap.parse_args(argv)
+    if args.world_bank:
+        import world_bank
+        if args.scaling:
+            world_bank.scaling(args.scaling_scenarios)
+        ratio = world_bank.compare(args.worlds, args.step)
+        print(f"scenarios: {ratio:.1f}x faster than full recomputation")
+        return
     sets = [] if have_data_file("eros001708.tab") else ['body.name="ellipsoid"']
     if args.ideal:
         sets.append('attitude.mode="ideal"')

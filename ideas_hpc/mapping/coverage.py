@@ -283,6 +283,11 @@ def _quality_record(options) -> Quality:
                    bool(options.require_lit))
 
 
+#: The kernels' :class:`Quality` record of coverage options (public for the world bank's
+#: rows, :mod:`ideas_hpc.mapping.world_rows`).
+quality_record = _quality_record
+
+
 def _quality(shape, options, sun_T, mesh, cam, act, counts) -> CoverageResult:
     opts, bvh = _strict_args(shape, options, sun_T, cam.r_T_m.shape[1])
     (times, first, lit, res, emi, inc, pha, nsc, stereo,

@@ -8,10 +8,12 @@ deviation *budget* could see it, and then turns any perturbed flight
 :func:`ideas_hpc.design.candidates.rows_from_views` on that flight. The budget only
 decides speed, never the rows; it is taken from a pilot scenario (the
 deviations of scenario 0, with head room). Rows with a ``[coverage]``
-requirement (quality masks) take the full recomputation, and so does a scenario
-whose world differs from the nominal one in what the rows read besides the flight
-(its shape, or its Sun under a lighting requirement:
-:meth:`~ideas_hpc.flyby.world.World.mapping_key`). Every scenario is flown by the one
+requirement (quality masks) take no proofs, and neither does a scenario whose world
+differs from the nominal one in what the rows read besides the flight (its shape, or
+its Sun under a lighting requirement: :meth:`~ideas_hpc.flyby.world.World.mapping_key`):
+those come from the world's own statics, built once per world and shared by every
+candidate (:func:`world_rows`, the world bank of issue 43: each row stops at its first
+usable image), identical to the full recomputation :func:`full_rows_of`. Every scenario is flown by the one
 flight path (:func:`ideas_hpc.flyby.views.flight_views`), which picks the one-pass
 closed loop (the pipeline's flight, same bits) when it covers the scenario.
 """
@@ -33,7 +35,8 @@ from ideas_hpc.flyby.flight import FlybySetup, Perturbation
 from ideas_hpc.flyby.views import FlightPlan, flight_views
 from ideas_hpc.flyby.world import World, cached_static
 from ideas_hpc.core.mapping.records import Nominal
-from ideas_hpc.mapping.coverage import camera_record, check_geometry, mesh_record, strict_records
+from ideas_hpc.mapping.coverage import camera_record, check_geometry
+from ideas_hpc.mapping.world_rows import WorldStatics, rows_of_world, world_statics
 
 #: Head room on the pilot's deviations (speed only).
 HEADROOM = 1.5
@@ -202,18 +205,37 @@ class RowEngine:
         return first_image_by_spacecraft(mesh, cam, opts, bvh)
 
     def _full(self, r_img, dcm, world: World | None = None) -> np.ndarray:
-        return full_rows_of(self.setup, world, r_img, dcm)
+        """Rows without the nominal flight's proofs: from the world's statics."""
+        return world_rows(self.setup, world, r_img, dcm)
 
 
 def world_records(setup: FlybySetup, world: World, n_img: int) -> tuple:
     """``(Mesh, Strict, Bvh)`` of ``world``'s shape and Sun at ``setup``'s images for its
-    coverage options: per-world statics (:func:`ideas_hpc.flyby.world.cached_static`)."""
-    def build():
-        opts, bvh = strict_records(world.shape, setup.coverage, world.sun_at_images(setup),
-                                   n_img)
-        return mesh_record(world.shape), opts, bvh
+    coverage options: per-world statics (:func:`world_statics_of`)."""
+    return world_statics_of(setup, world, n_img)[:3]
+
+
+def world_statics_of(setup: FlybySetup, world: World, n_img: int) -> WorldStatics:
+    """The :class:`~ideas_hpc.mapping.world_rows.WorldStatics` of ``world`` at ``setup``'s
+    images (mesh, strict options with the Sun, BVH, lighting), built once per world and
+    process (:func:`ideas_hpc.flyby.world.cached_static`, keyed by what they read)."""
     return cached_static(("mapping", setup.flight_key, world.mapping_key(setup), int(n_img)),
-                         build)
+                         lambda: world_statics(world.shape, setup.coverage,
+                                               world.sun_at_images(setup), int(n_img)))
+
+
+def world_rows(setup: FlybySetup, world: World | None, r_img, dcm) -> np.ndarray:
+    """(K, V) bool rows of a flight through ``world`` (default: ``setup``'s) from its
+    per-world statics (:func:`~ideas_hpc.mapping.world_rows.rows_of_world`): every
+    candidate of the world shares its mesh, BVH and lighting, and a mapped row stops at
+    its first usable image. Identical to :func:`full_rows_of` (which it falls back to
+    for input of the wrong rank, so that the full path names the error)."""
+    world = setup.world if world is None else world
+    if np.ndim(r_img) != 3:
+        return full_rows_of(setup, world, r_img, dcm)
+    st = world_statics_of(setup, world, np.shape(r_img)[1])
+    return rows_of_world(st, setup.coverage, r_img, dcm, setup.image_times,
+                         (setup.eta_rad, setup.near_m, setup.far_m))
 
 
 def _down32(x: np.ndarray) -> np.ndarray:

@@ -120,8 +120,8 @@ def _rows_chunk(ks, *, engine: RowEngine, mc, seed, stream):
         if setup.target is None:
             row = engine.scenario_rows(pert, reuse=True)
         else:
-            # world k of the stream's family: its own shape, so its rows are recomputed in
-            # full (RowEngine.rows: the nominal's proofs hold for the nominal shape only)
+            # world k of the stream's family: its own shape, so the nominal's proofs do not
+            # hold; its rows come from its own statics (the world bank, RowEngine.rows)
             world = scenario_world(setup, seed, stream, int(k), pert.params_override)
             row = engine.rows(*engine.flight(pert, True, world), world=world)
         out = _rows_out(out, len(ks), row)
@@ -137,8 +137,8 @@ def _rows_out(out, n: int, row: np.ndarray) -> np.ndarray:
 
 def row_engine(setup: FlybySetup, theta, mc, seed: int, stream: int) -> RowEngine:
     """Targeted candidates ``theta`` with their nominal witnesses; budget from draw 0.
-    With a target prior no world is the nominal one: no witnesses (every row is
-    recomputed in full, :meth:`RowEngine.rows`)."""
+    With a target prior no world is the nominal one: no witnesses (every world's rows
+    come from its own statics, :func:`~ideas_hpc.montecarlo.scenario_rows.world_rows`)."""
     r0, v0 = nominal_start(setup, theta)
     if setup.target is not None:
         return RowEngine(setup, theta, r0, v0)

@@ -29,7 +29,8 @@ from numba import njit
 
 from ideas_hpc.core.mapping.segments import segment_blocked, segment_hit, segments_blocked
 
-__all__ = ["build_bvh", "cone_clear", "segment_blocked", "segment_hit", "segments_blocked"]
+__all__ = ["build_bvh", "cone_clear", "segment_blocked", "segment_hit", "segments_blocked",
+           "tri_cone_gap"]
 
 LEAF_SIZE = 4
 
@@ -178,11 +179,12 @@ def _arc_distance(ux, uy, uz, vx, vy, vz, ax, ay, az):
 
 
 @njit(cache=True, inline="always")
-def _tri_outside_cone(px, py, pz, ax, ay, az, alpha, tri, i):
-    """True when face ``i`` lies wholly outside the cone (apex p, unit axis a, half-angle
-    alpha): the directions from p to the face form the spherical triangle of the
-    unit vectors ``w_k`` toward its corners, and the angular distance from ``a`` to
-    it (0 inside; else the nearest edge arc) must exceed alpha."""
+def tri_cone_gap(px, py, pz, ax, ay, az, tri, i):
+    """Angular distance (rad) from the unit axis ``a`` to face ``i`` seen from ``p``: the
+    directions from p to the face form the spherical triangle of the unit vectors
+    ``w_k`` toward its corners, and the distance is 0 when the axis is inside it (or
+    the face is degenerate, or p (nearly) in its plane), else that to the nearest edge
+    arc. Every cone of half-angle below it misses the face."""
     x0 = tri[i, 0] - px
     y0 = tri[i, 1] - py
     z0 = tri[i, 2] - pz
@@ -190,25 +192,31 @@ def _tri_outside_cone(px, py, pz, ax, ay, az, alpha, tri, i):
     ax1, ay1, az1, n1 = _unit(x0 + tri[i, 3], y0 + tri[i, 4], z0 + tri[i, 5])
     ax2, ay2, az2, n2 = _unit(x0 + tri[i, 6], y0 + tri[i, 7], z0 + tri[i, 8])
     if n0 == 0.0 or n1 == 0.0 or n2 == 0.0:
-        return False
+        return 0.0
     # orientation of the corner directions; near 0: p (nearly) in the face's plane
     c01x = ay0 * az1 - az0 * ay1
     c01y = az0 * ax1 - ax0 * az1
     c01z = ax0 * ay1 - ay0 * ax1
     det = c01x * ax2 + c01y * ay2 + c01z * az2
     if abs(det) < 1e-12:
-        return False
+        return 0.0
     s0 = (c01x * ax + c01y * ay + c01z * az) * det
     s1 = ((ay1 * az2 - az1 * ay2) * ax + (az1 * ax2 - ax1 * az2) * ay
           + (ax1 * ay2 - ay1 * ax2) * az) * det
     s2 = ((ay2 * az0 - az2 * ay0) * ax + (az2 * ax0 - ax2 * az0) * ay
           + (ax2 * ay0 - ay2 * ax0) * az) * det
     if s0 >= 0.0 and s1 >= 0.0 and s2 >= 0.0:
-        return False                     # the axis itself meets the face
-    d = min(_arc_distance(ax0, ay0, az0, ax1, ay1, az1, ax, ay, az),
-            _arc_distance(ax1, ay1, az1, ax2, ay2, az2, ax, ay, az),
-            _arc_distance(ax2, ay2, az2, ax0, ay0, az0, ax, ay, az))
-    return d > alpha
+        return 0.0                       # the axis itself meets the face
+    return min(_arc_distance(ax0, ay0, az0, ax1, ay1, az1, ax, ay, az),
+               _arc_distance(ax1, ay1, az1, ax2, ay2, az2, ax, ay, az),
+               _arc_distance(ax2, ay2, az2, ax0, ay0, az0, ax, ay, az))
+
+
+@njit(cache=True, inline="always")
+def _tri_outside_cone(px, py, pz, ax, ay, az, alpha, tri, i):
+    """True when face ``i`` lies wholly outside the cone (apex p, unit axis a, half-angle
+    alpha): its :func:`tri_cone_gap` exceeds alpha."""
+    return tri_cone_gap(px, py, pz, ax, ay, az, tri, i) > alpha
 
 
 @njit(cache=True)
