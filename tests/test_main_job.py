@@ -74,10 +74,12 @@ def test_main_job_is_proven_and_decided_by_the_continuous_uncertainties(main_sto
     ds = xr.open_zarr(main_store)
     a = ds.attrs
     n = int(ds["best_swarm_size"])
-    # the fewest N is proven on the bank
+    # the fewest N is proven on the bank; the reported N is that one or a step up
+    # planned from the held-out worlds (design.demonstrate), never below it
+    n_bank = int(ds["bank_swarm_size"])
     assert a["solver_status"] == "optimal" and float(a["optimality_gap"]) == 0.0
-    assert int(ds["bank_swarm_size"]) == n and int(ds["proven_bound"]) == n
-    assert float(ds["bank_probability"]) >= 0.9
+    assert int(ds["proven_bound"]) == n_bank and float(ds["bank_probability"]) >= 0.9
+    assert n >= n_bank and (n == n_bank) == (a["demonstrate_steps"] == "none")
     # the failures-only P of the chosen swarm, enumerated here on the nominal world
     c = load(MAIN, SIZES)
     setup = setup_from_campaign(c)
@@ -93,9 +95,9 @@ def test_main_job_is_proven_and_decided_by_the_continuous_uncertainties(main_sto
     half = 1.959963984540054 * v.std(ddof=1) / math.sqrt(v.size)
     assert abs(v.mean() - p_f) > half, (v.mean(), p_f, half)
     assert a["continuous_uncertainties_decide"] == 1
-    # the held-out P is the bank's minus its stated bias
+    # the reported swarm's held-out P is its bank P minus the stated bias
     assert float(a["holdout_probability"]) == pytest.approx(
-        float(ds["bank_probability"]) - float(a["bank_bias"]), abs=1e-12)
+        float(ds["reliability_probability"]) - float(a["bank_bias"]), abs=1e-12)
     # what was flown: the prior's worlds, no data file
     assert a["body"] == "eros-class prior" and a["target_prior"] == "eros-class"
     assert "no data file read" in a["body_note"]
