@@ -373,6 +373,16 @@ MUTATIONS: tuple[Mutation, ...] = (
       "dp = np.array([d, 0.0, z1]) - p0",
       ("tests/test_coverage_reference_campaign.py::"
        "test_the_paper_closest_approach_is_the_trajectory_minimum",)),
+    # ---- the failures-only verdict (issue 42)
+    M("failures_only_gap_one_sided", "statistics", "ideas_hpc/campaign/failures_only.py",
+      '"decides": bool(abs(gap) > half)', '"decides": bool(gap > half)',
+      ("tests/test_failures_only.py::"
+       "test_the_verdict_is_the_gap_against_the_validation_sampling_error",)),
+    M("failures_only_weights_not_normalised", "statistics",
+      "ideas_hpc/campaign/failures_only.py",
+      "ev = Evaluator(rows, normalised(nominal_bank.areas, 1), need, model)",
+      "ev = Evaluator(rows, np.asarray(nominal_bank.areas, dtype=float), need, model)",
+      ("tests/test_failures_only.py::test_closed_forms_every_member_needed_and_any_one_enough",)),
     # ---- navigation (SPEC 7f)
     M("nav_start_ignores_the_spin", "kernels", "ideas_hpc/flyby/nav_flight.py",
       "return _r3(phi, o), -_r3(phi, w_x_o)", "return _r3(phi, o), 0.0 * _r3(phi, w_x_o)",

@@ -41,9 +41,13 @@ SMALL = {
                                 "design.time_limit_s=5"],
     # already coarse; its [target] prior supplies the body (no data file, no body.name)
     "eros-class-flyby.toml": ["design.angle_step_deg=15.0", "design.holdout_scenarios=20"],
+    # the main job (its prior supplies the body): the smallest bank p = 0.9 resolves
+    # (10 / (1 - p) = 100 worlds) on a 15 deg grid; its answer: tests/test_main_job.py
+    "fast-flyby-design.toml": ["design.angle_step_deg=15.0", "design.scenarios=100",
+                               "design.holdout_scenarios=100", "design.verify_samples=100"],
 }
 #: Files whose body comes from their [target] prior: run as shipped, never on another body.
-PRIOR_BODY = {"eros-class-flyby.toml"}
+PRIOR_BODY = {"eros-class-flyby.toml", "fast-flyby-design.toml"}
 FORBIDDEN = ("design.n_max", "design.eps_tol_pct", "coverage.", "design.failures_tolerated")
 
 

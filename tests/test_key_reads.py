@@ -105,6 +105,7 @@ VALUES = {
     "design.holdout_scenarios": ["design.holdout_scenarios=40"],
     "design.verify_samples_max": ["design.verify_samples_max=512"],
     "design.tolerant_markers": ["design.tolerant_markers=true"],
+    "design.curve_samples": ["design.curve_samples=0"],
     "design.target_rule": ['design.target_rule="full"'],
     "design.coverage_reference": ['design.coverage_reference="lit_at_tca"'],
     "design.generations": ["design.generations=5"], "design.n_max": ["design.n_max=10"],

@@ -100,5 +100,22 @@ def base_attrs(c, setup) -> dict:
     attrs = {"kind": c.kind, "execution": config_json(knobs),
              "campaign_file": str(c.source.path)}
     attrs.update(setup_attrs(setup))
+    attrs.update(flown_body(c, setup))
     attrs.update(requirement_attrs(requirement_from_campaign(c)))
     return attrs
+
+
+def flown_body(c, setup) -> dict:
+    """What a store with a target prior flew (issue 42): a success-probability design
+    flies one drawn world per scenario and validation sample, so its ``body`` is the
+    prior (``"eros-class prior"``), not the nominal that defines the flight frame
+    (``shape_model`` stays the nominal mesh's name); ``target_prior`` names the prior.
+    Without a prior: nothing (``setup_attrs``' body stands)."""
+    t = setup.target
+    if t is None:
+        return {}
+    if getattr(c.config.design, "success_probability", None) is None:
+        return {"target_prior": t.name}
+    return {"body": f"{t.name} prior", "target_prior": t.name,
+            "body_note": f"{t.name} prior: one drawn world per scenario and validation "
+                         f"sample, around {setup.body.note}"}

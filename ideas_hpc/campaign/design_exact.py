@@ -240,7 +240,8 @@ def checked_setup(c, theta):
     targeting swarm ``theta`` once here: a targeting failure is the user's to fix, in
     one line, rather than a failed task on every worker."""
     setup = setup_from_campaign(c, maneuver=KINDS[c.kind].maneuver)
-    _log(f"body: {setup.body.note}")
+    # a design over a target prior's drawn worlds names the prior (datasets.flown_body)
+    _log(f"body: {datasets.flown_body(c, setup).get('body_note', setup.body.note)}")
     target(setup, theta)
     return setup
 

@@ -59,7 +59,8 @@ from ideas_hpc.campaign.design_exact import design_exact
 from ideas_hpc.campaign.bank_design import bank_settings, campaign_bank
 from ideas_hpc.campaign.schema.design_checks import designer_errors
 from ideas_hpc.campaign.reliability_vars import BankRun, reliability_dataset
-from ideas_hpc.campaign.schema.design_table import holdout_scenarios, verify_samples
+from ideas_hpc.campaign.schema.design_table import (curve_samples, holdout_scenarios,
+                                                    verify_samples)
 from ideas_hpc.design.holdout import HeldOut, agreement
 
 #: Purpose word of the validation's sampled failures (its old home; now
@@ -280,16 +281,20 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=Non
     looked = {lk.n: lk.extra for lk in cert.looks}
     # the reliability curve: N0 .. first N with P >= CURVE_TOP (or n_max)
     n0 = int(nominal.data["best_swarm_size"])
+    m_curve = curve_samples(d, exact)
     curve = []
     for n in range(min(n0, chosen.n), d.n_max + 1):
         sw, pb = (chosen.indices, chosen.probability) if n == chosen.n else rel.best_of(n)
         if sw.size != n:
             break
-        # the curve reports each N alone at design.confidence (it certifies nothing)
-        v = looked.get(n) or _validate(c, setup, bank.theta[sw], need, w, exact, client)
-        low = v.p_hat if exact else lower_confidence_bound(v.per_sample, d.confidence)
+        # the curve reports each N alone at design.confidence (it certifies nothing);
+        # design.curve_samples = 0: the held-out scenarios alone score the other sizes
+        v = looked.get(n) or (_validate(c, setup, bank.theta[sw], need, w, exact, client,
+                                        size=m_curve) if m_curve else None)
+        ph_v = math.nan if v is None else v.p_hat
+        low = ph_v if exact or v is None else lower_confidence_bound(v.per_sample, d.confidence)
         ph = held.probability(sw) if held is not None else math.nan
-        curve.append((n, pb, rel.upper(n), v.p_hat, low, sw, ph))
+        curve.append((n, pb, rel.upper(n), ph_v, low, sw, ph))
         if pb >= CURVE_TOP and n >= chosen.n:
             break
     # the markers only when asked (design.tolerant_markers): their HiGHS minute held a

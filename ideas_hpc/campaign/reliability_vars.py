@@ -72,6 +72,7 @@ from ideas_hpc.design.reliability_eval import Evaluator
 from ideas_hpc.design.api.methods import method_of_designer
 from ideas_hpc.base.seeds import SCENARIO_STREAM, VALIDATION_STREAM
 from ideas_hpc.campaign.design_exact import ExactDesign
+from ideas_hpc.campaign.failures_only import effect_record
 from ideas_hpc.design.certificate import verdict as certificate_verdict
 from ideas_hpc.design.reliability_levels import levels_line
 
@@ -294,6 +295,11 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
         new = new.merge(_held_vars(run.held, curve))
     if np.ndim(bank.areas) == 2:        # drawn worlds: the weights differ by scenario
         new = new.merge(world_vars(bank.rows, bank.areas))
+    effect = None if exact else effect_record(nominal.bank, idx, need, run.model, val, run.held)
+    if effect is not None:              # do the continuous uncertainties decide? (issue 42)
+        new = new.merge(xr.Dataset(effect[0]))
+        _with(new, "failures_only_probability", "1", f"P({thr}) of the chosen swarm on the "
+              "nominal world, failures only (enumerated)")
     ds = xr.merge([ds.drop_vars([k for k in new.data_vars if k in ds]), new],
                   combine_attrs="override")
     attrs = dict(nominal.attrs)
@@ -319,6 +325,8 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
     })
     if cert is not None:
         attrs["certificate"] = cert.line()
+    if effect is not None:
+        attrs.update(effect[1])
     if run.levels:
         attrs["p_f_levels"] = levels_line(run.levels, level)
     if run.held is not None:
@@ -373,6 +381,7 @@ def reliability_dataset(c, nominal: ExactDesign, bank, res, chosen, val, curve, 
                f"lower bound {val.lower:.4f}; "
                f"{bank_line(res.n, res.probability, res.status, res.bound, res.gap)}; "
                f"nominal N = {attrs['nominal_swarm_size']}"
-               + (f"\n{attrs['certificate']}" if cert is not None else ""))
+               + (f"\n{attrs['certificate']}" if cert is not None else "")
+               + (f"\n{effect[2]}" if effect is not None else ""))
     return ExactDesign(theta=theta, data=ds, attrs=attrs, notes=notes, summary=summary,
                        bank=nominal.bank)

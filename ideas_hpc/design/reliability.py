@@ -32,8 +32,11 @@ true P.
 * **Feasibility.** A swarm of N whose exact ``P_bank >= p``: the programme's
   swarm and the previous size's best swarm plus its best new member, each
   improved by a swap search on the exact ``P_bank`` (:func:`improve`). When
-  the number of N-swarms is small (``enumerate_budget``) every one is scored
-  instead, which settles N either way.
+  the number of N-swarms is small (``enumerate_budget``, and at most
+  :data:`ENUM_CELLS` swarm-scenarios) every one is scored instead, which settles N
+  either way. On a sampled bank (S > 1) the screen of
+  :mod:`ideas_hpc.design.screen_bound` tries each size before the programme refines
+  ``Ubar_m``, which can spend the whole time limit on one m.
 
 Sizes neither proven infeasible nor met are *unresolved*: the proven lower
 bound is the smallest of them, the gap ``(N - bound) / N``, and the status
@@ -60,7 +63,8 @@ from ideas_hpc.failures.model import as_model
 from ideas_hpc.failures.sums import level_bound, weights_of
 from ideas_hpc.design.ring_bound import ring_bound
 from ideas_hpc.design.scenario_mip import ScenarioMIP
-from ideas_hpc.design.screen_bound import clip_gap_matrix, screen_size, stack_gap_matrices
+from ideas_hpc.design.screen_bound import (clip_gap_matrix, screen_note, screen_size,
+                                          stack_gap_matrices)
 from ideas_hpc.design.tolerance_bound import ToleranceBound
 from ideas_hpc.design.settings import ReliableSettings
 
@@ -69,6 +73,10 @@ from ideas_hpc.design.settings import ReliableSettings
 #: candidates: no incumbent, 100 s for a 20 s limit), and ``Ubar_m`` comes from the
 #: per-scenario ring-gap bounds alone (still proven; the gap says what is left).
 MIP_MAX_CELLS = 5000
+#: Most swarm-scenarios one exhaustive enumeration scores (about 25 us each at 642
+#: vertices); the quick campaign's 4005 2-swarms x 100 scenarios stay enumerated, a bank
+#: of 100 worlds x 45 candidates leaves its 14190 3-swarms (30-47 s) to the screen (16 s).
+ENUM_CELLS = 1_000_000
 
 
 @dataclass
@@ -198,10 +206,10 @@ class ReliabilityDesigner:
                                        2 * math.pi / self.c_n, solver=self._tol_solver)
         return self._tol
 
-    def upper(self, n: int, p: float | None = None) -> float:
+    def upper(self, n: int, p: float | None = None, *, refine: bool = True) -> float:
         """Proven ``UB(n)`` (module docstring). The ring-gap fractions first, then the
         per-scenario failure-tolerance bound; the programme refines ``Ubar_m`` from
-        ``m = n`` down only while ``UB(n) >= p``."""
+        ``m = n`` down only while ``UB(n) >= p`` (and ``refine``)."""
         u = [0.0] + [min(self.cheap_ubar(k), self.u_bar.get(k, 1.0)) for k in range(1, n + 1)]
         ub = level_bound(n, u, self.model)
         if ub >= (p if p is not None else 0.0) - 1e-12:
@@ -211,7 +219,8 @@ class ReliabilityDesigner:
                 self.tol_proved.add(n)
             ub = min(ub, tol)
         for k in range(n, 0, -1):
-            if (p is not None and ub < p - 1e-12) or u[k] == 0.0 or self.out_of_time():
+            if not refine or (p is not None and ub < p - 1e-12) or u[k] == 0.0 \
+                    or self.out_of_time():
                 break
             u[k] = min(u[k], self.ubar(k))
             ub = min(ub, level_bound(n, u, self.model))
@@ -230,7 +239,8 @@ class ReliabilityDesigner:
         if n in self.best:
             return self.best[n]
         n_swarms = math.comb(self.c_n, n)
-        if n_swarms <= self.budget and not self.out_of_time():
+        if n_swarms <= self.budget and n_swarms * self.s_n <= ENUM_CELLS \
+                and not self.out_of_time():
             sw = all_swarms(self.c_n, n, self.m)
             if sw.shape[0] == 0:
                 self.best[n] = (np.zeros(0, np.int64), 0.0)
@@ -268,18 +278,6 @@ class ReliabilityDesigner:
         top = (sw, max(top[1], 0.0))       # member k: the k-th grid candidate (reliability_eval)
         self.best[n] = top
         return top
-
-
-def _screen_note(d: ReliabilityDesigner) -> str:
-    """What the screen (:mod:`ideas_hpc.design.screen_bound`) settled, in one note."""
-    parts = []
-    if d.screen_proved:
-        parts.append(f"sizes {sorted(d.screen_proved)} proven short of p")
-    if d.screen_found:
-        parts.append(f"sizes {sorted(d.screen_found)} met by a swarm found")
-    return (" and ".join(parts) + " by the screen over all scenarios (every swarm that could "
-            "reach p is one of the (N-1)-swarms the ring-gap relaxation lets cover enough "
-            "scenarios plus one member, ideas_hpc.design.screen_bound)")
 
 
 def min_swarm_reliable(rows, areas, settings: ReliableSettings | None = None,
@@ -336,9 +334,12 @@ def settle(d: ReliabilityDesigner, p: float, n_max: int) -> ReliableResult:
     ``InputError`` on ``p`` as :func:`min_swarm_reliable`)."""
     upper: dict = {}
     unresolved: list = []
+    # a sampled bank: the screen before the programme, which can spend the whole time limit
+    # on one U_m (issue 42: 100 worlds x 45 candidates; the screen took 16 + 5 s)
+    screen_first = d.s_n > 1
     for n in progress.steps(range(1, int(n_max) + 1), "success-probability design",
                             unit="size"):
-        upper[n] = d.upper(n, p)
+        upper[n] = d.upper(n, p, refine=not screen_first)
         if upper[n] < p - 1e-12:
             continue
         sw, val = d.best_of(n)
@@ -352,6 +353,10 @@ def settle(d: ReliabilityDesigner, p: float, n_max: int) -> ReliableResult:
             elif sc is not None and sc.proven_short:
                 upper[n] = min(upper[n], sc.upper)
                 d.screen_proved.add(n)
+                continue
+        if val < p - 1e-12 and screen_first and not d.enumerated_short(n, p):
+            upper[n] = min(upper[n], d.upper(n, p))   # the programme, the screen unsettled
+            if upper[n] < p - 1e-12:
                 continue
         if val >= p - 1e-12:
             bound = unresolved[0] if unresolved else n
@@ -369,7 +374,7 @@ def settle(d: ReliabilityDesigner, p: float, n_max: int) -> ReliableResult:
                              "per-scenario failure-tolerance bound (fewest spacecraft "
                              "surviving any k failures, ideas_hpc.design.tolerance_bound)")
             if d.screen_proved or d.screen_found:
-                notes.append(_screen_note(d))
+                notes.append(screen_note(d.screen_proved, d.screen_found))
             if unresolved:
                 notes.append(f"sizes {unresolved} are neither proven short of p nor met by a "
                              "swarm found")

@@ -309,3 +309,16 @@ def screen_size(mt, slack, ev, n: int, p: float, p_f: float, u_bar: list, m: int
              float(below.max()) if below.size else 0.0)
     return ScreenOutcome(n=n, proven_short=True, swarm=None, probability=best[1], upper=ub,
                          screened=found.shape[0], checked=checked, route="screen")
+
+
+def screen_note(proved, found) -> str:
+    """What the screen settled (sizes ``proved`` short of p, sizes ``found`` met), in one
+    note of the design."""
+    parts = []
+    if proved:
+        parts.append(f"sizes {sorted(proved)} proven short of p")
+    if found:
+        parts.append(f"sizes {sorted(found)} met by a swarm found")
+    return (" and ".join(parts) + " by the screen over all scenarios (every swarm that could "
+            "reach p is one of the (N-1)-swarms the ring-gap relaxation lets cover enough "
+            "scenarios plus one member, ideas_hpc.design.screen_bound)")

@@ -46,8 +46,12 @@ def close(fig, path) -> None:
 
 
 def body_name(ds) -> str:
-    """The body a store was computed on, as figures name it."""
+    """The body a store was computed on, as figures name it: a design over a target
+    prior's drawn worlds names the prior and its nominal (``eros-class prior, nominal
+    eros-ellipsoid``), not the nominal alone."""
     a = ds.attrs
+    if a.get("target_prior") and str(a.get("body", "")).endswith(" prior"):
+        return f"{a['body']}, nominal {a.get('shape_model')}"
     return str(a.get("shape_model") or a.get("body") or "body")
 
 

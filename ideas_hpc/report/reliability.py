@@ -78,16 +78,22 @@ def reliability_lines(ds) -> list[str]:
     if "bank_validation_agreement" in a:
         out.append(f"held-out scoring ({a['n_holdout_scenarios']} scenarios that chose "
                    f"nothing): {a['bank_validation_agreement']}")
+    if "failures_only" in a:           # do the continuous uncertainties decide? (issue 42)
+        out.append(str(a["failures_only"]))
     if "p_f_levels" in a:
         out.append(str(a["p_f_levels"]))
     if "bank_level" in ds and float(ds["bank_level"]) != p:
         out.append(f"bank solved at the stricter level p' = {float(ds['bank_level']):g} "
                    f"(p = {p:g}; docs/certificate.md)")
-    pts = [f"{int(n)}: {float(b):.4f} (<= {float(u):.4f}; validated {float(v):.4f}, "
-           f">= {float(lo):.4f})" for n, b, u, v, lo in zip(
+    held = (ds["reliability_vs_n_holdout"].values if "reliability_vs_n_holdout" in ds
+            else np.full(ds.sizes["reliability_n"], np.nan))
+    # a size design.curve_samples = 0 left unvalidated shows its held-out P instead
+    pts = [f"{int(n)}: {float(b):.4f} (<= {float(u):.4f}; " + (
+           f"validated {float(v):.4f}, >= {float(lo):.4f})" if not np.isnan(v) else
+           f"held-out {float(h):.4f})") for n, b, u, v, lo, h in zip(
                ds["reliability_n"].values, ds["reliability_vs_n"].values,
                ds["reliability_vs_n_upper"].values, ds["reliability_vs_n_validated"].values,
-               ds["reliability_vs_n_lower"].values)]
+               ds["reliability_vs_n_lower"].values, held)]
     out.append("P of mapping the threshold vs N (scenarios, proven bound; validation): "
                + "; ".join(pts))
     if ds.sizes.get("tolerated", 0):

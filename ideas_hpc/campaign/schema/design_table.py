@@ -66,6 +66,11 @@ DESIGN = {
                                 doc="most validation samples of one look: the look plan "
                                     "doubles a look's M from design.verify_samples toward 80 % "
                                     "predicted power (default: design.verify_samples)"),
+    "curve_samples": Field("int", None, nullable=True, lo=0, hi=100000,
+                           doc="validation samples of each size on the reliability curve "
+                               "other than the looks' (default: design.verify_samples; 0: "
+                               "those sizes are scored on the held-out scenarios only, their "
+                               "validated P-hat NaN)"),
     "tolerant_markers": Field("bool", False,
                               doc="mark the 1- and 2-failure-tolerant designs on the reliability "
                                   "curve (HiGHS on the nominal bank: about a minute of one "
@@ -131,6 +136,14 @@ def holdout_scenarios(d, exact: bool) -> int:
     if d.holdout_scenarios is not None:
         return int(d.holdout_scenarios)
     return HOLDOUT_PER_SAMPLE * verify_samples(d)
+
+
+def curve_samples(d, exact: bool) -> int:
+    """Validation samples of each reliability-curve size that no look flew:
+    ``design.curve_samples``, or ``design.verify_samples`` (one when exact)."""
+    if exact:
+        return 1
+    return verify_samples(d) if d.curve_samples is None else int(d.curve_samples)
 
 
 def reference_checks(c) -> None:
