@@ -108,3 +108,22 @@ def install() -> None:
     _ORIGINAL = Dispatcher.compile
     _compile._compile_once = True
     Dispatcher.compile = _compile
+
+
+def loaded_kernels(prefix: str = "ideas_hpc.core") -> dict:
+    """``{module.kernel: [signature, ...]}`` of every Numba kernel in the modules under
+    ``prefix`` that this process has compiled or loaded from the cache (what a warm-up
+    covered, what a worker ran)."""
+    import sys
+
+    from numba.core.registry import CPUDispatcher
+
+    out = {}
+    for name, mod in list(sys.modules.items()):
+        if mod is None or not (name == prefix or name.startswith(prefix + ".")):
+            continue
+        for f in list(vars(mod).values()):
+            if isinstance(f, CPUDispatcher) and f.overloads:
+                out[f"{f.py_func.__module__}.{f.py_func.__qualname__}"] = sorted(
+                    str(s) for s in f.overloads)
+    return out
