@@ -122,7 +122,8 @@ def warm_all(setup, bank=None) -> None:
 
 def wanted(bank: bool) -> bool:
     """Whether to start the helper: ``IDEAS_HPC_PRECOMPILE`` (``0`` never, ``1`` on a
-    cold cache), by default on a cold cache with a second CPU."""
+    cold cache), by default on a cold cache with a second CPU (``bank``: the scenario
+    bank's proof kernels count, :func:`cache_is_warm`)."""
     mode = os.environ.get("IDEAS_HPC_PRECOMPILE", "")
     if mode == "0" or (mode != "1" and (os.cpu_count() or 1) < 2):
         return False
@@ -136,7 +137,9 @@ def start(setup, campaign=None) -> Helper | None:
     bank = None
     if getattr(d, "success_probability", None) is not None:
         bank = (campaign.config.monte_carlo, int(campaign.config.seed))
-    if not wanted(bank is not None):
+    # drawn worlds (a target prior) take the full row kernels, whose index the coverage
+    # kernels' stands for; the nominal world's bank the proofs' kernel
+    if not wanted(bank is not None and getattr(setup, "target", None) is None):
         return None
     fd, path = tempfile.mkstemp(prefix="ideas-hpc-precompile-", suffix=".pkl")
     with os.fdopen(fd, "wb") as fh:
