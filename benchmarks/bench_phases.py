@@ -7,22 +7,27 @@ phases it calls) inside each section of the job:
 
 phases (what the time is spent on)
     world draw (a scenario's dispersion draws and, with a target prior, its drawn
-    shape, pole and spin: ``draw_world``, ``scenario_world``); statics (what is
+    shape, pole and spin: ``draw_world``, ``scenario_world``, ``drawn_world``); targeting
+    (``flyby.flight.target``: the candidates' start states on the nominal model); nominal
+    proofs (``RowEngine.prepare``: the nominal flight's witnesses and windows, once per
+    bank of the nominal world); statics (what is
     built once per world and kept: ``flyby.world.cached_static``, the BVH and
     lighting records of ``mapping.coverage``); flight and attitude
     (``flyby.views.flight_views``: the orbits and the closed loop to the cameras
     at the images); visibility and rows (the row kernels: proofs and time trees
     on the nominal world, the full strict/quality kernels on a drawn one); design
-    solve (``design.api.minimize``: HiGHS and the screens); the rest (targeting,
-    Python, the store).
+    solve (``design.api.minimize``: HiGHS and the screens); the rest (Python, the
+    store). Statics include each world's reference area (``reference_areas``: the
+    surface lit at closest approach, with ``coverage_reference = "lit_at_tca"``).
 sections (when)
     candidate masks, scenario bank, held-out and validation flights, the rest
     (design, certificate, final flyby, store).
 
 Per scenario: the scenario bank's phases divided by its scenario count (each
-scenario flies every candidate). The job runs twice, the first untimed (a warm
-Numba cache: compilation is not a phase; ``--once`` skips it when the cache is
-warm). Numbers unchanged: the wrappers only read the clock.
+scenario flies every candidate). The job runs twice, the first untimed in another
+process (a warm Numba cache: compilation is not a phase, loading a kernel is;
+``--once`` skips it when the cache is warm). Numbers unchanged: the wrappers only
+read the clock.
 
 Workloads (``--bank``): ``drawn`` is ``campaigns/eros-class-flyby.toml`` as
 written (coarse: 45 candidates, 20 drawn worlds, 642 vertices); ``paper`` is the
@@ -38,6 +43,7 @@ from __future__ import annotations
 import argparse
 import functools
 import os
+import subprocess
 import sys
 import tempfile
 import time
@@ -52,7 +58,7 @@ WORKLOADS = {
                                    "design.holdout_scenarios=20", "design.verify_samples=20",
                                    "design.demonstrate=false"]),
 }
-PHASES = ("world draw", "statics", "flight and attitude", "visibility and rows",
+PHASES = ("world draw", "targeting", "nominal proofs", "statics", "flight and attitude", "visibility and rows",
           "design solve")
 SECTIONS = ("candidate masks", "scenario bank", "held-out and validation flights")
 
@@ -112,12 +118,17 @@ def instrument(clock: Clock) -> None:
     from ideas_hpc.core.mapping import coverage as kcov, quality_masks as kq
     from ideas_hpc.core.mapping import scenario_rows as krows
     from ideas_hpc.design import api, bank
-    from ideas_hpc.flyby import views, world, target_world
+    from ideas_hpc.flyby import flight, views, world, target_world
     from ideas_hpc.mapping import coverage as mcov
     from ideas_hpc.montecarlo import scenarios
 
-    phases = {"world draw": [scenarios.draw_world, target_world.scenario_world],
-              "statics": [world.cached_static, mcov._strict_args, mcov._mesh],
+    from ideas_hpc.flyby import reference_area
+
+    phases = {"world draw": [scenarios.draw_world, target_world.scenario_world,
+                             target_world.drawn_world],
+              "targeting": [flight.target],
+              "statics": [world.cached_static, mcov._strict_args, mcov._mesh,
+                          reference_area.reference_areas],
               "flight and attitude": [views.flight_views],
               "visibility and rows": [kcov.first_image_by_spacecraft],
               "design solve": [api.minimize]}
@@ -131,6 +142,11 @@ def instrument(clock: Clock) -> None:
     for name, fns in sections.items():
         for f in fns:
             _replace_everywhere(f, clock.in_section(name, f))
+    # the bank's proofs on the nominal flight, made once per bank (a method: on its class)
+    from ideas_hpc.montecarlo.scenario_rows import RowEngine
+
+    _SAVED[(RowEngine, "prepare")] = RowEngine.prepare
+    RowEngine.prepare = clock.phase("nominal proofs", RowEngine.prepare)
     # the row kernels the boundary reads as module attributes (``_k.perturbed_rows``), which
     # no kernel calls: wrapped in their own modules (restored by uninstrument)
     for mod, names in ((krows, ["perturbed_rows"]),
@@ -158,8 +174,12 @@ def measure(key: str, once: bool) -> tuple[Clock, float, int]:
     name, sets = WORKLOADS[key]
     campaign = ROOT / "campaigns" / name
     with tempfile.TemporaryDirectory(prefix="bench-phases-") as tmp:
-        if not once:
-            run_job(campaign, sets, Path(tmp) / "warm.zarr")    # compile: untimed
+        if not once:    # compile, untimed, in another process: this one draws its worlds afresh
+            cmd = [sys.executable, "-m", "ideas_hpc.cli", "run", str(campaign), "--out",
+                   str(Path(tmp) / "warm.zarr"), "--workers", "0", "--no-progress"]
+            for s in sets:
+                cmd += ["--set", s]
+            subprocess.run(cmd, check=True, capture_output=True)
         clock = Clock()
         instrument(clock)
         try:
@@ -200,6 +220,8 @@ def report(key: str, clock: Clock, wall: float, n: int) -> str:
     for s in sections:
         row = [clock.t.get((s, p), 0.0) for p in cols]
         print(f"| {s} | " + " | ".join(f"{x:.2f}" for x in row) + f" | {sum(row):.2f} |")
+    print(f"(outside every phase and section: targeting, the final flyby, the store, Python: "
+          f"{wall - sum(clock.t.values()):.2f} s)")
     bank_t = {p: clock.t.get(("scenario bank", p), 0.0) for p in cols}
     per = sum(bank_t.values()) / max(n, 1)
     parts = ", ".join(f"{p} {bank_t[p] / max(n, 1):.3f} s ({100 * bank_t[p] / max(sum(bank_t.values()), 1e-12):.0f} %)"
