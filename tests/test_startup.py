@@ -47,7 +47,7 @@ def test_precompile_helper_warms_the_kernels_the_job_calls(monkeypatch):
     monkeypatch.setenv("IDEAS_HPC_PRECOMPILE", "1")
     assert precompile.start(setup) is None  # nothing to do on a warm cache
     calls = []
-    monkeypatch.setattr(precompile, "cache_is_warm", lambda bank=False: False)
+    monkeypatch.setattr(precompile, "cache_is_warm", lambda bank=False, setup=None: False)
     monkeypatch.setenv("IDEAS_HPC_PRECOMPILE", "0")
     assert precompile.start(setup) is None  # turned off
     monkeypatch.setenv("IDEAS_HPC_PRECOMPILE", "1")

@@ -38,16 +38,26 @@ import numpy as np
 
 from ideas_hpc.base.compile_once import lock_path
 from ideas_hpc.core.mapping import coverage as _cov
+from ideas_hpc.core.mapping import quality_masks as _qmask
 from ideas_hpc.core.mapping import scenario_rows as _rows
 from ideas_hpc.core.dynamics import targeting as _tgt
 
 
-def cache_is_warm(bank: bool = False) -> bool:
-    """True when the cache has an index for the coverage and propagation kernels (and,
-    with ``bank``, for the scenario bank's row kernels)."""
-    kernels = [_cov.coverage_vertices, _cov.observed_by_spacecraft, _tgt.propagate_batch]
-    if bank:
-        kernels.append(_rows.perturbed_rows)
+def cache_is_warm(bank: bool = False, setup=None) -> bool:
+    """True when the cache has an index for the first kernels the helper would compile:
+    the coverage and propagation kernels, or with ``bank`` the scenario bank's row
+    kernel (the proofs' on the nominal world, the full strict or quality kernel on a
+    drawn world or under a ``[coverage]`` requirement). Only kernels the job itself
+    calls: a helper stopped at the end of a short job must not start again on every
+    later run for kernels no run needs."""
+    if not bank:
+        kernels = [_cov.coverage_vertices, _cov.observed_by_spacecraft, _tgt.propagate_batch]
+    elif setup is not None and setup.coverage.requirement:
+        kernels = [_qmask.quality_by_spacecraft]
+    elif setup is not None and getattr(setup, "target", None) is not None:
+        kernels = [_cov.observed_by_spacecraft]
+    else:
+        kernels = [_rows.perturbed_rows]
     paths = [lock_path(f) for f in kernels]
     # a Numba without these internals: assume warm
     return any(p is None for p in paths) or all(os.path.exists(p[:-5]) for p in paths)
@@ -120,14 +130,13 @@ def warm_all(setup, bank=None) -> None:
     warm_kernels(setup)
 
 
-def wanted(bank: bool) -> bool:
+def wanted(bank: bool, setup=None) -> bool:
     """Whether to start the helper: ``IDEAS_HPC_PRECOMPILE`` (``0`` never, ``1`` on a
-    cold cache), by default on a cold cache with a second CPU (``bank``: the scenario
-    bank's proof kernels count, :func:`cache_is_warm`)."""
+    cold cache), by default on a cold cache with a second CPU (:func:`cache_is_warm`)."""
     mode = os.environ.get("IDEAS_HPC_PRECOMPILE", "")
     if mode == "0" or (mode != "1" and (os.cpu_count() or 1) < 2):
         return False
-    return not cache_is_warm(bank)
+    return not cache_is_warm(bank, setup)
 
 
 def start(setup, campaign=None) -> Helper | None:
@@ -137,9 +146,7 @@ def start(setup, campaign=None) -> Helper | None:
     bank = None
     if getattr(d, "success_probability", None) is not None:
         bank = (campaign.config.monte_carlo, int(campaign.config.seed))
-    # drawn worlds (a target prior) take the full row kernels, whose index the coverage
-    # kernels' stands for; the nominal world's bank the proofs' kernel
-    if not wanted(bank is not None and getattr(setup, "target", None) is None):
+    if not wanted(bank is not None, setup):
         return None
     fd, path = tempfile.mkstemp(prefix="ideas-hpc-precompile-", suffix=".pkl")
     with os.fdopen(fd, "wb") as fh:
