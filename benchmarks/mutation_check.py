@@ -423,6 +423,16 @@ MUTATIONS: tuple[Mutation, ...] = (
       "navigation_dispersion.COMMON_VARS, level=\"spacecraft\"",
       ("tests/test_navigation_flights.py::"
        "test_the_common_error_is_shared_by_every_candidate_and_independent_of_chunking",)),
+    # ---- start-up (issue 43)
+    M("compile_lock_not_held", "store", "ideas_hpc/base/compile_once.py",
+      "    with holding(self):\n        return _ORIGINAL(self, sig)",
+      "    if True:\n        return _ORIGINAL(self, sig)",
+      ("tests/test_compile_once.py::"
+       "test_a_process_waits_for_the_kernel_another_compiles_and_loads_it",)),
+    M("warm_up_skips_the_bank", "store", "ideas_hpc/campaign/precompile.py",
+      "    if bank is not None:\n        warm_bank(setup, *bank)",
+      "    if bank is None:\n        warm_bank(setup, *bank)",
+      ("tests/test_startup.py::test_the_warm_up_covers_every_kernel_a_bank_worker_runs",)),
 )
 
 

@@ -251,7 +251,7 @@ def run_exact(c, setup, *, workers=None, scheduler=None, cluster="local",
     """Kind ``design-nadir``, method ``exact``: certified design, its Monte Carlo
     verification, then a flyby of it (the store). ``designer`` replaces
     :func:`design_exact` (the success-probability design validates its own swarm)."""
-    helper = precompile.start(setup)  # cold cache: later kernels compile alongside
+    helper = precompile.start(setup, c)  # cold cache: later kernels compile alongside
     try:
         with designer_errors(c):
             return _run_exact(c, setup, workers, scheduler, cluster, slurm_config, designer)

@@ -1,26 +1,29 @@
 """Cold start: compile a job's later kernels in a second process while this one works.
 
 On an empty Numba cache a job compiles its kernels one after the other, in
-the order it first calls them, on one core: a design job compiles the
-targeting kernels, then the candidate-mask kernel, then (for its Monte Carlo
-verification and the final flyby) the open-loop propagation and the coverage
-kernel. :func:`start` launches one helper process that compiles the
-mask, coverage and propagation kernels with the job's own argument types (tiny
-inputs made from the job's :class:`~ideas_hpc.flyby.flight.FlybySetup`, so the very
-specialisations the job needs) and writes them to the cache; when the job
-reaches them it loads them instead of compiling. Each kernel is still compiled
-once (whichever process gets there first; the helper's order puts the
-targeting kernels last so that the two processes do not duplicate them).
+the order it first calls them: a design job compiles the targeting kernels,
+then the candidate-mask kernel, then (in its scenario bank's first chunks, or
+its Monte Carlo verification and final flyby) the flight, row and coverage
+kernels. :func:`start` launches one helper process that compiles the later
+phases' kernels with the job's own argument types (tiny inputs made from the
+job's :class:`~ideas_hpc.flyby.flight.FlybySetup`, so the very
+specialisations the job needs) and writes them to the cache while the job
+computes its masks: the scenario bank's (one scenario of two candidates,
+:func:`~ideas_hpc.montecarlo.scenarios.warm_rows`; a success-probability
+design only), then the mask, coverage and propagation kernels. When the job or
+its workers reach a kernel they load it, or, while the helper still compiles
+it, wait for it and then load it (:mod:`ideas_hpc.base.compile_once`): each
+kernel is compiled once, by whichever process gets there first.
 
-Nothing is started when the cache already holds these kernels. The helper's
-failure changes nothing but the time: the job compiles what it does not find.
+Nothing is started when the cache already holds these kernels, or on one CPU.
+The helper's failure changes nothing but the time: the job compiles what it
+does not find. ``IDEAS_HPC_PRECOMPILE=0`` turns it off, ``1`` starts it
+whenever the cache is cold (also on one CPU).
 
-Opt-in (``IDEAS_HPC_PRECOMPILE=1``): it needs a second idle core. Measured
-on the shared 2-core VM under load 6-9 from other users
-(``benchmarks/bench_startup.py --helper``, same run), the main job's cold
-start took 131.6 s with the helper and 103.9 s without: the helper only
-competes with the job there. Measure on a quiet machine before turning it on
-by default.
+History: opt-in until issue 43, measured on the shared 2-core VM under load
+6-9 (``benchmarks/bench_startup.py --helper``) at 131.6 s with the helper and
+103.9 s without, when the helper and the job could compile the same kernel
+twice; with the per-kernel lock they cannot.
 """
 
 from __future__ import annotations
@@ -33,18 +36,31 @@ import tempfile
 
 import numpy as np
 
+from ideas_hpc.base.compile_once import lock_path
 from ideas_hpc.core.mapping import coverage as _cov
+from ideas_hpc.core.mapping import quality_masks as _qmask
+from ideas_hpc.core.mapping import scenario_rows as _rows
 from ideas_hpc.core.dynamics import targeting as _tgt
 
 
-def cache_is_warm() -> bool:
-    """True when the cache has an index for the coverage and propagation kernels."""
-    try:
-        return all(os.path.exists(f._cache._cache_file._index_path)
-                   for f in (_cov.coverage_vertices, _cov.observed_by_spacecraft,
-                             _tgt.propagate_batch))
-    except AttributeError:  # a Numba without these internals: assume warm
-        return True
+def cache_is_warm(bank: bool = False, setup=None) -> bool:
+    """True when the cache has an index for the first kernels the helper would compile:
+    the coverage and propagation kernels, or with ``bank`` the scenario bank's row
+    kernel (the proofs' on the nominal world, the full strict or quality kernel on a
+    drawn world or under a ``[coverage]`` requirement). Only kernels the job itself
+    calls: a helper stopped at the end of a short job must not start again on every
+    later run for kernels no run needs."""
+    if not bank:
+        kernels = [_cov.coverage_vertices, _cov.observed_by_spacecraft, _tgt.propagate_batch]
+    elif setup is not None and setup.coverage.requirement:
+        kernels = [_qmask.quality_by_spacecraft]
+    elif setup is not None and getattr(setup, "target", None) is not None:
+        kernels = [_cov.observed_by_spacecraft]
+    else:
+        kernels = [_rows.perturbed_rows]
+    paths = [lock_path(f) for f in kernels]
+    # a Numba without these internals: assume warm
+    return any(p is None for p in paths) or all(os.path.exists(p[:-5]) for p in paths)
 
 
 def warm_kernels(setup) -> None:
@@ -80,11 +96,13 @@ class Helper:
         self.proc = proc
         self._path = path
 
-    def close(self, timeout: float = 600.0) -> None:
+    def close(self) -> None:
+        """The job is done: what the helper has not compiled yet nobody waits for, so it
+        stops (a kernel it was writing is written whole or not at all: Numba replaces
+        cache files atomically, and its lock goes with it)."""
         try:
-            self.proc.wait(timeout=timeout)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
+            if self.proc.poll() is None:
+                self.proc.terminate()
             self.proc.wait()
         finally:
             if os.path.exists(self._path):
@@ -97,14 +115,42 @@ class Helper:
         self.close()
 
 
-def start(setup) -> Helper | None:
-    """Start the helper for ``setup`` when asked (``IDEAS_HPC_PRECOMPILE=1``) and the
-    cache is cold; None otherwise."""
-    if os.environ.get("IDEAS_HPC_PRECOMPILE", "") != "1" or cache_is_warm():
+def warm_bank(setup, mc, seed: int) -> None:
+    """The scenario bank's kernels (:func:`~ideas_hpc.montecarlo.scenarios.warm_rows`)."""
+    from ideas_hpc.montecarlo.scenarios import warm_rows
+
+    warm_rows(setup, mc, seed)
+
+
+def warm_all(setup, bank=None) -> None:
+    """The helper's work: the bank's kernels first (``bank``: ``(mc, seed)`` of a
+    success-probability design), then :func:`warm_kernels`."""
+    if bank is not None:
+        warm_bank(setup, *bank)
+    warm_kernels(setup)
+
+
+def wanted(bank: bool, setup=None) -> bool:
+    """Whether to start the helper: ``IDEAS_HPC_PRECOMPILE`` (``0`` never, ``1`` on a
+    cold cache), by default on a cold cache with a second CPU (:func:`cache_is_warm`)."""
+    mode = os.environ.get("IDEAS_HPC_PRECOMPILE", "")
+    if mode == "0" or (mode != "1" and (os.cpu_count() or 1) < 2):
+        return False
+    return not cache_is_warm(bank, setup)
+
+
+def start(setup, campaign=None) -> Helper | None:
+    """Start the helper for ``setup`` (and, for a success-probability ``campaign``, its
+    scenario bank) when :func:`wanted`; None otherwise."""
+    d = getattr(getattr(campaign, "config", None), "design", None)
+    bank = None
+    if getattr(d, "success_probability", None) is not None:
+        bank = (campaign.config.monte_carlo, int(campaign.config.seed))
+    if not wanted(bank is not None, setup):
         return None
     fd, path = tempfile.mkstemp(prefix="ideas-hpc-precompile-", suffix=".pkl")
     with os.fdopen(fd, "wb") as fh:
-        pickle.dump(setup, fh)
+        pickle.dump((setup, bank), fh)
     proc = subprocess.Popen([sys.executable, "-m", "ideas_hpc.campaign.precompile", path],
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                             stdin=subprocess.DEVNULL)
@@ -113,4 +159,4 @@ def start(setup) -> Helper | None:
 
 if __name__ == "__main__":  # the helper process
     with open(sys.argv[1], "rb") as fh:
-        warm_kernels(pickle.load(fh))
+        warm_all(*pickle.load(fh))

@@ -154,6 +154,17 @@ def _run_chunks(ks, fn, client, chunk_size, progress, label):
     return np.concatenate(out) if out else None
 
 
+def warm_rows(setup: FlybySetup, mc, seed: int, n_candidates: int = 2) -> None:
+    """Scenario 0 of the bank for ``n_candidates`` candidates, rows discarded: compiles (or
+    loads) the kernels of the bank's chunks, which the held-out and validation flights
+    share, with their argument types (the row engine's nominal flight and proofs, the
+    scenario's world, flight and rows). A cold cache's warm-up
+    (:mod:`ideas_hpc.campaign.precompile`); the bank itself is untouched."""
+    theta = (TWO_PI / 8) * np.arange(int(n_candidates))   # grid_theta's type, 8-point grid
+    _rows_chunk([0], engine=row_engine(setup, theta, mc, seed, SCENARIO_STREAM), mc=mc,
+                seed=int(seed), stream=SCENARIO_STREAM)
+
+
 def grid_theta(step_rad: float) -> np.ndarray:
     """The snapped design grid ``k 2 pi / C`` (as :func:`ideas_hpc.design.bank.build_bank`)."""
     from ideas_hpc.design.bank import grid_size
