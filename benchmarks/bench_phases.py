@@ -123,14 +123,15 @@ def instrument(clock: Clock) -> None:
     from ideas_hpc.montecarlo import scenarios
 
     from ideas_hpc.flyby import reference_area
+    from ideas_hpc.mapping import world_rows as wrows   # the world bank (issue 43)
 
     phases = {"world draw": [scenarios.draw_world, target_world.scenario_world,
                              target_world.drawn_world],
               "targeting": [flight.target],
               "statics": [world.cached_static, mcov._strict_args, mcov._mesh,
-                          reference_area.reference_areas],
+                          reference_area.reference_areas, wrows.world_statics],
               "flight and attitude": [views.flight_views],
-              "visibility and rows": [kcov.first_image_by_spacecraft],
+              "visibility and rows": [kcov.first_image_by_spacecraft, wrows.rows_of_world],
               "design solve": [api.minimize]}
     for name, fns in phases.items():
         for f in fns:
