@@ -167,6 +167,16 @@ MUTATIONS: tuple[Mutation, ...] = (
       "block = v.reshape(-1, k)", "block = v.reshape(k, -1).T",
       ("tests/test_study.py::test_conditional_probabilities_by_hand",
        "tests/test_study.py::test_no_spread_every_world_is_the_plain_p")),
+    M("study_distance_not_applied", "study", "ideas_hpc/campaign/study_distance.py",
+      'data.setdefault("flyby", {})["d_sep_km"] = float(d_m) / KM',
+      'data.setdefault("flyby", {})["d_sep_km"] = None',
+      ("tests/test_study_distance.py::"
+       "test_own_distance_is_the_design_and_others_apply_their_distance",)),
+    M("study_distance_gsd_from_range", "study", "ideas_hpc/campaign/study_distance.py",
+      'return {"gsd_m": (d - setup.sizing.r_av) * float(ifov)',
+      'return {"gsd_m": d * float(ifov)',
+      ("tests/test_study_distance.py::"
+       "test_gsd_is_the_sizings_at_its_radius_and_the_los_rate_is_v_over_d",)),
     # ---- designers
     M("ring_bound_optimistic_single", "designers", "ideas_hpc/core/design/ring_gaps.py",
       "tot[1, s] = M[s, K]", "tot[1, s] = 0.5 * M[s, K]",

@@ -237,7 +237,7 @@ def test_answers_that_do_not_apply_say_why(tmp_path_factory, capsys):
     apply, and the store gains no study group."""
     from small_stores import small_store
 
-    from ideas_hpc.campaign.study import GROUPS
+    from ideas_hpc.campaign.study import DEFAULT_ANSWERS
     from ideas_hpc.cli import main
     from ideas_hpc.report.study import study_groups
 
@@ -245,6 +245,6 @@ def test_answers_that_do_not_apply_say_why(tmp_path_factory, capsys):
     capsys.readouterr()
     assert main(["study", str(store), "--no-progress"]) == 0
     lines = capsys.readouterr().out.strip().splitlines()
-    assert [ln.split(":")[0] for ln in lines] == list(GROUPS)
+    assert [ln.split(":")[0] for ln in lines] == list(DEFAULT_ANSWERS)
     assert all(": does not apply: " in ln for ln in lines)
     assert study_groups(store) == {}

@@ -24,8 +24,11 @@ new physics:
 3. **Per-target reliability** (:mod:`ideas_hpc.campaign.study_nested`): ``M`` outer worlds,
    ``K`` inner draws each; the share of worlds whose conditional P reaches ``p``.
 
+4. **The closest-approach distance** (:mod:`ideas_hpc.campaign.study_distance`), on
+   request: the fewest N, its P, the GSD and LOS rate at each distance of a short list.
+
 Each answer is written into the store as its own group (``study_ignorance``,
-``study_navigation``, ``study_per_target``) with attrs saying its seeds and streams, and
+``study_navigation``, ``study_per_target``, ``study_distance``) with attrs saying its seeds and streams, and
 what no data chose (the study selects nothing: the swarm is the store's, the levels are
 the campaign's). Its banks live in ``NAME-study/`` beside the store and are reused while
 their shaping config is unchanged; an answer whose group holds the same options is not
@@ -48,17 +51,15 @@ from ideas_hpc.base.errors import InputError
 from ideas_hpc.base.progress import log, result
 from ideas_hpc.base.units import KM
 from ideas_hpc.campaign.study_lines import PRICE_UNDEFINED, answer_line
+from ideas_hpc.campaign.study_vars import CHOSE_NOTHING, answer_attrs, labels, search_vars
 
 #: The answers, in the order they run and print.
-ANSWERS = ("ignorance", "navigation", "per-target")
+ANSWERS = ("ignorance", "navigation", "per-target", "distance")
+#: The answers run by default (``distance`` runs when a distance list is given).
+DEFAULT_ANSWERS = ANSWERS[:3]
 #: Store group of each answer.
 GROUPS = {"ignorance": "study_ignorance", "navigation": "study_navigation",
-          "per-target": "study_per_target"}
-#: What no data chose, written with every answer.
-CHOSE_NOTHING = ("the swarm is the store's (swarm_angle); the level, threshold, seed and "
-                 "bank size are the campaign's; the sigmas, M and K are the command's")
-
-
+          "per-target": "study_per_target", "distance": "study_distance"}
 @dataclass(frozen=True)
 class StudyOptions:
     """The command's choices (SI)."""
@@ -66,8 +67,9 @@ class StudyOptions:
     sigmas_m: tuple = (100e3, 30e3, 10e3, 3e3)
     worlds: int = 20
     per_world: int = 10
-    answers: tuple = ANSWERS
+    answers: tuple = DEFAULT_ANSWERS
     force: bool = False
+    distances_m: tuple = ()     # closest-approach distances (the store's is added)
     time_limit_s: float | None = None     # each fewest-N search; None: the campaign's
 
     def __post_init__(self):
@@ -81,6 +83,9 @@ class StudyOptions:
         for name, v in (("--worlds", self.worlds), ("--per-world", self.per_world)):
             if int(v) < 1:
                 raise InputError(f"must be >= 1, got {v}", field=name)
+        if "distance" in self.answers:
+            from ideas_hpc.campaign.study_distance import check_distances
+            check_distances(self.distances_m)
         if self.time_limit_s is not None and not self.time_limit_s > 0:
             raise InputError(f"must be > 0 s, got {self.time_limit_s}", field="--time-limit-s")
 
@@ -167,34 +172,6 @@ def open_study(store, client=None) -> Study:
                  p=float(attrs["success_probability"]), client=client)
 
 
-def _search_vars(dim: str, rows: list) -> dict:
-    """The fewest-N search's variables of ``rows`` (:meth:`Study.fewest`) along ``dim``."""
-    return {
-        "fewest_n": (dim, np.array([r["n"] for r in rows], dtype=np.int64), {
-            "units": "1", "long_name": "fewest N found with P_bank >= the level (-1: none up "
-                                       "to n_max)"}),
-        "fewest_bound": (dim, np.array([r["bound"] for r in rows], dtype=np.int64), {
-            "units": "1", "long_name": "proven lower bound on that N (-1: none reached)"}),
-        "fewest_status": (dim, _labels(*[r["status"] for r in rows]), {
-            "units": "1", "long_name": "status of the search (optimal: N proven fewest)"}),
-        "fewest_probability": (dim, np.array([r["probability"] for r in rows]), {
-            "units": "1", "long_name": "P_bank of the fewest-N swarm"}),
-        "swarm_probability": (dim, np.array([r["swarm_probability"] for r in rows]), {
-            "units": "1", "long_name": "P_bank of the designed swarm (common random "
-                                       "numbers across the rows)"})}
-
-
-def _labels(*names) -> np.ndarray:
-    """Labels as variable-length strings (zarr 3 has no specification of fixed-length ones)."""
-    return np.array(names, dtype=object)
-
-
-def _attrs(st: Study, **more) -> dict:
-    return {"campaign_seed": int(st.c.config.seed), "chose_nothing": CHOSE_NOTHING,
-            "success_probability": st.p, "bank_level": st.level,
-            "reliability_threshold": st.need, **more}
-
-
 def price_of_ignorance(st: Study):
     """Answer 1 (module docstring): ``xarray.Dataset`` over ``case = [prior, known]``."""
     import xarray as xr
@@ -207,11 +184,11 @@ def price_of_ignorance(st: Study):
             st.fewest(known, st.bank(known, "known"))]
     price = rows[0]["n"] - rows[1]["n"] if min(r["n"] for r in rows) > 0 else None
     return xr.Dataset(
-        _search_vars("case", rows),
-        coords={"case": ("case", _labels("prior", "known"),
+        search_vars("case", rows),
+        coords={"case": ("case", labels("prior", "known"),
                          {"long_name": "the target prior, or its nominal body known exactly"})},
         # PRICE_UNDEFINED: a case reaches the level with no N up to n_max
-        attrs=_attrs(st, price=PRICE_UNDEFINED if price is None else int(price),
+        attrs=answer_attrs(st, price=PRICE_UNDEFINED if price is None else int(price),
                      scenario_stream=seeds.SCENARIO_STREAM,
                      known_bank=str(st.work / "known-scenarios.zarr")))
 
@@ -242,7 +219,7 @@ def navigation_value(st: Study, sigmas_m):
     monotone = bool(np.all(np.diff(sp) >= -1e-12))
     bp_cov, bp_swarm = bplane_geometry(st)
     return xr.Dataset(
-        {**_search_vars("bplane_sigma", rows),
+        {**search_vars("bplane_sigma", rows),
          "tca_sigma": ("bplane_sigma", np.array([plan.error.sigma_tca_s * s / own
                                                  for s in sig]),
                        {"units": "s", "long_name": "1-sigma of the time of closest approach "
@@ -255,10 +232,10 @@ def navigation_value(st: Study, sigmas_m):
                                                       "points in the B-plane (T, R)"})},
         coords={"bplane_sigma": ("bplane_sigma", np.array(sig), {
             "units": "m", "long_name": "B-plane 1-sigma semi-major axis"}),
-                "bplane_axis": ("bplane_axis", _labels("T", "R")),
+                "bplane_axis": ("bplane_axis", labels("T", "R")),
                 "spacecraft": ("spacecraft", np.arange(bp_swarm.shape[0])),
-                "bplane_axis2": ("bplane_axis2", _labels("T", "R"))},
-        attrs=_attrs(st, monotone=int(monotone), campaign_sigma_m=own,
+                "bplane_axis2": ("bplane_axis2", labels("T", "R"))},
+        attrs=answer_attrs(st, monotone=int(monotone), campaign_sigma_m=own,
                      scenario_stream=seeds.SCENARIO_STREAM,
                      common_random_numbers="every bank: the same seed and scenario stream, "
                      "so the same worlds, dispersions and navigation normals; only the scale "
@@ -297,7 +274,7 @@ def per_target(st: Study, worlds: int, per_world: int):
                     "long_name": "outer target world m (world m of family NESTED_STREAM)"}),
                 "inner": ("inner", np.arange(r.per_world), {
                     "long_name": "inner draw j (sample m K + j of NESTED_STREAM)"})},
-        attrs=_attrs(st, worlds=r.worlds, per_world=r.per_world, meeting=r.meeting,
+        attrs=answer_attrs(st, worlds=r.worlds, per_world=r.per_world, meeting=r.meeting,
                      share=r.share, wilson_low=lo, wilson_high=hi,
                      nested_stream=seeds.NESTED_STREAM,
                      streams=f"world m: world_rng family NESTED_STREAM ({seeds.NESTED_STREAM:#x}); "
@@ -330,6 +307,9 @@ def _compute(st: Study, name: str, opts: StudyOptions):
         return price_of_ignorance(st)
     if name == "navigation":
         return navigation_value(st, opts.sigmas_m)
+    if name == "distance":
+        from ideas_hpc.campaign.study_distance import distance_value
+        return distance_value(st, opts.distances_m)
     return per_target(st, opts.worlds, opts.per_world)
 
 
@@ -342,6 +322,8 @@ def run_study(store, opts: StudyOptions = StudyOptions(), client=None) -> list[s
         options = {"answer": name}
         if name == "navigation":
             options["sigmas_m"] = [float(s) for s in opts.sigmas_m]
+        if name == "distance":
+            options["distances_m"] = [float(d) for d in opts.distances_m]
         if name == "per-target":
             options.update(worlds=int(opts.worlds), per_world=int(opts.per_world))
         else:

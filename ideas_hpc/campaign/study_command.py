@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.base.units import KM
-from ideas_hpc.campaign.study import ANSWERS, StudyOptions, run_study
+from ideas_hpc.campaign.study import ANSWERS, DEFAULT_ANSWERS, StudyOptions, run_study
 
 
 def _km_list(text: str) -> tuple:
@@ -21,10 +21,18 @@ def _km_list(text: str) -> tuple:
 def _cmd_study(args) -> int:
     from ideas_hpc.base import progress
 
-    answers = tuple(a.strip() for a in args.answers.split(",") if a.strip())
+    from ideas_hpc.campaign.study_distance import parse_km
+
+    answers = tuple(a.strip() for a in (args.answers or ",".join(DEFAULT_ANSWERS)).split(",")
+                    if a.strip())
+    distances = ()
+    if args.ca_distances_km is not None:
+        distances = parse_km(args.ca_distances_km)
+        if args.answers is None:        # a list given: its answer runs with the defaults
+            answers += ("distance",)
     opts = StudyOptions(sigmas_m=_km_list(args.bplane_sigmas_km), worlds=args.worlds,
                         per_world=args.per_world, answers=answers, force=args.force,
-                        time_limit_s=args.time_limit_s)
+                        time_limit_s=args.time_limit_s, distances_m=distances)
     with progress.enabled(not args.no_progress):
         run_study(args.store, opts)
     return 0
@@ -47,8 +55,13 @@ def add_study_command(sub) -> None:
     p.add_argument("--worlds", type=int, default=20, help="outer target worlds M (default 20)")
     p.add_argument("--per-world", type=int, default=10,
                    help="inner draws K per world (default 10)")
-    p.add_argument("--answers", default=",".join(ANSWERS),
-                   help=f"which answers, comma-separated (default {','.join(ANSWERS)})")
+    p.add_argument("--ca-distances-km", default=None,
+                   help="closest-approach distances d_sep, km, comma-separated (e.g. "
+                        "100,157,300; the store's is added): the fewest N, its P, the GSD "
+                        "and the LOS rate at each, the same seeds (adds the distance answer)")
+    p.add_argument("--answers", default=None,
+                   help=f"which answers, comma-separated, of {','.join(ANSWERS)} (default "
+                        f"{','.join(DEFAULT_ANSWERS)}, and distance with --ca-distances-km)")
     p.add_argument("--time-limit-s", type=float, default=None,
                    help="seconds for each fewest-N search (default: the campaign's "
                         "design.time_limit_s); a search stopped by it says so")

@@ -73,10 +73,29 @@ def per_target_line(ds) -> str:
             f"{float(np.nanmedian(se)) if np.isfinite(se).any() else float('nan'):.3f})")
 
 
+def distance_line(ds) -> str:
+    """Fewest N, its P, GSD and LOS rate against the closest-approach distance, and the
+    best distance."""
+    own = float(ds.attrs["campaign_distance_m"])
+    parts = []
+    for i, d in enumerate(ds["ca_distance"].values):
+        n, pn = int(ds["fewest_n"].values[i]), float(ds["fewest_probability"].values[i])
+        mark = "*" if d == own else ""
+        parts.append(f"{d / KM:.4g}{mark} km: {_n(ds, i)}" + (f" (P {pn:.4f})" if n > 0 else "")
+                     + f", GSD {float(ds['gsd'].values[i]):.3g} m, LOS rate "
+                     f"{np.rad2deg(float(ds['los_rate'].values[i])):.3g} deg/s")
+    b = int(ds.attrs["best"])
+    best = ("none reaches the level" if b < 0 else
+            f"best {float(ds['ca_distance'].values[b]) / KM:.4g} km (fewest N, ties by higher P)")
+    return ("closest-approach distance (* the campaign's; same seeds): " + "; ".join(parts)
+            + f"; {best}")
+
+
 LINES = {"ignorance": ignorance_line, "navigation": navigation_line,
-         "per-target": per_target_line}
+         "per-target": per_target_line, "distance": distance_line}
 
 
 def answer_line(name: str, ds) -> str:
-    """The line of answer ``name`` (``ignorance``, ``navigation``, ``per-target``)."""
+    """The line of answer ``name`` (``ignorance``, ``navigation``, ``per-target``,
+    ``distance``)."""
     return LINES[name](ds)
