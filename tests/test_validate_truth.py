@@ -118,10 +118,13 @@ def test_a_truth_equal_to_a_known_body_is_the_ordinary_validation(tmp_path_facto
     np.testing.assert_allclose(given.per_sample, plain.per_sample, atol=1e-9)
     np.testing.assert_array_equal(given.success, plain.success)
     assert given.truth and "truth given" in given.line() and plain.truth is None
-    # another truth changes the answer: a sphere half the size, missed by the ring's cameras
-    small = validate_store(store, samples=6, progress=False,
-                           truth=TruthOptions(shape="ellipsoid:3,3,3"))
-    assert not np.allclose(small.per_sample, plain.per_sample)
+    # another truth changes the answer: spheres far smaller than the body, which the ring's
+    # cameras see otherwise (which one shows it depends on the swarm the design chose: a
+    # swarm that needs all its members on both bodies scores p_s^N on each)
+    others = [validate_store(store, samples=6, progress=False,
+                             truth=TruthOptions(shape=f"ellipsoid:{r},{r},{r}")).per_sample
+              for r in (3, 1)]
+    assert any(not np.allclose(o, plain.per_sample) for o in others)
     # the same, member by member and vertex by vertex (the store's P-hat is the failures'
     # alone there): the body given back as a truth is flown as the known body is
     from small_stores import CAMPAIGNS, KINDS
