@@ -10,7 +10,7 @@ nominal world (nothing goes wrong but failures),
 
 for independent failures the binomial sum the issue quotes (N = 4 with one spare pair:
 0.95^4 + 2 x 0.05 x 0.95^3). The continuous uncertainties decide when the validation's
-P-hat of X differs from ``P_f(X)`` by more than the validation's sampling error:
+P-hat of X differs from ``P_f(X)`` by more than the validation's sampling error::
 
     |P-hat - P_f| > z_{0.975} s_v / sqrt(M),
 

@@ -9,7 +9,7 @@ a bank built from the same seed and scenario stream (common random numbers: the 
 worlds, dispersions and navigation draws at every distance; only the ring's radius
 differs), and the fewest N searched at the design's level, with the P of that fewest-N
 swarm. No new physics; beside them, each distance's camera figures from the existing
-closed forms (SPEC 7f; :mod:`ideas_hpc.flyby.pass_rates`, :mod:`ideas_hpc.flyby.sizing`):
+closed forms (SPEC 7f; :mod:`ideas_hpc.flyby.pass_rates`, :mod:`ideas_hpc.flyby.sizing`)::
 
     GSD      = (d - R_av) IFOV                 ground sample at the sub-spacecraft point
                                                at closest approach (the sizing's h = d - R_av)
