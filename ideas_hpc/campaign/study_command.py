@@ -2,26 +2,13 @@
 
 from __future__ import annotations
 
-from ideas_hpc.base.errors import InputError
-from ideas_hpc.base.units import KM
 from ideas_hpc.campaign.study import ANSWERS, DEFAULT_ANSWERS, StudyOptions, run_study
-
-
-def _km_list(text: str) -> tuple:
-    try:
-        vals = tuple(float(x) * KM for x in str(text).split(",") if x.strip())
-    except ValueError:
-        vals = ()
-    if not vals or any(not v > 0 for v in vals):
-        raise InputError(f"needs positive km separated by commas, got {text!r}",
-                         field="--bplane-sigmas-km")
-    return vals
 
 
 def _cmd_study(args) -> int:
     from ideas_hpc.base import progress
 
-    from ideas_hpc.campaign.study_distance import parse_km
+    from ideas_hpc.campaign.study_distance import km_list, parse_km
 
     answers = tuple(a.strip() for a in (args.answers or ",".join(DEFAULT_ANSWERS)).split(",")
                     if a.strip())
@@ -30,7 +17,7 @@ def _cmd_study(args) -> int:
         distances = parse_km(args.ca_distances_km)
         if args.answers is None:        # a list given: its answer runs with the defaults
             answers += ("distance",)
-    opts = StudyOptions(sigmas_m=_km_list(args.bplane_sigmas_km), worlds=args.worlds,
+    opts = StudyOptions(sigmas_m=km_list(args.bplane_sigmas_km, "--bplane-sigmas-km"), worlds=args.worlds,
                         per_world=args.per_world, answers=answers, force=args.force,
                         time_limit_s=args.time_limit_s, distances_m=distances)
     with progress.enabled(not args.no_progress):

@@ -51,16 +51,21 @@ def check_distances(distances_m) -> tuple:
     return vals
 
 
-def parse_km(text: str) -> tuple:
-    """``"100,157,300"`` (km) as distances in m (:func:`check_distances`)."""
+def km_list(text: str, field: str) -> tuple:
+    """``"100,30,10"`` (km) as positive lengths in m; one line naming ``field`` otherwise
+    (the study's B-plane sigmas and closest-approach distances)."""
     try:
         vals = tuple(float(x) * KM for x in str(text).split(",") if x.strip())
     except ValueError:
-        raise InputError(f"needs positive km separated by commas, got {text!r}",
-                         field=OPTION) from None
-    if not vals:
-        raise InputError(f"needs positive km separated by commas, got {text!r}", field=OPTION)
-    return check_distances(vals)
+        vals = ()
+    if not vals or any(not v > 0 for v in vals):
+        raise InputError(f"needs positive km separated by commas, got {text!r}", field=field)
+    return vals
+
+
+def parse_km(text: str) -> tuple:
+    """``"100,157,300"`` (km) as distances in m (:func:`check_distances`)."""
+    return check_distances(km_list(text, OPTION))
 
 
 def distance_campaign(c, d_m: float):
