@@ -78,6 +78,22 @@ def test_open_mesh_rejected():
         build_shape(s.vertices_T, s.faces[1:], name="t", source="t")
 
 
+def test_topology_memo_still_rejects_what_differs():
+    """The edge check is remembered per face array (every world of a prior shares its
+    nominal's faces): a mesh whose faces passed is accepted again at any vertices, and a
+    face array that differs by one face (or by its winding) is checked afresh."""
+    s = sphere_mesh(KM, 1)
+    build_shape(s.vertices_T, s.faces, name="t", source="t")
+    build_shape(1.3 * s.vertices_T, s.faces, name="t", source="t")   # remembered: no error
+    for _ in range(2):          # a failed check is never remembered
+        with pytest.raises(InputError, match="open"):
+            build_shape(s.vertices_T, s.faces[1:], name="t", source="t")
+    f = s.faces.copy()
+    f[0] = f[0, [0, 2, 1]]      # one face wound the other way
+    with pytest.raises(InputError, match="wound"):
+        build_shape(s.vertices_T, f, name="t", source="t")
+
+
 def test_nonmanifold_rejected():
     v, f = _tetra()
     v2 = np.vstack([v, v + 5 * KM])

@@ -10,6 +10,7 @@ Everything downstream takes the contiguous float64/int64 arrays of
 from __future__ import annotations
 
 import functools
+import hashlib
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -84,8 +85,27 @@ class Shape:
                 f"[{self.source}]")
 
 
+#: Digests of face arrays that passed :func:`_edge_check` (bounded). The check reads the
+#: topology only, and every world of a target prior shares its nominal's faces: a bank's
+#: draws (each built twice, drawn then placed) would otherwise sort the same 3F edges
+#: again each time, 75 % of a draw's 11 ms at 1280 faces.
+_TOPOLOGIES_PASSED: dict = {}
+_TOPOLOGIES_KEPT = 64
+
+
 def _edge_check(faces: np.ndarray, name: str) -> None:
     """Reject open or non-manifold meshes: every directed edge once, every edge twice."""
+    key = (faces.shape, hashlib.blake2b(faces.tobytes(), digest_size=16).digest())
+    if key in _TOPOLOGIES_PASSED:
+        return
+    _edge_rules(faces, name)
+    if len(_TOPOLOGIES_PASSED) >= _TOPOLOGIES_KEPT:
+        _TOPOLOGIES_PASSED.clear()
+    _TOPOLOGIES_PASSED[key] = True
+
+
+def _edge_rules(faces: np.ndarray, name: str) -> None:
+    """The topology rules of :func:`_edge_check`, computed."""
     e = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
     und = np.sort(e, axis=1)
     _, counts = np.unique(und, axis=0, return_counts=True)
