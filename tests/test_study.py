@@ -82,6 +82,32 @@ def test_no_spread_costs_nothing_and_the_known_case_is_the_nominal(drawn, zero):
     assert int(d.attrs["price"]) == int(d["fewest_n"].values[0] - d["fewest_n"].values[1])
 
 
+def test_the_prior_case_is_the_designs_own_recorded_search(drawn):
+    """A design store's own fewest-N search on its bank (``bank_swarm_size``,
+    ``bank_probability``, ``solver_status``, ``proven_bound``) is the prior case's row as
+    recorded, not searched again under the study's time limit; the known case is still
+    searched, and the price is their difference."""
+    import xarray as xr
+
+    from ideas_hpc.campaign.study import recorded_search
+
+    ds = xr.Dataset({"bank_swarm_size": ((), np.int64(5)), "bank_probability": ((), 0.9031),
+                     "solver_status": ((), "optimal"), "proven_bound": ((), 4.9999999999)})
+    rec = recorded_search(ds)
+    assert rec == {"n": 5, "probability": 0.9031, "status": "optimal", "bound": 5}
+    assert recorded_search(ds.drop_vars("proven_bound")) is None
+    searched = price_of_ignorance(drawn)
+    marked = {"n": 6, "probability": 0.61, "status": "recorded here", "bound": 4}
+    got = price_of_ignorance(dataclasses.replace(drawn, design_search=marked))
+    assert got["fewest_n"].values[0] == 6 and got["fewest_probability"].values[0] == 0.61
+    assert str(got["fewest_status"].values[0]) == "recorded here"
+    np.testing.assert_array_equal(got["fewest_n"].values[1], searched["fewest_n"].values[1])
+    # the designed swarm's P on the bank is still scored, whichever search is taken
+    np.testing.assert_allclose(got["swarm_probability"].values,
+                               searched["swarm_probability"].values, atol=0)
+    assert int(got.attrs["price"]) == 6 - int(searched["fewest_n"].values[1])
+
+
 def test_late_update_draws_common_random_numbers_and_p_is_monotone(drawn):
     """Every sigma's bank draws the same normals (scenario s's target offset, B-plane and
     along-track, scales with sigma exactly), and the fixed swarm's P does not fall as the update sharpens; the

@@ -102,6 +102,7 @@ class Study:
     p: float                    # required success probability
     client: object = None
     time_limit_s: float | None = None   # each fewest-N search (None: design.time_limit_s)
+    design_search: dict | None = None   # the design's own fewest N on its bank (the store's)
 
     @property
     def work(self) -> Path:
@@ -132,9 +133,11 @@ class Study:
         step = 2.0 * np.pi / bank.theta.size
         return np.round(np.mod(self.theta, 2.0 * np.pi) / step).astype(np.int64) % bank.theta.size
 
-    def fewest(self, setup, bank) -> dict:
+    def fewest(self, setup, bank, recorded: dict | None = None) -> dict:
         """The proven fewest N on ``bank`` at the design's level (``n`` -1 when no swarm of
-        at most ``n_max`` reaches it), and the designed swarm's ``P_bank`` there."""
+        at most ``n_max`` reaches it), and the designed swarm's ``P_bank`` there.
+        ``recorded``: the design's own search on this very bank (:attr:`design_search`),
+        taken as it is instead of searching again."""
         from ideas_hpc.base.vertex_weights import normalised
         from ideas_hpc.campaign.bank_design import bank_settings
         from ideas_hpc.design.api import ScenarioProblem, minimize
@@ -146,6 +149,8 @@ class Study:
         ev = Evaluator(bank.rows, normalised(bank.areas, bank.rows.shape[0]), self.need,
                        settings.model)
         swarm_p = float(ev([self.indices(bank)])[0])
+        if recorded is not None:
+            return {**recorded, "swarm_probability": swarm_p}
         try:
             res = minimize(ScenarioProblem(bank.rows, bank.areas, bank.theta), settings).detail
         except InputError as exc:
@@ -169,7 +174,24 @@ def open_study(store, client=None) -> Study:
     theta = np.asarray(ds["swarm_angle"].values, dtype=np.float64)
     return Study(store=Path(store), c=c, setup=setup_from_campaign(c), theta=theta,
                  need=float(attrs["reliability_threshold"]),
-                 p=float(attrs["success_probability"]), client=client)
+                 p=float(attrs["success_probability"]), client=client,
+                 design_search=recorded_search(ds))
+
+
+def recorded_search(ds) -> dict | None:
+    """The design's fewest-N search on its own bank as the store records it
+    (``bank_swarm_size``, ``bank_probability``, ``solver_status``, ``proven_bound``), or
+    None for a store without it. The study's prior case is that same search (the same
+    bank, at the same level ``design.bank_level`` or p), so it is read, not run again:
+    searched again under the study's own time limit it may stop short of the proof the
+    design reached (the main job: the design proved N = 5; a 60 s search gave 6,
+    unproven)."""
+    names = ("bank_swarm_size", "bank_probability", "solver_status", "proven_bound")
+    if any(n not in ds for n in names):
+        return None
+    return {"n": int(ds["bank_swarm_size"].values), "probability": float(ds["bank_probability"].values),
+            "status": str(ds["solver_status"].values),
+            "bound": int(math.ceil(float(ds["proven_bound"].values) - 1e-9))}
 
 
 def price_of_ignorance(st: Study):
@@ -180,7 +202,7 @@ def price_of_ignorance(st: Study):
         raise InputError("the design's target is known ([target] prior = \"known\"): there is "
                          "no ignorance to price", field="--answers")
     known = dataclasses.replace(st.setup, target=None)
-    rows = [st.fewest(st.setup, st.bank(st.setup, None)),
+    rows = [st.fewest(st.setup, st.bank(st.setup, None), recorded=st.design_search),
             st.fewest(known, st.bank(known, "known"))]
     price = rows[0]["n"] - rows[1]["n"] if min(r["n"] for r in rows) > 0 else None
     return xr.Dataset(
@@ -212,7 +234,8 @@ def navigation_value(st: Study, sigmas_m):
                 plan, error=plan.error.scaled(s)))
             name = f"nav-{s / KM:g}km"
         t0 = time.perf_counter()
-        rows.append(st.fewest(setup, st.bank(setup, name)))
+        rows.append(st.fewest(setup, st.bank(setup, name),
+                              recorded=st.design_search if name is None else None))
         log(f"B-plane 1-sigma {s / KM:g} km: bank and search in {time.perf_counter() - t0:.1f} s")
     sp = np.array([r["swarm_probability"] for r in rows])
     # sigma descending: P must not fall as the update sharpens

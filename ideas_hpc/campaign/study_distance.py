@@ -132,7 +132,8 @@ def distance_value(st, distances_m):
         setup, name = (st.setup, None) if d == own else (distance_setup(st.c, d),
                                                           f"ca-{d / KM:g}km")
         t0 = time.perf_counter()
-        rows.append(st.fewest(setup, st.bank(setup, name)))
+        rows.append(st.fewest(setup, st.bank(setup, name),
+                              recorded=st.design_search if name is None else None))
         log(f"closest approach {d / KM:g} km: bank and search in "
             f"{time.perf_counter() - t0:.1f} s")
     ifov = camera_ifov_rad(st.c, st.setup)
