@@ -178,6 +178,9 @@ MUTATIONS: tuple[Mutation, ...] = (
       ("tests/test_study_distance.py::"
        "test_gsd_is_the_sizings_at_its_radius_and_the_los_rate_is_v_over_d",)),
     # ---- designers
+    M("best_of_clock_after_search", "designers", "ideas_hpc/design/reliability.py",
+      "        clock = not self.settled", "        clock = True",
+      ("tests/test_stop_signals.py::test_sizes_past_the_search_do_not_depend_on_the_clock",)),
     M("ring_bound_optimistic_single", "designers", "ideas_hpc/core/design/ring_gaps.py",
       "tot[1, s] = M[s, K]", "tot[1, s] = 0.5 * M[s, K]",
       ("tests/test_ring_bound.py::test_bound_is_the_least_gap_miss_and_never_above_the_truth",)),

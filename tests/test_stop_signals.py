@@ -7,6 +7,7 @@ import os
 import signal
 import subprocess
 import sys
+import time
 import warnings
 from pathlib import Path
 
@@ -128,3 +129,21 @@ def test_designer_raises_no_warning_at_a_spent_limit():
         warnings.simplefilter("error")
         min_swarm_reliable(rows, areas, p=0.9, p_f=0.05, need=0.95, n_max=8, time_limit=1e-6)
         min_swarm_reliable(rows, areas, p=0.9, p_f=0.05, need=0.95, n_max=8, time_limit=30)
+
+
+def test_sizes_past_the_search_do_not_depend_on_the_clock():
+    """After the fewest-N search has settled, the swarms of larger sizes (the looks' step-ups,
+    the reliability curve) are the same whether the design's time limit is spent or not: a
+    first run that spent it compiling gets the swarm a warm run gets (the main job's N = 7
+    step-up differed from a fresh clone, 2026-11-29). The reference has no limit at all."""
+    rows, areas = _rows(11, s_n=6, c_n=24, v_n=40)
+    kw = dict(p=0.5, p_f=0.05, need=0.9, n_max=12, enumerate_budget=0)
+    free = min_swarm_reliable(rows, areas, time_limit=None, **kw)
+    timed = min_swarm_reliable(rows, areas, time_limit=600.0, **kw)
+    assert (timed.n, timed.status) == (free.n, free.status)
+    timed.designer.deadline = time.perf_counter() - 1.0      # spent once the search is over
+    for n in range(free.n + 1, free.n + 4):
+        sw_free, p_free = free.designer.best_of(n)
+        sw_timed, p_timed = timed.designer.best_of(n)
+        np.testing.assert_array_equal(sw_timed, sw_free)
+        assert p_timed == p_free

@@ -49,7 +49,6 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -66,7 +65,7 @@ from ideas_hpc.design.scenario_mip import ScenarioMIP
 from ideas_hpc.design.screen_bound import (clip_gap_matrix, screen_note, screen_size,
                                           stack_gap_matrices)
 from ideas_hpc.design.tolerance_bound import ToleranceBound
-from ideas_hpc.design.settings import ReliableSettings
+from ideas_hpc.design.settings import ReliableResult, ReliableSettings  # noqa: F401 (its old home)
 
 #: Largest bank (scenarios x candidates) given to the scenario programme: above it
 #: HiGHS does not return within its time limit (eros001708, 5 scenarios x 720
@@ -79,23 +78,6 @@ MIP_MAX_CELLS = 5000
 ENUM_CELLS = 1_000_000
 
 
-@dataclass
-class ReliableResult:
-    """Outcome of :func:`min_swarm_reliable` (store variables of issue 20)."""
-
-    indices: np.ndarray
-    n: int
-    probability: float            # P_bank of the chosen swarm
-    per_scenario: np.ndarray      # (S,) exact failure-weighted P in each scenario
-    status: str
-    bound: float                  # proven lower bound on N
-    gap: float
-    solve_time: float
-    upper: dict = field(default_factory=dict)      # N -> UB(N) proven
-    best: dict = field(default_factory=dict)       # N -> (swarm, P_bank) best found
-    u_bar: dict = field(default_factory=dict)      # m -> Ubar_m (fraction)
-    notes: list = field(default_factory=list)
-    designer: object = field(default=None, repr=False, compare=False)
 
 
 class ReliabilityDesigner:
@@ -128,6 +110,7 @@ class ReliabilityDesigner:
         self._mt = None
         self.screen_proved: set = set()
         self.screen_found: set = set()
+        self.settled = False      # the search is over: best_of runs without the clock
 
     def ring_lows(self, n_max: int) -> np.ndarray:
         """(S,) proven lower bound on each scenario's fewest covering spacecraft (ring-gap
@@ -235,12 +218,15 @@ class ReliabilityDesigner:
         return self.deadline is not None and time.perf_counter() >= self.deadline
 
     def best_of(self, n: int, target: float = math.inf):
-        """Best swarm of n found (exhaustive when the count is within the budget)."""
+        """Best swarm of n found (exhaustive when the count is within the budget). Once
+        :attr:`settled`, the clock no longer cuts it short (every step is bounded): the
+        looks' step-ups must not depend on what a first run spent compiling."""
         if n in self.best:
             return self.best[n]
+        clock = not self.settled
         n_swarms = math.comb(self.c_n, n)
         if n_swarms <= self.budget and n_swarms * self.s_n <= ENUM_CELLS \
-                and not self.out_of_time():
+                and not (clock and self.out_of_time()):
             sw = all_swarms(self.c_n, n, self.m)
             if sw.shape[0] == 0:
                 self.best[n] = (np.zeros(0, np.int64), 0.0)
@@ -254,7 +240,7 @@ class ReliabilityDesigner:
             self.exhausted.add(n)
             return self.best[n]
         starts = []
-        if n in self.mip_swarm and not self.out_of_time():
+        if n in self.mip_swarm and not (clock and self.out_of_time()):
             s = self.mip_swarm[n]
             while s is not None and s.size < n:
                 s = extend(self.ev, s, self.m)
@@ -271,7 +257,7 @@ class ReliabilityDesigner:
             starts.append(s)
         top = (np.zeros(0, np.int64), -1.0)
         for s in starts:
-            sw, val = improve(self.ev, s, self.m, deadline=self.deadline)
+            sw, val = improve(self.ev, s, self.m, deadline=self.deadline if clock else None)
             if val > top[1]:
                 top = (sw, val)
         sw = top[0] if weights_of(self.model, n).exchangeable else np.sort(top[0])
@@ -326,7 +312,9 @@ def min_swarm_reliable(rows, areas, settings: ReliableSettings | None = None,
                             bound_solver=s.bound_solver, tolerance_solver=s.tolerance_solver)
     if s.ring_prebound:
         d.ring_lows(s.n_max)
-    return settle(d, s.p, s.n_max)
+    res = settle(d, s.p, s.n_max)
+    d.settled = True
+    return res
 
 
 def settle(d: ReliabilityDesigner, p: float, n_max: int) -> ReliableResult:

@@ -55,6 +55,7 @@ def with_model(designer: ReliabilityDesigner, model, time_limit: float | None = 
     other.t0 = time.perf_counter()
     other.deadline = None if time_limit is None else other.t0 + float(time_limit)
     other.best, other.exhausted, other.exhausted_upper = {}, set(), {}
+    other.settled = False
     other.tol_proved, other.screen_proved, other.screen_found = set(), set(), set()
     return other
 

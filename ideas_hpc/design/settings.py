@@ -9,8 +9,10 @@ are area fractions; separations in m; times in s.
 
 from __future__ import annotations
 
-from dataclasses import KW_ONLY, dataclass
+from dataclasses import KW_ONLY, dataclass, field
 from typing import Callable
+
+import numpy as np
 
 from ideas_hpc.mapping.requirement import Threshold, as_threshold
 
@@ -106,3 +108,22 @@ class LookPlan:
     max_looks: int = DEFAULT_LOOKS
     exact: bool = False
     samples_max: int | None = None
+
+
+@dataclass
+class ReliableResult:
+    """Outcome of :func:`~ideas_hpc.design.reliability.min_swarm_reliable` (store variables of issue 20)."""
+
+    indices: np.ndarray
+    n: int
+    probability: float            # P_bank of the chosen swarm
+    per_scenario: np.ndarray      # (S,) exact failure-weighted P in each scenario
+    status: str
+    bound: float                  # proven lower bound on N
+    gap: float
+    solve_time: float
+    upper: dict = field(default_factory=dict)      # N -> UB(N) proven
+    best: dict = field(default_factory=dict)       # N -> (swarm, P_bank) best found
+    u_bar: dict = field(default_factory=dict)      # m -> Ubar_m (fraction)
+    notes: list = field(default_factory=list)
+    designer: object = field(default=None, repr=False, compare=False)
