@@ -110,6 +110,77 @@ def install() -> None:
     Dispatcher.compile = _compile
 
 
+#: The stamp of the kernel sources the caches under a package folder were compiled from.
+STAMP = "ideas_hpc_kernel_sources.stamp"
+
+
+def sources_digest(folder) -> str:
+    """blake2b of every ``*.py`` under ``folder`` (relative path and bytes, sorted)."""
+    import hashlib
+    from pathlib import Path
+
+    h = hashlib.blake2b(digest_size=16)
+    root = Path(folder)
+    for f in sorted(root.rglob("*.py")):
+        h.update(str(f.relative_to(root)).encode() + b"\0" + f.read_bytes() + b"\0")
+    return h.hexdigest()
+
+
+def guard_sources(folder) -> int:
+    """Drop the on-disk kernel caches under ``folder`` when its sources changed since they
+    were written; returns the number of cache files removed.
+
+    Numba checks a cached kernel against its *own* file only (its index holds that file's
+    modification time): a kernel that inlines or calls kernels of another file keeps its
+    cached machine code when only that other file changes (a ``git pull``, a branch
+    switch), and runs the old callee: wrong numbers, or a segfault (seen 2026-11-29:
+    ``core/design/reliability.py``'s ``swarm_probabilities`` crashed in a tree whose
+    callees had moved on). The whole folder's sources are stamped instead: when the
+    stamp in ``folder/__pycache__`` differs from the sources, every ``*.nbi`` / ``*.nbc``
+    under ``folder`` is removed (under a file lock, so concurrent processes of one tree
+    remove once) and the stamp rewritten; kernels then compile once more, as on a fresh
+    clone. Nothing happens when the stamp matches, or with ``NUMBA_CACHE_DIR`` set (the
+    caches then live elsewhere, keyed by that setting's user), or where the folder cannot
+    be written (Numba then caches nothing there either)."""
+    from pathlib import Path
+
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return 0
+    cache = Path(folder) / "__pycache__"
+    stamp = cache / STAMP
+    digest = sources_digest(folder)
+    try:
+        if stamp.read_text() == digest:
+            return 0
+    except OSError:
+        pass
+    removed = 0
+    try:
+        cache.mkdir(exist_ok=True)
+        lock = str(cache / (STAMP + ".lock"))
+        _acquire(lock)
+    except OSError:
+        return 0
+    try:
+        try:
+            current = stamp.read_text()
+        except OSError:
+            current = None
+        if current != digest:        # not already done by another process meanwhile
+            for pattern in ("*.nbi", "*.nbc"):
+                for f in Path(folder).rglob(pattern):
+                    with contextlib.suppress(OSError):
+                        f.unlink()
+                        removed += 1
+            with contextlib.suppress(OSError):
+                tmp = stamp.with_suffix(f".{os.getpid()}.tmp")
+                tmp.write_text(digest)
+                os.replace(tmp, stamp)
+    finally:
+        _release(lock)
+    return removed
+
+
 def loaded_kernels(prefix: str = "ideas_hpc.core") -> dict:
     """``{module.kernel: [signature, ...]}`` of every Numba kernel in the modules under
     ``prefix`` that this process has compiled or loaded from the cache (what a warm-up

@@ -9,3 +9,6 @@ from ideas_hpc.base import compile_once as _compile_once
 # every process (the client, each dask worker) compiles a cached kernel only where no
 # other process is compiling it: it waits and loads (ideas_hpc.base.compile_once)
 _compile_once.install()
+# kernels compiled from other sources (a pull, a branch switch) are dropped before any loads:
+# Numba checks a cached kernel against its own file only (ideas_hpc.base.compile_once)
+_compile_once.guard_sources(__path__[0])
