@@ -25,12 +25,13 @@ win, but an unproven N never wins a tie against a proven one (its true N may be 
 not; the proven one is known). A distance where no swarm of ``design.n_max`` reaches p'
 (or where its nominal design finds no grid candidate mapping anything, or no swarm
 reaching the target: a single-distance run there stops with that error) takes no part;
-when none takes part, the run stops with one line naming ``design.ca_distances_km``. The choice reads the banks only: the held-out scenarios and the
-validation samples have chosen nothing, so the held-out bias and the certificate stay
-honest. Then the rest of the design (held-out scoring, the looks, the certificate, the
-reliability curve: :func:`~ideas_hpc.campaign.design_reliability.design_on_bank`) runs at
-the chosen distance only, exactly as the single-distance design, and the store flies and
-records that distance's campaign.
+when none takes part, the run stops with one line naming ``design.ca_distances_km``. The
+choice reads the banks only: the held-out scenarios and the validation samples have chosen
+nothing, so the held-out bias and the certificate stay honest. Then the rest of the
+design (held-out scoring, the looks, the certificate, the reliability curve:
+:func:`~ideas_hpc.campaign.design_reliability.design_on_bank`) runs at the chosen distance
+only, exactly as the single-distance design, and the store flies and records that
+distance's campaign.
 
 Store variables over ``ca_distance`` (m, ascending): ``ca_distance_swarm_size`` (fewest N,
 -1 where none reaches p'), ``ca_distance_bank_probability``, ``ca_distance_proven``,
