@@ -17,8 +17,9 @@ run of the single-distance design with ``--set flyby.d_sep_km=d`` would:
    leaves after step 1.
 
 **The rule.** The chosen distance is the one of fewest N on its bank; at equal N a
-distance whose N is proven (solver status ``optimal``) beats one whose search stopped at
-the time limit, then the higher bank P of that fewest-N swarm wins, then the shorter
+distance whose N is proven (solver status ``optimal``, gap 0) beats one whose search
+left a gap (``time_limit`` or ``feasible``: sizes below it neither proven short of p' nor
+met), then the higher bank P of that fewest-N swarm wins, then the shorter
 distance. An unproven N is the fewest *found*, an upper bound on that distance's true
 fewest N: a smaller unproven N is therefore truly better than a larger proven one and may
 win, but an unproven N never wins a tie against a proven one (its true N may be smaller or
@@ -66,7 +67,7 @@ from ideas_hpc.engine.job_cluster import phase_client
 FIELD = "design.ca_distances_km"
 #: The rule, in words (attr ``ca_distance_rule``).
 RULE = ("fewest N on the distance's bank; at equal N a proven N before an unproven one "
-        "(time limit: the fewest found, an upper bound), then the higher bank P of the "
+        "(a gap left: the fewest found, an upper bound), then the higher bank P of the "
         "fewest-N swarm, then the shorter distance; held-out scenarios and validation "
         "samples choose nothing")
 
@@ -204,7 +205,7 @@ def choice_line(dist_m, n, probability, proven, gsd_m, los_rad_s, best: int) -> 
             f"{_fmt(np.asarray(dist_m) / KM, 'g')} km (fewest N {ns}; bank P "
             f"{_fmt(probability, '.4f')}; GSD at TCA {_fmt(gsd_m, '.3g')} m; peak LOS rate "
             f"{_fmt(np.degrees(los_rad_s), '.3g')} deg/s)"
-            + ("; * not proven (time limit)" if not all(
+            + ("; * not proven (the search left a gap)" if not all(
                 ok for k, ok in zip(n, proven) if k > 0) else "")
             + "; rule: fewest N, ties by the higher bank P")
 
