@@ -177,6 +177,18 @@ MUTATIONS: tuple[Mutation, ...] = (
       'return {"gsd_m": d * float(ifov)',
       ("tests/test_study_distance.py::"
        "test_gsd_is_the_sizings_at_its_radius_and_the_los_rate_is_v_over_d",)),
+    M("design_distance_tie_flipped", "designers", "ideas_hpc/campaign/design_distance.py",
+      "(int(n[i]), not bool(proven[i]), -float(probability[i]), i)",
+      "(int(n[i]), not bool(proven[i]), float(probability[i]), i)",
+      ("tests/test_design_distance.py::test_the_rule",)),
+    M("design_distance_most_n", "designers", "ideas_hpc/campaign/design_distance.py",
+      "(int(n[i]), not bool(proven[i]), -float(probability[i]), i)",
+      "(-int(n[i]), not bool(proven[i]), -float(probability[i]), i)",
+      ("tests/test_design_distance.py::test_the_rule",)),
+    M("design_distance_not_flown", "designers", "ideas_hpc/campaign/design_distance.py",
+      "    out.flown = (row.c, row.setup)", "    out.flown = None",
+      ("tests/test_design_distance.py::"
+       "test_the_design_over_distances_is_the_brute_force_of_single_distance_designs",)),
     # ---- designers
     M("best_of_clock_after_search", "designers", "ideas_hpc/design/reliability.py",
       "        clock = not self.settled", "        clock = True",

@@ -106,6 +106,7 @@ VALUES = {
     "design.verify_samples_max": ["design.verify_samples_max=512"],
     "design.tolerant_markers": ["design.tolerant_markers=true"],
     "design.curve_samples": ["design.curve_samples=0"],
+    "design.ca_distances_km": ["design.ca_distances_km=[100,130]"],
     "design.target_rule": ['design.target_rule="full"'],
     "design.coverage_reference": ['design.coverage_reference="lit_at_tca"'],
     "design.generations": ["design.generations=5"], "design.n_max": ["design.n_max=10"],

@@ -9,7 +9,10 @@ import dataclasses
 import math
 
 from ideas_hpc.base import progress, seeds
+from ideas_hpc.base.errors import InputError
+from ideas_hpc.campaign.schema.design_checks import designer_errors
 from ideas_hpc.campaign.setup import requirement_from_campaign
+from ideas_hpc.design.api import ScenarioProblem, minimize
 from ideas_hpc.design.bank import grid_size, separation_steps
 from ideas_hpc.design.settings import ReliableSettings
 from ideas_hpc.flyby.target_world import world_areas
@@ -47,3 +50,38 @@ def bank_settings(c, setup, threshold, level: float, time_limit_s: float) -> Rel
                             need=None if thr is not None else float(threshold),
                             threshold=thr, n_max=d.n_max, sep_steps=m_sep,
                             time_limit_s=time_limit_s, failures=model)
+
+
+def bank_search(c, setup, bank, threshold, level: float, time_limit_s: float):
+    """The proven fewest N on ``bank`` at ``level`` (:func:`bank_settings`): the search's
+    detail (:class:`~ideas_hpc.design.reliability.ReliableResult`). A level no swarm of
+    ``n_max`` reaches is one :class:`InputError` naming ``design.success_probability``, or
+    ``design.bank_level`` when the bank is solved at that stricter level."""
+    p = float(c.config.design.success_probability)
+    try:
+        with designer_errors(c):
+            return minimize(ScenarioProblem(bank.rows, bank.areas, bank.theta),
+                            bank_settings(c, setup, threshold, level, time_limit_s)).detail
+    except InputError as exc:
+        if level == p or exc.field != "design.success_probability":
+            raise
+        raise c.error(f"{exc.message} (the stricter level the bank is solved at)",
+                      "design.bank_level") from None
+
+
+def bank_level(d) -> float:
+    """p': the level the bank is solved at (``design.bank_level``, else p)."""
+    return float(d.success_probability) if d.bank_level is None else float(d.bank_level)
+
+
+def search_budget(d, spent_s: float) -> float:
+    """What ``design.time_limit_s`` leaves the bank's search after ``spent_s`` of the
+    nominal design's searches (issue 29: one limit bounds the phase's searches)."""
+    return max(1e-3, float(d.time_limit_s) - max(0.0, spent_s))
+
+
+def refuse_stereo(c, setup) -> None:
+    """Stereo pairs are not in the scenario bank: refused, naming the design's key."""
+    if setup.coverage.require_stereo:
+        raise c.error("is not supported with coverage.require_stereo (stereo pairs are not in "
+                      "the scenario bank)", "design.success_probability")

@@ -63,6 +63,9 @@ class ExactDesign:
     summary: str = ""
     bank: object = field(default=None, repr=False)     # the nominal candidate bank
     threshold: object = None    # the requirement's Threshold on that bank
+    # (campaign, setup) the swarm was designed at when not the run's own: the
+    # closest-approach distance design.ca_distances_km chose (campaign/design_distance.py)
+    flown: tuple | None = field(default=None, repr=False)
 
 
 def _threshold(bank, requirement, notes: list):
@@ -272,6 +275,8 @@ def _run_exact(c, setup, workers, scheduler, cluster, slurm_config, designer) ->
     with JobCluster(workers=workers, scheduler=scheduler, cluster=cluster,
                     slurm_config=slurm_config, work=work) as client:
         res = (designer or design_exact)(c, setup, client)
+        if res.flown is not None:   # the store flies and records the chosen distance
+            c, setup = res.flown
         result(res.summary)
         for note in res.notes:
             result(f"note: {note}")

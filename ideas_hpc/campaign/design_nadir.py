@@ -16,6 +16,7 @@ import numpy as np
 import xarray as xr
 
 from ideas_hpc.campaign.design_exact import checked_setup, run_exact
+from ideas_hpc.campaign.design_distance import design_distances
 from ideas_hpc.campaign.design_reliability import design_reliable, scenario_store_path
 
 
@@ -25,6 +26,10 @@ def run_design_exact(c, out, *, workers=None, scheduler=None, cluster="local",
     setup = checked_setup(c, np.linspace(0.0, 2 * np.pi, 16, endpoint=False))
     designer = None
     if c.config.design.success_probability is not None:
-        designer = functools.partial(design_reliable, bank_store=scenario_store_path(out))
+        # design.ca_distances_km: the distance is a dimension of the design (its banks
+        # choose it; design_distance.py); unset: the one distance, as before
+        designer = functools.partial(
+            design_reliable if c.config.design.ca_distances_m is None else design_distances,
+            bank_store=scenario_store_path(out))
     return run_exact(c, setup, workers=workers, scheduler=scheduler, cluster=cluster,
                      slurm_config=slurm_config, designer=designer)

@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from ideas_hpc.base.progress import result
-from ideas_hpc.design.api import CoverSettings, ScenarioProblem, minimize
+from ideas_hpc.design.api import CoverSettings, minimize
 from ideas_hpc.design.settings import LookPlan
 from ideas_hpc.design.certificate import (certify, group_bounds, planned_looks,
                                          replicated_lower_bound)
@@ -56,8 +56,8 @@ from ideas_hpc.campaign.validation_flights import (  # noqa: F401 (Validation, f
     Validation, fly_validation, fly_validation_world, sample_weights)  # their old home)
 from ideas_hpc.base import seeds
 from ideas_hpc.campaign.design_exact import design_exact
-from ideas_hpc.campaign.bank_design import bank_settings, campaign_bank
-from ideas_hpc.campaign.schema.design_checks import designer_errors
+from ideas_hpc.campaign.bank_design import (bank_level, bank_search, campaign_bank, refuse_stereo,
+                                           search_budget)
 from ideas_hpc.campaign.reliability_vars import BankRun, reliability_dataset
 from ideas_hpc.campaign.schema.design_table import (curve_samples, holdout_scenarios,
                                                     verify_samples)
@@ -181,6 +181,46 @@ def scenario_store_path(out) -> str | None:
     return str(out.with_name(out.name.removesuffix(".zarr") + "-scenarios.zarr"))
 
 
+def nominal_design(c, setup, client) -> tuple:
+    """(the nominal exact design, the time its searches spent): design.time_limit_s bounds
+    the searches of the phase together (issue 29): the nominal design, then the bank's
+    search gets what is left. Sampling (the bank's flights, the validation) is not search:
+    it has its own progress bars."""
+    t_nominal = time.perf_counter()
+    nominal = design_exact(c, setup, client)
+    return nominal, time.perf_counter() - t_nominal - float(nominal.attrs.get("design_masks_s",
+                                                                               0.0))
+
+
+def sizes(c, setup) -> tuple:
+    """``(S, H, exact)``: the bank's scenarios (one when no continuous dispersion is drawn),
+    the held-out scenarios, and whether the validation is exact (one flight)."""
+    d, mc = c.config.design, c.config.monte_carlo
+    exact = continuous_off(mc, setup)
+    s_n = 1 if exact else d.scenarios
+    # held-out scenarios (issue 41): H draws of their own stream, flown for the swarms
+    # they score only (design/holdout.py)
+    h_n = holdout_scenarios(d, exact)
+    # losses in the pass are drawn per validation flight: sampling, even on one scenario
+    return s_n, h_n, exact and failure_model(mc).in_pass_share == 0.0
+
+
+def bank_phase(c, setup, client, nominal) -> tuple:
+    """After the nominal design (its line printed): ``(client, S, tolerant)``, the phase's
+    client, the bank's scenarios and the tolerant markers' future (or None)."""
+    d = c.config.design
+    result(nominal.summary.replace("exact design:", "nominal exact design (nothing goes wrong):"))
+    client = phase_client(client)   # the job's one cluster (None: in this process)
+    s_n = sizes(c, setup)[0]
+    sep = c.config.swarm.min_separation_m
+    # the tolerant designs (single-threaded HiGHS) on one worker while the other
+    # builds the bank: their ~17 s no longer wait for it (same designs)
+    tolerant = (client.submit(_tolerant_designs, nominal.bank, nominal.threshold, d, sep,
+                              pure=False)
+                if client is not None and d.tolerant_markers else None)
+    return client, s_n, tolerant
+
+
 def design_reliable(c, setup, client, *, bank_store: str | None = None):
     """The success-probability design of a campaign (module docstring).
 
@@ -188,53 +228,32 @@ def design_reliable(c, setup, client, *, bank_store: str | None = None):
     chosen swarm (its data holds the nominal design's variables and the
     reliability ones) and its summary lines.
     """
-    d, mc = c.config.design, c.config.monte_carlo
-    if setup.coverage.require_stereo:
-        raise c.error("is not supported with coverage.require_stereo (stereo pairs are not in "
-                      "the scenario bank)", "design.success_probability")
+    refuse_stereo(c, setup)
     # the most any swarm of n_max can reach is checked with the other cross-checks
     # (campaign/schema/design_table.py reliability_checks)
-    # design.time_limit_s bounds the searches of the phase together (issue 29): the
-    # nominal design, then the bank's search gets what is left. Sampling (the bank's
-    # flights, the validation) is not search: it has its own progress bars.
-    t_nominal = time.perf_counter()
-    nominal = design_exact(c, setup, client)
-    spent = time.perf_counter() - t_nominal - float(nominal.attrs.get("design_masks_s", 0.0))
-    result(nominal.summary.replace("exact design:", "nominal exact design (nothing goes wrong):"))
-    client = phase_client(client)   # the job's one cluster (None: in this process)
-    exact = continuous_off(mc, setup)
-    s_n = 1 if exact else d.scenarios
-    # held-out scenarios (issue 41): H draws of their own stream, flown for the swarms
-    # they score only (design/holdout.py)
-    h_n = holdout_scenarios(d, exact)
-    # losses in the pass are drawn per validation flight: sampling, even on one scenario
-    exact = exact and failure_model(mc).in_pass_share == 0.0
-    sep = c.config.swarm.min_separation_m
-    # the tolerant designs (single-threaded HiGHS) on one worker while the other
-    # builds the bank: their ~17 s no longer wait for it (same designs)
-    tolerant = (client.submit(_tolerant_designs, nominal.bank, nominal.threshold, d, sep,
-                              pure=False)
-                if client is not None and d.tolerant_markers else None)
+    nominal, spent = nominal_design(c, setup, client)
+    client, s_n, tolerant = bank_phase(c, setup, client, nominal)
     t0 = time.perf_counter()
     fresh = bank_store is not None and not Path(bank_store).exists()
     bank = campaign_bank(c, setup, s_n, client, bank_store)
     t_bank = time.perf_counter() - t0
     try:
-        return _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant,
-                               spent_s=spent, holdout=h_n)
+        return design_on_bank(c, setup, client, nominal, bank, t_bank, tolerant, spent_s=spent)
     except InputError:
         if fresh:    # bad input leaves no store: the bank this run made goes too
             shutil.rmtree(bank_store, ignore_errors=True)
         raise
 
 
-def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=None, *,
-                    spent_s=0.0, holdout=0):
+def design_on_bank(c, setup, client, nominal, bank, t_bank, tolerant=None, *, spent_s=0.0,
+                   searched=None):
+    """Steps 3 to 5 of the module docstring on a built bank (``searched``: step 3 already
+    made by the caller on this bank, at :func:`bank_level` and :func:`search_budget`)."""
     d, mc = c.config.design, c.config.monte_carlo
-    left = max(1e-3, float(d.time_limit_s) - max(0.0, spent_s))
+    _, h_n, exact = sizes(c, setup)
+    left = search_budget(d, spent_s)
     p, model = float(d.success_probability), failure_model(mc)
     need = nominal.threshold.need
-    h_n = int(holdout)
     s_n = bank.rows.shape[0]
     _log(f"scenario bank: {s_n} scenarios x {bank.theta.size} candidates in {t_bank:.1f} s"
          + (" (continuous dispersions off: one exact scenario)" if exact else "")
@@ -242,16 +261,11 @@ def _design_on_bank(c, setup, client, nominal, bank, t_bank, exact, tolerant=Non
          + (" (one worker designed the failure-tolerant markers meanwhile)"
             if tolerant is not None and not bank.attrs.get("reused") else ""))
     sep = c.config.swarm.min_separation_m
-    level = p if d.bank_level is None else float(d.bank_level)
-    try:
-        with designer_errors(c):
-            res = minimize(ScenarioProblem(bank.rows, bank.areas, bank.theta),
-                           bank_settings(c, setup, nominal.threshold, level, left)).detail
-    except InputError as exc:
-        if level == p or exc.field != "design.success_probability":
-            raise
-        raise c.error(f"{exc.message} (the stricter level the bank is solved at)",
-                      "design.bank_level") from None
+    level = bank_level(d)
+    # searched: the search a caller already made on this bank (the distance's, whose
+    # choice it decided: campaign/design_distance.py), with this budget and level
+    res = searched if searched is not None else bank_search(c, setup, bank, nominal.threshold,
+                                                             level, left)
     rel = res.designer
     w = rel.ev.w
     if rel.ev.per_scenario_weights:     # drawn worlds: the threshold is one fraction of each

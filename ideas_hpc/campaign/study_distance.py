@@ -34,21 +34,17 @@ from ideas_hpc.base import seeds
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.base.progress import log
 from ideas_hpc.base.units import KM
+from ideas_hpc.campaign.schema.design_table import check_distances as checked_distances
 
 #: The option naming the list (InputError field).
 OPTION = "--ca-distances-km"
 
 
 def check_distances(distances_m) -> tuple:
-    """The list as positive floats (m), else one :class:`InputError` naming the option."""
-    try:
-        vals = tuple(float(x) for x in distances_m)
-    except (TypeError, ValueError):
-        vals = ()
-    if not vals or any(not (np.isfinite(v) and v > 0) for v in vals):
-        raise InputError(f"needs positive closest-approach distances, got {distances_m!r}",
-                         field=OPTION)
-    return vals
+    """The list as positive floats (m), else one :class:`InputError` naming the option
+    (:func:`~ideas_hpc.campaign.schema.design_table.check_distances`, shared with the
+    design's ``design.ca_distances_km``)."""
+    return checked_distances(distances_m, OPTION)
 
 
 def km_list(text: str, field: str) -> tuple:

@@ -107,7 +107,9 @@ class StoreValidation(_Outcome):
 
 def store_campaign(store) -> tuple:
     """``(campaign, attrs)`` of a success-probability design store: its resolved config
-    validated again, and its root attrs (an input error when it holds no such design)."""
+    validated again (at the closest-approach distance the design chose, when it chose one
+    from ``design.ca_distances_km``), and its root attrs (an input error when it holds no
+    such design)."""
     from ideas_hpc.base.errors import InputError
     from ideas_hpc.campaign.schema.campaign_tables import validate_campaign
     from ideas_hpc.campaign.schema.toml_file import CampaignSource
@@ -120,7 +122,11 @@ def store_campaign(store) -> tuple:
     cfg = dict(attrs["config"])
     cfg.pop("models", None)
     src = Path(attrs["campaign_file"]) if attrs.get("campaign_file") else None
-    return validate_campaign(CampaignSource(data=cfg, path=src, resolved=True)), attrs
+    c = validate_campaign(CampaignSource(data=cfg, path=src, resolved=True))
+    if "chosen_ca_distance_m" in attrs:     # design.ca_distances_km: the swarm flew there
+        from ideas_hpc.campaign.study_distance import distance_campaign
+        c = distance_campaign(c, float(attrs["chosen_ca_distance_m"]))
+    return c, attrs
 
 
 def validate_store(store, *, samples: int = 1024, seed: int | None = None, first: int = 0,

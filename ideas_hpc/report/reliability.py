@@ -70,6 +70,8 @@ def reliability_lines(ds) -> list[str]:
            + (f" (design.demonstrate: {steps})" if steps != "none" else "")
            + f"; P on the scenarios = {float(ds['reliability_probability']):.4f}; nominal "
            f"N = {a['nominal_swarm_size']}"]
+    if "ca_distance_choice" in a:       # design.ca_distances_km (campaign/design_distance.py)
+        out.append(str(a["ca_distance_choice"]))
     if "certificate" in a:
         out.append(str(a["certificate"]))
     if "statistical_lower_bound" in a:

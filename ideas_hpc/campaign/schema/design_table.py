@@ -9,7 +9,10 @@ The success-probability designer (issue 20) reads ``design.success_probability``
 (:func:`verify_samples`). S and M must resolve p: at least ``10 / (1 - p)``.
 ``design.holdout_scenarios`` (H, :func:`holdout_scenarios`) held-out scenarios score the
 swarms the bank chose (issue 41); ``design.verify_samples_max`` caps the samples the look
-plan may give one look.
+plan may give one look. ``design.ca_distances_km`` (issue 42 deliverable 5) makes the
+closest-approach distance a dimension of that design: a short list, checked once
+(:func:`check_distances`), from which the design chooses
+(:mod:`ideas_hpc.campaign.design_distance`).
 """
 
 from __future__ import annotations
@@ -24,7 +27,9 @@ from ideas_hpc.montecarlo.dispersions import dispersion_keys
 from ideas_hpc.montecarlo.failure_dispersion import failure_model
 from ideas_hpc.campaign.schema.kinds import KINDS
 from ideas_hpc.base.fields import Field, LiveTable
-from ideas_hpc.base.units import DEG, MINUTE
+import numpy as np
+
+from ideas_hpc.base.units import DEG, KM, MINUTE
 
 #: Validation samples when ``design.verify_samples`` is not given.
 VERIFY_DEFAULT, VERIFY_DEFAULT_RELIABILITY = 64, 256
@@ -76,6 +81,12 @@ DESIGN = {
                                   "curve (HiGHS on the nominal bank: about a minute of one "
                                   "worker, ending with 40 % gaps on eros001708; off by default, "
                                   "issue 43)"),
+    "ca_distances_km": Field("floats", None, nullable=True, si="ca_distances_m", to_si=KM,
+                             lo=0, lo_open=True,
+                             doc="closest-approach distances (km) the success-probability "
+                                 "design chooses from: a bank at each, the distance of fewest "
+                                 "proven N, ties by the higher bank P (docs/study.md); unset: "
+                                 "flyby.d_sep_km alone"),
     "population": Field("int", 100, lo=2, doc="GA population size"),
     "generations": Field("int", 115, lo=1),
     "n_max": Field("int", 20, lo=1, hi=200),
@@ -146,6 +157,21 @@ def curve_samples(d, exact: bool) -> int:
     return verify_samples(d) if d.curve_samples is None else int(d.curve_samples)
 
 
+def check_distances(distances_m, field: str) -> tuple:
+    """Closest-approach distances (m) as a tuple of positive finite floats, else one
+    :class:`InputError` naming ``field`` (the study's ``--ca-distances-km``, the design's
+    ``design.ca_distances_km``): an empty list, a non-number, zero, a negative or a
+    non-finite value."""
+    try:
+        vals = tuple(float(x) for x in distances_m)
+    except (TypeError, ValueError):
+        vals = ()
+    if not vals or any(not (np.isfinite(v) and v > 0) for v in vals):
+        raise InputError(f"needs positive closest-approach distances, got {distances_m!r}",
+                         field=field)
+    return vals
+
+
 def reference_checks(c) -> None:
     """``design.coverage_reference`` other than the whole surface where a run would read
     coverage that ignores it: the plain exact design's Monte Carlo verification flies
@@ -174,6 +200,8 @@ def reliability_checks(c) -> None:
                          "(failures enter the probability exactly through "
                          "monte_carlo.failure_probability)", field="design.failures_tolerated")
     _reachable(c.monte_carlo, p, d.n_max)
+    if d.ca_distances_m is not None:     # each distance's own checks run with its campaign
+        check_distances(d.ca_distances_m, "design.ca_distances_km")
     if d.bank_level is not None and d.bank_level < p:
         raise InputError(f"{d.bank_level:g} is below design.success_probability = {p:g}: the "
                          "bank's level may only be stricter", field="design.bank_level")

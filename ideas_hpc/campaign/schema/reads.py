@@ -342,7 +342,8 @@ RULES: dict[str, Rule] = {
     **{f"design.{k}": Rule(_p_key, _why_p) for k in ("confidence", "scenarios", "demonstrate",
                                                       "bank_level", "holdout_scenarios",
                                                       "verify_samples_max",
-                                                      "tolerant_markers", "curve_samples")},
+                                                      "tolerant_markers", "curve_samples",
+                                                      "ca_distances_km")},
     "design.demonstrate_looks": Rule(
         lambda s: s.p and s.config.design.demonstrate,
         lambda s: (_why_p(s) if not s.p else "is ignored with design.demonstrate = false: one "
