@@ -85,6 +85,7 @@ class DistanceRow:
     t_bank_s: float = 0.0
     res: object = None          # the bank search's detail; None: the distance takes no part
     why: str = ""               # why it takes no part
+    store: str | None = None    # the bank's store (None: in memory)
 
     @property
     def n(self) -> int:
@@ -136,7 +137,7 @@ def _row(c, setup, client, d_m, store, s_n) -> DistanceRow:
     anything from that ring, no swarm of ``n_max`` reaches the target or p') takes no part,
     its reason kept; a single-distance run there stops with that same error."""
     d = c.config.design
-    row = DistanceRow(d_m=d_m, c=c, setup=setup)
+    row = DistanceRow(d_m=d_m, c=c, setup=setup, store=store)
     try:
         row.nominal, row.spent_s = nominal_design(c, setup, client)
         t0 = time.perf_counter()
@@ -246,6 +247,8 @@ def _with_distances(out, rows, best: int):
     out.attrs.update({"chosen_ca_distance_m": float(row.d_m),
                       "ca_distances_m": [float(x) for x in dist], "ca_distance_rule": RULE,
                       "ca_distance_choice": line})
+    if row.store is not None:   # the chosen distance's bank, which `ideas-hpc study` reads
+        out.attrs["scenario_bank_store"] = Path(row.store).name
     out.summary = f"{out.summary}\n{line}"
     out.flown = (row.c, row.setup)
     return out

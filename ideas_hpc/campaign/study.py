@@ -103,6 +103,7 @@ class Study:
     client: object = None
     time_limit_s: float | None = None   # each fewest-N search (None: design.time_limit_s)
     design_search: dict | None = None   # the design's own fewest N on its bank (the store's)
+    bank_name: str | None = None        # its bank's store beside it (attr scenario_bank_store)
 
     @property
     def work(self) -> Path:
@@ -121,8 +122,9 @@ class Study:
 
         s_n = 1 if continuous_off(self.c.config.monte_carlo, setup) else \
             int(self.c.config.design.scenarios)
-        if name is None:
-            path = scenario_store_path(self.store)
+        if name is None:        # the design's own bank (at a chosen distance, that one's)
+            path = scenario_store_path(self.store) if self.bank_name is None else \
+                str(self.store.with_name(self.bank_name))
         else:
             self.work.mkdir(exist_ok=True)
             path = str(self.work / f"{name}-scenarios.zarr")
@@ -175,7 +177,7 @@ def open_study(store, client=None) -> Study:
     return Study(store=Path(store), c=c, setup=setup_from_campaign(c), theta=theta,
                  need=float(attrs["reliability_threshold"]),
                  p=float(attrs["success_probability"]), client=client,
-                 design_search=recorded_search(ds))
+                 design_search=recorded_search(ds), bank_name=attrs.get("scenario_bank_store"))
 
 
 def recorded_search(ds) -> dict | None:
