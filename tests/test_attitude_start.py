@@ -93,10 +93,10 @@ def test_tilted_encounter_starts_within_the_dispersion():
     _, pert = draw_sample(off, c.config.seed, 0, THETA, setup)
     pert = Perturbation(**{**pert, "position_error_T": None, "velocity_error_T": None,
                            "misalignment_prv": None, "params_override": None})
-    # the start alone: every image counted, as ideal attitude counts them
+    # the start alone: every image counted (no usable-image test), in both flights
     flown = fly_sample(setup.with_(imaging=None), nom, pert)
-    ideal = fly_open_loop(setup.with_(attitude_mode="ideal"), THETA, None, nom.r0_T, nom.v0_T,
-                          Perturbation())
+    ideal = fly_open_loop(setup.with_(attitude_mode="ideal", imaging=None), THETA, None,
+                          nom.r0_T, nom.v0_T, Perturbation())
     assert ideal.coverage.coverage > 0.1
     assert abs(flown["coverage"] - ideal.coverage.coverage) < 0.005
     # with the usable-image test: the swarm frame is fixed in N, and at 10 km/s the scene

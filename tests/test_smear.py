@@ -25,6 +25,8 @@ from ideas_hpc.core.attitude.smear import smear_rates
 from ideas_hpc.flyby.camera import (ideal_omega_BN_B_at, ideal_usable, image_smear_rates,
                                     usable_mask)
 from ideas_hpc.flyby.flight import Perturbation, fly
+from ideas_hpc.flyby.nav_flight import aim_rates_B
+from ideas_hpc.flyby.navigation import PRESETS as NAVIGATION_PRESETS, NavigationPlan
 from ideas_hpc.flyby.views import FlightPlan, flight_views
 from ideas_hpc.flyby.pass_rates import follow_check, los_rate_rad_s
 from ideas_hpc.flyby.usable import scene_radius_m
@@ -370,3 +372,42 @@ def test_the_papers_nadir_pass_keeps_every_image_in_ideal_attitude(eros1708):
                          plan=FlightPlan(trajectory=(out.targeting.position_T,
                                                      out.targeting.velocity_T)))
     assert _kept(views).all()
+
+
+def _track_camera_N(r, z_S):
+    """The oracle's body-tracking camera ``[B N]`` (rows x, y, z) aiming from ``r`` (m, N) at
+    the origin: ``z = -r / |r|``, ``x`` toward ``z_S`` across ``z``, ``y = z x x``."""
+    z = -r / np.linalg.norm(r)
+    x = z_S - np.dot(z_S, z) * z
+    x /= np.linalg.norm(x)
+    return np.array([x, np.cross(z, x), z])
+
+
+def test_ideal_tracking_rate_with_navigation_errors_is_the_turn_of_its_cameras(tmp_path):
+    """Ideal body tracking with navigation errors: toward the predicted target (the flown
+    position less the offset ``o``) before terminal tracking locks, on the flown track
+    turned by the centroid error ``[B' B]`` after. The oracle builds those cameras at
+    ``t -+ h`` along the straight pass (spin stopped: T = N) and reads their turn,
+    ``[B N](t + h) [B N](t - h)^T = exp(-[w x] 2 h)``."""
+    setup, _, views, v_img = _ideal_views(tmp_path, "track")
+    r = views.r_img_T
+    rng_m = np.linalg.norm(r, axis=-1)
+    detect = float(np.median(rng_m[0]))        # locks half way to closest approach
+    setup = setup.with_(navigation=NavigationPlan(error=NAVIGATION_PRESETS["lutetia"],
+                                                  detect_range_m=detect))
+    lock = np.logical_or.accumulate(rng_m <= detect, axis=1)
+    assert lock.any() and not lock.all()
+    gen = np.random.default_rng(42)
+    off = gen.normal(size=(3, 3)) * 5e3
+    c_rot = Rotation.from_rotvec(gen.normal(size=(3, 3)) * 0.01).as_matrix()    # [B' B]
+    got = aim_rates_B(setup, r, v_img, off, c_rot)
+    z_S = setup.encounter.dcm_NS[:, 2]
+    h = 1e-3
+    for i in range(3):
+        for k in range(0, r.shape[1], 7):
+            aim = r[i, k] if lock[i, k] else r[i, k] - off[i]
+            turn = c_rot[i] if lock[i, k] else np.eye(3)
+            c1 = turn @ _track_camera_N(aim + v_img[i, k] * h, z_S)
+            c0 = turn @ _track_camera_N(aim - v_img[i, k] * h, z_S)
+            w = -Rotation.from_matrix(c1 @ c0.T).as_rotvec() / (2.0 * h)
+            np.testing.assert_allclose(got[i, k], w, rtol=1e-5, atol=1e-10)

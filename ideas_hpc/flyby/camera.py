@@ -3,7 +3,9 @@
 Ideal tracking of the maneuver's reference, the closed-loop reaction-wheel
 attitude (:func:`ideas_hpc.attitude.simulate_attitude`), body tracking on
 encounters, and the fixed camera misalignment ``[C B]`` of a Monte Carlo
-sample. ``setup`` is a :class:`ideas_hpc.flyby.flight.FlybySetup`.
+sample; the usable-image test of both (the closed loop's rates, perfect tracking's
+reference rate, :func:`ideal_usable`). ``setup`` is a
+:class:`ideas_hpc.flyby.flight.FlybySetup`.
 """
 
 from __future__ import annotations
@@ -155,8 +157,9 @@ def ideal_usable(setup, omega_BN_B, dcm_CB, dcm_CT, r_img, v_img) -> np.ndarray:
 
 
 def _tested(setup, att):
-    """``(use, smear rate (N, n_img))`` of a flight the usable-image test applies to, else
-    None (ideal attitude or no ``setup.imaging``)."""
+    """``(use, smear rate (N, n_img))`` of a closed-loop flight the usable-image test
+    applies to, else None (ideal attitude, tested in the flight itself by
+    :func:`ideal_usable`, or no ``setup.imaging``)."""
     use = getattr(setup, "imaging", None)
     if use is None or att is None or att.image_error is None:
         return None
@@ -168,8 +171,9 @@ def _tested(setup, att):
 
 def usable_mask(setup, att) -> np.ndarray | None:
     """(N, n_img) bool: the images that pass the usable-image test (smear and settle,
-    :mod:`ideas_hpc.flyby.usable`), or None when every image counts (ideal attitude or
-    no ``setup.imaging``)."""
+    :mod:`ideas_hpc.flyby.usable`) of a closed loop ``att``, or None (ideal attitude, whose
+    flight blinds its own unusable images, :func:`ideal_usable`, or no
+    ``setup.imaging``)."""
     got = _tested(setup, att)
     if got is None:
         return None
@@ -178,7 +182,9 @@ def usable_mask(setup, att) -> np.ndarray | None:
 
 def imaging_dcms(setup, dcm, att, r_img):
     """The cameras the coverage sees: ``dcm`` with the unusable images blinded when
-    ``setup.imaging`` is set and the attitude is simulated (:func:`usable_mask`)."""
+    ``setup.imaging`` is set and the attitude is simulated (:func:`usable_mask`); perfect
+    tracking's are blinded by :func:`ideas_hpc.flyby.views.flight_views`
+    (:func:`ideal_usable`)."""
     ok = usable_mask(setup, att)
     return dcm if ok is None else blind(dcm, r_img, ok, setup.body.shape.r_max)
 

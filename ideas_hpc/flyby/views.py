@@ -28,8 +28,10 @@ target, Sun, encounter and force model) and the swarm's own draws (a
    (:func:`ideas_hpc.flyby.camera.imaging_dcms`; the smear rate of the batched
    loop, :func:`ideas_hpc.flyby.camera.smear_rates_of`, is kept on its
    ``AttitudeResult`` as ``image_smear_rate``). Perfect tracking (``attitude.mode =
-   "ideal"``) counts every image, as the paper's ideal mode did
-   (:mod:`ideas_hpc.flyby.usable`).
+   "ideal"``) faces the same smear test at its reference's analytic rate where the
+   geometry tests its images (an encounter,
+   :func:`ideas_hpc.flyby.camera.ideal_usable`); on the paper's geometry it counts every
+   image, as the paper's ideal mode did (:mod:`ideas_hpc.flyby.usable`).
 """
 
 from __future__ import annotations
