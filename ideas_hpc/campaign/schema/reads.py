@@ -38,7 +38,7 @@ from ideas_hpc.attitude.modes import ATTITUDE_MODES, ATTITUDE_STARTS
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.body.formats import builtin_body, length_unit_applies
 from ideas_hpc.campaign.schema.encounter_table import ENCOUNTER
-from ideas_hpc.flyby.geometry import PAPER, EncounterGeometry
+from ideas_hpc.campaign.schema.imaging_rules import IMAGING_RULES
 from ideas_hpc.campaign.schema.target_table import TARGET_RULES, drawn, why_drawn
 from ideas_hpc.campaign.schema.navigation_table import NAVIGATION_RULES
 from ideas_hpc.campaign.schema.kinds import DISPERSION_KEYS, KINDS
@@ -152,35 +152,6 @@ def _why_separation(s: Settings) -> str:
         return (f"is ignored with flyby.configuration = {s.config.flyby.configuration!r}: only a "
                 "ring's spacing is checked")
     return "is ignored: the swarm of design.nadir_store is flown as designed"
-
-
-def _ideal_tested(s: Settings) -> bool:
-    """Perfect tracking faces the usable-image test on this geometry
-    (:attr:`~ideas_hpc.flyby.geometry.Geometry.ideal_images_tested`)."""
-    return (PAPER if _paper(s) else EncounterGeometry).ideal_images_tested
-
-
-def _imaging(s: Settings) -> bool:
-    return s.start.usable_images if s.simulated else _ideal_tested(s)
-
-
-def _why_imaging(s: Settings) -> str:
-    if not (s.simulated or _ideal_tested(s)):
-        return (f"is ignored with attitude.mode = {s.attitude.name!r} on the paper's geometry: "
-                "every image counts, as the paper's ideal mode (the usable-image test judges "
-                f"a closed loop, attitude.mode = {_closed_loop_modes()}, and perfect tracking "
-                "on an encounter)")
-    return (f"is ignored with monte_carlo.attitude_start = {s.start.name!r}: every image counts "
-            f"(attitude_start = {_names(ATTITUDE_STARTS, lambda t: t.usable_images)} applies "
-            "the test)")
-
-
-def _why_settle(s: Settings) -> str:
-    if not s.simulated:
-        return (f"is ignored with attitude.mode = {s.attitude.name!r}: perfect tracking has no "
-                "attitude error to settle (the settle test judges a closed loop, attitude.mode "
-                f"= {_closed_loop_modes()})")
-    return _why_imaging(s)
 
 
 def _closed_loop(what: str) -> Callable:
@@ -337,9 +308,7 @@ RULES: dict[str, Rule] = {
                                                                    "z_stop_km")},
     **{f"flyby.{k}": ENCOUNTER_KEY for k in ENCOUNTER if k != "geometry"},
     **NAVIGATION_RULES,
-    **{f"instrument.{k}": Rule(_imaging, _why_imaging)
-       for k in ("pixels_across", "exposure_ms", "smear_pixels")},
-    "instrument.settle_deg": Rule(lambda s: s.simulated and s.start.usable_images, _why_settle),
+    **IMAGING_RULES,
     "swarm.angles_rad": Rule(_angles_read, _why_angles),
     "swarm.sweep_periods_min": Rule(lambda s: s.kind.swarm == "file" and s.maneuver.sweeps,
                                     _why_periods),
