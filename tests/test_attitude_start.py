@@ -31,7 +31,10 @@ from ideas_hpc.montecarlo.sample import design_nominal, fly_sample
 ROOT = Path(__file__).resolve().parent.parent
 ENCOUNTER = ROOT / "campaigns" / "eros-fast-encounter.toml"
 DESIGN = ROOT / "campaigns" / "eros-design-nominal.toml"
-SIMULATED = ['body.name="ellipsoid"', 'attitude.mode="simulated"']
+# the reference start (the fast encounter campaign counts every image: its file's start is
+# the paper's)
+SIMULATED = ['body.name="ellipsoid"', 'attitude.mode="simulated"',
+             'monte_carlo.attitude_start="reference"']
 PAPER_SHORT = ["flyby.tf_s=60", "flyby.z_start_km=-3", "flyby.z_stop_km=3",
                "dynamics.srp=false"]
 THETA = np.array([0.3, 2.0, 4.0])

@@ -16,7 +16,7 @@ import dataclasses
 from ideas_hpc.attitude import campaign_maneuver
 from ideas_hpc.attitude.torque_terms import torques_from_config
 from ideas_hpc.attitude.device import check_device
-from ideas_hpc.attitude.modes import attitude_mode, attitude_start
+from ideas_hpc.attitude.modes import attitude_start
 from ideas_hpc.campaign.body_checks import check_body, check_grid_step, check_pointing
 from ideas_hpc.body.bodies import load_body
 from ideas_hpc.body.formats import load_shape_file
@@ -152,12 +152,12 @@ def _navigation(cfg, eta_rad: float, sizing):
 
 
 def _imaging(cfg, eta_rad: float) -> ImageUse | None:
-    """The usable-image test (SPEC 7d), or None (every image counts) for a closed loop whose
-    start has no ``usable_images`` (the paper's, ``monte_carlo.attitude_start = "paper"``).
-    Perfect tracking has no start: its test is set, and its geometry decides whether it
-    applies (:attr:`~ideas_hpc.flyby.geometry.Geometry.ideal_images_tested`)."""
-    if (attitude_mode(cfg.attitude.mode).closed_loop
-            and not attitude_start(cfg.monte_carlo.attitude_start).usable_images):
+    """The usable-image test (SPEC 7d), or None (every image counts) for a start without
+    ``usable_images`` (the paper's, ``monte_carlo.attitude_start = "paper"``). Perfect
+    tracking faces it where its geometry tests ideal images
+    (:attr:`~ideas_hpc.flyby.geometry.Geometry.ideal_images_tested`), and the paper's start
+    turns it off there too."""
+    if not attitude_start(cfg.monte_carlo.attitude_start).usable_images:
         return None
     inst = cfg.instrument
     return ImageUse(ifov_rad(eta_rad, pixels_across=inst.pixels_across,

@@ -335,7 +335,6 @@ RULES: dict[str, Rule] = {
                    "look (design.demonstrate = true steps N up over several)")),
     "design.time_limit_s": Rule(_time_limit, _why_time_limit),
     "monte_carlo.samples": Rule(lambda s: s.lists("monte_carlo.samples"), _samples_why),
-    "monte_carlo.attitude_start": Rule(_simulated, _closed_loop("a flight starts from it")),
     "monte_carlo.failures_k": Rule(_failures_k, _why_failures_k),
     "monte_carlo.failure_in_pass_share": Rule(
         lambda s: _dispersed(s, "monte_carlo.failure_in_pass_share") and s.p,
