@@ -410,3 +410,22 @@ def test_ideal_tracking_rate_with_navigation_errors_is_the_turn_of_its_cameras(t
             c0 = turn @ _track_camera_N(aim - v_img[i, k] * h, z_S)
             w = -Rotation.from_matrix(c1 @ c0.T).as_rotvec() / (2.0 * h)
             np.testing.assert_allclose(got[i, k], w, rtol=1e-5, atol=1e-10)
+
+
+def test_the_export_marks_ideal_images_the_coverage_blinded(tmp_path):
+    """The SPICE export's ``usable`` column (images.csv) reads perfect tracking's smear test
+    from the cameras the coverage saw: an inertially fixed camera at 10 km/s has none, and
+    the same flight without the test has every image with the body in view."""
+    from types import SimpleNamespace
+
+    from ideas_hpc.export.kernels import body_in_view, usable_images
+
+    setup, fixed, views, _ = _ideal_views(tmp_path, "nadir")
+    assert fixed.imaging_BT is not None
+    fl = SimpleNamespace(setup=setup, r_img_T=views.r_img_T, dcm_BT=views.dcm_BT, attitude=None,
+                         active=None, imaging_BT=views.imaging_BT)
+    in_view = body_in_view(views.r_img_T, views.dcm_BT, setup.eta_rad, setup.body.shape.r_max)
+    assert in_view.any()
+    assert not usable_images(fl).any()
+    np.testing.assert_array_equal(usable_images(SimpleNamespace(**{**vars(fl), "imaging_BT": None})),
+                                  in_view)
