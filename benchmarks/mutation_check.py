@@ -99,6 +99,30 @@ MUTATIONS: tuple[Mutation, ...] = (
       "float(setup.body.params.spin_rate), scene_radius_m(setup.body.shape))",
       "0.0, scene_radius_m(setup.body.shape))",
       ("tests/test_scenario_flight.py::test_one_pass_flight_is_the_pipeline_flight",)),
+    # ---- perfect tracking faces smear at its reference's rate (issue 42)
+    M("ideal_track_rate_dropped", "kernels", "ideas_hpc/flyby/camera.py",
+      "            return track_omega_BN_B(setup, r_img, v_img)",
+      "            return 0.0 * track_omega_BN_B(setup, r_img, v_img)",
+      ("tests/test_smear.py::"
+       "test_ideal_attitude_at_a_fast_pass_keeps_tracked_images_and_loses_fixed_ones",)),
+    M("ideal_track_rate_sign", "kernels", "ideas_hpc/flyby/encounter.py",
+      "    return track_rates(r_N, v_N, np.ascontiguousarray(setup.encounter.dcm_NS[:, 2]))",
+      "    return -track_rates(r_N, v_N, np.ascontiguousarray(setup.encounter.dcm_NS[:, 2]))",
+      ("tests/test_smear.py::"
+       "test_ideal_attitude_at_a_fast_pass_keeps_tracked_images_and_loses_fixed_ones",)),
+    M("ideal_aim_centroid_not_turned", "kernels", "ideas_hpc/flyby/nav_flight.py",
+      "    if centroid_dcm is None or not lock.any():\n        return w\n",
+      "    if True:\n        return w\n",
+      ("tests/test_smear.py::"
+       "test_ideal_tracking_rate_with_navigation_errors_is_the_turn_of_its_cameras",)),
+    M("ideal_ring_rate_without_spin", "kernels", "ideas_hpc/flyby/camera.py",
+      "w, ts = setup.geometry.maneuver_frame(setup, setup.body.params.spin_rate)\n    return",
+      "w, ts = setup.geometry.maneuver_frame(setup, 0.0)\n    return",
+      ("tests/test_smear.py::test_the_papers_nadir_pass_keeps_every_image_in_ideal_attitude",)),
+    M("ideal_images_never_tested", "kernels", "ideas_hpc/flyby/views.py",
+      "closed or flown.geometry.ideal_images_tested)", "closed)",
+      ("tests/test_smear.py::"
+       "test_ideal_attitude_at_a_fast_pass_keeps_tracked_images_and_loses_fixed_ones",)),
     # ---- the world a flight flies through (issue 40)
     M("world_sun_ignores_its_pole", "kernels", "ideas_hpc/flyby/world.py",
       "return sun_direction_T(self.params, self.epoch_s", "return sun_direction_T(self.body.params, self.epoch_s",

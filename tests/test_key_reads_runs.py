@@ -62,7 +62,7 @@ UNSEEN = {
                           "when it names that one", ("design-fov",)),
 }
 _IMAGING = ("the setup builds the usable-image test for every flight; only a simulated "
-            "attitude applies it", IDEAL)
+            "attitude, or perfect tracking on an encounter, applies it", IDEAL)
 _DRAWN = ("the attitude entry always draws, so that turning it on shifts no other stream; an "
           "ideal flight drops the draw", ("design-exact", "design-reliability"))
 _POINTING = ("the pointing warning of the setup of every design kind",

@@ -28,8 +28,11 @@ from ideas_hpc.montecarlo import dispersions
 from ideas_hpc.montecarlo.scenarios import draw_world, nominal_start
 
 CAMPAIGN = "campaigns/eros-fast-encounter-nav.toml"
-#: a small body and a short window: every check here is geometry, not mapping
-FAST = ['body.name="ellipsoid"', "flyby.before_km=30.0", "flyby.after_km=30.0"]
+#: a small body and a short window: every check here is geometry, not mapping; the
+#: closed loop's usable-image test on (the campaign's swarm frame counts every image, its
+#: start is the paper's)
+FAST = ['body.name="ellipsoid"', "flyby.before_km=30.0", "flyby.after_km=30.0",
+        'monte_carlo.attitude_start="reference"']
 THETA = np.array([0.3, 2.0, 4.1])
 
 

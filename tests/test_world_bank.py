@@ -21,6 +21,7 @@ from ideas_hpc.core.mapping import world_statics as ws
 from ideas_hpc.core.mapping.segments import segments_blocked
 from ideas_hpc.design.candidates import rows_from_views
 from ideas_hpc.flyby.flight import Perturbation
+from ideas_hpc.flyby.views import flight_views
 from ideas_hpc.mapping.coverage import (camera_record, check_geometry, mesh_record,
                                         occlusion_structure)
 from ideas_hpc.mapping.world_rows import rows_of_world, world_statics
@@ -204,3 +205,26 @@ def test_pass_tree_rejects_only_runs_that_no_image_sees(rough):
             n_rejected += int(rej[dn].sum())
             n_nodes += v.shape[0]
     assert n_rejected > 0.3 * n_nodes
+
+
+def test_the_bank_blinds_the_images_a_whole_flight_blinds():
+    # perfect tracking on an encounter faces the smear test (issue 42): in 2 ms
+    # the body-tracking parallax near closest approach blinds some images; the bank's
+    # flight (reused buffers) and the flyby pipeline's whole flight (time series kept) blind
+    # the same ones, and the bank's rows are the full recomputation's
+    c = load(CAMPAIGN, ["instrument.exposure_ms=2.0"])
+    setup = setup_from_campaign(c)
+    mc = c.config.monte_carlo
+    theta = grid_theta(np.deg2rad(30.0))
+    engine = row_engine(setup, theta, mc, SEED, seeds.SCENARIO_STREAM)
+    for k in range(2):
+        pert = Perturbation(**draw_world(mc, setup, theta, SEED, seeds.SCENARIO_STREAM, k))
+        world = scenario_world(setup, SEED, seeds.SCENARIO_STREAM, k, pert.params_override)
+        r, d = engine.flight(pert, True, world)
+        full = flight_views(setup, theta, None, engine.r0_T, engine.v0_T, pert, world=world)
+        np.testing.assert_array_equal(r, full.r_img_T)
+        np.testing.assert_array_equal(d, full.imaging_BT)
+        blinded = ~np.all(full.imaging_BT == full.dcm_BT, axis=(-2, -1))
+        assert blinded.any() and not blinded.all()
+        np.testing.assert_array_equal(engine.rows(r, d, world=world),
+                                      full_rows_of(setup, world, full.r_img_T, full.imaging_BT))

@@ -12,7 +12,7 @@ import numpy as np
 from ideas_hpc.attitude.device import batch_kernel
 from ideas_hpc.core.attitude.records import ControlGains, Initial, StepTables, Wheels
 from ideas_hpc.core.dynamics.frames import dcm_RT as _dcm_RT
-from ideas_hpc.core.attitude.maneuvers import TRACK_MODE, reference, reference_dcm_BT
+from ideas_hpc.core.attitude.maneuvers import TRACK_MODE, reference_dcm_BT, reference_rates
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.base.seeds import sample_rng
 from ideas_hpc.base.units import RPM
@@ -181,14 +181,9 @@ def ideal_omega_BN_B(theta, spin_rate, image_times, *, mode="np", periods=None,
     man, p, tm = maneuver_args(mode, th.size, periods, theta_max, p_min)
     if man.code == TRACK_MODE:
         raise InputError("body tracking has no reference function of time", field="mode")
-    times = np.atleast_1d(np.asarray(image_times, dtype=np.float64))
-    rings = _ring_dcms(th, dcm_TS)
-    out = np.empty((th.size, times.size, 3))
-    for i in range(th.size):
-        for k in range(times.size):
-            out[i, k] = reference(man.code, float(times[k]), float(spin_rate), rings[i],
-                                  float(tm), float(p[i]))[1]
-    return out
+    times = np.ascontiguousarray(np.atleast_1d(np.asarray(image_times, dtype=np.float64)))
+    return reference_rates(man.code, _ring_dcms(th, dcm_TS), float(spin_rate), float(tm),
+                           np.ascontiguousarray(p, dtype=np.float64), times)
 
 
 def simulate_attitude(theta, spin_rate, t_f=None, *, run: AttitudeRun | None = None,

@@ -153,7 +153,10 @@ def _navigation(cfg, eta_rad: float, sizing):
 
 def _imaging(cfg, eta_rad: float) -> ImageUse | None:
     """The usable-image test (SPEC 7d), or None (every image counts) for a start without
-    ``usable_images`` (the paper's, ``monte_carlo.attitude_start = "paper"``)."""
+    ``usable_images`` (the paper's, ``monte_carlo.attitude_start = "paper"``). Perfect
+    tracking faces it where its geometry tests ideal images
+    (:attr:`~ideas_hpc.flyby.geometry.Geometry.ideal_images_tested`), and the paper's start
+    turns it off there too."""
     if not attitude_start(cfg.monte_carlo.attitude_start).usable_images:
         return None
     inst = cfg.instrument

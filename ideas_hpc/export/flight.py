@@ -57,6 +57,8 @@ class ExportFlight:
     #: flight is a dispersed sample; None: this flight is the nominal one
     nominal_position_T: np.ndarray | None = None
     notes: list = field(default_factory=list)
+    #: (N, n_img, 3, 3) the cameras the coverage saw (unusable images blinded); None: unknown
+    imaging_BT: np.ndarray | None = None
 
 
 def _campaign(attrs: dict):
@@ -127,7 +129,7 @@ def _nominal(c, setup, theta, periods, kind_name: str) -> ExportFlight:
     return ExportFlight(c, setup, tg.times, tg.position_T, tg.velocity_T, res.image_times,
                         res.r_img_T, res.dcm_BT, res.attitude, None,
                         what=f"the nominal flight of the {kind_name} store's "
-                             f"{theta.size}-spacecraft swarm")
+                             f"{theta.size}-spacecraft swarm", imaging_BT=res.imaging_BT)
 
 
 def _sample(c, setup, theta, periods, k: int, stored_coverage: float, kind_name: str) -> ExportFlight:
@@ -153,7 +155,8 @@ def _sample(c, setup, theta, periods, k: int, stored_coverage: float, kind_name:
                        f.r_img_T, f.dcm_BT, f.attitude,
                        None if p.active is None else np.asarray(p.active, dtype=bool),
                        dcm_CB=mis, what=f"sample {k} of the {kind_name} store (its dispersions drawn "
-                            "again from the store's seed)", nominal_position_T=nom.position_T)
+                            "again from the store's seed)", nominal_position_T=nom.position_T,
+                       imaging_BT=f.imaging_BT)
 
 
 def omega_BN_B(fl: ExportFlight) -> np.ndarray | None:

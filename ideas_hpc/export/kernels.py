@@ -161,13 +161,16 @@ def export_store(store, out=None, *, naif_base: int = -1000, body_id: int | None
 
 def usable_images(fl) -> np.ndarray:
     """(N, n_img) bool: the CSV's ``usable``: the body in view (:func:`body_in_view`), the
-    smear and settle test the coverage applied (simulated attitude), the spacecraft not
+    smear and settle test the coverage applied (simulated attitude; perfect tracking's
+    smear test on an encounter, read from the cameras it blinded), the spacecraft not
     failed (a dispersed sample)."""
     from ideas_hpc.flyby.camera import usable_mask
 
     setup = fl.setup
     ok = body_in_view(fl.r_img_T, fl.dcm_BT, setup.eta_rad, setup.body.shape.r_max)
-    sharp = usable_mask(setup, fl.attitude)    # None: every image counts (ideal attitude)
+    sharp = usable_mask(setup, fl.attitude)    # None: ideal attitude, or no test
+    if sharp is None and fl.imaging_BT is not None:
+        sharp = np.all(np.asarray(fl.imaging_BT) == np.asarray(fl.dcm_BT), axis=(-2, -1))
     if sharp is not None:
         ok &= sharp
     if fl.active is not None:

@@ -3,21 +3,25 @@
 Ideal tracking of the maneuver's reference, the closed-loop reaction-wheel
 attitude (:func:`ideas_hpc.attitude.simulate_attitude`), body tracking on
 encounters, and the fixed camera misalignment ``[C B]`` of a Monte Carlo
-sample. ``setup`` is a :class:`ideas_hpc.flyby.flight.FlybySetup`.
+sample; the usable-image test of both (the closed loop's rates, perfect tracking's
+reference rate, :func:`ideal_usable`). ``setup`` is a
+:class:`ideas_hpc.flyby.flight.FlybySetup`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ideas_hpc.attitude import ideal_dcm_BT, initial_conditions, simulate_attitude
+from ideas_hpc.attitude import (ideal_dcm_BT, ideal_omega_BN_B, initial_conditions,
+                                simulate_attitude)
 from ideas_hpc.attitude.modes import undrawn_start
 from ideas_hpc.attitude.run_settings import InitialState, from_keywords
 from ideas_hpc.core.attitude.compose import compose_each
 from ideas_hpc.core.attitude.mrp import dcm_from_mrp, mrp_from_prv
 from ideas_hpc.core.attitude.smear import smear_rates
 from ideas_hpc.base.errors import InputError
-from ideas_hpc.flyby.encounter import track_dcms, track_reference
+from ideas_hpc.flyby.encounter import track_dcms, track_omega_BN_B, track_reference
+from ideas_hpc.flyby.nav_flight import aim_rates_B
 from ideas_hpc.flyby.usable import blind, scene_radius_m, usable_images
 
 
@@ -96,13 +100,22 @@ def camera_at_images(setup, th, periods, ics, misalignment, r_img, track_T=None,
 
 def smear_rates_of(setup, att, dcm_CB, dcm_CT, r_img, v_img) -> np.ndarray:
     """(N, n_img) rad/s: the footprint centre's image rate across the line of sight
+    (:func:`image_smear_rates`) of the closed loop ``att`` (sample 0, its rates at the
+    images ``image_omega``)."""
+    return image_smear_rates(setup, att.image_omega[0], dcm_CB, dcm_CT, r_img, v_img)
+
+
+def image_smear_rates(setup, omega_BN_B, dcm_CB, dcm_CT, r_img, v_img) -> np.ndarray:
+    """(N, n_img) rad/s: the footprint centre's image rate across the line of sight
     (:func:`ideas_hpc.core.attitude.smear.smear_rates`, the one-pass loops' operands) of
-    the closed loop ``att`` (sample 0) flown with cameras ``dcm_CT`` (N, n_img, 3, 3),
-    misaligned by ``dcm_CB`` (N, 3, 3) or None, along positions ``r_img`` (m) and
-    velocities relative to T ``v_img`` (m/s), (N, n_img, 3), in ``setup``'s world (its
-    body's spin and :func:`~ideas_hpc.flyby.usable.scene_radius_m`)."""
+    cameras ``dcm_CT`` (N, n_img, 3, 3) turning at ``omega_BN_B`` (N, n_img, 3; rad/s, B
+    components), misaligned by ``dcm_CB`` (N, 3, 3) or None, along positions ``r_img``
+    (m) and velocities relative to T ``v_img`` (m/s), (N, n_img, 3), in ``setup``'s world
+    (its body's spin and :func:`~ideas_hpc.flyby.usable.scene_radius_m`): the closed
+    loop's rates (:func:`smear_rates_of`) and perfect tracking's
+    (:func:`ideal_omega_BN_B_at`) alike."""
     f8 = np.float64
-    return smear_rates(np.ascontiguousarray(att.image_omega[0], dtype=f8),
+    return smear_rates(np.ascontiguousarray(omega_BN_B, dtype=f8),
                        np.empty((0, 3, 3)) if dcm_CB is None
                        else np.ascontiguousarray(dcm_CB, dtype=f8),
                        np.ascontiguousarray(dcm_CT, dtype=f8),
@@ -111,9 +124,42 @@ def smear_rates_of(setup, att, dcm_CB, dcm_CT, r_img, v_img) -> np.ndarray:
                        float(setup.body.params.spin_rate), scene_radius_m(setup.body.shape))
 
 
+def ideal_omega_BN_B_at(setup, theta, periods, r_img, v_img, navigation=(None, None)):
+    """(N, n_img, 3) rad/s, B components: the inertial rate of perfect tracking's camera at
+    the images, the reference's own analytic rate ``omega_RN`` (B = R): body tracking's
+    along the flown positions ``r_img`` (m) and velocities relative to T ``v_img`` (m/s)
+    (:func:`~ideas_hpc.flyby.encounter.track_omega_BN_B`; with ``navigation = (offsets
+    (N, 3) m in N, centroid errors (N, 3) rad or None)`` the aim of
+    :func:`~ideas_hpc.flyby.nav_flight.aim_rates_B`), else the maneuver's reference in the
+    geometry's ring frames (:func:`ideas_hpc.attitude.ideal_omega_BN_B`: ``[R T] w_s z_T``
+    for the paper's rings, which turn with the body; 0 for an encounter's Nadir Pointing,
+    fixed in N; plus ``theta_ref' x_R`` for a sweep)."""
+    if setup.maneuver.tracks_body:
+        off, centroid = navigation
+        if off is None:
+            return track_omega_BN_B(setup, r_img, v_img)
+        return aim_rates_B(setup, r_img, v_img, off,
+                           None if centroid is None else misalignment_dcms(centroid))
+    w, ts = setup.geometry.maneuver_frame(setup, setup.body.params.spin_rate)
+    return ideal_omega_BN_B(theta, w, setup.image_times - setup.t0_s, mode=setup.maneuver.name,
+                            periods=periods, theta_max=setup.theta_max_rad, dcm_TS=ts,
+                            p_min=setup.p_min_s)
+
+
+def ideal_usable(setup, omega_BN_B, dcm_CB, dcm_CT, r_img, v_img) -> np.ndarray:
+    """(N, n_img) bool: perfect tracking's images that pass the usable-image test of
+    ``setup.imaging``: the smear test of the closed loop, the same expression
+    (:func:`image_smear_rates`, :func:`~ideas_hpc.flyby.usable.usable_images`), at the
+    rates ``omega_BN_B`` of :func:`ideal_omega_BN_B_at`; the attitude error is zero, so
+    no image is unsettled."""
+    rate = image_smear_rates(setup, omega_BN_B, dcm_CB, dcm_CT, r_img, v_img)
+    return usable_images(setup.imaging, rate, np.zeros(rate.shape))[0]
+
+
 def _tested(setup, att):
-    """``(use, smear rate (N, n_img))`` of a flight the usable-image test applies to, else
-    None (ideal attitude or no ``setup.imaging``)."""
+    """``(use, smear rate (N, n_img))`` of a closed-loop flight the usable-image test
+    applies to, else None (ideal attitude, tested in the flight itself by
+    :func:`ideal_usable`, or no ``setup.imaging``)."""
     use = getattr(setup, "imaging", None)
     if use is None or att is None or att.image_error is None:
         return None
@@ -125,8 +171,9 @@ def _tested(setup, att):
 
 def usable_mask(setup, att) -> np.ndarray | None:
     """(N, n_img) bool: the images that pass the usable-image test (smear and settle,
-    :mod:`ideas_hpc.flyby.usable`), or None when every image counts (ideal attitude or
-    no ``setup.imaging``)."""
+    :mod:`ideas_hpc.flyby.usable`) of a closed loop ``att``, or None (ideal attitude, whose
+    flight blinds its own unusable images, :func:`ideal_usable`, or no
+    ``setup.imaging``)."""
     got = _tested(setup, att)
     if got is None:
         return None
@@ -135,7 +182,9 @@ def usable_mask(setup, att) -> np.ndarray | None:
 
 def imaging_dcms(setup, dcm, att, r_img):
     """The cameras the coverage sees: ``dcm`` with the unusable images blinded when
-    ``setup.imaging`` is set and the attitude is simulated (:func:`usable_mask`)."""
+    ``setup.imaging`` is set and the attitude is simulated (:func:`usable_mask`); perfect
+    tracking's are blinded by :func:`ideas_hpc.flyby.views.flight_views`
+    (:func:`ideal_usable`)."""
     ok = usable_mask(setup, att)
     return dcm if ok is None else blind(dcm, r_img, ok, setup.body.shape.r_max)
 

@@ -33,7 +33,7 @@ import numpy as np
 from ideas_hpc.attitude import default_spacecraft, ideal_dcm_BT
 from ideas_hpc.core.dynamics.encounter import (dcm_BT_from_BN, dcm_NS, pointing_demand, straight_tracks_T,
                              track_dcm_BN)
-from ideas_hpc.core.attitude.maneuvers import track_reference_table
+from ideas_hpc.core.attitude.maneuvers import track_rates, track_reference_table
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.dynamics.trajectory import TargetingResult, propagate_swarm, target_swarm
 
@@ -206,17 +206,36 @@ def track_reference(setup, r_T, v_T) -> np.ndarray:
     :func:`ideas_hpc.core.attitude.maneuvers.track_reference_table`.
     """
     enc = setup.encounter
+    r = np.asarray(r_T, dtype=np.float64)
+    r_N, v_N = _state_N(setup, setup.t0_s + setup.dt_s * np.arange(r.shape[1]), r, v_T)
+    return track_reference_table(r_N, v_N, np.ascontiguousarray(enc.dcm_NS[:, 2]),
+                                 float(setup.dt_s))
+
+
+def _state_N(setup, times_s, r_T, v_T) -> tuple[np.ndarray, np.ndarray]:
+    """``(r_N, v_N)`` (N, T, 3) of positions ``r_T`` (m) and velocities relative to T
+    ``v_T`` (m/s) at flyby times ``times_s`` (T,): ``N = T`` at closest approach,
+    ``r_N = R3(phi)^T r_T``, ``v_N = R3(phi)^T v_T + w x r_N``, ``phi = w (t - t_ca)``."""
     w = setup.body.params.spin_rate
     r = np.asarray(r_T, dtype=np.float64)
     v = np.asarray(v_T, dtype=np.float64)
-    phi = w * (setup.t0_s + setup.dt_s * np.arange(r.shape[1]) - enc.t_ca_s)
+    phi = w * (np.asarray(times_s, dtype=np.float64) - setup.encounter.t_ca_s)
     c, s_ = np.cos(phi)[None, :], np.sin(phi)[None, :]
     r_N = np.stack([c * r[..., 0] - s_ * r[..., 1], s_ * r[..., 0] + c * r[..., 1], r[..., 2]],
                    axis=-1)
     v_N = np.stack([c * v[..., 0] - s_ * v[..., 1], s_ * v[..., 0] + c * v[..., 1], v[..., 2]],
                    axis=-1) + np.cross([0.0, 0.0, w], r_N)
-    return track_reference_table(np.ascontiguousarray(r_N), np.ascontiguousarray(v_N),
-                                 np.ascontiguousarray(enc.dcm_NS[:, 2]), float(setup.dt_s))
+    return np.ascontiguousarray(r_N), np.ascontiguousarray(v_N)
+
+
+def track_omega_BN_B(setup, r_img_T, v_img_T) -> np.ndarray:
+    """(N, n_img, 3) rad/s: the inertial rate, B components, of the body-tracking camera
+    of :func:`track_dcms` at the image times, along positions ``r_img_T`` (m) with
+    velocities relative to T ``v_img_T`` (m/s): the tracking frame's rate in the state
+    (:func:`~ideas_hpc.core.attitude.maneuvers.track_rates`), exact, not differenced
+    across images."""
+    r_N, v_N = _state_N(setup, setup.image_times, r_img_T, v_img_T)
+    return track_rates(r_N, v_N, np.ascontiguousarray(setup.encounter.dcm_NS[:, 2]))
 
 
 def pointing_check(dcm_BN, dt: float, spacecraft) -> dict:

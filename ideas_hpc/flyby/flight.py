@@ -275,6 +275,9 @@ class FlybyOutcome:
     extras: dict = field(default_factory=dict)
     position_T: np.ndarray | None = None  # (N, T, 3) m, the flown trajectory (open loop)
     velocity_T: np.ndarray | None = None  # (N, T, 3) m/s, its velocities (open loop)
+    #: (N, n_img, 3, 3) the cameras the coverage saw: ``dcm_BT`` with the unusable images
+    #: blinded (:func:`ideas_hpc.flyby.camera.imaging_dcms`, perfect tracking's alike)
+    imaging_BT: np.ndarray | None = None
 
 
 def fly(setup: FlybySetup, theta, periods=None, *, sample: int = 0, ics=None,
@@ -308,7 +311,7 @@ def fly(setup: FlybySetup, theta, periods=None, *, sample: int = 0, ics=None,
     return FlybyOutcome(theta=th, periods=None if periods is None else np.asarray(periods),
                         targeting=tgt, image_times=setup.image_times, r_img_T=v.r_img_T,
                         dcm_BT=v.dcm_BT, coverage=_coverage(setup, setup.world, v, None, counts),
-                        attitude=v.attitude)
+                        attitude=v.attitude, imaging_BT=v.imaging_BT)
 
 
 def undrawn_perturbation(setup: FlybySetup, n: int, random_state) -> "Perturbation":
@@ -342,7 +345,8 @@ def fly_open_loop(setup: FlybySetup, theta, periods, r0_T, v0_T,
     return FlybyOutcome(theta=th, periods=None if periods is None else np.asarray(periods),
                         targeting=None, image_times=setup.image_times, r_img_T=v.r_img_T,
                         dcm_BT=v.dcm_BT, coverage=cov, attitude=v.attitude,
-                        position_T=v.position_T, velocity_T=v.velocity_T)
+                        position_T=v.position_T, velocity_T=v.velocity_T,
+                        imaging_BT=v.imaging_BT)
 
 
 def open_loop_views(setup: FlybySetup, theta, periods, r0_T, v0_T,

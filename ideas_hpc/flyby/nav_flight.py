@@ -53,7 +53,7 @@ import numpy as np
 
 from ideas_hpc.core.attitude.compose import compose_each
 from ideas_hpc.core.attitude.mrp import dcm_from_mrp, mrp_from_dcm, mrp_from_prv
-from ideas_hpc.flyby.encounter import track_reference
+from ideas_hpc.flyby.encounter import track_omega_BN_B, track_reference
 
 
 def member_offsets(pert, n: int) -> np.ndarray | None:
@@ -125,6 +125,26 @@ def aim_positions_T(setup, r_img_T, off_N) -> np.ndarray:
     dr, _ = offset_T(setup, off_N, setup.image_times)
     lock = locked(setup, r)
     return np.ascontiguousarray(np.where(lock[..., None], r, r - dr))
+
+
+def aim_rates_B(setup, r_img_T, v_img_T, off_N, centroid_dcm=None) -> np.ndarray:
+    """(N, n_img, 3) rad/s: the inertial rate, B components, of ideal body tracking with
+    navigation errors (:func:`aim_positions_T`, :func:`with_centroid_errors`) at the images,
+    from the flown positions ``r_img_T`` (m) and velocities relative to T ``v_img_T`` (m/s):
+    before the lock the believed track's (``r - R3 o``, ``v - dv``: the aim point moves
+    with the spacecraft's plan), after it the flown track's turned by the centroid error
+    ``[B' B] = centroid_dcm`` (constant: ``omega' = [B' B] omega``). Ideal attitude locks
+    at once, so the lock's step is an instant between images, not a rate."""
+    r = np.asarray(r_img_T, dtype=np.float64)
+    v = np.asarray(v_img_T, dtype=np.float64)
+    dr, dv = offset_T(setup, off_N, setup.image_times)
+    lock = locked(setup, r)
+    w = track_omega_BN_B(setup, np.where(lock[..., None], r, r - dr),
+                         np.where(lock[..., None], v, v - dv))
+    if centroid_dcm is None or not lock.any():
+        return w
+    turned = np.einsum("nab,nkb->nka", np.asarray(centroid_dcm, dtype=np.float64), w)
+    return np.ascontiguousarray(np.where(lock[..., None], turned, w))
 
 
 def with_centroid_errors(setup, dcm_BT, r_img_T, centroid_dcm) -> np.ndarray:

@@ -34,13 +34,23 @@ pixel at it (``rho`` = 147.5 km): the paper's camera is sized so that ``v t_exp`
 (1 m) is its ground sample at the altitude ``h`` = 145.5 km, so a point at
 ``R_av`` (10.4 km) is smeared by exactly one pixel.
 
-Only the closed loop (``attitude.mode = "simulated"``) has a rate and an error
-to test. Perfect tracking (``attitude.mode = "ideal"``) counts every image, as
-the paper's ideal mode did: its camera would turn at the reference's rate, which
-for the paper's Nadir Pointing is the body's own, so the smear above applies to
-it too (0.92-0.99 pixel, usable); an encounter's swarm-frame pointing is fixed
-in inertial space and smears by ``v t_exp / (rho IFOV)`` (tens of pixels at
-10 km/s), which ideal attitude does not count: fly the closed loop to see it.
+The closed loop (``attitude.mode = "simulated"``) is tested at its own rate and
+error. Perfect tracking (``attitude.mode = "ideal"``) faces the smear test too, where
+its geometry says so (:attr:`~ideas_hpc.flyby.geometry.Geometry.ideal_images_tested`:
+an encounter): its camera turns at its reference's rate, ``omega_CN = [C B]
+omega_RN``, the reference's analytic rate at each image
+(:func:`ideas_hpc.flyby.camera.ideal_omega_BN_B_at`: body tracking's from the flown
+position and velocity, toward the predicted target before terminal tracking locks and
+turned by the centroid error after; the ring frames' ``reference_rates``, zero for an
+encounter's swarm-frame Nadir Pointing, which is fixed in inertial space), fed to the
+same kernel and the same flags (:func:`ideas_hpc.flyby.camera.ideal_usable`); its
+attitude error is zero, so there is no settle test. At 10 km/s an inertially fixed
+camera smears by ``v t_exp / (rho IFOV)`` pixels (2.5 to 10 in an encounter's 1 ms)
+and loses its images, while body tracking smears the footprint centre by its parallax
+only (``tests/test_smear.py``). The paper's geometry keeps the paper's ideal mode and
+counts every image: its Nadir Pointing turns with the body, so the smear above
+(0.92-0.99 pixel) would keep every image anyway, but its FoV sweeps (Fig. 32) turn
+at up to 17 pixels per exposure, which the paper's 100 % does not discount.
 An unusable image is
 replaced by a *blind* camera, one whose boresight points from the body centre
 through the spacecraft, away from the body: with the spacecraft outside the

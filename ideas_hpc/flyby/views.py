@@ -28,8 +28,10 @@ target, Sun, encounter and force model) and the swarm's own draws (a
    (:func:`ideas_hpc.flyby.camera.imaging_dcms`; the smear rate of the batched
    loop, :func:`ideas_hpc.flyby.camera.smear_rates_of`, is kept on its
    ``AttitudeResult`` as ``image_smear_rate``). Perfect tracking (``attitude.mode =
-   "ideal"``) counts every image, as the paper's ideal mode did
-   (:mod:`ideas_hpc.flyby.usable`).
+   "ideal"``) faces the same smear test at its reference's analytic rate where the
+   geometry tests its images (an encounter,
+   :func:`ideas_hpc.flyby.camera.ideal_usable`); on the paper's geometry it counts every
+   image, as the paper's ideal mode did (:mod:`ideas_hpc.flyby.usable`).
 """
 
 from __future__ import annotations
@@ -44,11 +46,13 @@ from ideas_hpc.attitude.modes import undrawn_start
 from ideas_hpc.core.attitude.maneuvers import FOV_MODE, NP_MODE
 from ideas_hpc.dynamics.trajectory import propagate_swarm
 from ideas_hpc.flyby import closed_loop as _loop
-from ideas_hpc.flyby.camera import (camera_at_images, camera_dcms, imaging_dcms, misaligned,
-                                    misalignment_dcms, smear_rates_of)
+from ideas_hpc.flyby.camera import (camera_at_images, camera_dcms, ideal_omega_BN_B_at,
+                                    ideal_usable, imaging_dcms, misaligned, misalignment_dcms,
+                                    smear_rates_of)
 from ideas_hpc.flyby.encounter import track_dcms
 from ideas_hpc.flyby.nav_flight import (aim_positions_T, member_offsets, start_errors_T,
                                         terminal_reference, with_centroid_errors)
+from ideas_hpc.flyby.usable import blind
 from ideas_hpc.flyby.world import World, array_key, cached_static
 
 
@@ -201,8 +205,10 @@ def flight_views(setup, theta, periods, r0_T, v0_T, pert, *, world: World | None
     flown = world.flown(setup)
     closed = flown.attitude.closed_loop
     tracks = flown.maneuver.tracks_body
-    # the velocities at the images: only the closed loop's smear test reads them
-    smear = closed and getattr(flown, "imaging", None) is not None
+    # the velocities at the images: only the smear test reads them (the closed loop's, and
+    # perfect tracking's where the geometry tests its images)
+    smear = getattr(flown, "imaging", None) is not None and (
+        closed or flown.geometry.ideal_images_tested)
     pos = vel = v_img = None
     nav = member_offsets(pert, th.size) if flown.encounter is not None else None
     if plan.trajectory is not None:
@@ -226,11 +232,17 @@ def flight_views(setup, theta, periods, r0_T, v0_T, pert, *, world: World | None
     mis = pert.misalignment_prv
     if not closed:
         ideal = _ideal(setup, world, flown, th, periods, r_img, (nav, pert.centroid_prv))
+        mis_CB = None if mis is None else misalignment_dcms(mis)
         if mis is not None:
-            dcm = misaligned(ideal, misalignment_dcms(mis))
+            dcm = misaligned(ideal, mis_CB)
         else:       # the pipeline's caller owns its arrays; the bank only reads them
             dcm = ideal.copy() if plan.series else ideal
-        return Views(r_img, dcm, dcm, None, pos, vel)
+        if not smear:
+            return Views(r_img, dcm, dcm, None, pos, vel)
+        omega = _ideal_rates(setup, world, flown, th, periods, r_img, v_img,
+                             (nav, pert.centroid_prv))
+        ok = ideal_usable(flown, omega, mis_CB, dcm, r_img, v_img)
+        return Views(r_img, dcm, blind(dcm, r_img, ok, flown.body.shape.r_max), None, pos, vel)
     start = flight_start(flown, pert, th.size)
     loop = closed_loop_for(flown, start, plan.series)
     if loop.series and not plan.series:     # the time series is not kept: one sample a run
@@ -275,3 +287,14 @@ def _ideal(setup, world, flown, th, periods, r_img, navigation=(None, None)):
                                     else misalignment_dcms(centroid))
     return cached_static(("ideal", setup.flight_key, world.attitude_key, array_key(th, periods)),
                          lambda: camera_dcms(flown, th, periods)[0])
+
+
+def _ideal_rates(setup, world, flown, th, periods, r_img, v_img, navigation):
+    """Perfect tracking's camera rates at the images (:func:`~ideas_hpc.flyby.camera.
+    ideal_omega_BN_B_at`): body tracking's along the flight, else the maneuver's reference
+    rate, which no draw but the world changes (kept per world, as its cameras)."""
+    if flown.maneuver.tracks_body:
+        return ideal_omega_BN_B_at(flown, th, periods, r_img, v_img, navigation)
+    return cached_static(("ideal-rate", setup.flight_key, world.attitude_key,
+                          array_key(th, periods)),
+                         lambda: ideal_omega_BN_B_at(flown, th, periods, r_img, v_img))

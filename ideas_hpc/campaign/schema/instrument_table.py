@@ -9,7 +9,8 @@ the scene's image on the detector at the footprint centre, the camera's rate
 relative to the turning line of sight, SPEC 7d) and ``settle_deg`` (largest
 attitude error of a usable image): :mod:`ideas_hpc.flyby.usable`. The
 test applies to the closed loop (``attitude.mode = "simulated"``) unless
-``monte_carlo.attitude_start = "paper"`` (docs/attitude-start.md).
+``monte_carlo.attitude_start = "paper"``, and its smear part to perfect tracking on an
+encounter (at the reference's rate; no settle test) (docs/attitude-start.md).
 """
 
 from __future__ import annotations

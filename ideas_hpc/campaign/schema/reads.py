@@ -38,6 +38,7 @@ from ideas_hpc.attitude.modes import ATTITUDE_MODES, ATTITUDE_STARTS
 from ideas_hpc.base.errors import InputError
 from ideas_hpc.body.formats import builtin_body, length_unit_applies
 from ideas_hpc.campaign.schema.encounter_table import ENCOUNTER
+from ideas_hpc.campaign.schema.imaging_rules import IMAGING_RULES
 from ideas_hpc.campaign.schema.target_table import TARGET_RULES, drawn, why_drawn
 from ideas_hpc.campaign.schema.navigation_table import NAVIGATION_RULES
 from ideas_hpc.campaign.schema.kinds import DISPERSION_KEYS, KINDS
@@ -151,20 +152,6 @@ def _why_separation(s: Settings) -> str:
         return (f"is ignored with flyby.configuration = {s.config.flyby.configuration!r}: only a "
                 "ring's spacing is checked")
     return "is ignored: the swarm of design.nadir_store is flown as designed"
-
-
-def _imaging(s: Settings) -> bool:
-    return s.simulated and s.start.usable_images
-
-
-def _why_imaging(s: Settings) -> str:
-    if not s.simulated:
-        return (f"is ignored with attitude.mode = {s.attitude.name!r}: every image counts (the "
-                "usable-image test judges a closed loop: attitude.mode = "
-                f"{_closed_loop_modes()})")
-    return (f"is ignored with monte_carlo.attitude_start = {s.start.name!r}: every image counts "
-            f"(attitude_start = {_names(ATTITUDE_STARTS, lambda t: t.usable_images)} applies "
-            "the test)")
 
 
 def _closed_loop(what: str) -> Callable:
@@ -321,8 +308,7 @@ RULES: dict[str, Rule] = {
                                                                    "z_stop_km")},
     **{f"flyby.{k}": ENCOUNTER_KEY for k in ENCOUNTER if k != "geometry"},
     **NAVIGATION_RULES,
-    **{f"instrument.{k}": Rule(_imaging, _why_imaging)
-       for k in ("pixels_across", "exposure_ms", "smear_pixels", "settle_deg")},
+    **IMAGING_RULES,
     "swarm.angles_rad": Rule(_angles_read, _why_angles),
     "swarm.sweep_periods_min": Rule(lambda s: s.kind.swarm == "file" and s.maneuver.sweeps,
                                     _why_periods),
@@ -350,7 +336,6 @@ RULES: dict[str, Rule] = {
                    "look (design.demonstrate = true steps N up over several)")),
     "design.time_limit_s": Rule(_time_limit, _why_time_limit),
     "monte_carlo.samples": Rule(lambda s: s.lists("monte_carlo.samples"), _samples_why),
-    "monte_carlo.attitude_start": Rule(_simulated, _closed_loop("a flight starts from it")),
     "monte_carlo.failures_k": Rule(_failures_k, _why_failures_k),
     "monte_carlo.failure_in_pass_share": Rule(
         lambda s: _dispersed(s, "monte_carlo.failure_in_pass_share") and s.p,

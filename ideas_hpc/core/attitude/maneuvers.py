@@ -308,3 +308,44 @@ def track_reference_table(r_N, v_N, z_S, dt):
                 out[i, k, 6 + a] = dcm[i, k, a, 0] * w[0] + dcm[i, k, a, 1] * w[1] \
                     + dcm[i, k, a, 2] * w[2]
     return out
+
+
+@njit(cache=True, error_model="numpy")
+def reference_rates(mode, dcm_RT_all, spin_rate, theta_max, periods, times):
+    """``omega_RN_R`` (rad/s) of maneuver ``mode`` (0 NP, 1 FoV) at ``times`` (s): the
+    reference's own analytic rate (:func:`reference_into`), which perfect tracking's
+    camera turns at (``B = R``). Arguments as :func:`reference_dcm_BT` plus the spin
+    ``spin_rate`` (rad/s) of the ring frames about ``z_T``. Returns (N, n_img, 3)."""
+    n = dcm_RT_all.shape[0]
+    m = times.shape[0]
+    out = np.empty((n, m, 3))
+    ref = np.empty(9)
+    for i in range(n):
+        sigma_RT = mrp_from_dcm(np.ascontiguousarray(dcm_RT_all[i]))
+        for k in range(m):
+            reference_into(mode, times[k], spin_rate, sigma_RT, dcm_RT_all[i], theta_max,
+                           periods[i], ref)
+            out[i, k, 0] = ref[3]
+            out[i, k, 1] = ref[4]
+            out[i, k, 2] = ref[5]
+    return out
+
+
+@njit(cache=True, error_model="numpy")
+def track_rates(r_N, v_N, z_S):
+    """``omega_RN_R`` (rad/s) of the body-tracking frame (:func:`_track_frame`: boresight on
+    the body centre, ``x`` toward the approach direction ``z_S``) at positions ``r_N`` (m)
+    and velocities ``v_N`` (m/s), (N, T, 3) in N: exact in the state, no differences
+    across steps. Returns (N, T, 3)."""
+    n = r_N.shape[0]
+    m = r_N.shape[1]
+    out = np.empty((n, m, 3))
+    dcm = np.empty((3, 3))
+    w = np.empty(3)
+    for i in range(n):
+        for k in range(m):
+            _track_frame(r_N[i, k], v_N[i, k], z_S, dcm, w)
+            out[i, k, 0] = w[0]
+            out[i, k, 1] = w[1]
+            out[i, k, 2] = w[2]
+    return out
