@@ -10,7 +10,9 @@ kernel's ``_usable`` on the same floats, cheapest condition first:
 * culling and clipping (:func:`~ideas_hpc.core.mapping.visibility._seen_basic`, compiled
   for the device), then the range and elevation tests of
   :func:`~ideas_hpc.core.mapping.visibility._seen`;
-* the resolution limit and the emission, incidence and phase cosines of the quality pass;
+* the resolution limit and the emission, incidence and phase cosines of the quality pass
+  (:func:`~ideas_hpc.core.mapping.world_rows.limits_met`, the CPU kernel's own, compiled
+  for the device);
 * with occlusion, the vertex's clear cone, and outside it the occlusion ray through the
   BVH: the any-hit walk of :func:`~ideas_hpc.core.mapping.segments.segment_hit` (same slab
   test and Moller-Trumbore test, compiled for the device, same traversal order) with a
@@ -36,10 +38,10 @@ import math
 import numpy as np
 from numba import cuda, int64
 
-from ideas_hpc.core.mapping.observations import L_RES
 from ideas_hpc.core.mapping.records import Bvh, Camera, Mesh, QualityTests, Strict
 from ideas_hpc.core.mapping.segments import _crosses, _ray_box
 from ideas_hpc.core.mapping.visibility import _seen_basic
+from ideas_hpc.core.mapping.world_rows import limits_met
 
 #: Threads per block (one row bit each).
 THREADS = 128
@@ -49,6 +51,7 @@ STACK = 64
 _cross = cuda.jit(device=True)(_crosses.py_func)
 _box = cuda.jit(device=True)(_ray_box.py_func)
 _basic = cuda.jit(device=True)(_seen_basic.py_func)
+_limits = cuda.jit(device=True)(limits_met.py_func)
 
 
 @cuda.jit(device=True)
@@ -112,22 +115,10 @@ def _usable(j, k, i, mesh, cam, opts, tests, lit, cos_clear, bvh, hint):
             return False, hint
         if not (-dx) * nx + (-dy) * ny + (-dz) * nz >= rng * opts.sin_min_elev:
             return False, hint
-    lx = r_T[k, i, 0] - px
-    ly = r_T[k, i, 1] - py
-    lz = r_T[k, i, 2] - pz
-    ln = lx * nx + ly * ny + lz * nz
-    rng2 = lx * lx + ly * ly + lz * lz
-    res = tests.rho_rad * rng2 / ln if ln > 0.0 else math.inf
-    if not res <= tests.limits[L_RES]:
+    ok, ln, rng2 = _limits(tests, opts.sun_T, i, r_T[k, i, 0] - px, r_T[k, i, 1] - py,
+                           r_T[k, i, 2] - pz, nx, ny, nz)
+    if not ok:
         return False, hint
-    if tests.check_ang:
-        nabs = math.sqrt(nx * nx + ny * ny + nz * nz)
-        rng = math.sqrt(rng2)
-        s = opts.sun_T
-        if not (ln >= tests.c_emi * rng * nabs
-                and s[i, 0] * nx + s[i, 1] * ny + s[i, 2] * nz >= tests.c_inc * nabs
-                and s[i, 0] * lx + s[i, 1] * ly + s[i, 2] * lz >= tests.c_pha * rng):
-            return False, hint
     if opts.occlusion and not ln >= math.sqrt(rng2) * math.sqrt(nx * nx + ny * ny + nz * nz) \
             * cos_clear[j]:
         f = _ray_hit(bvh, px, py, pz, -(px - r_T[k, i, 0]), -(py - r_T[k, i, 1]),
