@@ -22,6 +22,11 @@ through that world, identical to :func:`ideas_hpc.design.candidates.rows_from_vi
 
 The flight's arrays are validated as the full path validates them
 (:func:`~ideas_hpc.mapping.coverage.check_geometry`: the same errors, by field).
+
+With ``device="cuda"`` (the run's ``run.device``, :mod:`ideas_hpc.attitude.device`) the
+mapped rows run as the ``numba.cuda`` kernel of
+:mod:`ideas_hpc.core.mapping.world_rows_cuda` (one thread per row bit, the same test per
+image); seen and stereo rows stay on the CPU (docs/gpu.md).
 """
 
 from __future__ import annotations
@@ -30,6 +35,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ideas_hpc.attitude.device import check_device
 from ideas_hpc.core.mapping import world_rows as _wr
 from ideas_hpc.core.mapping import world_statics as _ws
 from ideas_hpc.core.mapping.coverage import observed_by_spacecraft
@@ -84,11 +90,14 @@ def world_statics(shape, options: CoverageOptions, sun_T, n_img: int) -> WorldSt
 
 
 def rows_of_world(statics: WorldStatics, options: CoverageOptions, r_img, dcm,
-                  image_times, frustum) -> np.ndarray:
+                  image_times, frustum, device: str = "cpu") -> np.ndarray:
     """(K, V) bool rows (seen, or mapped with a requirement) of candidates flown through
     the world of ``statics`` (module docstring): positions ``r_img`` (K, n_img, 3) m and
     camera DCMs ``dcm`` (K, n_img, 3, 3) at ``image_times`` (s), with the camera's
-    ``frustum`` ``(eta_rad, near_m, far_m)``."""
+    ``frustum`` ``(eta_rad, near_m, far_m)``; mapped rows on ``device`` (``"cpu"`` or
+    ``"cuda"``: an :class:`~ideas_hpc.base.errors.InputError` naming ``device`` where
+    ``numba.cuda`` has none)."""
+    check_device(device, "device")
     eta, near, far = frustum
     mesh, opts, bvh, lit, cos_clear = statics
     # the shape is only read for its name in messages: the records hold the mesh
@@ -101,5 +110,7 @@ def rows_of_world(statics: WorldStatics, options: CoverageOptions, r_img, dcm,
     if options.require_stereo:
         usable, stereo, _ = quality_by_spacecraft(mesh, cam, opts, bvh, quality)
         return usable & stereo
-    return _wr.mapped_by_spacecraft(mesh, cam, opts, bvh, QualityTests(*quality_tests(quality)),
-                                    lit, cos_clear)
+    kernel = _wr.mapped_by_spacecraft
+    if device == "cuda":
+        from ideas_hpc.core.mapping.world_rows_cuda import mapped_by_spacecraft_cuda as kernel
+    return kernel(mesh, cam, opts, bvh, QualityTests(*quality_tests(quality)), lit, cos_clear)

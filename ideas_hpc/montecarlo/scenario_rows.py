@@ -235,7 +235,8 @@ def world_rows(setup: FlybySetup, world: World | None, r_img, dcm) -> np.ndarray
         return full_rows_of(setup, world, r_img, dcm)
     st = world_statics_of(setup, world, np.shape(r_img)[1])
     return rows_of_world(st, setup.coverage, r_img, dcm, setup.image_times,
-                         (setup.eta_rad, setup.near_m, setup.far_m))
+                         (setup.eta_rad, setup.near_m, setup.far_m),
+                         getattr(setup, "device", "cpu"))
 
 
 def _down32(x: np.ndarray) -> np.ndarray:

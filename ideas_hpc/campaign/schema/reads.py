@@ -347,7 +347,10 @@ RULES: dict[str, Rule] = {
     **{f"monte_carlo.{k}": _attitude_draw(f"monte_carlo.{k}", lambda t: not t.random_state,
                                           "the error about the reference")
        for k in ("sigma_attitude_deg", "sigma_rate_rad_s")},
-    "run.device": Rule(_simulated, _closed_loop("the device flies the attitude")),
+    # the device flies the closed loop, and the mapped rows of drawn worlds (issue 43)
+    "run.device": Rule(lambda s: s.simulated or drawn(s),
+                       lambda s: _closed_loop("the device flies the attitude")(s)
+                       + ", and the rows of a drawn world (target.prior)"),
     "controller": Rule(_simulated, _closed_loop("the controller's gains act")),
     "torques": Rule(_simulated, _closed_loop("disturbance torques act")),
     "spacecraft": Rule(lambda s: s.simulated or s.lists("spacecraft"),

@@ -45,6 +45,33 @@ _CHUNK = 64
 
 
 @njit(cache=True, inline="always")
+def limits_met(tests, sun_T, i, lx, ly, lz, nx, ny, nz):
+    """``(met, l . n, |l|^2)``: image ``i``'s line of sight ``l = r - p`` (m) to a vertex of
+    normal ``n`` meets the per-image limits of ``tests`` (a
+    :class:`~ideas_hpc.core.mapping.records.QualityTests`; ``sun_T`` the unit Sun
+    directions per image): the resolution ``rho |l|^2 / (l . n) <= X_max``, then the
+    emission, incidence and phase cosines, the quality pass's expressions
+    (:func:`ideas_hpc.core.mapping.observations._scan`) on the same floats. Shared with
+    the CUDA kernel (:mod:`ideas_hpc.core.mapping.world_rows_cuda`)."""
+    ln = lx * nx + ly * ny + lz * nz
+    rng2 = lx * lx + ly * ly + lz * lz
+    res = tests.rho_rad * rng2 / ln if ln > 0.0 else np.inf
+    if not res <= tests.limits[L_RES]:
+        return False, ln, rng2
+    if tests.check_ang:
+        nabs = np.sqrt(nx * nx + ny * ny + nz * nz)
+        rng = np.sqrt(rng2)
+        sx = sun_T[i, 0]
+        sy = sun_T[i, 1]
+        sz = sun_T[i, 2]
+        if not (ln >= tests.c_emi * rng * nabs
+                and sx * nx + sy * ny + sz * nz >= tests.c_inc * nabs
+                and sx * lx + sy * ly + sz * lz >= tests.c_pha * rng):
+            return False, ln, rng2
+    return True, ln, rng2
+
+
+@njit(cache=True, inline="always")
 def _usable(j, k, i, mesh, cam, opts, tests, light, hint, bvh):
     """``(usable, hint)``: image ``i`` of candidate ``k`` is a usable observation of
     vertex ``j`` (module docstring), its conditions cheapest first; ``hint`` the face
@@ -56,27 +83,11 @@ def _usable(j, k, i, mesh, cam, opts, tests, light, hint, bvh):
     if not _seen(j, k, i, mesh, cam, opts, bvh, False, False):
         return False, hint
     r_T = cam.r_T_m
-    sun_T = opts.sun_T
     px, py, pz, nx, ny, nz, _ = _vertex(mesh, j)
-    # the quality pass's expressions (observations._scan), on the same floats
-    lx = r_T[k, i, 0] - px
-    ly = r_T[k, i, 1] - py
-    lz = r_T[k, i, 2] - pz
-    ln = lx * nx + ly * ny + lz * nz
-    rng2 = lx * lx + ly * ly + lz * lz
-    res = tests.rho_rad * rng2 / ln if ln > 0.0 else np.inf
-    if not res <= tests.limits[L_RES]:
+    ok, ln, rng2 = limits_met(tests, opts.sun_T, i, r_T[k, i, 0] - px, r_T[k, i, 1] - py,
+                              r_T[k, i, 2] - pz, nx, ny, nz)
+    if not ok:
         return False, hint
-    if tests.check_ang:
-        nabs = np.sqrt(nx * nx + ny * ny + nz * nz)
-        rng = np.sqrt(rng2)
-        sx = sun_T[i, 0]
-        sy = sun_T[i, 1]
-        sz = sun_T[i, 2]
-        if not (ln >= tests.c_emi * rng * nabs
-                and sx * nx + sy * ny + sz * nz >= tests.c_inc * nabs
-                and sx * lx + sy * ly + sz * lz >= tests.c_pha * rng):
-            return False, hint
     if opts.occlusion and not ln >= np.sqrt(rng2) * np.sqrt(nx * nx + ny * ny + nz * nz) \
             * cos_clear[j]:
         # outside the vertex's clear cone (world_statics.clear_cones): cast the ray
