@@ -2,6 +2,8 @@
 # Start or stop a one-node SLURM cluster (munged + slurmctld + slurmd) on this
 # machine, without systemd, so the `slurm`-marked tests can submit real jobs.
 #
+#   slurm/ci_local_slurm.sh install # install if missing (only that: .ci/run does it early,
+#                                   # in the background, while the tests run)
 #   slurm/ci_local_slurm.sh start   # install if missing, configure, start, wait for idle
 #   slurm/ci_local_slurm.sh stop    # kill exactly the daemons `start` recorded
 #   slurm/ci_local_slurm.sh status  # sinfo, and whether the recorded PIDs live
@@ -210,8 +212,9 @@ cmd_status() {
 }
 
 case "${1:-}" in
+    install) need_root; install_if_missing ;;
     start) cmd_start ;;
     stop) cmd_stop ;;
     status) cmd_status ;;
-    *) echo "usage: $0 start|stop|status" >&2; exit 2 ;;
+    *) echo "usage: $0 install|start|stop|status" >&2; exit 2 ;;
 esac

@@ -39,21 +39,32 @@ SMALL = {
                          "design.angle_step_deg=5.0"],
     "eros-stereo-design.toml": ["design.verify_samples=2", "design.angle_step_deg=12.0",
                                 "design.time_limit_s=5"],
-    # already coarse; its [target] prior supplies the body (no data file, no body.name)
-    "eros-class-flyby.toml": ["design.angle_step_deg=15.0", "design.holdout_scenarios=20"],
-    # the main job (its prior supplies the body): the smallest bank p = 0.9 resolves
-    # (10 / (1 - p) = 100 worlds) on a 15 deg grid; its answer: tests/test_main_job.py
-    "fast-flyby-design.toml": ["design.angle_step_deg=15.0", "design.scenarios=100",
-                               "design.holdout_scenarios=100", "design.verify_samples=100"],
 }
-#: Files whose body comes from their [target] prior: run as shipped, never on another body.
-PRIOR_BODY = {"eros-class-flyby.toml", "fast-flyby-design.toml"}
+#: Files whose body comes from their [target] prior (never flown on another body), each run
+#: small by a docs example (CI ran them here too, a second time: 2 minutes of its budget):
+#: the main job by the README (and as shipped, with its report, by tests/test_main_job.py),
+#: the coarse Eros-class design by docs/study.md (with its study and report; also
+#: tests/test_study.py, tests/test_design_distance.py).
+PRIOR_BODY = {"eros-class-flyby.toml": "docs/study.md", "fast-flyby-design.toml": "README.md"}
 FORBIDDEN = ("design.n_max", "design.eps_tol_pct", "coverage.", "design.failures_tolerated")
 
 
 def test_every_campaign_file_is_listed_and_only_sizes_change():
-    assert sorted(SMALL) == FILES
+    assert sorted([*SMALL, *PRIOR_BODY]) == FILES and not set(SMALL) & set(PRIOR_BODY)
     assert not [s for sets in SMALL.values() for s in sets if s.startswith(FORBIDDEN)]
+
+
+def test_prior_body_files_run_in_their_docs_examples():
+    from test_doc_examples import examples
+
+    for name, page in PRIOR_BODY.items():
+        runs = [ex for ex in examples() if ex.page == page and not ex.skip
+                and any(c[1:3] == ["run", f"campaigns/{name}"] for c in ex.commands)]
+        assert runs, f"no example of {page} runs campaigns/{name}"
+        # the docs run sizes only, as SMALL does here
+        sets = [a for ex in runs for c in ex.commands for a in c if "=" in a]
+        sets += [o for ex in runs for o in ex.overrides if "=" in o]
+        assert not [s for s in sets if s.startswith(FORBIDDEN)], (name, sets)
 
 
 def _run(name: str, sets: list, out: Path, shared_root: Path | None = None) -> xr.Dataset:
@@ -68,11 +79,8 @@ def _run(name: str, sets: list, out: Path, shared_root: Path | None = None) -> x
     return xr.open_zarr(store)
 
 
-@pytest.mark.parametrize("name", FILES)
+@pytest.mark.parametrize("name", sorted(SMALL))
 def test_campaign_runs_on_the_ellipsoid(name, tmp_path):
-    if name in PRIOR_BODY:
-        _run(name, SMALL[name], tmp_path)
-        return
     ds = _run(name, ['body.name="ellipsoid"'] + SMALL[name], tmp_path)
     assert ds.attrs["body"] == "ellipsoid"
 

@@ -102,3 +102,9 @@ def test_main_job_is_proven_and_decided_by_the_continuous_uncertainties(main_sto
     assert a["body"] == "eros-class prior" and a["target_prior"] == "eros-class"
     assert "no data file read" in a["body_note"]
     assert a["coverage_reference"] == "lit_at_tca" and a["requirement_kind"] == "visual"
+    # its report names the body on its second line, as every campaign's does
+    # (tests/test_campaigns.py; the main job is run there no more, being run here)
+    from ideas_hpc.report.write import write_report
+
+    summary = write_report(main_store, Path(main_store).parent / "report").read_text()
+    assert summary.splitlines()[1].startswith("body: eros-class prior")
