@@ -48,8 +48,10 @@ def _summary(printed: str) -> list[str]:
 
 
 def run_job(campaign: Path, out: Path, cache: Path, sets, workers,
-            helper: bool = False) -> tuple[float, str]:
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), MPLBACKEND="Agg")
+            helper: bool = False, env_extra: dict | None = None) -> tuple[float, str]:
+    """Wall seconds and printed text of ``ideas-hpc run`` in a fresh process on the Numba
+    cache ``cache`` (``env_extra``: more environment, e.g. ``bench_compile``'s recorder)."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache), MPLBACKEND="Agg", **(env_extra or {}))
     env.pop("IDEAS_HPC_PRECOMPILE", None)
     if not helper:
         env["IDEAS_HPC_PRECOMPILE"] = "0"

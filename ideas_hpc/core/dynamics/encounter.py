@@ -248,13 +248,26 @@ def track_dcm_BN(r_T, times, t_ca, spin_rate, z_S):
             y = s * r_T[i, k, 0] + c * r_T[i, k, 1]
             z = r_T[i, k, 2]
             rn = np.sqrt(x * x + y * y + z * z)
-            zb = np.array([-x / rn, -y / rn, -z / rn])
-            d = z_S[0] * zb[0] + z_S[1] * zb[1] + z_S[2] * zb[2]
-            xb = np.array([z_S[0] - d * zb[0], z_S[1] - d * zb[1], z_S[2] - d * zb[2]])
-            xb /= np.sqrt(xb[0] ** 2 + xb[1] ** 2 + xb[2] ** 2)
-            out[i, k, 0] = xb
-            out[i, k, 1, 0] = zb[1] * xb[2] - zb[2] * xb[1]
-            out[i, k, 1, 1] = zb[2] * xb[0] - zb[0] * xb[2]
-            out[i, k, 1, 2] = zb[0] * xb[1] - zb[1] * xb[0]
-            out[i, k, 2] = zb
+            # scalars, not 3-arrays: the same operations, and no array expressions for
+            # the parallel lowering to compile (issue 43: 7.4 s to compile before)
+            zb0 = -x / rn
+            zb1 = -y / rn
+            zb2 = -z / rn
+            d = z_S[0] * zb0 + z_S[1] * zb1 + z_S[2] * zb2
+            xb0 = z_S[0] - d * zb0
+            xb1 = z_S[1] - d * zb1
+            xb2 = z_S[2] - d * zb2
+            nb = np.sqrt(xb0 ** 2 + xb1 ** 2 + xb2 ** 2)
+            xb0 /= nb
+            xb1 /= nb
+            xb2 /= nb
+            out[i, k, 0, 0] = xb0
+            out[i, k, 0, 1] = xb1
+            out[i, k, 0, 2] = xb2
+            out[i, k, 1, 0] = zb1 * xb2 - zb2 * xb1
+            out[i, k, 1, 1] = zb2 * xb0 - zb0 * xb2
+            out[i, k, 1, 2] = zb0 * xb1 - zb1 * xb0
+            out[i, k, 2, 0] = zb0
+            out[i, k, 2, 1] = zb1
+            out[i, k, 2, 2] = zb2
     return out

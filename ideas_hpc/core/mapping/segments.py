@@ -7,6 +7,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ideas_hpc.core.mapping.records import Bvh
+
 
 @njit(cache=True, inline="always")
 def _ray_box(ox, oy, oz, ix, iy, iz, tmax, b, node):
@@ -86,8 +88,10 @@ def segment_blocked(node_bounds, node_info, tri, tri_vid,
         True when a face is crossed (Moller-Trumbore, both face sides). Hits
         with ``t <= 1e-9 |d|``-relative slack at the origin are ignored.
     """
-    return segment_hit((node_bounds, node_info, tri, tri_vid), ox, oy, oz, dx, dy, dz, tmax,
-                       skip_vertex, -1) >= 0
+    # the record and an int64 hint, as every other caller passes them: one compiled
+    # signature of segment_hit instead of three (issue 43, compile time)
+    return segment_hit(Bvh(node_bounds, node_info, tri, tri_vid), ox, oy, oz, dx, dy, dz,
+                       tmax, skip_vertex, np.int64(-1)) >= 0
 
 
 @njit(cache=True, inline="always")

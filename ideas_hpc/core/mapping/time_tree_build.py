@@ -175,7 +175,8 @@ def time_tree(r_T, dcm_BT, leaf):
     NI = tree_nodes(r_T.shape[1], leaf)
     NF = np.empty((nsc, NI.shape[0], _NF))
     for k in prange(nsc):
-        fill_tree(NF, NI, r_T, dcm_BT, k, leaf)
+        # int64 as the bank's caller passes it (prange's index is uint64): one signature
+        fill_tree(NF, NI, r_T, dcm_BT, np.int64(k), leaf)
     return NF, NI
 
 

@@ -112,7 +112,6 @@ def lit_at_images(mesh, sun_T, bvh):
     start, axis, half = sun_runs(sun_T, SUN_CONE_MAX)
     nrun = half.shape[0]
     lit = np.zeros((nv, nimg), dtype=np.bool_)
-    tree = (bvh.node_bounds_m, bvh.node_info, bvh.tri_m, bvh.tri_vid)
     for j in prange(nv):
         px, py, pz, nx, ny, nz, _ = _vertex(mesh, j)
         hint = np.int64(-1)
@@ -136,7 +135,7 @@ def lit_at_images(mesh, sun_T, bvh):
                 if clear:
                     lit[j, i] = True
                     continue
-                f = segment_hit(tree, px, py, pz, sx, sy, sz, np.inf, np.int64(j), hint)
+                f = segment_hit(bvh, px, py, pz, sx, sy, sz, np.inf, np.int64(j), hint)
                 if f >= 0:
                     hint = f
                 else:
