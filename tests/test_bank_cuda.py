@@ -23,6 +23,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
 DESIGN = ROOT / "campaigns" / "eros-design-nominal.toml"
@@ -116,6 +117,9 @@ def _simulator_report() -> dict:
     return rep
 
 
+# slow: the CUDA simulator runs each thread in Python (90 s on the quiet machine); the slow
+# session, beside the default one in CI, has the room (.ci/run)
+@pytest.mark.slow
 def test_cuda_kernel_and_bank_rows_match_the_cpu_under_the_simulator():
     out = subprocess.run([sys.executable, __file__], env=_env(NUMBA_ENABLE_CUDASIM="1"),
                          capture_output=True, text=True, timeout=600, cwd=ROOT)
