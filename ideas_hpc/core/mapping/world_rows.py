@@ -46,11 +46,13 @@ _CHUNK = 64
 
 @njit(cache=True, inline="always")
 def limits_met(tests, sun_T, i, lx, ly, lz, nx, ny, nz):
-    """``(met, l . n, |l|^2)``: image ``i``'s line of sight ``l = r - p`` (m) to a vertex of
-    normal ``n`` meets the per-image limits of ``tests`` (a
-    :class:`~ideas_hpc.core.mapping.records.QualityTests`; ``sun_T`` the unit Sun
-    directions per image): the resolution ``rho |l|^2 / (l . n) <= X_max``, then the
-    emission, incidence and phase cosines, the quality pass's expressions
+    """``(met, l_dot_n, l_sq)``: whether image ``i``'s line of sight ``l = r - p`` (m) to a
+    vertex of normal ``n`` meets the per-image limits of ``tests``, with ``l_dot_n`` the dot
+    product of ``l`` and ``n`` and ``l_sq`` the square of ``|l|``.
+
+    ``tests`` is a :class:`~ideas_hpc.core.mapping.records.QualityTests`, ``sun_T`` the unit
+    Sun directions per image. The limits: the resolution ``rho l_sq / l_dot_n <= X_max``,
+    then the emission, incidence and phase cosines, the quality pass's expressions
     (:func:`ideas_hpc.core.mapping.observations._scan`) on the same floats. Shared with
     the CUDA kernel (:mod:`ideas_hpc.core.mapping.world_rows_cuda`)."""
     ln = lx * nx + ly * ny + lz * nz
