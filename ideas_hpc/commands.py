@@ -20,7 +20,7 @@ def _cmd_run(args) -> int:
 def _cmd_report(args) -> int:
     from ideas_hpc.report.write import write_report
 
-    out = write_report(args.store, args.out, html=args.html)
+    out = write_report(args.store, args.out, html=args.html, parallel=True)
     print(out.read_text() if out.suffix == ".txt" else out)
     if args.html:
         print(f"interactive report: {out.with_name('report.html')}")

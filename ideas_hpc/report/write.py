@@ -17,6 +17,7 @@ from ideas_hpc.base.units import DEG, KM
 from ideas_hpc.report.reliability import (reliability_figures, reliability_lines,
                                                    swarm_label)
 from ideas_hpc.campaign.schema.kinds import KINDS
+from ideas_hpc.report.map_pool import MapPool
 from ideas_hpc.report.requirement import coverage_meaning
 from ideas_hpc.campaign.vocabulary import requirement_line, verification_verdict
 
@@ -201,11 +202,11 @@ def _design_figures(ds, out: Path) -> list[Path]:
     return figs
 
 
-def _quality_maps(ds, shape, out):
+def _quality_maps(ds, shape, out, render_coverage_map):
     """Maps of the quality variables (issue 14) and area histograms. Monte Carlo:
-    the per-vertex probability of the booleans and the median of the others."""
+    the per-vertex probability of the booleans and the median of the others
+    (``render_coverage_map``: :meth:`~ideas_hpc.report.map_pool.MapPool.render`)."""
     from ideas_hpc.plots import figures
-    from ideas_hpc.plots.coverage_map import render_coverage_map
 
     mc = ds["best_resolution"].ndim == 2
     deg = 180.0 / np.pi
@@ -258,9 +259,16 @@ def _check_complete(ds, store: Path) -> None:
                          "CAMPAIGN --out STORE --resume'", file=store)
 
 
-def write_report(store, out=None, *, html: bool = False) -> Path:
+def write_report(store, out=None, *, html: bool = False, parallel: bool = False) -> Path:
     """Write PNGs and ``summary.txt`` for a store (and ``report.html`` with ``html``,
-    :mod:`~ideas_hpc.report.html`); returns the summary path."""
+    :mod:`~ideas_hpc.report.html`); returns the summary path. ``parallel``: draw the
+    body maps in a second process meanwhile (:mod:`~ideas_hpc.report.map_pool`; the
+    ``ideas-hpc report`` command's choice)."""
+    with MapPool(parallel) as maps:
+        return _write_report(store, out, html, maps)
+
+
+def _write_report(store, out, html: bool, maps: MapPool) -> Path:
     store = Path(store)
     if not store.exists():
         raise InputError("no such store", field="STORE", file=store)
@@ -302,9 +310,8 @@ def write_report(store, out=None, *, html: bool = False) -> Path:
                                          float(ds.attrs["half_angle_rad"]), float(snap_t[j]),
                                          vertices=shape.vertices_T, faces=shape.faces,
                                          body=shape.name))
+    render_coverage_map = maps.render
     if "observed" in ds and shape is not None:
-        from ideas_hpc.plots.coverage_map import render_coverage_map
-
         obs = ds["observed"].values
         fs = ds["first_seen"].values
         if obs.ndim == 2:  # Monte Carlo: fraction of samples that saw each vertex
@@ -318,7 +325,7 @@ def write_report(store, out=None, *, html: bool = False) -> Path:
             figs.append(render_coverage_map(shape, fs, out / "fig25b_first_seen.png",
                                             kind="first_seen"))
     if "best_resolution" in ds and shape is not None:
-        figs += _quality_maps(ds, shape, out)
+        figs += _quality_maps(ds, shape, out, render_coverage_map)
     base = store_figure(ds.attrs.get("maneuver"), "attitude", 26)
     for i, (var, label, scale) in enumerate((("sigma_error", "MRP error", 1.0),
                                              ("omega_error", "rate error, rad/s", 1.0),
@@ -334,6 +341,7 @@ def write_report(store, out=None, *, html: bool = False) -> Path:
     groups = study_groups(store)
     extras = study_figures(store, ds, groups, out, shape=shape)
     figs.extend(extras)
+    maps.finish()            # every PNG written before the summary and the page list them
     summary = out / "summary.txt"
     summary.write_text(_summary(ds, figs) + "".join(f"{line}\n" for line in study_lines(groups)))
     if html:
