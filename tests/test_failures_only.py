@@ -65,3 +65,15 @@ def test_the_verdict_is_the_gap_against_the_validation_sampling_error():
     assert e["decides"]                 # P-hat far below the failures-only P
     assert continuous_effect(0.75, lower)["decides"]       # and far above it
     assert not continuous_effect(float(same.mean()), same)["decides"]
+
+
+def test_no_spread_and_a_rounding_gap_is_not_a_decision():
+    # every validation sample gives the same P (a geometry where nothing but failures
+    # matters): the spread is 0, and P_f, summed in another order, differs from it in the
+    # last bit (seen on eros-design at 12 deg: "differs by -0.0000 against a 95 % sampling
+    # error of +-0.0000: the continuous uncertainties decide")
+    v = np.full(64, 0.5)
+    p_f = float(np.nextafter(0.5, 1.0))
+    e = continuous_effect(p_f, v)
+    assert e["half_width"] == 0.0 and e["gap"] != 0.0 and not e["decides"]
+    assert continuous_effect(0.9, np.ones(100))["decides"]   # a real gap with no spread

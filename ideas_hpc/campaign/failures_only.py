@@ -49,8 +49,11 @@ def continuous_effect(p_failures: float, per_sample, held: float | None = None) 
     s_v = float(v.std(ddof=1)) if v.size > 1 else 0.0
     half = Z95 * s_v / math.sqrt(v.size) if v.size else math.nan
     gap = p_hat - float(p_failures)
+    # a gap within the rounding of M summed probabilities is no gap: with no spread (every
+    # sample at P_f) the half-width is 0 and the gap a last-bit residue of the mean
+    rounding = 8.0 * np.finfo(np.float64).eps * max(v.size, 1)
     return {"failures_only": float(p_failures), "p_hat": p_hat, "gap": gap,
-            "half_width": half, "decides": bool(abs(gap) > half),
+            "half_width": half, "decides": bool(abs(gap) > half + rounding),
             "held": math.nan if held is None else float(held)}
 
 
