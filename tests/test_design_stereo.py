@@ -106,9 +106,12 @@ def test_stereo_campaign_end_to_end_flown_coverage_meets_the_design(tmp_path, er
     from ideas_hpc.campaign.run import run_file
 
     campaign = Path(__file__).resolve().parent.parent / "campaigns" / "eros-stereo-design.toml"
-    # eps_tol 5 %: the programme proves N in ~20 s (loaded machine); 600 s is far above
-    # need, so optimality is asserted (the time-limited branch: tests/test_time_limits.py)
-    sets = ["design.angle_step_deg=12", "design.n_max=20", "design.verify_samples=0",
+    # eps_tol 5 %: the programme proves N in seconds; 600 s is far above need, so
+    # optimality is asserted (the time-limited branch: tests/test_time_limits.py). A 20 deg
+    # grid (18 candidates, N = 14 proven, flown = design coverage 0.747 >= the 0.742 needed)
+    # keeps every check of the 12 deg one (a pair-model design flown through the quality
+    # pass, N >= 2, optimality proven) at a fraction of its masks and programme
+    sets = ["design.angle_step_deg=20", "design.n_max=20", "design.verify_samples=0",
             "design.eps_tol_pct=5.0", "design.time_limit_s=600", "run.workers=0"]
     ds = xr.open_zarr(run_file(campaign, out=tmp_path / "s.zarr", overrides=sets))
     assert str(ds["design_method"].values) == "exact"
