@@ -60,19 +60,19 @@ def cache_root() -> Path | None:
 
 
 def digest(folders) -> str:
-    """blake2b of every ``*.py`` under ``folders`` (folder name, relative path and bytes,
-    sorted), with Numba's and Python's versions: the name of a source version's folder."""
+    """The name of a source version's folder: blake2b of Numba's and Python's versions
+    and of each folder's :func:`~ideas_hpc.base.compile_once.sources_digest` (its
+    ``*.py`` files' relative paths and bytes)."""
     import sys
 
     import numba
 
+    from ideas_hpc.base.compile_once import sources_digest
+
     h = hashlib.blake2b(digest_size=12)
     h.update(f"numba {numba.__version__} python {sys.version_info[:2]}\0".encode())
     for folder in folders:
-        root = Path(folder)
-        for f in sorted(root.rglob("*.py")):
-            rel = f"{root.name}/{f.relative_to(root)}"
-            h.update(rel.encode() + b"\0" + f.read_bytes() + b"\0")
+        h.update(f"{Path(folder).name}\0{sources_digest(folder)}\0".encode())
     return h.hexdigest()
 
 
