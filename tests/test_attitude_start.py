@@ -272,3 +272,45 @@ def test_nominal_candidate_masks_start_on_the_reference():
     np.testing.assert_array_equal(candidate_masks(setup, keys), ideal)
     paper = candidate_masks(setup.with_(attitude_start="paper", imaging=None), keys)
     assert (paper != ideal).any()
+
+
+def test_blinding_inside_the_bounding_sphere_past_the_waist():
+    """A navigation error can put a spacecraft inside the bounding sphere of an elongated
+    body, beside its waist (``ideas-hpc study`` at a 100 km sigma, 2026-12-07): the radial
+    camera would see the body's ends there. The blinded camera must have every vertex
+    behind it (``q_z < 0``, what every coverage mode needs), and the coverage sees nothing;
+    inside the body's hull the error names the field."""
+    from ideas_hpc.body.bodies import load_body
+    from ideas_hpc.flyby.usable import separating_axis
+
+    shape = load_body("ellipsoid", resolution=2).shape
+    v = shape.vertices_T
+    half = np.ptp(v, axis=0) / 2
+    long, waist = int(np.argmax(half)), int(np.argmin(half))
+    r = np.zeros(3)
+    # off both axes, outside the hull ((0.6)^2 + (1.2)^2 > 1), well inside the sphere
+    r[long], r[waist] = 0.6 * half[long], 1.2 * half[waist]
+    assert np.linalg.norm(r) < shape.r_max
+    radial = r / np.linalg.norm(r)
+    assert np.max((v - r) @ radial) > 0      # the radial camera would see the body's ends
+    assert separating_axis(np.zeros(3), v) is None              # the centre: inside the hull
+    r_img = np.stack([r, 3 * shape.r_max * radial])[None]       # (1, 2, 3): in, out
+    dcm = np.broadcast_to(np.eye(3), (1, 2, 3, 3)).copy()
+    dcm_b = blind(dcm, r_img, np.zeros((1, 2), dtype=bool), shape.r_max, v)
+    for i in range(2):
+        q_z = (v - r_img[0, i]) @ dcm_b[0, i, 2]
+        assert np.max(q_z) < 0, i
+        np.testing.assert_allclose(dcm_b[0, i] @ dcm_b[0, i].T, np.eye(3), atol=1e-12)
+        assert np.linalg.det(dcm_b[0, i]) > 0
+    np.testing.assert_allclose(dcm_b[0, 1, 2], radial)          # outside: radial as before
+    cov = compute_coverage(shape, r_img, dcm_b, np.array([0.0, 1.0]), np.radians(60.0), 1.0,
+                           1e9)
+    assert not cov.observed.any()
+    with pytest.raises(InputError) as e:                         # no vertices: no way to tell
+        blind(dcm, r_img, np.zeros((1, 2), dtype=bool), shape.r_max)
+    assert e.value.field == "r_img_T"
+    r_in = r_img.copy()
+    r_in[0, 0] = 0.0
+    with pytest.raises(InputError) as e:
+        blind(dcm, r_in, np.zeros((1, 2), dtype=bool), shape.r_max, v)
+    assert e.value.field == "r_img_T" and "convex hull" in str(e.value)

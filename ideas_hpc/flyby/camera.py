@@ -186,7 +186,8 @@ def imaging_dcms(setup, dcm, att, r_img):
     tracking's are blinded by :func:`ideas_hpc.flyby.views.flight_views`
     (:func:`ideal_usable`)."""
     ok = usable_mask(setup, att)
-    return dcm if ok is None else blind(dcm, r_img, ok, setup.body.shape.r_max)
+    return dcm if ok is None else blind(dcm, r_img, ok, setup.body.shape.r_max,
+                                         setup.body.shape.vertices_T)
 
 
 def discarded_images(setup, att) -> tuple[np.ndarray, np.ndarray] | None:

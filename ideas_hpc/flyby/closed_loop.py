@@ -68,6 +68,7 @@ class FlightStatics:
     omega_RN0_R: np.ndarray    # (N, 3) rad/s
     use: np.ndarray            # (3,) exposure s, smear limit rad, settle rad
     r_max_m: float
+    vertices_T: np.ndarray     # (V, 3) m: blinding inside the bounding sphere
     scene_radius_m: float      # the footprint centre's sphere (flyby.usable.scene_radius_m)
     cs_img: np.ndarray         # (n_img, 2) cos, sin(w_s t) at the images
 
@@ -100,7 +101,8 @@ def flight_statics(setup, theta, periods=None) -> FlightStatics:
         dt=dt, n_steps=int(n_steps), img_every=int(img_every),
         torques=pack_torques(tuple(setup.torques), th, n_steps, dt, ws),
         sigma_RN0=s_r, omega_RN0_R=w_r, use=limits,
-        r_max_m=float(setup.body.shape.r_max), scene_radius_m=scene_radius_m(setup.body.shape),
+        r_max_m=float(setup.body.shape.r_max), vertices_T=setup.body.shape.vertices_T,
+        scene_radius_m=scene_radius_m(setup.body.shape),
         cs_img=spin_table(ws, dt, int(n_steps), int(img_every)))
 
 
@@ -143,7 +145,7 @@ def fly_cameras(statics: FlightStatics, start_BR, misalignment_prv, at_images, b
         fly_cameras_into(statics.code, statics.rings, statics.spin, statics.periods,
                          statics.theta_max, statics.gains, statics.wheels, statics.dt,
                          statics.n_steps, initial, statics.torques, views)
-    blind_into(dcm, r_img, ok, statics.r_max_m)
+    blind_into(dcm, r_img, ok, statics.r_max_m, statics.vertices_T)
     return dcm
 
 

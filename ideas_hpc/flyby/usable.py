@@ -55,7 +55,9 @@ An unusable image is
 replaced by a *blind* camera, one whose boresight points from the body centre
 through the spacecraft, away from the body: with the spacecraft outside the
 body's bounding sphere (``|r| > r_max``) every vertex then lies behind it
-(``q_z = z . (p - r) <= r_max - |r| < 0``), so it observes nothing in every
+(``q_z = z . (p - r) <= r_max - |r| < 0``); inside the sphere but outside the
+body's convex hull it points along the normal of a plane that separates the two
+(:func:`separating_axis`), with the same effect. So it observes nothing in every
 coverage mode, and every consumer of the camera DCMs (the coverage kernels and
 the scenario rows' proofs alike) sees the same images.
 """
@@ -156,31 +158,69 @@ def usable_images(use: ImageUse, rate_rad_s: np.ndarray, error_rad: np.ndarray):
 
 
 def blind(dcm_BT: np.ndarray, r_img_T: np.ndarray, usable: np.ndarray,
-          r_max_m: float) -> np.ndarray:
+          r_max_m: float, vertices_T: np.ndarray | None = None) -> np.ndarray:
     """Camera DCMs (N, n_img, 3, 3) with every unusable image blinded (module docstring)."""
     out = np.array(dcm_BT, dtype=np.float64, copy=True)
-    blind_into(out, r_img_T, usable, r_max_m)
+    blind_into(out, r_img_T, usable, r_max_m, vertices_T)
     return np.ascontiguousarray(out)
 
 
-def blind_into(dcm_BT: np.ndarray, r_img_T: np.ndarray, usable: np.ndarray,
-               r_max_m: float) -> None:
-    """:func:`blind` in place on ``dcm_BT`` (float64, N x n_img x 3 x 3): the scenario
-    bank blinds its reused buffer without a copy."""
-    bad = ~np.asarray(usable, dtype=bool)
-    if not bad.any():
-        return
-    r = np.asarray(r_img_T, dtype=np.float64)[bad]
-    dist = np.linalg.norm(r, axis=1)
-    if not np.all(dist > r_max_m):
-        raise InputError(f"an unusable image is taken {dist.min() / 1e3:.3g} km from the body "
-                         f"centre, inside its bounding sphere ({r_max_m / 1e3:.3g} km): "
-                         "it cannot be blinded", field="r_img_T")
-    z = r / dist[:, None]
+def separating_axis(r_T: np.ndarray, vertices_T: np.ndarray) -> np.ndarray | None:
+    """A unit vector ``z`` with ``z . (p - r) < 0`` for every vertex ``p``, or None.
+
+    For a spacecraft inside the bounding sphere the radial direction may see part of an
+    elongated body (Eros' waist is 5.5 km from its centre, its ends 17.6 km). Any
+    plane that separates ``r`` from the body's convex hull gives such a ``z`` (its normal
+    toward ``r``). It is the linear programme ``max t`` subject to
+    ``z . (p_i - r) + t <= 0`` and ``-1 <= z_k <= 1`` (HiGHS): ``t > 0`` at the optimum
+    exactly when ``r`` lies outside the hull; inside it (an impact) there is none."""
+    from scipy.optimize import linprog
+
+    d = np.asarray(vertices_T, dtype=np.float64) - np.asarray(r_T, dtype=np.float64)
+    scale = float(np.max(np.abs(d))) or 1.0
+    a = np.hstack([d / scale, np.ones((d.shape[0], 1))])
+    res = linprog(np.array([0.0, 0.0, 0.0, -1.0]), A_ub=a, b_ub=np.zeros(d.shape[0]),
+                  bounds=[(-1.0, 1.0)] * 3 + [(0.0, None)], method="highs")
+    if res.status != 0 or res.x[3] <= 0.0:
+        return None
+    z = res.x[:3] / np.linalg.norm(res.x[:3])
+    return z if np.max(d @ z) < 0.0 else None          # checked, not trusted to tolerance
+
+
+def _frames(z: np.ndarray) -> np.ndarray:
+    """Rows ``x, y, z`` (M, 3, 3) of right-handed frames with the given unit ``z`` (M, 3)."""
     # any x orthogonal to z: the axis of z's smallest component crossed with z
     e = np.zeros_like(z)
     e[np.arange(z.shape[0]), np.argmin(np.abs(z), axis=1)] = 1.0
     x = np.cross(e, z)
     x /= np.linalg.norm(x, axis=1)[:, None]
     y = np.cross(z, x)
-    dcm_BT[bad] = np.stack([x, y, z], axis=1)     # rows: the camera axes in T
+    return np.stack([x, y, z], axis=1)
+
+
+def blind_into(dcm_BT: np.ndarray, r_img_T: np.ndarray, usable: np.ndarray,
+               r_max_m: float, vertices_T: np.ndarray | None = None) -> None:
+    """:func:`blind` in place on ``dcm_BT`` (float64, N x n_img x 3 x 3): the scenario
+    bank blinds its reused buffer without a copy.
+
+    Outside the bounding sphere (radius ``r_max_m``) the camera looks radially outward.
+    Inside it, with ``vertices_T`` given, it looks along :func:`separating_axis` (a large
+    navigation error can bring a spacecraft past an elongated body's waist inside the
+    sphere: ``ideas-hpc study`` at a 100 km navigation sigma, 2026-12-07); where none
+    exists (the spacecraft inside the body's hull) or without vertices the image cannot
+    be blinded and the error names it."""
+    bad = ~np.asarray(usable, dtype=bool)
+    if not bad.any():
+        return
+    r = np.asarray(r_img_T, dtype=np.float64)[bad]
+    dist = np.linalg.norm(r, axis=1)
+    z = r / np.maximum(dist, 1e-300)[:, None]
+    for k in np.flatnonzero(~(dist > r_max_m)):
+        axis = None if vertices_T is None else separating_axis(r[k], vertices_T)
+        if axis is None:
+            where = ("inside the body's convex hull" if vertices_T is not None else
+                     f"inside its bounding sphere ({r_max_m / 1e3:.3g} km)")
+            raise InputError(f"an unusable image is taken {dist[k] / 1e3:.3g} km from the body "
+                             f"centre, {where}: it cannot be blinded", field="r_img_T")
+        z[k] = axis
+    dcm_BT[bad] = _frames(z)     # rows: the camera axes in T

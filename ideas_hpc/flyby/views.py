@@ -242,7 +242,8 @@ def flight_views(setup, theta, periods, r0_T, v0_T, pert, *, world: World | None
         omega = _ideal_rates(setup, world, flown, th, periods, r_img, v_img,
                              (nav, pert.centroid_prv))
         ok = ideal_usable(flown, omega, mis_CB, dcm, r_img, v_img)
-        return Views(r_img, dcm, blind(dcm, r_img, ok, flown.body.shape.r_max), None, pos, vel)
+        return Views(r_img, dcm, blind(dcm, r_img, ok, flown.body.shape.r_max,
+                                              flown.body.shape.vertices_T), None, pos, vel)
     start = flight_start(flown, pert, th.size)
     loop = closed_loop_for(flown, start, plan.series)
     if loop.series and not plan.series:     # the time series is not kept: one sample a run
