@@ -166,7 +166,7 @@ def blind(dcm_BT: np.ndarray, r_img_T: np.ndarray, usable: np.ndarray,
 
 
 def separating_axis(r_T: np.ndarray, vertices_T: np.ndarray) -> np.ndarray | None:
-    """A unit vector ``z`` with ``z . (p - r) < 0`` for every vertex ``p``, or None.
+    """A camera axis ``z`` with every vertex ``p`` behind it, ``dot(z, p - r) < 0``, or None.
 
     For a spacecraft inside the bounding sphere the radial direction may see part of an
     elongated body (Eros' waist is 5.5 km from its centre, its ends 17.6 km). Any
