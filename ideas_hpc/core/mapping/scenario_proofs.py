@@ -214,9 +214,10 @@ def witness_proofs(first, window, mesh, cam, opts, bvh, bc, br):
             # the score varies smoothly along the pass: every WITNESS_STRIDE-th image,
             # then the images around the best (speed only: any seeing image is a witness)
             end = window[k, j, 1] + 1
-            b_i = _best_slack(vtx, k, w, end, WITNESS_STRIDE, cam, sec_eta, opts, bc, br)
-            b_i = _best_slack(vtx, k, max(w, b_i - WITNESS_STRIDE + 1),
-                              min(end, b_i + WITNESS_STRIDE), 1, cam, sec_eta, opts, bc, br)
+            a, b, stride = w, end, WITNESS_STRIDE
+            for _ in range(2):   # one call site: the inlined search is compiled once
+                b_i = _best_slack(vtx, k, a, b, stride, cam, sec_eta, opts, bc, br)
+                a, b, stride = max(w, b_i - WITNESS_STRIDE + 1), min(end, b_i + WITNESS_STRIDE), 1
             if b_i != w and not _seen(j, k, b_i, mesh, cam, opts, bvh, opts.occlusion,
                                       opts.illumination):
                 b_i = w
@@ -341,8 +342,11 @@ def windows(mesh, cam, opts, bvh, bc, br, both):
         stack = np.empty(128, dtype=np.int64)
         vtx = _vertex(mesh, j)
         for k in range(nsc):
-            lo = _walk(tree, stack, k, j, vtx, cam, opts, bvh, (bc, br), False)
-            out[k, j, 0] = lo
-            if both and lo >= 0:
-                out[k, j, 1] = _walk(tree, stack, k, j, vtx, cam, opts, bvh, (bc, br), True)
+            # the first image, then (with ``both``, when there is a first) the last: one
+            # call site, so the inlined walk is compiled once (twice cost 48 s of compile)
+            for last in range(2):
+                if last == 1 and not (both and out[k, j, 0] >= 0):
+                    break
+                out[k, j, last] = _walk(tree, stack, k, j, vtx, cam, opts, bvh, (bc, br),
+                                        last == 1)
     return out

@@ -235,17 +235,29 @@ def perturbed_rows(nominal, mesh, cam, opts, bvh):
                 continue
             hint[0] = -1
             hint[1] = -1        # a new vertex: no face frame yet
-            # before i_ok: every image until i_pos, then from what positions allow
-            seen = _scan_range(j, k, 0, min(i_pos[k], i_ok[k]), tree, stack, hint, frame, mesh,
-                               cam, opts, bvh)
-            a = max(i_pos[k], unseen_any[k, j])
-            if not seen and unseen_any[k, j] >= 0 and a < i_ok[k]:
-                seen = _scan_range(j, k, a, i_ok[k], tree, stack, hint, frame, mesh, cam, opts,
-                                   bvh)
-            # from i_ok: in both windows (either proof holds there)
-            if not seen and window[k, j, 0] >= 0 and unseen_any[k, j] >= 0:
-                seen = _scan_range(j, k, max(window[k, j, 0], i_ok[k], unseen_any[k, j]),
-                                   window[k, j, 1] + 1, tree, stack, hint, frame, mesh, cam, opts,
-                                   bvh)
+            seen = False
+            # three ranges of images, scanned in turn through one call site (the inlined
+            # scan compiled once: three copies cost about 120 s of compile); an empty
+            # range is skipped, which is what the scan answers for it (no image in it)
+            for part in range(3):
+                if part == 0:
+                    # before i_ok: every image until i_pos ...
+                    a, b = 0, min(i_pos[k], i_ok[k])
+                elif unseen_any[k, j] < 0:
+                    break       # no camera of any attitude within the budget sees it
+                elif part == 1:
+                    # ... then from what positions allow
+                    a, b = max(i_pos[k], unseen_any[k, j]), i_ok[k]
+                elif window[k, j, 0] >= 0:
+                    # from i_ok: in both windows (either proof holds there)
+                    a = max(window[k, j, 0], i_ok[k], unseen_any[k, j])
+                    b = window[k, j, 1] + 1
+                else:
+                    break
+                if a < b:
+                    seen = _scan_range(j, k, a, b, tree, stack, hint, frame, mesh, cam, opts,
+                                       bvh)
+                    if seen:
+                        break
             mask[k, j] = seen
     return mask
