@@ -199,46 +199,60 @@ def witness_proofs(first, window, mesh, cam, opts, bvh, bc, br):
     """
     nv = mesh.vertices_T_m.shape[0]
     nsc = cam.r_T_m.shape[0]
-    r_T = cam.r_T_m
     sec_eta = np.sqrt(1.0 + cam.tan_eta * cam.tan_eta) * (1.0 + 1e-12)
     witness = np.full((nsc, nv), -1, dtype=np.int64)
     slack_q = np.full((nsc, nv), -np.inf)
     radius = np.zeros((nsc, nv))
     for j in prange(nv):
-        vtx = _vertex(mesh, j)
-        px, py, pz = vtx[0], vtx[1], vtx[2]
-        for k in range(nsc):
-            w = first[k, j]
-            if w < 0:
-                continue
-            # the score varies smoothly along the pass: every WITNESS_STRIDE-th image,
-            # then the images around the best (speed only: any seeing image is a witness)
-            end = window[k, j, 1] + 1
-            a, b, stride = w, end, WITNESS_STRIDE
-            for _ in range(2):   # one call site: the inlined search is compiled once
-                b_i = _best_slack(vtx, k, a, b, stride, cam, sec_eta, opts, bc, br)
-                a, b, stride = max(w, b_i - WITNESS_STRIDE + 1), min(end, b_i + WITNESS_STRIDE), 1
-            if b_i != w and not _seen(j, k, b_i, mesh, cam, opts, bvh, opts.occlusion,
-                                      opts.illumination):
-                b_i = w
-            witness[k, j] = b_i
-            sq, rad, dn = _slacks(vtx, k, b_i, cam, sec_eta, opts, br)
-            slack_q[k, j] = sq
-            rad = min(rad, br)
-            if opts.occlusion and rad > 0.0:
-                ax = (r_T[k, b_i, 0] - px) / dn
-                ay = (r_T[k, b_i, 1] - py) / dn
-                az = (r_T[k, b_i, 2] - pz) / dn
-                # the sight lines p -> r' with |r' - r| <= rad lie in this cone
-                while rad > 1e-3 * br and not (
-                        rad < 0.5 * dn and cone_clear(
-                            bvh.node_bounds_m, bvh.node_info, bvh.tri_m, bvh.tri_vid,
-                            px, py, pz, ax, ay, az, np.arcsin(rad / dn), np.int64(j))):
-                    rad *= 0.125
-                if rad <= 1e-3 * br:
-                    rad = 0.0
-            radius[k, j] = max(rad, 0.0)
+        _vertex_witnesses(np.int64(j), first, window, mesh, cam, opts, bvh, bc, br, sec_eta,
+                          witness, slack_q, radius)
     return witness, slack_q, radius
+
+
+@njit(cache=True)
+def _vertex_witnesses(j, first, window, mesh, cam, opts, bvh, bc, br, sec_eta, witness,
+                      slack_q, radius):
+    """Vertex ``j``'s witnesses of :func:`witness_proofs`, every candidate, into
+    ``witness[:, j]``, ``slack_q[:, j]`` and ``radius[:, j]``.
+
+    The kernel's ``prange`` body, compiled on its own (as
+    :func:`~ideas_hpc.core.mapping.scenario_rows._candidate_row` is, for the same reason).
+    """
+    nsc = cam.r_T_m.shape[0]
+    r_T = cam.r_T_m
+    vtx = _vertex(mesh, j)
+    px, py, pz = vtx[0], vtx[1], vtx[2]
+    for k in range(nsc):
+        w = first[k, j]
+        if w < 0:
+            continue
+        # the score varies smoothly along the pass: every WITNESS_STRIDE-th image,
+        # then the images around the best (speed only: any seeing image is a witness)
+        end = window[k, j, 1] + 1
+        a, b, stride = w, end, WITNESS_STRIDE
+        for _ in range(2):   # one call site: the inlined search is compiled once
+            b_i = _best_slack(vtx, k, a, b, stride, cam, sec_eta, opts, bc, br)
+            a, b, stride = max(w, b_i - WITNESS_STRIDE + 1), min(end, b_i + WITNESS_STRIDE), 1
+        if b_i != w and not _seen(j, k, b_i, mesh, cam, opts, bvh, opts.occlusion,
+                                  opts.illumination):
+            b_i = w
+        witness[k, j] = b_i
+        sq, rad, dn = _slacks(vtx, k, b_i, cam, sec_eta, opts, br)
+        slack_q[k, j] = sq
+        rad = min(rad, br)
+        if opts.occlusion and rad > 0.0:
+            ax = (r_T[k, b_i, 0] - px) / dn
+            ay = (r_T[k, b_i, 1] - py) / dn
+            az = (r_T[k, b_i, 2] - pz) / dn
+            # the sight lines p -> r' with |r' - r| <= rad lie in this cone
+            while rad > 1e-3 * br and not (
+                    rad < 0.5 * dn and cone_clear(
+                        bvh.node_bounds_m, bvh.node_info, bvh.tri_m, bvh.tri_vid,
+                        px, py, pz, ax, ay, az, np.arcsin(rad / dn), np.int64(j))):
+                rad *= 0.125
+            if rad <= 1e-3 * br:
+                rad = 0.0
+        radius[k, j] = max(rad, 0.0)
 
 
 @njit(cache=True, inline="always")
@@ -339,14 +353,24 @@ def windows(mesh, cam, opts, bvh, bc, br, both):
             NF[k, node, _AX + 3] = (NF[k, node, _AX + 3] + br) * (1.0 + 1e-12)
     out = np.full((nsc, nv, 2), -1, dtype=np.int64)
     for j in prange(nv):
-        stack = np.empty(128, dtype=np.int64)
-        vtx = _vertex(mesh, j)
-        for k in range(nsc):
-            # the first image, then (with ``both``, when there is a first) the last: one
-            # call site, so the inlined walk is compiled once (twice cost 48 s of compile)
-            for last in range(2):
-                if last == 1 and not (both and out[k, j, 0] >= 0):
-                    break
-                out[k, j, last] = _walk(tree, stack, k, j, vtx, cam, opts, bvh, (bc, br),
-                                        last == 1)
+        _vertex_windows(np.int64(j), tree, mesh, cam, opts, bvh, bc, br, both, out)
     return out
+
+
+@njit(cache=True)
+def _vertex_windows(j, tree, mesh, cam, opts, bvh, bc, br, both, out):
+    """Vertex ``j``'s windows of :func:`windows`, every candidate, into ``out[:, j]``.
+
+    The kernel's ``prange`` body, compiled on its own (as
+    :func:`~ideas_hpc.core.mapping.scenario_rows._candidate_row` is, for the same reason).
+    """
+    stack = np.empty(128, dtype=np.int64)
+    vtx = _vertex(mesh, j)
+    for k in range(cam.r_T_m.shape[0]):
+        # the first image, then (with ``both``, when there is a first) the last: one
+        # call site, so the inlined walk is compiled once (twice cost 48 s of compile)
+        for last in range(2):
+            if last == 1 and not (both and out[k, j, 0] >= 0):
+                break
+            out[k, j, last] = _walk(tree, stack, k, j, vtx, cam, opts, bvh, (bc, br),
+                                    last == 1)

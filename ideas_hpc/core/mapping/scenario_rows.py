@@ -200,6 +200,26 @@ def perturbed_rows(nominal, mesh, cam, opts, bvh):
     is not computed, and the caller must recompute the rows in full. A (candidate,
     vertex) not settled by its witness is scanned exactly (:func:`_scan_range`).
     """
+    nv = mesh.vertices_T_m.shape[0]
+    nsc = cam.r_T_m.shape[0]
+    tree = TimeTree(*scan_tree_unfilled(cam))
+    mask = np.zeros((nsc, nv), dtype=np.bool_)
+    # candidate-major: one candidate's flight, time tree and rows stay in cache,
+    # the tree built right before it is walked
+    for k in prange(nsc):
+        _candidate_row(np.int64(k), nominal, mesh, cam, opts, bvh, tree, mask[k])
+    return mask
+
+
+@njit(cache=True)
+def _candidate_row(k, nominal, mesh, cam, opts, bvh, tree, row):
+    """Candidate ``k``'s row (V,) of :func:`perturbed_rows`, written to ``row``, with its
+    ``i_ok[k]`` and ``i_pos[k]``; it fills the candidate's nodes of ``tree`` first.
+
+    The kernel's ``prange`` body, compiled on its own: Numba types a ``prange`` body
+    twice (in the kernel and in its gufunc) and copy-propagates the inlined scans each
+    time, so inside the loop the kernel cost 54 CPU s to compile (the same work).
+    """
     witness = nominal.witness
     window = nominal.window
     unseen_any = nominal.unseen_any
@@ -208,56 +228,48 @@ def perturbed_rows(nominal, mesh, cam, opts, bvh):
     bc, br, ortho_tol = nominal.budget[0], nominal.budget[1], nominal.budget[2]
     vertices = mesh.vertices_T_m
     nv = mesh.vertices_T_m.shape[0]
-    nsc = cam.r_T_m.shape[0]
-    tree = TimeTree(*scan_tree_unfilled(cam))
-    mask = np.zeros((nsc, nv), dtype=np.bool_)
-    # candidate-major: one candidate's flight, time tree and rows stay in cache,
-    # the tree built right before it is walked
-    for k in prange(nsc):
-        # how far this candidate strays, while its flight comes into cache for the
-        # tree and the scans (a separate pass over every flight cost more)
-        i_ok[k], i_pos[k], worst = _deviation(nominal.r_nom_T_m, nominal.dcm_nom_BT,
-                                              cam.r_T_m, cam.dcm_BT, k, bc, br)
-        if not np.sqrt(worst) <= ortho_tol:
-            i_ok[k] = -1        # not near-rotations (or not finite): no proof holds
+    # how far this candidate strays, while its flight comes into cache for the
+    # tree and the scans (a separate pass over every flight cost more)
+    i_ok[k], i_pos[k], worst = _deviation(nominal.r_nom_T_m, nominal.dcm_nom_BT,
+                                          cam.r_T_m, cam.dcm_BT, k, bc, br)
+    if not np.sqrt(worst) <= ortho_tol:
+        i_ok[k] = -1        # not near-rotations (or not finite): no proof holds
+        return
+    # the tree's S from the gram errors just checked, not computed again
+    fill_tree(tree.NF, tree.NI, cam.r_T_m, cam.dcm_BT, k, LEAF, worst)
+    stack = np.empty(128, dtype=np.int64)
+    hint = np.full(3, -1, dtype=np.int64)
+    frame = np.empty(FRAME)
+    for j in range(nv):
+        w = witness[k, j]
+        if w >= 0 and (_proven(nominal, vertices, j, cam, k, w)
+                       or _seen(j, k, w, mesh, cam, opts, bvh, opts.occlusion,
+                                opts.illumination)):
+            row[j] = True
             continue
-        # the tree's S from the gram errors just checked, not computed again
-        fill_tree(tree.NF, tree.NI, cam.r_T_m, cam.dcm_BT, k, LEAF, worst)
-        stack = np.empty(128, dtype=np.int64)
-        hint = np.full(3, -1, dtype=np.int64)
-        frame = np.empty(FRAME)
-        for j in range(nv):
-            w = witness[k, j]
-            if w >= 0 and (_proven(nominal, vertices, j, cam, k, w)
-                           or _seen(j, k, w, mesh, cam, opts, bvh, opts.occlusion,
-                                    opts.illumination)):
-                mask[k, j] = True
-                continue
-            hint[0] = -1
-            hint[1] = -1        # a new vertex: no face frame yet
-            seen = False
-            # three ranges of images, scanned in turn through one call site (the inlined
-            # scan compiled once: three copies cost about 120 s of compile); an empty
-            # range is skipped, which is what the scan answers for it (no image in it)
-            for part in range(3):
-                if part == 0:
-                    # before i_ok: every image until i_pos ...
-                    a, b = 0, min(i_pos[k], i_ok[k])
-                elif unseen_any[k, j] < 0:
-                    break       # no camera of any attitude within the budget sees it
-                elif part == 1:
-                    # ... then from what positions allow
-                    a, b = max(i_pos[k], unseen_any[k, j]), i_ok[k]
-                elif window[k, j, 0] >= 0:
-                    # from i_ok: in both windows (either proof holds there)
-                    a = max(window[k, j, 0], i_ok[k], unseen_any[k, j])
-                    b = window[k, j, 1] + 1
-                else:
+        hint[0] = -1
+        hint[1] = -1        # a new vertex: no face frame yet
+        seen = False
+        # three ranges of images, scanned in turn through one call site (the inlined
+        # scan compiled once: three copies cost about 120 s of compile); an empty
+        # range is skipped, which is what the scan answers for it (no image in it)
+        for part in range(3):
+            if part == 0:
+                # before i_ok: every image until i_pos ...
+                a, b = 0, min(i_pos[k], i_ok[k])
+            elif unseen_any[k, j] < 0:
+                break       # no camera of any attitude within the budget sees it
+            elif part == 1:
+                # ... then from what positions allow
+                a, b = max(i_pos[k], unseen_any[k, j]), i_ok[k]
+            elif window[k, j, 0] >= 0:
+                # from i_ok: in both windows (either proof holds there)
+                a = max(window[k, j, 0], i_ok[k], unseen_any[k, j])
+                b = window[k, j, 1] + 1
+            else:
+                break
+            if a < b:
+                seen = _scan_range(j, k, a, b, tree, stack, hint, frame, mesh, cam, opts, bvh)
+                if seen:
                     break
-                if a < b:
-                    seen = _scan_range(j, k, a, b, tree, stack, hint, frame, mesh, cam, opts,
-                                       bvh)
-                    if seen:
-                        break
-            mask[k, j] = seen
-    return mask
+        row[j] = seen
