@@ -199,19 +199,18 @@ def witness_proofs(first, window, mesh, cam, opts, bvh, bc, br):
     """
     nv = mesh.vertices_T_m.shape[0]
     nsc = cam.r_T_m.shape[0]
-    sec_eta = np.sqrt(1.0 + cam.tan_eta * cam.tan_eta) * (1.0 + 1e-12)
     witness = np.full((nsc, nv), -1, dtype=np.int64)
     slack_q = np.full((nsc, nv), -np.inf)
     radius = np.zeros((nsc, nv))
     for j in prange(nv):
-        _vertex_witnesses(np.int64(j), first, window, mesh, cam, opts, bvh, bc, br, sec_eta,
-                          witness, slack_q, radius)
+        _vertex_witnesses(np.int64(j), first, window, mesh, cam, opts, bvh, bc, br, witness,
+                          slack_q, radius)
     return witness, slack_q, radius
 
 
 @njit(cache=True)
-def _vertex_witnesses(j, first, window, mesh, cam, opts, bvh, bc, br, sec_eta, witness,
-                      slack_q, radius):
+def _vertex_witnesses(j, first, window, mesh, cam, opts, bvh, bc, br, witness, slack_q,
+                      radius):
     """Vertex ``j``'s witnesses of :func:`witness_proofs`, every candidate, into
     ``witness[:, j]``, ``slack_q[:, j]`` and ``radius[:, j]``.
 
@@ -220,6 +219,7 @@ def _vertex_witnesses(j, first, window, mesh, cam, opts, bvh, bc, br, sec_eta, w
     """
     nsc = cam.r_T_m.shape[0]
     r_T = cam.r_T_m
+    sec_eta = np.sqrt(1.0 + cam.tan_eta * cam.tan_eta) * (1.0 + 1e-12)
     vtx = _vertex(mesh, j)
     px, py, pz = vtx[0], vtx[1], vtx[2]
     for k in range(nsc):
